@@ -1,0 +1,145 @@
+//! `orbitlash check`: validate a scenario and print what can be derived without a run.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::Args;
+
+use orbitlash::thermal::analysis::time_constants;
+
+use super::{load, print_out};
+
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// Scenario file (TOML).
+    scenario: PathBuf,
+}
+
+pub fn check(a: CheckArgs) -> Result<()> {
+    let mut o = String::new();
+    let loaded = load(Some(&a.scenario))?;
+    let sc = &loaded.scenario;
+    let env = &sc.thermal.environment;
+    let orbit = &env.orbit;
+    let net = &sc.thermal.network;
+    outln!(o, "{}: valid ({})", loaded.file, sc.name);
+    if !sc.description.is_empty() {
+        outln!(o, "  {}", sc.description);
+    }
+    let period = orbit.period_s();
+    outln!(o, "\norbit");
+    outln!(
+        o,
+        "  altitude                {:.1} km",
+        orbit.altitude_m / 1e3
+    );
+    outln!(
+        o,
+        "  period                  {period:.3} s ({:.2} min)",
+        period / 60.0
+    );
+    outln!(
+        o,
+        "  earth view factor       {:.6}",
+        orbit.earth_view_factor()
+    );
+    outln!(
+        o,
+        "  eclipses stop at |beta| {:.3}°",
+        orbit.critical_beta_rad().to_degrees()
+    );
+    let (b_lo, b_hi) = env.beta_rad.range();
+    let mut betas = vec![b_lo];
+    if b_hi != b_lo {
+        betas.push(b_hi);
+    }
+    for b in betas {
+        let f = orbit.eclipse_fraction(b);
+        outln!(
+            o,
+            "  beta {:7.3}°: eclipse half-angle {:.3}°, fraction {:.5}, duration {:.1} s",
+            b.to_degrees(),
+            orbit.eclipse_half_angle_rad(b).to_degrees(),
+            f,
+            f * period
+        );
+    }
+    let (s_lo, s_hi) = env.solar_flux_w_per_m2.range();
+    outln!(o, "  solar flux              {s_lo} … {s_hi} W/m²");
+
+    outln!(o, "\nnetwork");
+    outln!(
+        o,
+        "  {} diffusion nodes, {} boundary nodes, {} conductors, {} radiative conductors, {} loads, {} heaters, {} modes",
+        net.nodes.len(),
+        net.boundaries.len(),
+        net.conductors.len(),
+        net.radiators.len(),
+        net.loads.len(),
+        net.heaters.len(),
+        sc.thermal.modes.len()
+    );
+    let temps = net.initial_temperatures_k();
+    let boundary: Vec<f64> = net
+        .boundaries
+        .iter()
+        .map(|b| b.temperature_k.at(0.0))
+        .collect();
+    let tc = time_constants(net, &temps, &boundary);
+    let width = net
+        .nodes
+        .iter()
+        .map(|n| n.name.len())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    outln!(
+        o,
+        "  time constants at the initial temperatures (C_i / sum of conductances):"
+    );
+    for (n, t) in net.nodes.iter().zip(&tc.node_s) {
+        outln!(
+            o,
+            "    {:width$}  C = {:>9.3} J/K   tau = {:>10.2} s",
+            n.name,
+            n.capacitance_j_per_k,
+            t
+        );
+    }
+    outln!(
+        o,
+        "  eigen time constants: slowest {:.1} s, fastest {:.4} s, stiffness ratio {:.3e}",
+        tc.slowest_s,
+        tc.fastest_s,
+        tc.stiffness_ratio()
+    );
+    outln!(o, "\nrun");
+    outln!(
+        o,
+        "  duration {:.1} s ({:.3} orbits), CSV every {} s",
+        sc.run.duration_s,
+        sc.run.duration_s / period,
+        sc.run.output_interval_s
+    );
+    outln!(
+        o,
+        "  solver tr-bdf2, tolerance {} K, max step {} s, {}",
+        sc.solver.tolerance_k,
+        sc.solver.max_step_s,
+        if sc.solver.adaptive {
+            "adaptive"
+        } else {
+            "fixed step"
+        }
+    );
+    outln!(
+        o,
+        "  sensors: {}",
+        sc.sensors
+            .iter()
+            .map(|s| s.column.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    print_out(&o)
+}

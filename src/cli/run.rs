@@ -1,0 +1,218 @@
+//! `orbitlash run`: simulate, observe, summarise.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use orbitlash::io::csv_export::CsvExport;
+use orbitlash::io::mcap_log::{McapLog, Provenance};
+use orbitlash::sim::{Observer, ObserverResult, RunStats, StepView, simulate};
+use orbitlash::summary::WindowStats;
+use orbitlash::thermal::ThermalModel;
+use orbitlash::units::k_to_c;
+
+use super::{default_log_path, load, orbits_arg, print_out};
+
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Scenario file (TOML). Default: the embedded reference-hinge scenario.
+    scenario: Option<PathBuf>,
+    /// Number of orbits to simulate (overrides the scenario's [run]).
+    #[arg(long, value_parser = orbits_arg)]
+    orbits: Option<f64>,
+    /// MCAP log path. Default: logs/<scenario name>.mcap.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Also export the time series as CSV (time_s, <node>_k, …).
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Do not write an MCAP log.
+    #[arg(long)]
+    no_log: bool,
+    /// No progress bar.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+struct Progress(ProgressBar, f64);
+
+impl Observer for Progress {
+    fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
+        self.0.set_position((step.t1_s() / self.1 * 1000.0) as u64);
+        Ok(())
+    }
+    fn on_finish(&mut self, _stats: &RunStats) -> ObserverResult {
+        self.0.finish_and_clear();
+        Ok(())
+    }
+}
+
+pub fn run(a: RunArgs) -> Result<()> {
+    let loaded = load(a.scenario.as_deref())?;
+    let mut sc = loaded.scenario;
+    if let Some(o) = a.orbits {
+        sc = sc.with_orbits(o);
+    }
+    let period_s = sc.period_s();
+    let t_end_s = sc.run.duration_s;
+
+    // Open every output before the run, so a bad path fails now.
+    let log_path = (!a.no_log).then(|| a.out.clone().unwrap_or_else(|| default_log_path(&sc.name)));
+    let log = match &log_path {
+        Some(p) => Some(McapLog::create(
+            p,
+            Provenance {
+                scenario_name: sc.name.clone(),
+                scenario_file: loaded.file.clone(),
+                scenario_toml: loaded.toml.clone(),
+                solver: format!(
+                    "tr-bdf2 tolerance_k={} max_step_s={} adaptive={}",
+                    sc.solver.tolerance_k, sc.solver.max_step_s, sc.solver.adaptive
+                ),
+            },
+        )?),
+        None => None,
+    };
+    let csv = match &a.csv {
+        Some(p) => Some(CsvExport::create(p, sc.run.output_interval_s)?),
+        None => None,
+    };
+    let progress = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
+        let pb = ProgressBar::new(1000);
+        pb.set_style(
+            ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {percent}% ({eta})")
+                .expect("template")
+                .progress_chars("=> "),
+        );
+        pb.set_message(sc.name.clone());
+        Progress(pb, t_end_s)
+    });
+
+    let mut stats_obs = WindowStats::last(period_s.min(t_end_s));
+    let mut observers = (&mut stats_obs, csv, log, progress);
+    let wall = Instant::now();
+    let stats = simulate(&sc.thermal, &sc.solver, t_end_s, &mut observers, None)
+        .with_context(|| format!("running {}", loaded.file))?;
+    let wall_s = wall.elapsed().as_secs_f64();
+
+    let mut o = format_summary(&sc.name, &sc.thermal, &stats, &stats_obs, period_s, wall_s);
+    if let Some(p) = &a.csv {
+        outln!(o, "csv: {}", p.display());
+    }
+    if let Some(p) = &log_path {
+        outln!(
+            o,
+            "log: {}  (open in Foxglove, or `rerun {}`)",
+            p.display(),
+            p.display()
+        );
+    }
+    print_out(&o)
+}
+
+fn format_summary(
+    name: &str,
+    model: &ThermalModel,
+    stats: &RunStats,
+    window: &WindowStats,
+    period_s: f64,
+    wall_s: f64,
+) -> String {
+    let mut o = String::new();
+    let env = &model.environment;
+    let orbits = stats.t_end_s / period_s;
+    outln!(
+        o,
+        "{name}: {orbits:.2} orbits, {:.1} s simulated{}",
+        stats.t_end_s,
+        if stats.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
+    );
+    let (b_lo, b_hi) = env.beta_rad.range();
+    outln!(
+        o,
+        "orbit: period {period_s:.3} s, beta {}, eclipse fraction {:.5} (predicted at t = 0), {:.5} (over the run)",
+        if b_lo == b_hi {
+            format!("{:.2}°", b_lo.to_degrees())
+        } else {
+            format!("{:.2}° … {:.2}°", b_lo.to_degrees(), b_hi.to_degrees())
+        },
+        env.orbit.eclipse_fraction(env.beta_rad.at(0.0)),
+        stats.eclipse_time_s / stats.t_end_s
+    );
+    let last_orbit = (window.window_start_s() / period_s).round() as u64 + 1;
+    outln!(
+        o,
+        "\nlast orbit (orbit {last_orbit}, t = {:.1} … {:.1} s):",
+        window.window_start_s(),
+        stats.t_end_s
+    );
+    let width = model
+        .network
+        .nodes
+        .iter()
+        .map(|n| n.name.len())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    outln!(
+        o,
+        "  {:width$}  {:>9}  {:>9}  {:>9}",
+        "node",
+        "min °C",
+        "max °C",
+        "mean °C"
+    );
+    for s in window.nodes() {
+        outln!(
+            o,
+            "  {:width$}  {:>9.2}  {:>9.2}  {:>9.2}",
+            s.name,
+            k_to_c(s.min_k),
+            k_to_c(s.max_k),
+            k_to_c(s.mean_k)
+        );
+    }
+    let e = &stats.energy;
+    outln!(o, "\nenergy balance over the run:");
+    outln!(o, "  absorbed (sun, albedo, IR)  {:>14.1} J", e.absorbed_j);
+    outln!(
+        o,
+        "  dissipated (loads, heaters) {:>14.1} J",
+        e.dissipated_j
+    );
+    for (b, q) in model.network.boundaries.iter().zip(&e.to_boundary_j) {
+        outln!(o, "  to boundary {:15} {:>14.1} J", b.name, q);
+    }
+    outln!(o, "  stored                      {:>14.1} J", e.stored_j);
+    outln!(
+        o,
+        "  error                       {:>14.3e} J ({:.2e} of the heat in)",
+        e.error_j(),
+        e.relative_error()
+    );
+    outln!(
+        o,
+        "\nsolver: tr-bdf2, {} steps ({} rejected), {:.2} Newton iterations/step, {} eclipse entries, {} heater switches",
+        stats.steps,
+        stats.rejected_steps,
+        stats.newton_iterations as f64 / stats.steps.max(1) as f64,
+        stats.eclipse_entries,
+        stats.heater_switches
+    );
+    outln!(
+        o,
+        "wall time {:.3} ms, {:.0} steps/s, {:.3} ms/orbit",
+        wall_s * 1e3,
+        stats.steps as f64 / wall_s,
+        wall_s * 1e3 / orbits
+    );
+    o
+}

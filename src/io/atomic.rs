@@ -1,0 +1,90 @@
+//! Output files written to a temporary sibling and renamed into place on success, so
+//! a failed or interrupted run never leaves a half-written file under the final name.
+
+use std::fs::File;
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write {path}: {source}")]
+pub struct OutputError {
+    pub path: String,
+    pub source: std::io::Error,
+}
+
+pub struct AtomicFile {
+    final_path: PathBuf,
+    tmp_path: PathBuf,
+    writer: Option<BufWriter<File>>,
+}
+
+impl AtomicFile {
+    /// Creates `<path>.partial` next to `path` (creating parent folders); fails now if
+    /// the location cannot be written.
+    pub fn create(path: &Path) -> Result<AtomicFile, OutputError> {
+        let err = |source| OutputError {
+            path: path.display().to_string(),
+            source,
+        };
+        if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).map_err(err)?;
+        }
+        if path.is_dir() {
+            return Err(err(std::io::Error::other("it is a directory")));
+        }
+        let mut tmp = path.as_os_str().to_owned();
+        tmp.push(".partial");
+        let tmp_path = PathBuf::from(tmp);
+        let file = File::create(&tmp_path).map_err(err)?;
+        Ok(AtomicFile {
+            final_path: path.to_path_buf(),
+            tmp_path,
+            writer: Some(BufWriter::with_capacity(1 << 16, file)),
+        })
+    }
+
+    pub fn writer(&mut self) -> &mut BufWriter<File> {
+        self.writer.as_mut().expect("file not yet committed")
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.final_path
+    }
+
+    /// Flushes, syncs and renames the file into place.
+    pub fn commit(mut self) -> Result<PathBuf, OutputError> {
+        let err = |source| OutputError {
+            path: self.final_path.display().to_string(),
+            source,
+        };
+        let w = self.writer.take().expect("committed twice");
+        let file = w.into_inner().map_err(|e| err(e.into_error()))?;
+        file.sync_all().map_err(err)?;
+        drop(file);
+        std::fs::rename(&self.tmp_path, &self.final_path).map_err(err)?;
+        Ok(self.final_path.clone())
+    }
+}
+
+impl Write for AtomicFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.writer().write(buf)
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.writer().flush()
+    }
+}
+
+impl Seek for AtomicFile {
+    fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
+        self.writer().seek(pos)
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.writer.take().is_some() {
+            let _ = std::fs::remove_file(&self.tmp_path);
+        }
+    }
+}

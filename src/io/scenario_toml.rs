@@ -1,0 +1,994 @@
+//! Scenario files (TOML): the raw serde schema, its validation into a [`Scenario`],
+//! and errors that name the file, the key and its line.
+//!
+//! Every key is documented in `scenarios/README.md`; keep the two in step.
+
+use std::collections::HashMap;
+use std::fmt;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
+use crate::orbit::{Environment, Incidence, Orbit, Profile};
+use crate::scenario::{DERIVED_QUANTITIES, RunControl, Scenario, Sensor, SensorTarget};
+use crate::sim::SolverSettings;
+use crate::thermal::{
+    BoundaryNode, Conductor, DiffusionNode, Heater, Load, LoadKind, Mode, Network, NodeRef,
+    Radiator, ThermalModel, When,
+};
+use crate::units::SECONDS_PER_DAY;
+
+/// The reference scenario, embedded in the binary.
+pub const REFERENCE_HINGE_TOML: &str = include_str!("../../scenarios/reference-hinge.toml");
+pub const REFERENCE_HINGE_NAME: &str = "reference-hinge";
+
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    #[error("cannot read scenario {file}: {source}")]
+    Read {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file}: {message}")]
+    Syntax { file: String, message: String },
+    #[error("{file}:{line}:{column}: `{key}`: {message}")]
+    Invalid {
+        file: String,
+        line: usize,
+        column: usize,
+        key: String,
+        message: String,
+    },
+}
+
+/// Reads and validates a scenario file.
+pub fn load_file(path: &Path) -> Result<(Scenario, String), ScenarioError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
+        file: file.clone(),
+        source,
+    })?;
+    let scenario = parse(&text, &file)?;
+    Ok((scenario, text))
+}
+
+/// Parses and validates scenario text; `file` names it in errors.
+pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
+    let raw: RawScenario = toml::from_str(text).map_err(|e| ScenarioError::Syntax {
+        file: file.to_string(),
+        message: e.to_string().trim_end().to_string(),
+    })?;
+    let cx = Cx { file, text };
+    build(raw, &cx)
+}
+
+/// The embedded reference scenario.
+pub fn reference() -> Scenario {
+    parse(REFERENCE_HINGE_TOML, "<embedded reference-hinge.toml>")
+        .expect("embedded reference scenario is valid")
+}
+
+// ---------------------------------------------------------------- raw schema
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScenario {
+    scenario: RawMeta,
+    orbit: RawOrbit,
+    environment: RawEnvironment,
+    run: RawRun,
+    #[serde(default)]
+    solver: RawSolver,
+    #[serde(default)]
+    node: Vec<RawNode>,
+    #[serde(default)]
+    boundary: Vec<RawBoundary>,
+    #[serde(default)]
+    conductor: Vec<RawConductor>,
+    #[serde(default)]
+    radiation: Vec<RawRadiation>,
+    #[serde(default)]
+    sun: Vec<RawSun>,
+    #[serde(default)]
+    albedo: Vec<RawAlbedo>,
+    #[serde(default)]
+    earth_ir: Vec<RawEarthIr>,
+    #[serde(default)]
+    dissipation: Vec<RawDissipation>,
+    #[serde(default)]
+    heater: Vec<RawHeater>,
+    #[serde(default)]
+    mode: Vec<RawMode>,
+    #[serde(default)]
+    sensor: Vec<RawSensor>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMeta {
+    name: String,
+    #[serde(default)]
+    description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawOrbit {
+    altitude_m: f64,
+    earth_radius_m: Option<f64>,
+    mu_m3_per_s2: Option<f64>,
+    orbit_angle_at_start_deg: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEnvironment {
+    beta_deg: RawProfile,
+    solar_flux_w_per_m2: Option<RawProfile>,
+    space_sink_k: Option<f64>,
+    albedo: Option<f64>,
+    earth_ir_w_per_m2: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(
+    untagged,
+    expecting = "a number, or a table {time_s = [...], value = [...]} (or time_days)"
+)]
+enum RawProfile {
+    Constant(f64),
+    Table(RawTable),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTable {
+    time_s: Option<Vec<f64>>,
+    time_days: Option<Vec<f64>>,
+    value: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRun {
+    orbits: Option<f64>,
+    duration_s: Option<f64>,
+    duration_days: Option<f64>,
+    output_interval_s: Option<f64>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawSolver {
+    method: Option<String>,
+    tolerance_k: Option<f64>,
+    max_step_s: Option<f64>,
+    adaptive: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawNode {
+    name: String,
+    capacitance_j_per_k: f64,
+    initial_temperature_k: f64,
+    radius_mm: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBoundary {
+    name: String,
+    temperature_k: RawProfile,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConductor {
+    between: [String; 2],
+    conductance_w_per_k: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRadiation {
+    between: [String; 2],
+    emissivity_area_m2: Option<f64>,
+    emissivity: Option<f64>,
+    area_m2: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSun {
+    name: Option<String>,
+    node: String,
+    absorptivity_area_m2: Option<f64>,
+    absorptivity: Option<f64>,
+    area_m2: Option<f64>,
+    incidence: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAlbedo {
+    name: Option<String>,
+    node: String,
+    absorptivity_area_m2: Option<f64>,
+    absorptivity: Option<f64>,
+    area_m2: Option<f64>,
+    view_factor: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEarthIr {
+    name: Option<String>,
+    node: String,
+    emissivity_area_m2: Option<f64>,
+    emissivity: Option<f64>,
+    area_m2: Option<f64>,
+    view_factor: Option<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDissipation {
+    name: Option<String>,
+    node: String,
+    power_w: RawProfile,
+    when: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHeater {
+    name: Option<String>,
+    node: String,
+    sensor_node: Option<String>,
+    power_w: f64,
+    on_k: f64,
+    off_k: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMode {
+    name: String,
+    windows_s: Option<Vec<[f64; 2]>>,
+    windows_days: Option<Vec<[f64; 2]>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSensor {
+    column: String,
+    node: Option<String>,
+    quantity: Option<String>,
+}
+
+// ---------------------------------------------------------------- key paths
+
+#[derive(Clone)]
+enum Seg {
+    K(&'static str),
+    I(usize),
+}
+
+#[derive(Clone)]
+struct KeyPath(Vec<Seg>);
+
+impl KeyPath {
+    fn new(k: &'static str) -> KeyPath {
+        KeyPath(vec![Seg::K(k)])
+    }
+    fn at(&self, i: usize) -> KeyPath {
+        let mut p = self.clone();
+        p.0.push(Seg::I(i));
+        p
+    }
+    fn key(&self, k: &'static str) -> KeyPath {
+        let mut p = self.clone();
+        p.0.push(Seg::K(k));
+        p
+    }
+}
+
+impl fmt::Display for KeyPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (n, s) in self.0.iter().enumerate() {
+            match s {
+                Seg::K(k) if n == 0 => write!(f, "{k}")?,
+                Seg::K(k) => write!(f, ".{k}")?,
+                Seg::I(i) => write!(f, "[{i}]")?,
+            }
+        }
+        Ok(())
+    }
+}
+
+struct Cx<'a> {
+    file: &'a str,
+    text: &'a str,
+}
+
+impl Cx<'_> {
+    /// An error at `path`, located at the deepest part of the path present in the file.
+    fn err(&self, path: &KeyPath, message: impl Into<String>) -> ScenarioError {
+        let offset = locate(self.text, path).unwrap_or(0);
+        let before = &self.text[..offset.min(self.text.len())];
+        let line = before.matches('\n').count() + 1;
+        let column = before.len() - before.rfind('\n').map_or(0, |p| p + 1) + 1;
+        ScenarioError::Invalid {
+            file: self.file.to_string(),
+            line,
+            column,
+            key: path.to_string(),
+            message: message.into(),
+        }
+    }
+
+    fn finite(&self, path: &KeyPath, v: f64) -> Result<f64, ScenarioError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be a finite number (got {v})")))
+        }
+    }
+
+    fn positive(&self, path: &KeyPath, v: f64) -> Result<f64, ScenarioError> {
+        self.finite(path, v)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be > 0 (got {v})")))
+        }
+    }
+
+    fn non_negative(&self, path: &KeyPath, v: f64) -> Result<f64, ScenarioError> {
+        self.finite(path, v)?;
+        if v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be ≥ 0 (got {v})")))
+        }
+    }
+
+    fn within(
+        &self,
+        path: &KeyPath,
+        v: f64,
+        lo: f64,
+        hi: f64,
+        what: &str,
+    ) -> Result<f64, ScenarioError> {
+        self.finite(path, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("{what} must be within {lo} … {hi} (got {v})")))
+        }
+    }
+
+    fn temperature(&self, path: &KeyPath, v: f64) -> Result<f64, ScenarioError> {
+        self.finite(path, v)?;
+        if v > 0.0 && v < 5000.0 {
+            Ok(v)
+        } else {
+            Err(self.err(
+                path,
+                format!("is a temperature in kelvin and must be within 0 … 5000 K (got {v}; °C values need + 273.15)"),
+            ))
+        }
+    }
+
+    fn profile(
+        &self,
+        path: &KeyPath,
+        raw: RawProfile,
+        check: &dyn Fn(&KeyPath, f64) -> Result<f64, ScenarioError>,
+    ) -> Result<Profile, ScenarioError> {
+        match raw {
+            RawProfile::Constant(v) => Ok(Profile::Constant(check(path, v)?)),
+            RawProfile::Table(t) => {
+                let (time_s, tkey) = match (t.time_s, t.time_days) {
+                    (Some(s), None) => (s, "time_s"),
+                    (None, Some(d)) => (
+                        d.into_iter().map(|x| x * SECONDS_PER_DAY).collect(),
+                        "time_days",
+                    ),
+                    _ => {
+                        return Err(
+                            self.err(path, "a table needs exactly one of `time_s` or `time_days`")
+                        );
+                    }
+                };
+                let tpath = path.key(tkey);
+                if time_s.is_empty() {
+                    return Err(self.err(&tpath, "must not be empty"));
+                }
+                if time_s.len() != t.value.len() {
+                    return Err(self.err(
+                        &path.key("value"),
+                        format!(
+                            "has {} entries but `{tkey}` has {}",
+                            t.value.len(),
+                            time_s.len()
+                        ),
+                    ));
+                }
+                for (i, w) in time_s.windows(2).enumerate() {
+                    self.finite(&tpath.at(i + 1), w[1])?;
+                    if w[1] <= w[0] {
+                        return Err(self.err(
+                            &tpath.at(i + 1),
+                            format!(
+                                "times must increase strictly (entry {} is not after entry {i})",
+                                i + 1
+                            ),
+                        ));
+                    }
+                }
+                self.finite(&tpath.at(0), time_s[0])?;
+                let mut value = Vec::with_capacity(t.value.len());
+                for (i, v) in t.value.into_iter().enumerate() {
+                    value.push(check(&path.key("value").at(i), v)?);
+                }
+                Ok(Profile::Table { time_s, value })
+            }
+        }
+    }
+
+    /// `product` or both `a` and `b` (their product), never both forms.
+    fn product(
+        &self,
+        path: &KeyPath,
+        product: (Option<f64>, &'static str),
+        a: (Option<f64>, &'static str),
+        b: (Option<f64>, &'static str),
+        a_max: f64,
+    ) -> Result<f64, ScenarioError> {
+        match (product.0, a.0, b.0) {
+            (Some(p), None, None) => self.positive(&path.key(product.1), p),
+            (None, Some(x), Some(y)) => {
+                let x = self.within(&path.key(a.1), x, 0.0, a_max, a.1)?;
+                let y = self.positive(&path.key(b.1), y)?;
+                Ok(x * y)
+            }
+            _ => Err(self.err(
+                path,
+                format!(
+                    "give either `{}` or both `{}` and `{}`",
+                    product.1, a.1, b.1
+                ),
+            )),
+        }
+    }
+}
+
+/// Byte offset of the deepest key of `path` present in `text`.
+fn locate(text: &str, path: &KeyPath) -> Option<usize> {
+    let doc = toml_edit::Document::parse(text).ok()?;
+    let mut item = doc.as_item();
+    let mut best = None;
+    for seg in &path.0 {
+        let next = match seg {
+            Seg::K(k) => {
+                let key_span = item
+                    .as_table_like()
+                    .and_then(|t| t.get_key_value(k))
+                    .and_then(|(key, _)| key.span());
+                let next = item.get(*k);
+                if let Some(nx) = next {
+                    best = key_span.or_else(|| nx.span()).map(|r| r.start).or(best);
+                }
+                next
+            }
+            Seg::I(i) => {
+                let next = item.get(*i);
+                if let Some(nx) = next {
+                    best = nx.span().map(|r| r.start).or(best);
+                }
+                next
+            }
+        };
+        match next {
+            Some(nx) => item = nx,
+            None => break,
+        }
+    }
+    best
+}
+
+// ---------------------------------------------------------------- validation
+
+const SPACE: &str = "space";
+
+fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
+    let meta_p = KeyPath::new("scenario");
+    if raw.scenario.name.trim().is_empty() {
+        return Err(cx.err(&meta_p.key("name"), "must not be empty"));
+    }
+
+    // Orbit.
+    let op = KeyPath::new("orbit");
+    let earth_radius_m = cx.positive(
+        &op.key("earth_radius_m"),
+        raw.orbit.earth_radius_m.unwrap_or(EARTH_RADIUS_M),
+    )?;
+    let altitude_m = cx.finite(&op.key("altitude_m"), raw.orbit.altitude_m)?;
+    if !(100e3..=100_000e3).contains(&altitude_m) {
+        return Err(cx.err(
+            &op.key("altitude_m"),
+            format!("must be within 100 km … 100 000 km, in metres (got {altitude_m} m)"),
+        ));
+    }
+    let orbit = Orbit {
+        altitude_m,
+        earth_radius_m,
+        mu_m3_per_s2: cx.positive(
+            &op.key("mu_m3_per_s2"),
+            raw.orbit.mu_m3_per_s2.unwrap_or(EARTH_MU_M3_PER_S2),
+        )?,
+        orbit_angle_at_start_rad: cx
+            .finite(
+                &op.key("orbit_angle_at_start_deg"),
+                raw.orbit.orbit_angle_at_start_deg.unwrap_or(0.0),
+            )?
+            .to_radians(),
+    };
+
+    // Environment and mission profile.
+    let ep = KeyPath::new("environment");
+    let e = raw.environment;
+    let beta_deg = cx.profile(&ep.key("beta_deg"), e.beta_deg, &|p, v| {
+        cx.within(p, v, -90.0, 90.0, "beta angle (deg)")
+    })?;
+    let solar_flux = cx.profile(
+        &ep.key("solar_flux_w_per_m2"),
+        e.solar_flux_w_per_m2
+            .unwrap_or(RawProfile::Constant(SOLAR_CONSTANT_W_PER_M2)),
+        &|p, v| cx.non_negative(p, v),
+    )?;
+    let space_sink_k = e.space_sink_k.unwrap_or(3.0);
+    cx.non_negative(&ep.key("space_sink_k"), space_sink_k)?;
+    let environment = Environment {
+        orbit,
+        beta_rad: beta_deg.map(f64::to_radians),
+        solar_flux_w_per_m2: solar_flux,
+        albedo: cx.within(
+            &ep.key("albedo"),
+            e.albedo.unwrap_or(0.30),
+            0.0,
+            1.0,
+            "albedo",
+        )?,
+        earth_ir_w_per_m2: cx.non_negative(
+            &ep.key("earth_ir_w_per_m2"),
+            e.earth_ir_w_per_m2.unwrap_or(237.0),
+        )?,
+        space_sink_k,
+    };
+    let view_factor_default = environment.orbit.earth_view_factor();
+
+    // Run control.
+    let rp = KeyPath::new("run");
+    let period_s = environment.orbit.period_s();
+    let duration_s = match (raw.run.orbits, raw.run.duration_s, raw.run.duration_days) {
+        (Some(o), None, None) => cx.positive(&rp.key("orbits"), o)? * period_s,
+        (None, Some(s), None) => cx.positive(&rp.key("duration_s"), s)?,
+        (None, None, Some(d)) => cx.positive(&rp.key("duration_days"), d)? * SECONDS_PER_DAY,
+        _ => {
+            return Err(cx.err(
+                &rp,
+                "give exactly one of `orbits`, `duration_s` or `duration_days`",
+            ));
+        }
+    };
+    let run = RunControl {
+        duration_s,
+        output_interval_s: cx.positive(
+            &rp.key("output_interval_s"),
+            raw.run.output_interval_s.unwrap_or(30.0),
+        )?,
+    };
+
+    // Solver.
+    let sp = KeyPath::new("solver");
+    if let Some(m) = &raw.solver.method
+        && m != "tr-bdf2"
+    {
+        return Err(cx.err(
+            &sp.key("method"),
+            format!("unknown method `{m}` (known: tr-bdf2)"),
+        ));
+    }
+    let defaults = SolverSettings::default();
+    let solver = SolverSettings {
+        tolerance_k: cx.positive(
+            &sp.key("tolerance_k"),
+            raw.solver.tolerance_k.unwrap_or(defaults.tolerance_k),
+        )?,
+        max_step_s: cx.positive(
+            &sp.key("max_step_s"),
+            raw.solver.max_step_s.unwrap_or(defaults.max_step_s),
+        )?,
+        adaptive: raw.solver.adaptive.unwrap_or(defaults.adaptive),
+    };
+
+    // Nodes.
+    let mut names: HashMap<String, NodeRef> = HashMap::new();
+    let np = KeyPath::new("node");
+    let mut nodes = Vec::new();
+    for (i, n) in raw.node.into_iter().enumerate() {
+        let p = np.at(i);
+        check_name(cx, &p.key("name"), &n.name, &names)?;
+        let node = DiffusionNode {
+            capacitance_j_per_k: cx
+                .positive(&p.key("capacitance_j_per_k"), n.capacitance_j_per_k)?,
+            initial_temperature_k: cx
+                .temperature(&p.key("initial_temperature_k"), n.initial_temperature_k)?,
+            radius_m: match n.radius_mm {
+                Some(r) => Some(cx.positive(&p.key("radius_mm"), r)? * 1e-3),
+                None => None,
+            },
+            name: n.name,
+        };
+        names.insert(node.name.clone(), NodeRef::Diffusion(i));
+        nodes.push(node);
+    }
+    if nodes.is_empty() {
+        return Err(cx.err(
+            &np,
+            "the network needs at least one diffusion node ([[node]])",
+        ));
+    }
+    let bp = KeyPath::new("boundary");
+    let mut boundaries = vec![BoundaryNode {
+        name: SPACE.to_string(),
+        temperature_k: Profile::Constant(space_sink_k),
+    }];
+    names.insert(SPACE.to_string(), NodeRef::Boundary(0));
+    for (i, b) in raw.boundary.into_iter().enumerate() {
+        let p = bp.at(i);
+        if b.name == SPACE {
+            return Err(cx.err(
+                &p.key("name"),
+                "`space` is built in; set its temperature with environment.space_sink_k",
+            ));
+        }
+        check_name(cx, &p.key("name"), &b.name, &names)?;
+        let t = cx.profile(&p.key("temperature_k"), b.temperature_k, &|pp, v| {
+            cx.temperature(pp, v)
+        })?;
+        names.insert(b.name.clone(), NodeRef::Boundary(boundaries.len()));
+        boundaries.push(BoundaryNode {
+            name: b.name,
+            temperature_k: t,
+        });
+    }
+    let lookup = |p: &KeyPath, name: &str| -> Result<NodeRef, ScenarioError> {
+        names.get(name).copied().ok_or_else(|| {
+            let mut known: Vec<&str> = names.keys().map(String::as_str).collect();
+            known.sort();
+            cx.err(
+                p,
+                format!("unknown node `{name}` (known: {})", known.join(", ")),
+            )
+        })
+    };
+    let diffusion = |p: &KeyPath, name: &str| -> Result<usize, ScenarioError> {
+        match lookup(p, name)? {
+            NodeRef::Diffusion(i) => Ok(i),
+            NodeRef::Boundary(_) => Err(cx.err(
+                p,
+                format!("`{name}` is a boundary node; this needs a diffusion node"),
+            )),
+        }
+    };
+    let pair = |p: &KeyPath, between: &[String; 2]| -> Result<(NodeRef, NodeRef), ScenarioError> {
+        let bp = p.key("between");
+        let a = lookup(&bp.at(0), &between[0])?;
+        let b = lookup(&bp.at(1), &between[1])?;
+        if a == b {
+            return Err(cx.err(&bp, format!("links `{}` to itself", between[0])));
+        }
+        if matches!((a, b), (NodeRef::Boundary(_), NodeRef::Boundary(_))) {
+            return Err(cx.err(
+                &bp,
+                "links two boundary nodes; it would carry no heat the model tracks",
+            ));
+        }
+        Ok((a, b))
+    };
+
+    let mut conductors = Vec::new();
+    for (i, c) in raw.conductor.iter().enumerate() {
+        let p = KeyPath::new("conductor").at(i);
+        let (a, b) = pair(&p, &c.between)?;
+        conductors.push(Conductor {
+            a,
+            b,
+            conductance_w_per_k: cx
+                .positive(&p.key("conductance_w_per_k"), c.conductance_w_per_k)?,
+        });
+    }
+    let mut radiators = Vec::new();
+    for (i, r) in raw.radiation.iter().enumerate() {
+        let p = KeyPath::new("radiation").at(i);
+        let (a, b) = pair(&p, &r.between)?;
+        let ea = cx.product(
+            &p,
+            (r.emissivity_area_m2, "emissivity_area_m2"),
+            (r.emissivity, "emissivity"),
+            (r.area_m2, "area_m2"),
+            1.0,
+        )?;
+        radiators.push(Radiator {
+            a,
+            b,
+            emissivity_area_m2: ea,
+        });
+    }
+
+    // Modes (before loads, which may refer to them).
+    let mut modes = Vec::new();
+    for (i, m) in raw.mode.into_iter().enumerate() {
+        let p = KeyPath::new("mode").at(i);
+        if m.name.trim().is_empty() || ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
+            return Err(cx.err(&p.key("name"), format!("`{}` cannot name a mode", m.name)));
+        }
+        if modes.iter().any(|x: &Mode| x.name == m.name) {
+            return Err(cx.err(
+                &p.key("name"),
+                format!("mode `{}` is defined twice", m.name),
+            ));
+        }
+        let (windows, wkey, scale) = match (m.windows_s, m.windows_days) {
+            (Some(w), None) => (w, "windows_s", 1.0),
+            (None, Some(w)) => (w, "windows_days", SECONDS_PER_DAY),
+            _ => return Err(cx.err(&p, "give exactly one of `windows_s` or `windows_days`")),
+        };
+        let mut windows_s = Vec::new();
+        let mut last_end = f64::NEG_INFINITY;
+        for (k, [a, b]) in windows.into_iter().enumerate() {
+            let wp = p.key(wkey).at(k);
+            cx.finite(&wp, a)?;
+            cx.finite(&wp, b)?;
+            if !(b > a) || a < last_end {
+                return Err(cx.err(
+                    &wp,
+                    "windows are [start, end] with end > start, in increasing order, not overlapping",
+                ));
+            }
+            last_end = b;
+            windows_s.push((a * scale, b * scale));
+        }
+        modes.push(Mode {
+            name: m.name,
+            windows_s,
+        });
+    }
+
+    // Loads.
+    let mut loads = Vec::new();
+    let load_name = |given: Option<String>, kind: &str, node: &str, i: usize| {
+        given.unwrap_or_else(|| {
+            format!(
+                "{kind}{}.{node}",
+                if i == 0 {
+                    String::new()
+                } else {
+                    format!("{i}")
+                }
+            )
+        })
+    };
+    for (i, s) in raw.sun.into_iter().enumerate() {
+        let p = KeyPath::new("sun").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let aa = cx.product(
+            &p,
+            (s.absorptivity_area_m2, "absorptivity_area_m2"),
+            (s.absorptivity, "absorptivity"),
+            (s.area_m2, "area_m2"),
+            1.0,
+        )?;
+        let incidence = match s.incidence.as_deref() {
+            None => Incidence::Tracking,
+            Some(name) => Incidence::from_name(name).ok_or_else(|| {
+                cx.err(
+                    &p.key("incidence"),
+                    format!(
+                        "unknown incidence `{name}` (known: {})",
+                        Incidence::NAMES.join(", ")
+                    ),
+                )
+            })?,
+        };
+        loads.push(Load {
+            name: load_name(s.name, "sun", &s.node, i),
+            node,
+            kind: LoadKind::Sun {
+                absorptivity_area_m2: aa,
+                incidence,
+            },
+        });
+    }
+    for (i, s) in raw.albedo.into_iter().enumerate() {
+        let p = KeyPath::new("albedo").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let aa = cx.product(
+            &p,
+            (s.absorptivity_area_m2, "absorptivity_area_m2"),
+            (s.absorptivity, "absorptivity"),
+            (s.area_m2, "area_m2"),
+            1.0,
+        )?;
+        let vf = cx.within(
+            &p.key("view_factor"),
+            s.view_factor.unwrap_or(view_factor_default),
+            0.0,
+            1.0,
+            "view factor",
+        )?;
+        loads.push(Load {
+            name: load_name(s.name, "albedo", &s.node, i),
+            node,
+            kind: LoadKind::Albedo {
+                absorptivity_area_m2: aa,
+                view_factor: vf,
+            },
+        });
+    }
+    for (i, s) in raw.earth_ir.into_iter().enumerate() {
+        let p = KeyPath::new("earth_ir").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let ea = cx.product(
+            &p,
+            (s.emissivity_area_m2, "emissivity_area_m2"),
+            (s.emissivity, "emissivity"),
+            (s.area_m2, "area_m2"),
+            1.0,
+        )?;
+        let vf = cx.within(
+            &p.key("view_factor"),
+            s.view_factor.unwrap_or(view_factor_default),
+            0.0,
+            1.0,
+            "view factor",
+        )?;
+        loads.push(Load {
+            name: load_name(s.name, "earth_ir", &s.node, i),
+            node,
+            kind: LoadKind::EarthIr {
+                emissivity_area_m2: ea,
+                view_factor: vf,
+            },
+        });
+    }
+    for (i, s) in raw.dissipation.into_iter().enumerate() {
+        let p = KeyPath::new("dissipation").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let power = cx.profile(&p.key("power_w"), s.power_w, &|pp, v| {
+            cx.non_negative(pp, v)
+        })?;
+        let when = match s.when.as_deref() {
+            None | Some("always") => When::Always,
+            Some("sunlit") => When::Sunlit,
+            Some("eclipse") => When::Eclipse,
+            Some(m) => When::Mode(modes.iter().position(|x| x.name == m).ok_or_else(|| {
+                cx.err(
+                    &p.key("when"),
+                    format!(
+                        "`{m}` is neither always, sunlit, eclipse nor a mode defined with [[mode]]"
+                    ),
+                )
+            })?),
+        };
+        loads.push(Load {
+            name: load_name(s.name, "dissipation", &s.node, i),
+            node,
+            kind: LoadKind::Dissipation {
+                power_w: power,
+                when,
+            },
+        });
+    }
+    let mut heaters = Vec::new();
+    for (i, h) in raw.heater.into_iter().enumerate() {
+        let p = KeyPath::new("heater").at(i);
+        let node = diffusion(&p.key("node"), &h.node)?;
+        let sensor_node = match &h.sensor_node {
+            Some(s) => diffusion(&p.key("sensor_node"), s)?,
+            None => node,
+        };
+        let on_k = cx.temperature(&p.key("on_k"), h.on_k)?;
+        let off_k = cx.temperature(&p.key("off_k"), h.off_k)?;
+        if on_k >= off_k {
+            return Err(cx.err(
+                &p.key("off_k"),
+                format!("must be above on_k ({on_k} K): the heater switches on when the sensor falls to on_k and off when it rises to off_k"),
+            ));
+        }
+        heaters.push(Heater {
+            name: h.name.unwrap_or_else(|| format!("heater.{}", h.node)),
+            node,
+            sensor_node,
+            power_w: cx.positive(&p.key("power_w"), h.power_w)?,
+            on_k,
+            off_k,
+        });
+    }
+
+    // Sensors.
+    let mut sensors: Vec<Sensor> = Vec::new();
+    for (i, s) in raw.sensor.into_iter().enumerate() {
+        let p = KeyPath::new("sensor").at(i);
+        if sensors.iter().any(|x| x.column == s.column) {
+            return Err(cx.err(
+                &p.key("column"),
+                format!("column `{}` is defined twice", s.column),
+            ));
+        }
+        let target = match (s.node, s.quantity) {
+            (Some(n), None) => SensorTarget::Node(diffusion(&p.key("node"), &n)?),
+            (None, Some(q)) => {
+                if !DERIVED_QUANTITIES.contains(&q.as_str()) {
+                    return Err(cx.err(
+                        &p.key("quantity"),
+                        format!(
+                            "unknown quantity `{q}` (known: {})",
+                            DERIVED_QUANTITIES.join(", ")
+                        ),
+                    ));
+                }
+                SensorTarget::Derived(q)
+            }
+            _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
+        };
+        sensors.push(Sensor {
+            column: s.column,
+            target,
+        });
+    }
+
+    Ok(Scenario {
+        name: raw.scenario.name,
+        description: raw.scenario.description,
+        thermal: ThermalModel {
+            environment,
+            network: Network {
+                nodes,
+                boundaries,
+                conductors,
+                radiators,
+                loads,
+                heaters,
+            },
+            modes,
+        },
+        run,
+        solver,
+        sensors,
+    })
+}
+
+fn check_name(
+    cx: &Cx<'_>,
+    p: &KeyPath,
+    name: &str,
+    names: &HashMap<String, NodeRef>,
+) -> Result<(), ScenarioError> {
+    if name.trim().is_empty() || name.contains(',') || name.chars().any(char::is_whitespace) {
+        return Err(cx.err(
+            p,
+            format!("`{name}` is not a valid node name (no spaces or commas)"),
+        ));
+    }
+    if names.contains_key(name) {
+        return Err(cx.err(p, format!("node `{name}` is defined twice")));
+    }
+    Ok(())
+}

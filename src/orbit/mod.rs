@@ -1,0 +1,334 @@
+//! Circular-orbit geometry, the cylindrical Earth shadow, and the environment a
+//! spacecraft face sees (Sun, albedo, Earth infrared) along a mission profile.
+//!
+//! Frame: the orbit plane is spanned by `e1`, the in-plane direction closest to the
+//! Sun, and `e2`, 90° ahead along the motion; `n` is the orbit normal. The Sun
+//! direction is `cos β e1 + sin β n`. The orbit angle θ is measured from `e1`
+//! (θ = 0 is orbit noon), so the radial unit vector is `cos θ e1 + sin θ e2`.
+
+pub mod table;
+
+use std::f64::consts::PI;
+
+pub use table::Profile;
+
+/// A circular orbit about a spherical Earth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Orbit {
+    pub altitude_m: f64,
+    pub earth_radius_m: f64,
+    pub mu_m3_per_s2: f64,
+    /// Orbit angle at t = 0, rad (0 = orbit noon).
+    pub orbit_angle_at_start_rad: f64,
+}
+
+impl Orbit {
+    /// Orbit radius R + h, m.
+    pub fn radius_m(&self) -> f64 {
+        self.earth_radius_m + self.altitude_m
+    }
+
+    /// Period T = 2π √((R+h)³/μ), s.
+    pub fn period_s(&self) -> f64 {
+        2.0 * PI * (self.radius_m().powi(3) / self.mu_m3_per_s2).sqrt()
+    }
+
+    /// Orbit angle θ(t), rad, unwrapped.
+    pub fn orbit_angle_rad(&self, t_s: f64) -> f64 {
+        self.orbit_angle_at_start_rad + 2.0 * PI * t_s / self.period_s()
+    }
+
+    /// Orbit number (1-based) at time `t_s`: orbit k covers [(k−1)T, kT).
+    pub fn orbit_number(&self, t_s: f64) -> u64 {
+        (t_s / self.period_s()).floor().max(0.0) as u64 + 1
+    }
+
+    /// Earth view factor of a nadir face, (R/(R+h))².
+    pub fn earth_view_factor(&self) -> f64 {
+        (self.earth_radius_m / self.radius_m()).powi(2)
+    }
+
+    /// √(1 − (R/(R+h))²): the spacecraft is eclipsed when cos θ cos β < −this.
+    pub fn shadow_threshold(&self) -> f64 {
+        (1.0 - self.earth_view_factor()).sqrt()
+    }
+
+    /// Largest |β| at which eclipses occur, rad: arcsin(R/(R+h)).
+    pub fn critical_beta_rad(&self) -> f64 {
+        (self.earth_radius_m / self.radius_m()).asin()
+    }
+
+    /// Eclipse half-angle φ about orbit midnight, rad:
+    /// cos φ = √((R+h)² − R²) / ((R+h) cos β); 0 when there is no eclipse.
+    pub fn eclipse_half_angle_rad(&self, beta_rad: f64) -> f64 {
+        let c = self.shadow_threshold() / beta_rad.cos();
+        if c >= 1.0 { 0.0 } else { c.acos() }
+    }
+
+    /// Fraction of the orbit in eclipse, φ/π.
+    pub fn eclipse_fraction(&self, beta_rad: f64) -> f64 {
+        self.eclipse_half_angle_rad(beta_rad) / PI
+    }
+
+    /// Shadow function g = cos θ cos β + √(1 − (R/(R+h))²); eclipsed iff g < 0
+    /// (cylindrical shadow, no penumbra).
+    pub fn shadow_function(&self, theta_rad: f64, beta_rad: f64) -> f64 {
+        theta_rad.cos() * beta_rad.cos() + self.shadow_threshold()
+    }
+}
+
+/// A face orientation for the Sun load's incidence law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Incidence {
+    /// The face tracks the Sun: factor 1 whenever sunlit.
+    Tracking,
+    /// Body-fixed faces of a nadir-pointing spacecraft (LVLH frame).
+    Zenith,
+    Nadir,
+    Ram,
+    Wake,
+    /// +orbit normal (towards the Sun's side for β > 0) and −orbit normal.
+    NormalPlus,
+    NormalMinus,
+}
+
+impl Incidence {
+    /// cos of the Sun incidence angle on the face, clamped at 0 (face in its own shadow).
+    /// Not inlined: the optimiser would otherwise compute the trigonometry of every
+    /// face kind before the match, even for a Sun-tracking face.
+    #[inline(never)]
+    pub fn factor(self, theta_rad: f64, beta_rad: f64) -> f64 {
+        let c = match self {
+            Incidence::Tracking => 1.0,
+            Incidence::Zenith => theta_rad.cos() * beta_rad.cos(),
+            Incidence::Nadir => -theta_rad.cos() * beta_rad.cos(),
+            Incidence::Ram => -theta_rad.sin() * beta_rad.cos(),
+            Incidence::Wake => theta_rad.sin() * beta_rad.cos(),
+            Incidence::NormalPlus => beta_rad.sin(),
+            Incidence::NormalMinus => -beta_rad.sin(),
+        };
+        c.max(0.0)
+    }
+
+    pub const NAMES: [&'static str; 7] = [
+        "tracking",
+        "zenith",
+        "nadir",
+        "ram",
+        "wake",
+        "normal_plus",
+        "normal_minus",
+    ];
+
+    pub fn from_name(name: &str) -> Option<Incidence> {
+        Some(match name {
+            "tracking" => Incidence::Tracking,
+            "zenith" => Incidence::Zenith,
+            "nadir" => Incidence::Nadir,
+            "ram" => Incidence::Ram,
+            "wake" => Incidence::Wake,
+            "normal_plus" => Incidence::NormalPlus,
+            "normal_minus" => Incidence::NormalMinus,
+            _ => return None,
+        })
+    }
+}
+
+/// The orbital environment over mission time: the orbit plus the mission profile of
+/// β and solar flux, Earth albedo and infrared, and the deep-space sink.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Environment {
+    pub orbit: Orbit,
+    /// β(t), rad.
+    pub beta_rad: Profile,
+    /// S(t), W/m².
+    pub solar_flux_w_per_m2: Profile,
+    /// Albedo coefficient a.
+    pub albedo: f64,
+    /// Earth infrared flux at the top of the atmosphere, W/m².
+    pub earth_ir_w_per_m2: f64,
+    pub space_sink_k: f64,
+}
+
+/// The environment at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnvState {
+    pub t_s: f64,
+    pub orbit_angle_rad: f64,
+    pub beta_rad: f64,
+    pub solar_flux_w_per_m2: f64,
+    pub sunlit: bool,
+}
+
+impl Environment {
+    /// The environment at `t_s`. `sunlit` is decided by the caller's `phase_time_s`
+    /// (the midpoint of a step that the solver made land on eclipse boundaries), so
+    /// that round-off at a boundary cannot flip it inside a step.
+    pub fn state(&self, t_s: f64, phase_time_s: f64) -> EnvState {
+        self.state_with(t_s, self.sunlit(phase_time_s))
+    }
+
+    /// The environment at `t_s` with the sunlit flag already decided.
+    pub fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
+        EnvState {
+            t_s,
+            orbit_angle_rad: self.orbit.orbit_angle_rad(t_s),
+            beta_rad: self.beta_rad.at(t_s),
+            solar_flux_w_per_m2: self.solar_flux_w_per_m2.at(t_s),
+            sunlit,
+        }
+    }
+
+    /// Whether the spacecraft is in sunlight at `t_s`.
+    pub fn sunlit(&self, t_s: f64) -> bool {
+        self.shadow(t_s) >= 0.0
+    }
+
+    fn shadow(&self, t_s: f64) -> f64 {
+        self.orbit
+            .shadow_function(self.orbit.orbit_angle_rad(t_s), self.beta_rad.at(t_s))
+    }
+
+    /// The first eclipse entry or exit strictly after `t_s` and before `until_s`,
+    /// found by scanning the shadow function in 1° steps of orbit angle and refining
+    /// by bisection to round-off. Returns `(time, entering_eclipse)`.
+    pub fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
+        if let Profile::Constant(beta) = self.beta_rad {
+            return self.next_shadow_crossing_constant_beta(beta, t_s, until_s);
+        }
+        let dt = self.orbit.period_s() / 360.0;
+        let mut a = t_s + 1e-9 * dt;
+        let mut ga = self.shadow(a);
+        while a < until_s {
+            let b = (a + dt).min(until_s);
+            let gb = self.shadow(b);
+            if (ga >= 0.0) != (gb >= 0.0) {
+                let entering = ga >= 0.0;
+                let (mut lo, mut hi) = (a, b);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        break;
+                    }
+                    if (self.shadow(mid) >= 0.0) == entering {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                return Some((hi, entering));
+            }
+            a = b;
+            ga = gb;
+        }
+        None
+    }
+
+    /// Closed form for constant β: entry at θ = π − φ, exit at θ = π + φ (mod 2π).
+    fn next_shadow_crossing_constant_beta(
+        &self,
+        beta: f64,
+        t_s: f64,
+        until_s: f64,
+    ) -> Option<(f64, bool)> {
+        let phi = self.orbit.eclipse_half_angle_rad(beta);
+        if phi == 0.0 {
+            return None;
+        }
+        let period = self.orbit.period_s();
+        let omega = 2.0 * PI / period;
+        let theta = self.orbit.orbit_angle_rad(t_s);
+        let turn = ((theta - (PI - phi)) / (2.0 * PI)).floor();
+        let base = turn * 2.0 * PI;
+        // Candidates in increasing θ; the first strictly after t (by more than round-off).
+        let eps = 1e-9 * (1.0 + t_s.abs());
+        for k in 0..3 {
+            let b = base + 2.0 * PI * k as f64;
+            for (angle, entering) in [(b + PI - phi, true), (b + PI + phi, false)] {
+                let t = t_s + (angle - theta) / omega;
+                if t > t_s + eps {
+                    return (t < until_s).then_some((t, entering));
+                }
+            }
+        }
+        None
+    }
+
+    /// Heat absorbed from direct Sun, W, by an area `absorptivity_area_m2` (α·A).
+    pub fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
+        if !s.sunlit {
+            return 0.0;
+        }
+        let factor = match incidence {
+            Incidence::Tracking => 1.0,
+            _ => incidence.factor(s.orbit_angle_rad, s.beta_rad),
+        };
+        absorptivity_area_m2 * s.solar_flux_w_per_m2 * factor
+    }
+
+    /// Earth albedo on a nadir face, W: α·A · S · a · F · max(0, cos θ cos β).
+    /// Not inlined, so that its trigonometry is not hoisted into load loops that
+    /// have no albedo load.
+    #[inline(never)]
+    pub fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64 {
+        absorptivity_area_m2
+            * s.solar_flux_w_per_m2
+            * self.albedo
+            * view_factor
+            * (s.orbit_angle_rad.cos() * s.beta_rad.cos()).max(0.0)
+    }
+
+    /// Earth infrared on a nadir face, W: ε·A · q_IR · F.
+    pub fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64 {
+        emissivity_area_m2 * self.earth_ir_w_per_m2 * view_factor
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::constants::*;
+
+    fn reference() -> Environment {
+        Environment {
+            orbit: Orbit {
+                altitude_m: 500e3,
+                earth_radius_m: EARTH_RADIUS_M,
+                mu_m3_per_s2: EARTH_MU_M3_PER_S2,
+                orbit_angle_at_start_rad: 0.0,
+            },
+            beta_rad: Profile::Constant(20f64.to_radians()),
+            solar_flux_w_per_m2: Profile::Constant(1361.0),
+            albedo: 0.3,
+            earth_ir_w_per_m2: 237.0,
+            space_sink_k: 3.0,
+        }
+    }
+
+    #[test]
+    fn crossings_match_half_angle() {
+        let env = reference();
+        let t = env.orbit.period_s();
+        let phi = env.orbit.eclipse_half_angle_rad(20f64.to_radians());
+        let (t_in, entering) = env.next_shadow_crossing(0.0, 2.0 * t).unwrap();
+        assert!(entering);
+        assert!((t_in - t * (PI - phi) / (2.0 * PI)).abs() < 1e-6);
+        let (t_out, entering) = env.next_shadow_crossing(t_in, 2.0 * t).unwrap();
+        assert!(!entering);
+        assert!((t_out - t * (PI + phi) / (2.0 * PI)).abs() < 1e-6);
+        assert!(!env.sunlit(0.5 * (t_in + t_out)));
+        assert!(env.sunlit(t_out + 1.0));
+    }
+
+    #[test]
+    fn no_eclipse_above_critical_beta() {
+        let mut env = reference();
+        let crit = env.orbit.critical_beta_rad();
+        env.beta_rad = Profile::Constant(crit + 0.01);
+        assert_eq!(env.orbit.eclipse_fraction(crit + 0.01), 0.0);
+        assert!(
+            env.next_shadow_crossing(0.0, 10.0 * env.orbit.period_s())
+                .is_none()
+        );
+    }
+}

@@ -1,0 +1,525 @@
+//! The stepping loop: adaptive TR-BDF2 steps that land exactly on eclipse entry and
+//! exit, mission-profile breakpoints and thermostat switching times; energy
+//! bookkeeping; observers that see every accepted step and every event.
+//!
+//! Observers follow the "()` costs nothing" pattern: `()` is an observer that does
+//! nothing, tuples and `Option`s of observers are observers.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use crate::orbit::EnvState;
+use crate::thermal::solver::{StepData, StepFailure, Stepper, W0, W1, hermite};
+use crate::thermal::{StepSwitches, ThermalModel};
+
+/// Integration settings. Defaults meet 0.05 K against a step-converged solution on
+/// the reference network (see `tests/val_step_halving.rs`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverSettings {
+    /// Local error per step allowed on any node, K. Default 0.002; typical 1e-4 … 0.01.
+    pub tolerance_k: f64,
+    /// Longest step, s. Default 300; the step is also capped by events.
+    pub max_step_s: f64,
+    /// Adaptive step-size control; when false every step is `max_step_s` (except
+    /// where it lands on an event).
+    pub adaptive: bool,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            tolerance_k: 0.002,
+            max_step_s: 300.0,
+            adaptive: true,
+        }
+    }
+}
+
+/// Steps shorter than this are not attempted, s.
+pub const MIN_STEP_S: f64 = 1e-7;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventKind {
+    EclipseEntry,
+    EclipseExit,
+    HeaterOn(usize),
+    HeaterOff(usize),
+    ModeStart(usize),
+    ModeEnd(usize),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Event {
+    pub t_s: f64,
+    pub kind: EventKind,
+}
+
+/// What an observer sees of one accepted step.
+pub struct StepView<'a> {
+    pub index: u64,
+    pub data: &'a StepData,
+    /// Environment at the end of the step (sunlit as during the step).
+    pub env1: EnvState,
+    pub heaters_on: &'a [bool],
+    pub modes_active: &'a [bool],
+    /// Each load's heat at the end of the step, W (as `Network::loads`).
+    pub load_w: &'a [f64],
+}
+
+impl StepView<'_> {
+    pub fn t0_s(&self) -> f64 {
+        self.data.t0_s
+    }
+    pub fn t1_s(&self) -> f64 {
+        self.data.t0_s + self.data.h_s
+    }
+    pub fn temps1_k(&self) -> &[f64] {
+        &self.data.temps1_k
+    }
+    /// Temperature of node `i` at `t_s` within the step (cubic Hermite).
+    pub fn temperature_at(&self, i: usize, t_s: f64) -> f64 {
+        let d = self.data;
+        let s = ((t_s - d.t0_s) / d.h_s).clamp(0.0, 1.0);
+        hermite(
+            d.temps0_k[i],
+            d.temps1_k[i],
+            d.rates0_k_per_s[i],
+            d.rates1_k_per_s[i],
+            d.h_s,
+            s,
+        )
+    }
+    /// All node temperatures at `t_s` within the step.
+    pub fn temperatures_at(&self, t_s: f64, out_k: &mut [f64]) {
+        for (i, o) in out_k.iter_mut().enumerate() {
+            *o = self.temperature_at(i, t_s);
+        }
+    }
+}
+
+pub type ObserverResult = Result<(), Box<dyn std::error::Error + Send + Sync>>;
+
+pub trait Observer {
+    fn on_start(
+        &mut self,
+        _model: &ThermalModel,
+        _t_end_s: f64,
+        _temps_k: &[f64],
+    ) -> ObserverResult {
+        Ok(())
+    }
+    fn on_step(&mut self, _step: &StepView<'_>) -> ObserverResult {
+        Ok(())
+    }
+    fn on_event(&mut self, _event: &Event) -> ObserverResult {
+        Ok(())
+    }
+    fn on_finish(&mut self, _stats: &RunStats) -> ObserverResult {
+        Ok(())
+    }
+}
+
+impl Observer for () {}
+
+impl<O: Observer + ?Sized> Observer for &mut O {
+    fn on_start(&mut self, m: &ThermalModel, t: f64, y: &[f64]) -> ObserverResult {
+        (**self).on_start(m, t, y)
+    }
+    fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
+        (**self).on_step(s)
+    }
+    fn on_event(&mut self, e: &Event) -> ObserverResult {
+        (**self).on_event(e)
+    }
+    fn on_finish(&mut self, s: &RunStats) -> ObserverResult {
+        (**self).on_finish(s)
+    }
+}
+
+impl<O: Observer> Observer for Option<O> {
+    fn on_start(&mut self, m: &ThermalModel, t: f64, y: &[f64]) -> ObserverResult {
+        self.as_mut().map_or(Ok(()), |o| o.on_start(m, t, y))
+    }
+    fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
+        self.as_mut().map_or(Ok(()), |o| o.on_step(s))
+    }
+    fn on_event(&mut self, e: &Event) -> ObserverResult {
+        self.as_mut().map_or(Ok(()), |o| o.on_event(e))
+    }
+    fn on_finish(&mut self, s: &RunStats) -> ObserverResult {
+        self.as_mut().map_or(Ok(()), |o| o.on_finish(s))
+    }
+}
+
+macro_rules! tuple_observer {
+    ($($name:ident $idx:tt),+) => {
+        impl<$($name: Observer),+> Observer for ($($name,)+) {
+            fn on_start(&mut self, m: &ThermalModel, t: f64, y: &[f64]) -> ObserverResult {
+                $(self.$idx.on_start(m, t, y)?;)+ Ok(())
+            }
+            fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
+                $(self.$idx.on_step(s)?;)+ Ok(())
+            }
+            fn on_event(&mut self, e: &Event) -> ObserverResult {
+                $(self.$idx.on_event(e)?;)+ Ok(())
+            }
+            fn on_finish(&mut self, s: &RunStats) -> ObserverResult {
+                $(self.$idx.on_finish(s)?;)+ Ok(())
+            }
+        }
+    };
+}
+tuple_observer!(A 0, B 1);
+tuple_observer!(A 0, B 1, C 2);
+tuple_observer!(A 0, B 1, C 2, D 3);
+tuple_observer!(A 0, B 1, C 2, D 3, E 4);
+
+/// Energy bookkeeping of a run, J. `error_j` = stored + to boundaries − absorbed −
+/// dissipated, each integrated with the method's own quadrature, so it measures how
+/// well the discrete equations were solved (Newton residuals, bookkeeping bugs), not
+/// the time-discretisation error.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct EnergyBalance {
+    pub stored_j: f64,
+    pub absorbed_j: f64,
+    pub dissipated_j: f64,
+    /// Net heat into each boundary node (as `Network::boundaries`).
+    pub to_boundary_j: Vec<f64>,
+}
+
+impl EnergyBalance {
+    pub fn error_j(&self) -> f64 {
+        self.stored_j + self.to_boundary_j.iter().sum::<f64>() - self.absorbed_j - self.dissipated_j
+    }
+    /// |error| relative to the heat that came in.
+    pub fn relative_error(&self) -> f64 {
+        self.error_j().abs() / (self.absorbed_j + self.dissipated_j).abs().max(1e-300)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RunStats {
+    pub t_end_s: f64,
+    pub steps: u64,
+    pub rejected_steps: u64,
+    pub newton_iterations: u64,
+    pub eclipse_time_s: f64,
+    pub eclipse_entries: u64,
+    pub heater_switches: u64,
+    pub energy: EnergyBalance,
+    pub final_temperatures_k: Vec<f64>,
+    /// The run stopped early on request; everything up to `t_end_s` is valid.
+    pub interrupted: bool,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error("solver failed at t = {t_s:.6} s with step {h_s:.3e} s: {source}")]
+    StepFailed {
+        t_s: f64,
+        h_s: f64,
+        source: StepFailure,
+    },
+    #[error("observer failed: {0}")]
+    Observer(Box<dyn std::error::Error + Send + Sync>),
+    #[error("invalid run length {0} s")]
+    BadDuration(f64),
+}
+
+/// Integrates `model` from t = 0 to `t_end_s`.
+pub fn simulate<O: Observer>(
+    model: &ThermalModel,
+    settings: &SolverSettings,
+    t_end_s: f64,
+    observer: &mut O,
+    cancel: Option<&AtomicBool>,
+) -> Result<RunStats, SimError> {
+    if !(t_end_s.is_finite() && t_end_s > 0.0) {
+        return Err(SimError::BadDuration(t_end_s));
+    }
+    let env = &model.environment;
+    let net = &model.network;
+    let n = net.nodes.len();
+    let mut y = net.initial_temperatures_k();
+    let mut heaters_on: Vec<bool> = net
+        .heaters
+        .iter()
+        .map(|h| y[h.sensor_node] <= h.on_k)
+        .collect();
+    let mut modes_active: Vec<bool> = model.modes.iter().map(|m| m.active(0.0)).collect();
+    let breakpoints: Vec<f64> = model
+        .breakpoints_s()
+        .into_iter()
+        .filter(|&b| b > 0.0 && b < t_end_s)
+        .collect();
+    let mut next_bp = 0usize;
+    let mut next_shadow = env.next_shadow_crossing(0.0, t_end_s);
+    // Sunlit or eclipsed between shadow events: decided once at the start (just after
+    // t = 0) and toggled at every crossing the solver lands on.
+    let mut sunlit = env.sunlit(next_shadow.map_or(0.0, |(ts, _)| 0.5 * ts.min(1.0)));
+
+    let mut stepper = Stepper::new(model);
+    let mut stats = RunStats {
+        energy: EnergyBalance {
+            to_boundary_j: vec![0.0; net.boundaries.len()],
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    observer
+        .on_start(model, t_end_s, &y)
+        .map_err(SimError::Observer)?;
+
+    let mut t = 0.0f64;
+    let mut h = (settings.max_step_s).min(if settings.adaptive {
+        1.0
+    } else {
+        f64::INFINITY
+    });
+    let tol = settings.tolerance_k;
+    // A load that switches (eclipse, breakpoint, heater) breaks the smoothness the
+    // controller relies on; the first step after one starts from the size that worked
+    // after the previous one.
+    let mut h_after_event = settings.max_step_s / 30.0;
+    let mut just_after_event = false;
+    while t < t_end_s {
+        if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            stats.interrupted = true;
+            break;
+        }
+        // Next scheduled event.
+        let t_shadow = next_shadow.map_or(f64::INFINITY, |(ts, _)| ts);
+        let t_bp = breakpoints.get(next_bp).copied().unwrap_or(f64::INFINITY);
+        let t_event = t_shadow.min(t_bp).min(t_end_s);
+        let dt_event = t_event - t;
+        let mut h_try = h.min(settings.max_step_s);
+        let mut lands = false;
+        if h_try >= dt_event || dt_event - h_try < 0.1 * h_try {
+            h_try = dt_event;
+            lands = true;
+        } else if dt_event < 2.0 * h_try {
+            h_try = 0.5 * dt_event;
+        }
+
+        let phase_time = t + 0.5 * h_try;
+        for (a, m) in modes_active.iter_mut().zip(&model.modes) {
+            *a = m.active(phase_time);
+        }
+        let env_at = |tt: f64| env.state_with(tt, sunlit);
+        let sw = StepSwitches {
+            heaters_on: &heaters_on,
+            modes_active: &modes_active,
+        };
+        if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try, tol) {
+            if h_try * 0.25 < MIN_STEP_S {
+                return Err(SimError::StepFailed {
+                    t_s: t,
+                    h_s: h_try,
+                    source: e,
+                });
+            }
+            h = h_try * 0.25;
+            stats.rejected_steps += 1;
+            continue;
+        }
+        stats.newton_iterations += stepper.data.newton_iterations as u64;
+        let err = stepper.data.error_max_k() / tol;
+        if settings.adaptive && err > 1.0 && h_try > 1e3 * MIN_STEP_S {
+            h = h_try * (0.9 * err.powf(-1.0 / 3.0)).clamp(0.1, 0.9);
+            stats.rejected_steps += 1;
+            continue;
+        }
+
+        // Thermostats: land on the earliest switching time inside the step.
+        let mut switched: Option<usize> = None;
+        {
+            let mut best_s = f64::INFINITY;
+            for (k, ht) in net.heaters.iter().enumerate() {
+                let i = ht.sensor_node;
+                let d = &stepper.data;
+                let (target, crossed) = if heaters_on[k] {
+                    (ht.off_k, d.temps1_k[i] >= ht.off_k)
+                } else {
+                    (ht.on_k, d.temps1_k[i] <= ht.on_k)
+                };
+                if !crossed {
+                    continue;
+                }
+                let g = |s: f64| {
+                    hermite(
+                        d.temps0_k[i],
+                        d.temps1_k[i],
+                        d.rates0_k_per_s[i],
+                        d.rates1_k_per_s[i],
+                        d.h_s,
+                        s,
+                    ) - target
+                };
+                let s = first_root(&g, heaters_on[k]);
+                if s < best_s {
+                    best_s = s;
+                    switched = Some(k);
+                }
+            }
+            if switched.is_some() && best_s * h_try > MIN_STEP_S && best_s < 1.0 {
+                h_try *= best_s;
+                lands = false;
+                stepper
+                    .step(model, &env_at, sw, t, &y, h_try, tol)
+                    .map_err(|e| SimError::StepFailed {
+                        t_s: t,
+                        h_s: h_try,
+                        source: e,
+                    })?;
+                stats.newton_iterations += stepper.data.newton_iterations as u64;
+            }
+        }
+
+        // Accept.
+        let t_new = if lands { t_event } else { t + h_try };
+        stepper.data.h_s = t_new - t;
+        accumulate_energy(&mut stats.energy, &stepper.data);
+        stats.steps += 1;
+        if !sunlit {
+            stats.eclipse_time_s += t_new - t;
+        }
+        // Loads at the end of the step, for observers.
+        stepper.compiled.set_time(model, &env_at(t_new), sw);
+        let view = StepView {
+            index: stats.steps,
+            data: &stepper.data,
+            env1: env_at(t_new),
+            heaters_on: &heaters_on,
+            modes_active: &modes_active,
+            load_w: &stepper.compiled.each_load_w,
+        };
+        observer.on_step(&view).map_err(SimError::Observer)?;
+        t = t_new;
+        y.copy_from_slice(&stepper.data.temps1_k);
+
+        let event_happened_before_step = just_after_event;
+        just_after_event = false;
+
+        // Events at the new time.
+        if lands && t_event == t_shadow {
+            let (_, entering) = next_shadow.expect("shadow event");
+            sunlit = !entering;
+            let kind = if entering {
+                stats.eclipse_entries += 1;
+                EventKind::EclipseEntry
+            } else {
+                EventKind::EclipseExit
+            };
+            observer
+                .on_event(&Event { t_s: t, kind })
+                .map_err(SimError::Observer)?;
+            next_shadow = env.next_shadow_crossing(t, t_end_s);
+            just_after_event = true;
+        }
+        while breakpoints.get(next_bp).is_some_and(|&b| b <= t) {
+            next_bp += 1;
+            just_after_event = true;
+        }
+        for (k, m) in model.modes.iter().enumerate() {
+            let now = m.active(t + 1e-9 * (1.0 + t));
+            if now != modes_active[k] {
+                let kind = if now {
+                    EventKind::ModeStart(k)
+                } else {
+                    EventKind::ModeEnd(k)
+                };
+                observer
+                    .on_event(&Event { t_s: t, kind })
+                    .map_err(SimError::Observer)?;
+            }
+        }
+        if let Some(k) = switched {
+            heaters_on[k] = !heaters_on[k];
+            stats.heater_switches += 1;
+            just_after_event = true;
+            let kind = if heaters_on[k] {
+                EventKind::HeaterOn(k)
+            } else {
+                EventKind::HeaterOff(k)
+            };
+            observer
+                .on_event(&Event { t_s: t, kind })
+                .map_err(SimError::Observer)?;
+        }
+
+        // Next step size. A step cut short by an event says little about the next
+        // one, so it never shrinks the controller's step.
+        h = if settings.adaptive {
+            let fac = if err > 0.0 {
+                0.9 * err.powf(-1.0 / 3.0)
+            } else {
+                5.0
+            };
+            // Hold the step when it would grow by less than 20 %: the solver then
+            // reuses its factorised iteration matrix.
+            let fac = if (1.0..1.2).contains(&fac) { 1.0 } else { fac };
+            let proposed = h_try * fac.clamp(0.2, 3.0);
+            if event_happened_before_step {
+                h_after_event = proposed;
+            }
+            let next = if lands || switched.is_some() {
+                proposed.max(h)
+            } else {
+                proposed
+            };
+            if just_after_event {
+                next.min(h_after_event)
+            } else {
+                next
+            }
+        } else {
+            settings.max_step_s
+        };
+    }
+    stats.t_end_s = t;
+    stats.energy.stored_j = net
+        .nodes
+        .iter()
+        .zip(&y)
+        .map(|(nd, &yt)| nd.capacitance_j_per_k * (yt - nd.initial_temperature_k))
+        .sum();
+    debug_assert_eq!(y.len(), n);
+    stats.final_temperatures_k = y;
+    observer.on_finish(&stats).map_err(SimError::Observer)?;
+    Ok(stats)
+}
+
+fn accumulate_energy(e: &mut EnergyBalance, d: &StepData) {
+    let w = [W0 * d.h_s, W0 * d.h_s, W1 * d.h_s];
+    for (fl, wk) in d.flows.iter().zip(w) {
+        e.absorbed_j += wk * fl.absorbed_w;
+        e.dissipated_j += wk * fl.dissipated_w;
+        for (acc, q) in e.to_boundary_j.iter_mut().zip(&fl.to_boundary_w) {
+            *acc += wk * q;
+        }
+    }
+}
+
+/// First s in (0, 1] where g changes sign from its value at 0 (rising through zero when
+/// `rising`), found by a scan and bisection. Returns 1 when it only crosses at the end.
+fn first_root(g: &dyn Fn(f64) -> f64, rising: bool) -> f64 {
+    let past = |v: f64| if rising { v >= 0.0 } else { v <= 0.0 };
+    let mut lo = 0.0;
+    let scan = 16;
+    for k in 1..=scan {
+        let s = k as f64 / scan as f64;
+        if past(g(s)) {
+            let mut hi = s;
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if past(g(mid)) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            return hi;
+        }
+        lo = s;
+    }
+    1.0
+}

@@ -1,0 +1,392 @@
+//! TR-BDF2 (Bank et al. 1985; Hosea & Shampine 1996): a one-step, L-stable,
+//! second-order implicit Runge–Kutta method for C dT/dt = f(t, T).
+//!
+//! Stage 1 is the trapezoidal rule to t + γh, stage 2 the BDF2 formula through
+//! t, t + γh and t + h, with γ = 2 − √2 so that both stages share one iteration
+//! matrix W = C − (γ/2) h J. Radiation makes f non-linear: each stage is solved by
+//! Newton iterations with the Jacobian taken at the start of the step.
+//!
+//! The local error estimate is the method's leading term
+//! (−3γ² + 4γ − 2)/(12(2 − γ)) h³ T''' with T''' from the divided difference of
+//! dT/dt over the three stage points, filtered through W⁻¹C as Hosea and Shampine
+//! recommend so that stiff components do not inflate it.
+
+use super::lu::Lu;
+use super::{Compiled, Flows, StepSwitches, ThermalModel};
+use crate::orbit::EnvState;
+
+/// γ = 2 − √2.
+pub const GAMMA: f64 = 2.0 - std::f64::consts::SQRT_2;
+const D: f64 = GAMMA / 2.0;
+/// BDF2 stage: T1 = A Tγ − B T0 + D h F1 (note (1−γ)/(2−γ) = γ/2 = D).
+const A: f64 = 1.0 / (GAMMA * (2.0 - GAMMA));
+const B: f64 = (1.0 - GAMMA) * (1.0 - GAMMA) / (GAMMA * (2.0 - GAMMA));
+/// Quadrature weights of the whole step: T1 = T0 + h (W0 F0 + W0 Fγ + W1 F1).
+pub const W0: f64 = 1.0 / (2.0 * (2.0 - GAMMA));
+pub const W1: f64 = (1.0 - GAMMA) / (2.0 - GAMMA);
+const ERR_CONST: f64 = (-3.0 * GAMMA * GAMMA + 4.0 * GAMMA - 2.0) / (12.0 * (2.0 - GAMMA));
+
+/// Newton iterations stop when the update is below this fraction of the step
+/// tolerance (and never below 1e-9 K).
+const NEWTON_TOL_FRACTION: f64 = 1e-2;
+const NEWTON_MAX_ITER: usize = 12;
+/// Re-evaluate the Jacobian when Newton contracts slower than this.
+const JACOBIAN_REFRESH_THETA: f64 = 0.02;
+
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum StepFailure {
+    #[error("Newton iterations did not converge")]
+    NewtonDiverged,
+    #[error("iteration matrix is singular")]
+    Singular,
+    #[error("temperatures became non-finite or non-positive")]
+    NonPhysical,
+}
+
+/// Stopping rule of the simplified Newton iterations (Hairer & Wanner, Solving
+/// ODEs II, §IV.8): with contraction rate θ estimated from successive updates, the
+/// remaining error is about θ/(1 − θ)·|Δ|; stop when that is below the tolerance.
+#[derive(Debug, Clone, Copy)]
+struct NewtonMonitor {
+    tol_k: f64,
+    theta: f64,
+    last_k: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Newton {
+    Converged,
+    Continue,
+    Diverged,
+}
+
+impl NewtonMonitor {
+    fn new(tol_k: f64, theta_guess: f64) -> NewtonMonitor {
+        NewtonMonitor {
+            tol_k,
+            theta: theta_guess,
+            last_k: f64::INFINITY,
+        }
+    }
+
+    fn update(&mut self, iteration: usize, dmax_k: f64) -> Newton {
+        if iteration > 0 {
+            self.theta = dmax_k / self.last_k;
+            if self.theta >= 0.9 || !dmax_k.is_finite() {
+                return Newton::Diverged;
+            }
+        }
+        self.last_k = dmax_k;
+        let theta = self.theta.clamp(1e-3, 0.5);
+        if dmax_k <= 1e-12 || theta / (1.0 - theta) * dmax_k <= self.tol_k {
+            Newton::Converged
+        } else if iteration + 1 >= NEWTON_MAX_ITER {
+            Newton::Diverged
+        } else {
+            Newton::Continue
+        }
+    }
+}
+
+/// One accepted or rejected trial step, with everything observers and the energy
+/// bookkeeping need. Buffers are owned by the stepper and reused.
+#[derive(Debug, Clone, Default)]
+pub struct StepData {
+    pub t0_s: f64,
+    pub h_s: f64,
+    pub temps0_k: Vec<f64>,
+    pub temps1_k: Vec<f64>,
+    /// dT/dt at the start and end of the step, K/s.
+    pub rates0_k_per_s: Vec<f64>,
+    pub rates1_k_per_s: Vec<f64>,
+    /// Network heat flows at the three stage points.
+    pub flows: [Flows; 3],
+    /// Local error estimate per node, K.
+    pub error_k: Vec<f64>,
+    pub newton_iterations: usize,
+}
+
+impl StepData {
+    /// Largest |error| over all nodes, K.
+    pub fn error_max_k(&self) -> f64 {
+        self.error_k.iter().fold(0.0f64, |m, e| m.max(e.abs()))
+    }
+}
+
+/// Reusable workspace of the implicit stepper.
+pub struct Stepper {
+    pub compiled: Compiled,
+    cap: Vec<f64>,
+    lu: Lu,
+    jac: Vec<f64>,
+    f0: Vec<f64>,
+    f: Vec<f64>,
+    fg: Vec<f64>,
+    yg: Vec<f64>,
+    r: Vec<f64>,
+    /// Contraction rate of the last Newton iteration, to judge the first update.
+    theta: f64,
+    /// Step size the current factorisation was made for (NaN: none).
+    lu_h: f64,
+    /// The Jacobian must be re-evaluated before the next step.
+    jac_stale: bool,
+    /// Factorisations made (for statistics).
+    pub factorizations: u64,
+    pub data: StepData,
+}
+
+impl Stepper {
+    pub fn new(model: &ThermalModel) -> Stepper {
+        let compiled = Compiled::new(&model.network);
+        let n = compiled.n;
+        Stepper {
+            cap: compiled.capacitance_j_per_k.clone(),
+            compiled,
+            lu: Lu::new(n),
+            jac: vec![0.0; n * n],
+            f0: vec![0.0; n],
+            f: vec![0.0; n],
+            fg: vec![0.0; n],
+            yg: vec![0.0; n],
+            r: vec![0.0; n],
+            theta: 0.5,
+            lu_h: f64::NAN,
+            jac_stale: true,
+            factorizations: 0,
+            data: StepData {
+                temps0_k: vec![0.0; n],
+                temps1_k: vec![0.0; n],
+                rates0_k_per_s: vec![0.0; n],
+                rates1_k_per_s: vec![0.0; n],
+                error_k: vec![0.0; n],
+                ..StepData::default()
+            },
+        }
+    }
+
+    /// Takes one TR-BDF2 step of size `h_s` from (`t0_s`, `temps0_k`). `env_at(t)`
+    /// gives the environment at a stage time; the switches hold for the whole step.
+    /// The result is in `self.data`.
+    pub fn step(
+        &mut self,
+        model: &ThermalModel,
+        env_at: &dyn Fn(f64) -> EnvState,
+        sw: StepSwitches<'_>,
+        t0_s: f64,
+        temps0_k: &[f64],
+        h_s: f64,
+        tolerance_k: f64,
+    ) -> Result<(), StepFailure> {
+        let newton_tol_k = (NEWTON_TOL_FRACTION * tolerance_k).max(1e-9);
+        let n = self.compiled.n;
+        let cap = &self.cap;
+        let d = &mut self.data;
+        d.t0_s = t0_s;
+        d.h_s = h_s;
+        d.newton_iterations = 0;
+        d.temps0_k.copy_from_slice(temps0_k);
+
+        // f0 and the iteration matrix W = C − D h J(T0).
+        self.compiled.set_time(model, &env_at(t0_s), sw);
+        self.compiled
+            .heat_w(temps0_k, &mut self.f0, Some(&mut d.flows[0]));
+        // The iteration matrix is kept while the step size is unchanged and Newton
+        // converges fast; the Jacobian only affects convergence, not the solution.
+        if self.jac_stale {
+            self.compiled.jacobian(temps0_k, &mut self.jac);
+            self.jac_stale = false;
+            self.lu_h = f64::NAN;
+        }
+        if self.lu_h != h_s {
+            let w = self.lu.matrix_mut();
+            for i in 0..n {
+                for j in 0..n {
+                    w[i * n + j] = -D * h_s * self.jac[i * n + j];
+                }
+                w[i * n + i] += cap[i];
+            }
+            self.factorizations += 1;
+            if self.lu.factor().is_err() {
+                self.jac_stale = true;
+                return Err(StepFailure::Singular);
+            }
+            self.lu_h = h_s;
+        }
+        for i in 0..n {
+            d.rates0_k_per_s[i] = self.f0[i] / cap[i];
+        }
+
+        // Stage 1: trapezoidal rule to t0 + γh.
+        self.compiled
+            .set_time(model, &env_at(t0_s + GAMMA * h_s), sw);
+        for i in 0..n {
+            self.yg[i] = temps0_k[i] + GAMMA * h_s * d.rates0_k_per_s[i];
+        }
+        let mut monitor = NewtonMonitor::new(newton_tol_k, self.theta);
+        let mut converged = false;
+        for it in 0..NEWTON_MAX_ITER {
+            d.newton_iterations += 1;
+            self.compiled.heat_w(&self.yg, &mut self.f, None);
+            for i in 0..n {
+                self.r[i] =
+                    -(cap[i] * (self.yg[i] - temps0_k[i]) - D * h_s * (self.f0[i] + self.f[i]));
+            }
+            self.lu.solve(&mut self.r);
+            let mut dmax = 0.0f64;
+            for i in 0..n {
+                self.yg[i] += self.r[i];
+                dmax = dmax.max(self.r[i].abs());
+            }
+            match monitor.update(it, dmax) {
+                Newton::Converged => {
+                    converged = true;
+                    break;
+                }
+                Newton::Diverged => break,
+                Newton::Continue => {}
+            }
+        }
+        if !converged {
+            self.jac_stale = true;
+            return Err(StepFailure::NewtonDiverged);
+        }
+        self.compiled
+            .heat_w(&self.yg, &mut self.fg, Some(&mut d.flows[1]));
+
+        // Stage 2: BDF2 to t0 + h.
+        self.compiled.set_time(model, &env_at(t0_s + h_s), sw);
+        let y1 = &mut d.temps1_k;
+        for i in 0..n {
+            y1[i] = temps0_k[i] + (self.yg[i] - temps0_k[i]) / GAMMA;
+        }
+        monitor = NewtonMonitor::new(newton_tol_k, monitor.theta);
+        converged = false;
+        for it in 0..NEWTON_MAX_ITER {
+            d.newton_iterations += 1;
+            self.compiled.heat_w(y1, &mut self.f, None);
+            for i in 0..n {
+                self.r[i] =
+                    -(cap[i] * (y1[i] - A * self.yg[i] + B * temps0_k[i]) - D * h_s * self.f[i]);
+            }
+            self.lu.solve(&mut self.r);
+            let mut dmax = 0.0f64;
+            for i in 0..n {
+                y1[i] += self.r[i];
+                dmax = dmax.max(self.r[i].abs());
+            }
+            match monitor.update(it, dmax) {
+                Newton::Converged => {
+                    converged = true;
+                    break;
+                }
+                Newton::Diverged => break,
+                Newton::Continue => {}
+            }
+        }
+        if !converged {
+            self.jac_stale = true;
+            return Err(StepFailure::NewtonDiverged);
+        }
+        self.theta = monitor.theta;
+        if self.theta > JACOBIAN_REFRESH_THETA {
+            self.jac_stale = true;
+        }
+        if y1.iter().any(|&t| !(t.is_finite() && t > 0.0)) {
+            return Err(StepFailure::NonPhysical);
+        }
+        self.compiled.heat_w(y1, &mut self.f, Some(&mut d.flows[2]));
+
+        // Error estimate, filtered: e = W⁻¹ C (ERR_CONST · 2h ((F1 − Fγ)/(1−γ) − (Fγ − F0)/γ)).
+        for i in 0..n {
+            let f1 = self.f[i] / cap[i];
+            let fg = self.fg[i] / cap[i];
+            let f0 = d.rates0_k_per_s[i];
+            d.rates1_k_per_s[i] = f1;
+            let raw = ERR_CONST * 2.0 * h_s * ((f1 - fg) / (1.0 - GAMMA) - (fg - f0) / GAMMA);
+            d.error_k[i] = cap[i] * raw;
+        }
+        self.lu.solve(&mut d.error_k);
+        Ok(())
+    }
+}
+
+/// Cubic Hermite interpolation on [0, 1] of one component: value at `s`.
+pub fn hermite(y0: f64, y1: f64, dy0: f64, dy1: f64, h: f64, s: f64) -> f64 {
+    let s2 = s * s;
+    let s3 = s2 * s;
+    (2.0 * s3 - 3.0 * s2 + 1.0) * y0
+        + (s3 - 2.0 * s2 + s) * h * dy0
+        + (-2.0 * s3 + 3.0 * s2) * y1
+        + (s3 - s2) * h * dy1
+}
+
+/// Interior extrema (s in (0,1)) of the cubic Hermite interpolant, as values.
+pub fn hermite_interior_extrema(y0: f64, y1: f64, dy0: f64, dy1: f64, h: f64) -> [Option<f64>; 2] {
+    // p'(s) = a s² + b s + c
+    let m0 = h * dy0;
+    let m1 = h * dy1;
+    let a = 6.0 * y0 + 3.0 * m0 - 6.0 * y1 + 3.0 * m1;
+    let b = -6.0 * y0 - 4.0 * m0 + 6.0 * y1 - 2.0 * m1;
+    let c = m0;
+    let mut out = [None, None];
+    let mut push = |s: f64, k: usize| {
+        if s > 0.0 && s < 1.0 {
+            out[k] = Some(hermite(y0, y1, dy0, dy1, h, s));
+        }
+    };
+    if a.abs() < 1e-300 {
+        if b.abs() > 1e-300 {
+            push(-c / b, 0);
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc >= 0.0 {
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            push(q / a, 0);
+            if q != 0.0 {
+                push(c / q, 1);
+            }
+        }
+    }
+    out
+}
+
+/// Integral over the step of the Hermite interpolant (exact for cubics).
+pub fn hermite_integral(y0: f64, y1: f64, dy0: f64, dy1: f64, h: f64) -> f64 {
+    h * 0.5 * (y0 + y1) + h * h * (dy0 - dy1) / 12.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coefficients_are_consistent() {
+        assert!((A - B - 1.0).abs() < 1e-15);
+        assert!((2.0 * W0 + W1 - 1.0).abs() < 1e-15);
+        assert!(((1.0 - GAMMA) / (2.0 - GAMMA) - D).abs() < 1e-15);
+    }
+
+    #[test]
+    fn hermite_reproduces_cubic() {
+        // p(t) = t³ − 2t on [1, 3]
+        let p = |t: f64| t * t * t - 2.0 * t;
+        let dp = |t: f64| 3.0 * t * t - 2.0;
+        let (t0, h) = (1.0, 2.0);
+        for s in [0.0, 0.3, 0.5, 1.0] {
+            let v = hermite(p(t0), p(t0 + h), dp(t0), dp(t0 + h), h, s);
+            assert!((v - p(t0 + s * h)).abs() < 1e-12);
+        }
+        let integral = hermite_integral(p(t0), p(t0 + h), dp(t0), dp(t0 + h), h);
+        let exact = (81.0 / 4.0 - 9.0) - (0.25 - 1.0);
+        assert!((integral - exact).abs() < 1e-12);
+        // p on [-2, 2] has extrema at ±√(2/3)
+        let (t0, h) = (-2.0, 4.0);
+        let ex = hermite_interior_extrema(p(t0), p(t0 + h), dp(t0), dp(t0 + h), h);
+        let r = (2.0f64 / 3.0).sqrt();
+        let mut got: Vec<f64> = ex.iter().flatten().copied().collect();
+        got.sort_by(f64::total_cmp);
+        assert_eq!(got.len(), 2);
+        assert!((got[0] - p(r)).abs() < 1e-12 && (got[1] - p(-r)).abs() < 1e-12);
+    }
+}
