@@ -321,6 +321,26 @@ mod tests {
     }
 
     #[test]
+    fn scanned_crossings_agree_with_the_closed_form() {
+        // A β table holding a constant value takes the numerical scan-and-bisect path.
+        let closed = reference();
+        let mut scanned = reference();
+        scanned.beta_rad = Profile::Table {
+            time_s: vec![0.0, 1e9],
+            value: vec![20f64.to_radians(); 2],
+        };
+        let (mut a, mut b) = (0.0, 0.0);
+        for _ in 0..8 {
+            let ca = closed.next_shadow_crossing(a, 1e6).unwrap();
+            let cb = scanned.next_shadow_crossing(b, 1e6).unwrap();
+            assert_eq!(ca.1, cb.1);
+            assert!((ca.0 - cb.0).abs() < 1e-6, "{} vs {}", ca.0, cb.0);
+            a = ca.0;
+            b = cb.0;
+        }
+    }
+
+    #[test]
     fn no_eclipse_above_critical_beta() {
         let mut env = reference();
         let crit = env.orbit.critical_beta_rad();

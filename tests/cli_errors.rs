@@ -1,0 +1,276 @@
+//! Bad input gives a clear error naming the file, key and line, a non-zero exit, no
+//! panic and no output file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_orbitlash"))
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("orbitlash-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn reference_text() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml"),
+    )
+    .unwrap()
+}
+
+/// Runs `orbitlash check` and `orbitlash run` on the reference scenario with `old`
+/// replaced by `new`; both must fail with a message containing every needle, where
+/// `{line}` stands for the line `old` started on.
+fn assert_rejected(case: &str, old: &str, new: &str, needles: &[&str]) {
+    let text = reference_text();
+    let at = text
+        .find(old)
+        .unwrap_or_else(|| panic!("{case}: `{old}` not in the reference scenario"));
+    let line = text[..at].matches('\n').count() + 1;
+    let needles: Vec<String> = needles
+        .iter()
+        .map(|n| n.replace("{line}", &line.to_string()))
+        .collect();
+    let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
+    let needles = &needles[..];
+    let bad = text.replacen(old, new, 1);
+    let dir = tmpdir(case);
+    let file = dir.join(format!("{case}.toml"));
+    std::fs::write(&file, bad).unwrap();
+    let log = dir.join("out.mcap");
+    for args in [vec!["check"], vec!["run", "--out", log.to_str().unwrap()]] {
+        let out = bin().args(&args).arg(&file).output().unwrap();
+        assert_failed(case, &out, &[&[file.to_str().unwrap()], needles].concat());
+    }
+    assert!(
+        !log.exists(),
+        "{case}: a log was written for a bad scenario"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn assert_failed(case: &str, out: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "{case}: exit status {:?}",
+        out.status
+    );
+    assert!(!stderr.contains("panicked"), "{case}: panic\n{stderr}");
+    for n in needles {
+        assert!(stderr.contains(n), "{case}: `{n}` missing from\n{stderr}");
+    }
+}
+
+#[test]
+fn malformed_toml_names_the_line() {
+    assert_rejected(
+        "malformed",
+        "capacitance_j_per_k = 120.0",
+        "capacitance_j_per_k = = 120.0",
+        &["line {line}"],
+    );
+}
+
+#[test]
+fn unknown_key_is_named_with_its_line() {
+    assert_rejected(
+        "unknown-key",
+        "capacitance_j_per_k = 120.0",
+        "colour = \"red\"\ncapacitance_j_per_k = 120.0",
+        &["colour", "line {line}"],
+    );
+}
+
+#[test]
+fn missing_key_is_named() {
+    assert_rejected(
+        "missing",
+        "initial_temperature_k = 293.15\n\n[[node]]\nname = \"motor\"",
+        "\n[[node]]\nname = \"motor\"",
+        &["initial_temperature_k"],
+    );
+}
+
+#[test]
+fn negative_capacitance() {
+    assert_rejected(
+        "neg-cap",
+        "capacitance_j_per_k = 4.06",
+        "capacitance_j_per_k = -4.06",
+        &["node[2].capacitance_j_per_k", ":{line}:", "must be > 0"],
+    );
+}
+
+#[test]
+fn emissivity_above_one() {
+    assert_rejected(
+        "emissivity",
+        "emissivity_area_m2 = 0.030",
+        "emissivity = 1.2\narea_m2 = 0.03",
+        &["radiation[3].emissivity", "0 … 1"],
+    );
+}
+
+#[test]
+fn absorptivity_above_one() {
+    assert_rejected(
+        "absorptivity",
+        "absorptivity = 0.7",
+        "absorptivity = 1.7",
+        &["sun[0].absorptivity", "0 … 1"],
+    );
+}
+
+#[test]
+fn unknown_node_reference() {
+    assert_rejected(
+        "unknown-node",
+        "between = [\"housing\", \"motor\"]",
+        "between = [\"housing\", \"mottor\"]",
+        &[
+            "conductor[1].between[1]",
+            "unknown node `mottor`",
+            ":{line}:",
+        ],
+    );
+}
+
+#[test]
+fn duplicate_node_name() {
+    assert_rejected(
+        "duplicate",
+        "name = \"motor\"",
+        "name = \"housing\"",
+        &["node[1].name", "defined twice"],
+    );
+}
+
+#[test]
+fn temperature_in_celsius_by_mistake() {
+    assert_rejected(
+        "celsius",
+        "initial_temperature_k = 293.15",
+        "initial_temperature_k = -20.0",
+        &["node[0].initial_temperature_k", "kelvin"],
+    );
+}
+
+#[test]
+fn beta_out_of_range() {
+    assert_rejected(
+        "beta",
+        "beta_deg = 20.0",
+        "beta_deg = 120.0",
+        &["environment.beta_deg", "-90 … 90"],
+    );
+}
+
+#[test]
+fn non_monotonic_profile_time() {
+    assert_rejected(
+        "non-monotonic",
+        "beta_deg = 20.0",
+        "beta_deg = { time_s = [0.0, 100.0, 50.0], value = [0.0, 10.0, 20.0] }",
+        &["environment.beta_deg.time_s[2]", "increase"],
+    );
+}
+
+#[test]
+fn heater_set_points_inverted() {
+    assert_rejected(
+        "heater",
+        "[[sun]]",
+        "[[heater]]\nnode = \"housing\"\npower_w = 4.0\non_k = 270.0\noff_k = 265.0\n\n[[sun]]",
+        &["heater[0].off_k", "above on_k"],
+    );
+}
+
+#[test]
+fn zero_time_step() {
+    assert_rejected(
+        "step",
+        "max_step_s = 300.0",
+        "max_step_s = 0.0",
+        &["solver.max_step_s", "> 0"],
+    );
+}
+
+#[test]
+fn both_run_lengths() {
+    assert_rejected(
+        "run-length",
+        "orbits = 6",
+        "orbits = 6\nduration_s = 100.0",
+        &["run", "exactly one"],
+    );
+}
+
+#[test]
+fn self_link() {
+    assert_rejected(
+        "self-link",
+        "between = [\"housing\", \"motor\"]",
+        "between = [\"housing\", \"housing\"]",
+        &["conductor[1].between", "itself"],
+    );
+}
+
+#[test]
+fn wrong_type() {
+    assert_rejected(
+        "type",
+        "capacitance_j_per_k = 120.0",
+        "capacitance_j_per_k = \"120 J/K\"",
+        &["capacitance_j_per_k", "line {line}"],
+    );
+}
+
+#[test]
+fn missing_scenario_file() {
+    let out = bin()
+        .args(["run", "/nonexistent/nothing.toml"])
+        .output()
+        .unwrap();
+    assert_failed("missing-file", &out, &["/nonexistent/nothing.toml"]);
+}
+
+#[test]
+fn unwritable_output_path_fails_before_the_run() {
+    let dir = tmpdir("unwritable");
+    let blocker = dir.join("file");
+    std::fs::write(&blocker, "not a folder").unwrap();
+    let log = blocker.join("run.mcap");
+    let out = bin()
+        .args(["run", "--out", log.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_failed("unwritable", &out, &[log.to_str().unwrap()]);
+    assert!(
+        String::from_utf8_lossy(&out.stdout).is_empty(),
+        "the run went ahead"
+    );
+    let csv = dir.join("dir-as-csv");
+    std::fs::create_dir_all(&csv).unwrap();
+    let out = bin()
+        .args(["run", "--no-log", "--csv", csv.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_failed("csv-dir", &out, &[csv.to_str().unwrap()]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_orbit_count_on_the_command_line() {
+    for bad in ["0", "-3", "nan", "many"] {
+        let out = bin()
+            .args(["run", "--no-log", &format!("--orbits={bad}")])
+            .output()
+            .unwrap();
+        assert_failed("orbits", &out, &["--orbits"]);
+    }
+}

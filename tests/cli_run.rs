@@ -1,0 +1,162 @@
+//! `orbitlash run` and `check` end to end.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_orbitlash"))
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("orbitlash-run-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn scenario(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(name)
+}
+
+#[test]
+fn run_without_arguments_uses_the_embedded_reference_and_writes_a_log() {
+    let dir = tmpdir("default");
+    let out = bin().arg("run").current_dir(&dir).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("reference-hinge: 6.00 orbits"), "{stdout}");
+    assert!(stdout.contains("last orbit (orbit 6"), "{stdout}");
+    for node in ["housing", "gear1.r2", "gear2.r2"] {
+        assert!(stdout.contains(node), "{node} missing from the summary");
+    }
+    assert!(stdout.contains("energy balance"));
+    let log = dir.join("logs/reference-hinge.mcap");
+    let bytes = std::fs::read(&log).unwrap();
+    assert!(
+        bytes.starts_with(b"\x89MCAP0\r\n") && bytes.ends_with(b"\x89MCAP0\r\n"),
+        "not a complete MCAP file"
+    );
+    assert!(!dir.join("logs/reference-hinge.mcap.partial").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn csv_has_a_column_per_node_and_runs_are_reproducible() {
+    let dir = tmpdir("csv");
+    let run = |tag: &str| {
+        let csv = dir.join(format!("{tag}.csv"));
+        let log = dir.join(format!("{tag}.mcap"));
+        let out = bin()
+            .args([
+                "run",
+                "--orbits",
+                "1",
+                "--quiet",
+                "--csv",
+                csv.to_str().unwrap(),
+                "--out",
+                log.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        (std::fs::read(csv).unwrap(), std::fs::read(log).unwrap())
+    };
+    let (csv_a, log_a) = run("a");
+    let (csv_b, log_b) = run("b");
+    assert_eq!(csv_a, csv_b, "CSV differs between two runs");
+    assert_eq!(log_a, log_b, "MCAP differs between two runs");
+
+    let text = String::from_utf8(csv_a).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut want = vec!["time_s", "housing_k", "motor_k", "shaft1_k", "shaft2_k"];
+    want.extend([
+        "gear1.r0_k",
+        "gear1.r1_k",
+        "gear1.r2_k",
+        "gear2.r0_k",
+        "gear2.r1_k",
+        "gear2.r2_k",
+    ]);
+    assert_eq!(header, want);
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let period = 5676.978;
+    assert_eq!(rows.len(), (period / 30.0f64).floor() as usize + 1);
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(r.len(), header.len());
+        assert!((r[0] - 30.0 * k as f64).abs() < 1e-9);
+        assert!(
+            r[1..]
+                .iter()
+                .all(|t| t.is_finite() && *t > 200.0 && *t < 400.0)
+        );
+    }
+    assert!(
+        rows[0][1..].iter().all(|&t| (t - 293.15).abs() < 1e-9),
+        "first row is the initial state"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn check_prints_derived_quantities() {
+    let out = bin()
+        .args(["check"])
+        .arg(scenario("reference-hinge.toml"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for needle in [
+        "period                  5676.978 s",
+        "half-angle 66.526°",
+        "fraction 0.36959",
+        "stiffness ratio",
+        "gear1.r0",
+    ] {
+        assert!(stdout.contains(needle), "`{needle}` missing:\n{stdout}");
+    }
+    let out = bin()
+        .args(["check"])
+        .arg(scenario("hinge-90-day-drift.toml"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("beta  60.000°"), "{stdout}");
+    assert!(stdout.contains("1 heaters, 1 modes"), "{stdout}");
+}
+
+#[test]
+fn every_shipped_scenario_is_valid() {
+    for entry in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios")).unwrap()
+    {
+        let p = entry.unwrap().path();
+        if p.extension().is_some_and(|e| e == "toml") {
+            let out = bin().arg("check").arg(&p).output().unwrap();
+            assert!(
+                out.status.success(),
+                "{}: {}",
+                p.display(),
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    }
+}

@@ -1,0 +1,56 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use orbitlash::io::scenario_toml;
+use orbitlash::scenario::Scenario;
+
+/// A scenario from its parts: `[environment]` keys, `[run]`/`[solver]` keys and the
+/// network body. The orbit is 500 km unless `orbit` is given.
+pub fn scenario(orbit: &str, environment: &str, run: &str, body: &str) -> Scenario {
+    let orbit = if orbit.is_empty() {
+        "altitude_m = 500e3"
+    } else {
+        orbit
+    };
+    let text = format!(
+        "[scenario]\nname = \"test\"\n\n[orbit]\n{orbit}\n\n[environment]\n{environment}\n\n[run]\n{run}\n\n{body}\n"
+    );
+    scenario_toml::parse(&text, "<test>").unwrap_or_else(|e| panic!("{e}\n{text}"))
+}
+
+/// Path of a file under ../shared (beside the clone).
+pub fn shared(rel: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared")
+        .join(rel)
+}
+
+/// A recording CSV: header and rows (None for empty cells).
+pub struct Recording {
+    pub columns: Vec<String>,
+    pub rows: Vec<Vec<Option<f64>>>,
+}
+
+impl Recording {
+    pub fn read(path: &std::path::Path) -> Recording {
+        let text =
+            std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut lines = text.lines();
+        let columns = lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(|s| s.trim().to_string())
+            .collect();
+        let rows = lines
+            .filter(|l| !l.trim().is_empty())
+            .map(|l| l.split(',').map(|c| c.trim().parse().ok()).collect())
+            .collect();
+        Recording { columns, rows }
+    }
+
+    pub fn column(&self, name: &str) -> Vec<Option<f64>> {
+        let i = self.columns.iter().position(|c| c == name).unwrap();
+        self.rows.iter().map(|r| r[i]).collect()
+    }
+}

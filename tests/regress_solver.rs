@@ -1,0 +1,58 @@
+//! Regressions of solver cost and bookkeeping on the shipped scenarios: a change that
+//! makes the solver take many more steps, reject steps, or leak energy shows here.
+
+use orbitlash::io::scenario_toml::{load_file, reference};
+use orbitlash::sim::simulate;
+
+#[test]
+fn regress_reference_solver_cost() {
+    let sc = reference();
+    let stats = simulate(&sc.thermal, &sc.solver, sc.run.duration_s, &mut (), None).unwrap();
+    let per_orbit = stats.steps as f64 / 6.0;
+    assert!(
+        (70.0..=100.0).contains(&per_orbit),
+        "{per_orbit} steps per orbit (was 86)"
+    );
+    assert!(
+        stats.rejected_steps <= 3,
+        "{} rejected steps (was 1)",
+        stats.rejected_steps
+    );
+    let newton = stats.newton_iterations as f64 / stats.steps as f64;
+    assert!(
+        newton < 4.5,
+        "{newton} Newton iterations per step (was 3.9)"
+    );
+    assert_eq!(stats.eclipse_entries, 6);
+    // The balance closes to the Newton tolerance (1 % of the step tolerance).
+    assert!(
+        stats.energy.relative_error() < 1e-5,
+        "energy error {}",
+        stats.energy.relative_error()
+    );
+}
+
+#[test]
+fn regress_mission_profile_runs_90_days() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml");
+    let (sc, _) = load_file(&path).unwrap();
+    let stats = simulate(&sc.thermal, &sc.solver, sc.run.duration_s, &mut (), None).unwrap();
+    // β passes 0 → 60°, below the 68° where eclipses stop: one eclipse per orbit.
+    assert_eq!(stats.eclipse_entries, 1370);
+    assert!(
+        stats.heater_switches > 100,
+        "{} heater switches",
+        stats.heater_switches
+    );
+    assert!(
+        stats.energy.relative_error() < 1e-5,
+        "energy error {}",
+        stats.energy.relative_error()
+    );
+    let measured = stats.eclipse_time_s / stats.t_end_s;
+    assert!(
+        (0.30..0.36).contains(&measured),
+        "eclipse fraction over the mission {measured}"
+    );
+}

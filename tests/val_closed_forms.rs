@@ -1,0 +1,302 @@
+//! Thermal solver against closed-form solutions and published numbers.
+
+mod common;
+
+use common::scenario;
+use orbitlash::constants::STEFAN_BOLTZMANN_W_PER_M2_K4;
+use orbitlash::sim::{Event, EventKind, Observer, ObserverResult, SolverSettings, simulate};
+use orbitlash::summary::Samples;
+
+const NO_ECLIPSE_ENV: &str = "beta_deg = 90.0\nspace_sink_k = 0.0";
+
+fn run_samples(
+    sc: &orbitlash::scenario::Scenario,
+    settings: &SolverSettings,
+    t_end: f64,
+    every: f64,
+) -> Samples {
+    let mut s = Samples::every(every);
+    simulate(&sc.thermal, settings, t_end, &mut s, None).unwrap();
+    s
+}
+
+#[test]
+fn val_closed_form_exponential_relaxation() {
+    // C dT/dt = G (Tb − T): T = Tb + (T0 − Tb) exp(−G t / C)
+    let (c, g, tb, t0) = (10.0, 0.5, 300.0, 400.0);
+    let sc = scenario(
+        "",
+        NO_ECLIPSE_ENV,
+        "duration_s = 200.0",
+        &format!(
+            "[[node]]\nname = \"n\"\ncapacitance_j_per_k = {c}\ninitial_temperature_k = {t0}\n\
+             [[boundary]]\nname = \"b\"\ntemperature_k = {tb}\n\
+             [[conductor]]\nbetween = [\"n\", \"b\"]\nconductance_w_per_k = {g}\n"
+        ),
+    );
+    let exact = |t: f64| tb + (t0 - tb) * (-g * t / c).exp();
+    let s = run_samples(&sc, &sc.solver, 200.0, 1.0);
+    let err = s
+        .times_s
+        .iter()
+        .zip(&s.temps_k)
+        .map(|(&t, y)| (y[0] - exact(t)).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        err < 0.01,
+        "adaptive run deviates {err} K from the closed form"
+    );
+
+    // Second order: halving a fixed step divides the error by ~4.
+    let fixed = |h: f64| {
+        let st = SolverSettings {
+            adaptive: false,
+            max_step_s: h,
+            ..SolverSettings::default()
+        };
+        let s = run_samples(&sc, &st, 200.0, 8.0);
+        s.times_s
+            .iter()
+            .zip(&s.temps_k)
+            .map(|(&t, y)| (y[0] - exact(t)).abs())
+            .fold(0.0, f64::max)
+    };
+    let (e1, e2, e3) = (fixed(4.0), fixed(2.0), fixed(1.0));
+    for (a, b) in [(e1, e2), (e2, e3)] {
+        let ratio = a / b;
+        assert!(
+            (3.5..4.5).contains(&ratio),
+            "error ratio {ratio} ({a} / {b}) is not second order"
+        );
+    }
+}
+
+#[test]
+fn val_closed_form_radiative_cooling() {
+    // C dT/dt = −σ εA T⁴ (sink at 0 K): T = (T0⁻³ + 3σεA t / C)^(−1/3)
+    let (c, ea, t0): (f64, f64, f64) = (50.0, 0.02, 400.0);
+    let sc = scenario(
+        "",
+        NO_ECLIPSE_ENV,
+        "duration_s = 20000.0",
+        &format!(
+            "[[node]]\nname = \"n\"\ncapacitance_j_per_k = {c}\ninitial_temperature_k = {t0}\n\
+             [[radiation]]\nbetween = [\"n\", \"space\"]\nemissivity_area_m2 = {ea}\n"
+        ),
+    );
+    let s = STEFAN_BOLTZMANN_W_PER_M2_K4;
+    let exact = |t: f64| (t0.powi(-3) + 3.0 * s * ea * t / c).powf(-1.0 / 3.0);
+    let max_err = |settings: &SolverSettings| {
+        let out = run_samples(&sc, settings, 20000.0, 10.0);
+        assert!(out.temps_k.last().unwrap()[0] < 200.0, "it did cool");
+        out.times_s
+            .iter()
+            .zip(&out.temps_k)
+            .map(|(&t, y)| (y[0] - exact(t)).abs())
+            .fold(0.0, f64::max)
+    };
+    let err = max_err(&sc.solver);
+    assert!(
+        err < 0.05,
+        "default settings deviate {err} K from the closed form"
+    );
+    let tight = SolverSettings {
+        tolerance_k: 1e-4,
+        ..sc.solver.clone()
+    };
+    let err_tight = max_err(&tight);
+    // 20× tighter local tolerance: steps (20)^(1/3) shorter, global error ~7× smaller.
+    assert!(
+        err_tight < err / 5.0,
+        "tolerance 1e-4 K deviates {err_tight} K, default {err} K"
+    );
+}
+
+#[test]
+fn val_published_black_sphere_settles_at_278_k() {
+    // A black isothermal sphere at 1 AU absorbs S πr² and emits σ 4πr² T⁴:
+    // T = (S / 4σ)^(1/4) ≈ 278 K for S = 1360 W/m² (Gilmore, Spacecraft Thermal Control
+    // Handbook, vol. 1, ch. 2).
+    let r: f64 = 0.1;
+    let area = std::f64::consts::PI * r * r;
+    let sc = scenario(
+        "",
+        "beta_deg = 90.0\nspace_sink_k = 0.0\nsolar_flux_w_per_m2 = 1360.0",
+        "duration_s = 20000.0",
+        &format!(
+            "[[node]]\nname = \"sphere\"\ncapacitance_j_per_k = 200.0\ninitial_temperature_k = 200.0\n\
+             [[radiation]]\nbetween = [\"sphere\", \"space\"]\nemissivity = 1.0\narea_m2 = {}\n\
+             [[sun]]\nnode = \"sphere\"\nabsorptivity = 1.0\narea_m2 = {area}\n",
+            4.0 * area
+        ),
+    );
+    let stats = simulate(&sc.thermal, &sc.solver, 20000.0, &mut (), None).unwrap();
+    let t = stats.final_temperatures_k[0];
+    let closed = (1360.0 / (4.0 * STEFAN_BOLTZMANN_W_PER_M2_K4)).powf(0.25);
+    assert!(
+        (t - 278.0).abs() < 0.5,
+        "sphere settles at {t} K, published 278 K"
+    );
+    assert!(
+        (t - closed).abs() < 1e-3,
+        "sphere settles at {t} K, closed form {closed} K"
+    );
+}
+
+#[test]
+fn val_published_eclipse_example() {
+    // R = 6370 km, h = 300 km, β = 0: period 5424 s, eclipse 40 % (≈ 2190 s)
+    // (Wertz & Larson, Space Mission Analysis and Design, eclipse example).
+    let sc = scenario(
+        "altitude_m = 300e3\nearth_radius_m = 6370e3",
+        "beta_deg = 0.0",
+        "orbits = 3",
+        "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1.0\ninitial_temperature_k = 300.0\n",
+    );
+    let orbit = &sc.thermal.environment.orbit;
+    let period = orbit.period_s();
+    assert!((period - 5424.0).abs() < 5.0, "period {period} s");
+    let f = orbit.eclipse_fraction(0.0);
+    assert!((f - 0.40).abs() < 0.005, "eclipse fraction {f}");
+    assert!(
+        (f * period - 2190.0).abs() < 5.0,
+        "eclipse {} s",
+        f * period
+    );
+    // The stepping loop sees the same eclipses as the formula.
+    let stats = simulate(&sc.thermal, &sc.solver, 3.0 * period, &mut (), None).unwrap();
+    assert_eq!(stats.eclipse_entries, 3);
+    assert!((stats.eclipse_time_s / (3.0 * period) - f).abs() < 1e-9);
+}
+
+#[test]
+fn val_reference_mechanism_period_and_eclipse() {
+    let sc = orbitlash::io::scenario_toml::reference();
+    let orbit = &sc.thermal.environment.orbit;
+    assert!(
+        (orbit.period_s() - 5676.978).abs() < 5e-4,
+        "period {}",
+        orbit.period_s()
+    );
+    let phi = orbit
+        .eclipse_half_angle_rad(20f64.to_radians())
+        .to_degrees();
+    assert!((phi - 66.526).abs() < 5e-4, "half-angle {phi}");
+    assert!((orbit.eclipse_fraction(20f64.to_radians()) - 0.36959).abs() < 5e-6);
+    assert!((orbit.earth_view_factor() - 0.859896).abs() < 5e-7);
+}
+
+/// Collects event times.
+#[derive(Default)]
+struct Events(Vec<Event>);
+impl Observer for Events {
+    fn on_event(&mut self, e: &Event) -> ObserverResult {
+        self.0.push(*e);
+        Ok(())
+    }
+}
+
+#[test]
+fn val_closed_form_thermostat_cycle() {
+    // One node losing heat through G to a boundary at Tb, heated by P between set points:
+    // heating from T_on to T_off takes τ ln((T∞ − T_on)/(T∞ − T_off)), T∞ = Tb + P/G;
+    // cooling back takes τ ln((T_off − Tb)/(T_on − Tb)); τ = C/G.
+    let (c, g, tb, p, on, off): (f64, f64, f64, f64, f64, f64) =
+        (100.0, 0.2, 250.0, 10.0, 270.0, 280.0);
+    let sc = scenario(
+        "",
+        NO_ECLIPSE_ENV,
+        "duration_s = 20000.0",
+        &format!(
+            "[[node]]\nname = \"n\"\ncapacitance_j_per_k = {c}\ninitial_temperature_k = 290.0\n\
+             [[boundary]]\nname = \"b\"\ntemperature_k = {tb}\n\
+             [[conductor]]\nbetween = [\"n\", \"b\"]\nconductance_w_per_k = {g}\n\
+             [[heater]]\nnode = \"n\"\npower_w = {p}\non_k = {on}\noff_k = {off}\n"
+        ),
+    );
+    let tau = c / g;
+    let t_inf = tb + p / g;
+    let heat = tau * ((t_inf - on) / (t_inf - off)).ln();
+    let cool = tau * ((off - tb) / (on - tb)).ln();
+    let first_on = tau * ((290.0 - tb) / (on - tb)).ln();
+    // A tight tolerance, so that what is tested is where the steps land, not the
+    // solution error (0.002 K at a slope of 0.04 K/s would move a switch by 0.05 s).
+    let tight = SolverSettings {
+        tolerance_k: 1e-5,
+        ..sc.solver.clone()
+    };
+    let mut ev = Events::default();
+    let stats = simulate(&sc.thermal, &tight, 20000.0, &mut ev, None).unwrap();
+    let switches: Vec<(f64, bool)> =
+        ev.0.iter()
+            .filter_map(|e| match e.kind {
+                EventKind::HeaterOn(_) => Some((e.t_s, true)),
+                EventKind::HeaterOff(_) => Some((e.t_s, false)),
+                _ => None,
+            })
+            .collect();
+    assert!(switches.len() >= 10, "{} switches", switches.len());
+    assert_eq!(stats.heater_switches as usize, switches.len());
+    assert!(
+        switches[0].1 && (switches[0].0 - first_on).abs() < 0.05,
+        "first on at {}",
+        switches[0].0
+    );
+    for w in switches.windows(2) {
+        let want = if w[0].1 { heat } else { cool };
+        let got = w[1].0 - w[0].0;
+        assert!(
+            (got - want).abs() < 0.05,
+            "phase lasted {got} s, closed form {want} s"
+        );
+    }
+}
+
+#[test]
+fn val_closed_form_eclipse_duration_with_drifting_beta() {
+    // β drifts 0° → 80° over 5 days: each eclipse lasts (2φ(β)/2π) T with β at its
+    // middle, and eclipses stop once β passes arcsin(R/(R+h)).
+    let sc = scenario(
+        "",
+        "beta_deg = { time_days = [0.0, 5.0], value = [0.0, 80.0] }",
+        "duration_days = 5.0",
+        "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1.0\ninitial_temperature_k = 300.0\n",
+    );
+    let env = &sc.thermal.environment;
+    let mut ev = Events::default();
+    simulate(&sc.thermal, &sc.solver, 5.0 * 86400.0, &mut ev, None).unwrap();
+    let period = env.orbit.period_s();
+    let crit = env.orbit.critical_beta_rad();
+    let mut checked = 0;
+    for w in ev.0.windows(2) {
+        if let (EventKind::EclipseEntry, EventKind::EclipseExit) = (w[0].kind, w[1].kind) {
+            let beta = env.beta_rad.at(0.5 * (w[0].t_s + w[1].t_s));
+            let want = env.orbit.eclipse_fraction(beta) * period;
+            let got = w[1].t_s - w[0].t_s;
+            if beta < crit - 0.02 {
+                assert!(
+                    (got - want).abs() < 1.0,
+                    "β {:.2}°: eclipse {got} s, closed form {want} s",
+                    beta.to_degrees()
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 50, "{checked} eclipses checked");
+    let last =
+        ev.0.iter()
+            .rfind(|e| e.kind == EventKind::EclipseExit)
+            .unwrap();
+    let beta_last = env.beta_rad.at(last.t_s);
+    assert!(
+        beta_last <= crit + 1e-6,
+        "eclipse at β {}°",
+        beta_last.to_degrees()
+    );
+    assert!(
+        crit - beta_last < 0.05,
+        "eclipses stopped early, at β {}°",
+        beta_last.to_degrees()
+    );
+}
