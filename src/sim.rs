@@ -257,7 +257,7 @@ pub fn simulate<O: Observer>(
     // t = 0) and toggled at every crossing the solver lands on.
     let mut sunlit = env.sunlit(next_shadow.map_or(0.0, |(ts, _)| 0.5 * ts.min(1.0)));
 
-    let mut stepper = Stepper::new(model);
+    let mut stepper = Stepper::new(model, settings.tolerance_k);
     let mut stats = RunStats {
         energy: EnergyBalance {
             to_boundary_j: vec![0.0; net.boundaries.len()],
@@ -309,7 +309,7 @@ pub fn simulate<O: Observer>(
             heaters_on: &heaters_on,
             modes_active: &modes_active,
         };
-        if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try, tol) {
+        if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try) {
             if h_try * 0.25 < MIN_STEP_S {
                 return Err(SimError::StepFailed {
                     t_s: t,
@@ -364,7 +364,7 @@ pub fn simulate<O: Observer>(
                 h_try *= best_s;
                 lands = false;
                 stepper
-                    .step(model, &env_at, sw, t, &y, h_try, tol)
+                    .step(model, &env_at, sw, t, &y, h_try)
                     .map_err(|e| SimError::StepFailed {
                         t_s: t,
                         h_s: h_try,
@@ -382,8 +382,8 @@ pub fn simulate<O: Observer>(
         if !sunlit {
             stats.eclipse_time_s += t_new - t;
         }
-        // Loads at the end of the step, for observers.
-        stepper.compiled.set_time(model, &env_at(t_new), sw);
+        // The stepper's loads are those of the step's end (its last stage), which is
+        // what observers see.
         let view = StepView {
             index: stats.steps,
             data: &stepper.data,
@@ -444,6 +444,10 @@ pub fn simulate<O: Observer>(
             observer
                 .on_event(&Event { t_s: t, kind })
                 .map_err(SimError::Observer)?;
+        }
+
+        if !just_after_event {
+            stepper.continue_from_last_end();
         }
 
         // Next step size. A step cut short by an event says little about the next

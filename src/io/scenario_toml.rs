@@ -756,7 +756,7 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             let wp = p.key(wkey).at(k);
             cx.finite(&wp, a)?;
             cx.finite(&wp, b)?;
-            if !(b > a) || a < last_end {
+            if b <= a || a < last_end {
                 return Err(cx.err(
                     &wp,
                     "windows are [start, end] with end > start, in increasing order, not overlapping",

@@ -11,6 +11,9 @@
 //! dT/dt over the three stage points, filtered through W⁻¹C as Hosea and Shampine
 //! recommend so that stiff components do not inflate it.
 
+// Index loops over nodes mirror the equations of the method; kept as they are.
+#![allow(clippy::needless_range_loop)]
+
 use super::lu::Lu;
 use super::{Compiled, Flows, StepSwitches, ThermalModel};
 use crate::orbit::EnvState;
@@ -126,6 +129,9 @@ pub struct Stepper {
     r: Vec<f64>,
     /// Contraction rate of the last Newton iteration, to judge the first update.
     theta: f64,
+    newton_tol_k: f64,
+    /// The next step starts from the end of the last one, with the same switches.
+    start_is_last_end: bool,
     /// Step size the current factorisation was made for (NaN: none).
     lu_h: f64,
     /// The Jacobian must be re-evaluated before the next step.
@@ -136,7 +142,8 @@ pub struct Stepper {
 }
 
 impl Stepper {
-    pub fn new(model: &ThermalModel) -> Stepper {
+    /// A stepper for `model` whose steps aim at a local error of `tolerance_k`.
+    pub fn new(model: &ThermalModel, tolerance_k: f64) -> Stepper {
         let compiled = Compiled::new(&model.network);
         let n = compiled.n;
         Stepper {
@@ -150,6 +157,8 @@ impl Stepper {
             yg: vec![0.0; n],
             r: vec![0.0; n],
             theta: 0.5,
+            newton_tol_k: (NEWTON_TOL_FRACTION * tolerance_k).max(1e-9),
+            start_is_last_end: false,
             lu_h: f64::NAN,
             jac_stale: true,
             factorizations: 0,
@@ -175,9 +184,8 @@ impl Stepper {
         t0_s: f64,
         temps0_k: &[f64],
         h_s: f64,
-        tolerance_k: f64,
     ) -> Result<(), StepFailure> {
-        let newton_tol_k = (NEWTON_TOL_FRACTION * tolerance_k).max(1e-9);
+        let newton_tol_k = self.newton_tol_k;
         let n = self.compiled.n;
         let cap = &self.cap;
         let d = &mut self.data;
@@ -187,9 +195,17 @@ impl Stepper {
         d.temps0_k.copy_from_slice(temps0_k);
 
         // f0 and the iteration matrix W = C − D h J(T0).
-        self.compiled.set_time(model, &env_at(t0_s), sw);
-        self.compiled
-            .heat_w(temps0_k, &mut self.f0, Some(&mut d.flows[0]));
+        if self.start_is_last_end {
+            // Nothing changed since the accepted step that ended here: f0 is its f1.
+            std::mem::swap(&mut self.f0, &mut self.f);
+            let [first, _, last] = &mut d.flows;
+            std::mem::swap(first, last);
+        } else {
+            self.compiled.set_time(model, &env_at(t0_s), sw);
+            self.compiled
+                .heat_w(temps0_k, &mut self.f0, Some(&mut d.flows[0]));
+        }
+        self.start_is_last_end = false;
         // The iteration matrix is kept while the step size is unchanged and Newton
         // converges fast; the Jacobian only affects convergence, not the solution.
         if self.jac_stale {
@@ -307,6 +323,15 @@ impl Stepper {
         }
         self.lu.solve(&mut d.error_k);
         Ok(())
+    }
+}
+
+impl Stepper {
+    /// Declares that the next step starts where the last successful one ended, with
+    /// the same loads and switches, so its start values can be reused. The caller must
+    /// not call this after a rejected step or an event.
+    pub fn continue_from_last_end(&mut self) {
+        self.start_is_last_end = true;
     }
 }
 
