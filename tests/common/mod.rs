@@ -54,3 +54,16 @@ impl Recording {
         self.rows.iter().map(|r| r[i]).collect()
     }
 }
+
+/// The orbitlash binary built for these tests.
+pub fn bin() -> std::process::Command {
+    std::process::Command::new(env!("CARGO_BIN_EXE_orbitlash"))
+}
+
+/// A fresh, empty temporary folder for one test.
+pub fn tmpdir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("orbitlash-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
