@@ -16,6 +16,7 @@
 //! pipeline. See `docs/ARCHITECTURE.md` for the module map and invariants.
 
 pub mod constants;
+pub mod gear;
 pub mod io;
 pub mod orbit;
 pub mod scenario;

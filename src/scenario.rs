@@ -2,6 +2,7 @@
 //! the sensors that name recording columns. Built by `io::scenario_toml`; everything
 //! downstream may rely on it being physically valid.
 
+use crate::gear::GearPair;
 use crate::sim::SolverSettings;
 use crate::thermal::ThermalModel;
 
@@ -13,6 +14,8 @@ pub struct Scenario {
     pub run: RunControl,
     pub solver: SolverSettings,
     pub sensors: Vec<Sensor>,
+    /// Gear pairs whose backlash is evaluated at every step.
+    pub gears: Vec<GearPair>,
 }
 
 #[derive(Debug, Clone, PartialEq)]

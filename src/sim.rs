@@ -7,6 +7,7 @@
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use crate::gear::{GearPair, MeshState};
 use crate::orbit::EnvState;
 use crate::thermal::solver::{StepData, StepFailure, Stepper, W0, W1, hermite};
 use crate::thermal::{StepSwitches, ThermalModel};
@@ -45,6 +46,14 @@ pub enum EventKind {
     HeaterOff(usize),
     ModeStart(usize),
     ModeEnd(usize),
+    /// Gear pair k: exact backlash fell below its minimum allowed / rose back above it.
+    MarginLow(usize),
+    MarginRestored(usize),
+    /// Gear pair k: exact backlash reached zero (teeth interfere) / opened again.
+    InterferenceStart(usize),
+    InterferenceEnd(usize),
+    /// Gear pair k: no valid mesh (base circles overlap or contact ratio below 1).
+    MeshInvalid(usize),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -63,6 +72,31 @@ pub struct StepView<'a> {
     pub modes_active: &'a [bool],
     /// Each load's heat at the end of the step, W (as `Network::loads`).
     pub load_w: &'a [f64],
+    /// The gear pairs and their state at the end of the step (NaN backlash where the
+    /// mesh is invalid).
+    pub gears: &'a [GearPair],
+    pub mesh: &'a [MeshState],
+}
+
+/// What an observer is told before the first step.
+pub struct RunStart<'a> {
+    pub model: &'a ThermalModel,
+    pub gears: &'a [GearPair],
+    pub t_end_s: f64,
+    pub temps_k: &'a [f64],
+    pub mesh: &'a [MeshState],
+}
+
+/// The pair's state, or a state with NaN backlash when there is no valid mesh.
+pub fn mesh_or_nan(pair: &GearPair, temps_k: &[f64]) -> MeshState {
+    pair.evaluate(temps_k).unwrap_or(MeshState {
+        backlash_exact_m: f64::NAN,
+        backlash_closed_form_m: f64::NAN,
+        backlash_paper_m: f64::NAN,
+        margin_m: f64::NAN,
+        pressure_angle_rad: f64::NAN,
+        ..MeshState::default()
+    })
 }
 
 impl StepView<'_> {
@@ -99,12 +133,7 @@ impl StepView<'_> {
 pub type ObserverResult = Result<(), Box<dyn std::error::Error + Send + Sync>>;
 
 pub trait Observer {
-    fn on_start(
-        &mut self,
-        _model: &ThermalModel,
-        _t_end_s: f64,
-        _temps_k: &[f64],
-    ) -> ObserverResult {
+    fn on_start(&mut self, _start: &RunStart<'_>) -> ObserverResult {
         Ok(())
     }
     fn on_step(&mut self, _step: &StepView<'_>) -> ObserverResult {
@@ -121,8 +150,8 @@ pub trait Observer {
 impl Observer for () {}
 
 impl<O: Observer + ?Sized> Observer for &mut O {
-    fn on_start(&mut self, m: &ThermalModel, t: f64, y: &[f64]) -> ObserverResult {
-        (**self).on_start(m, t, y)
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        (**self).on_start(r)
     }
     fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
         (**self).on_step(s)
@@ -136,8 +165,8 @@ impl<O: Observer + ?Sized> Observer for &mut O {
 }
 
 impl<O: Observer> Observer for Option<O> {
-    fn on_start(&mut self, m: &ThermalModel, t: f64, y: &[f64]) -> ObserverResult {
-        self.as_mut().map_or(Ok(()), |o| o.on_start(m, t, y))
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        self.as_mut().map_or(Ok(()), |o| o.on_start(r))
     }
     fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
         self.as_mut().map_or(Ok(()), |o| o.on_step(s))
@@ -153,8 +182,8 @@ impl<O: Observer> Observer for Option<O> {
 macro_rules! tuple_observer {
     ($($name:ident $idx:tt),+) => {
         impl<$($name: Observer),+> Observer for ($($name,)+) {
-            fn on_start(&mut self, m: &ThermalModel, t: f64, y: &[f64]) -> ObserverResult {
-                $(self.$idx.on_start(m, t, y)?;)+ Ok(())
+            fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+                $(self.$idx.on_start(r)?;)+ Ok(())
             }
             fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
                 $(self.$idx.on_step(s)?;)+ Ok(())
@@ -228,6 +257,7 @@ pub enum SimError {
 /// Integrates `model` from t = 0 to `t_end_s`.
 pub fn simulate<O: Observer>(
     model: &ThermalModel,
+    gears: &[GearPair],
     settings: &SolverSettings,
     t_end_s: f64,
     observer: &mut O,
@@ -265,9 +295,19 @@ pub fn simulate<O: Observer>(
         },
         ..Default::default()
     };
+    let mut mesh: Vec<MeshState> = gears.iter().map(|g| mesh_or_nan(g, &y)).collect();
+    // Per pair: (margin low, interfering, invalid) as last reported.
+    let mut mesh_flags: Vec<[bool; 3]> = vec![[false; 3]; gears.len()];
     observer
-        .on_start(model, t_end_s, &y)
+        .on_start(&RunStart {
+            model,
+            gears,
+            t_end_s,
+            temps_k: &y,
+            mesh: &mesh,
+        })
         .map_err(SimError::Observer)?;
+    mesh_events(&mesh, &mut mesh_flags, 0.0, observer)?;
 
     let mut t = 0.0f64;
     let mut h = (settings.max_step_s).min(if settings.adaptive {
@@ -382,6 +422,9 @@ pub fn simulate<O: Observer>(
         if !sunlit {
             stats.eclipse_time_s += t_new - t;
         }
+        for (m, g) in mesh.iter_mut().zip(gears) {
+            *m = mesh_or_nan(g, &stepper.data.temps1_k);
+        }
         // The stepper's loads are those of the step's end (its last stage), which is
         // what observers see.
         let view = StepView {
@@ -391,8 +434,11 @@ pub fn simulate<O: Observer>(
             heaters_on: &heaters_on,
             modes_active: &modes_active,
             load_w: &stepper.compiled.each_load_w,
+            gears,
+            mesh: &mesh,
         };
         observer.on_step(&view).map_err(SimError::Observer)?;
+        mesh_events(&mesh, &mut mesh_flags, t_new, observer)?;
         t = t_new;
         y.copy_from_slice(&stepper.data.temps1_k);
 
@@ -490,6 +536,43 @@ pub fn simulate<O: Observer>(
     stats.final_temperatures_k = y;
     observer.on_finish(&stats).map_err(SimError::Observer)?;
     Ok(stats)
+}
+
+/// Reports gear-pair state changes (margin, interference, validity) as events.
+fn mesh_events<O: Observer>(
+    mesh: &[MeshState],
+    flags: &mut [[bool; 3]],
+    t_s: f64,
+    observer: &mut O,
+) -> Result<(), SimError> {
+    for (k, (m, f)) in mesh.iter().zip(flags.iter_mut()).enumerate() {
+        let invalid = m.backlash_exact_m.is_nan();
+        let now = [
+            !invalid && m.margin_m < 0.0,
+            !invalid && m.backlash_exact_m <= 0.0,
+            invalid,
+        ];
+        let kinds = [
+            (EventKind::MarginLow(k), EventKind::MarginRestored(k)),
+            (
+                EventKind::InterferenceStart(k),
+                EventKind::InterferenceEnd(k),
+            ),
+            (EventKind::MeshInvalid(k), EventKind::MeshInvalid(k)),
+        ];
+        for i in 0..3 {
+            if now[i] != f[i] {
+                f[i] = now[i];
+                if now[i] || i < 2 {
+                    let kind = if now[i] { kinds[i].0 } else { kinds[i].1 };
+                    observer
+                        .on_event(&Event { t_s, kind })
+                        .map_err(SimError::Observer)?;
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 fn accumulate_energy(e: &mut EnergyBalance, d: &StepData) {

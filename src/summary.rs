@@ -2,8 +2,7 @@
 //! (or the whole run when it is shorter), using the solver's cubic interpolant so that
 //! extremes between steps are not missed.
 
-use crate::sim::{Observer, ObserverResult, StepView};
-use crate::thermal::ThermalModel;
+use crate::sim::{Observer, ObserverResult, RunStart, StepView};
 use crate::thermal::solver::{hermite, hermite_interior_extrema};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -57,10 +56,17 @@ impl WindowStats {
 }
 
 impl Observer for WindowStats {
-    fn on_start(&mut self, model: &ThermalModel, t_end_s: f64, temps_k: &[f64]) -> ObserverResult {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        let temps_k = r.temps_k;
         let n = temps_k.len();
-        self.names = model.network.nodes.iter().map(|n| n.name.clone()).collect();
-        self.start_s = (t_end_s - self.window_s).max(0.0);
+        self.names = r
+            .model
+            .network
+            .nodes
+            .iter()
+            .map(|n| n.name.clone())
+            .collect();
+        self.start_s = (r.t_end_s - self.window_s).max(0.0);
         self.min_k = vec![f64::INFINITY; n];
         self.max_k = vec![f64::NEG_INFINITY; n];
         self.integral_ks = vec![0.0; n];
@@ -142,14 +148,9 @@ impl Samples {
 }
 
 impl Observer for Samples {
-    fn on_start(
-        &mut self,
-        _model: &ThermalModel,
-        _t_end_s: f64,
-        temps_k: &[f64],
-    ) -> ObserverResult {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
         self.times_s = vec![0.0];
-        self.temps_k = vec![temps_k.to_vec()];
+        self.temps_k = vec![r.temps_k.to_vec()];
         Ok(())
     }
 

@@ -79,6 +79,12 @@ fn csv_has_a_column_per_node_and_runs_are_reproducible() {
         "gear2.r1_k",
         "gear2.r2_k",
     ]);
+    want.extend([
+        "backlash_um",
+        "backlash_closed_form_um",
+        "backlash_paper_um",
+    ]);
+    want.extend(["pressure_angle_deg", "center_distance_mm"]);
     assert_eq!(header, want);
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
@@ -89,13 +95,19 @@ fn csv_has_a_column_per_node_and_runs_are_reproducible() {
         assert_eq!(r.len(), header.len());
         assert!((r[0] - 30.0 * k as f64).abs() < 1e-9);
         assert!(
-            r[1..]
+            r[1..11]
                 .iter()
                 .all(|t| t.is_finite() && *t > 200.0 && *t < 400.0)
         );
+        let (b, cf, paper, aw, a) = (r[11], r[12], r[13], r[14], r[15]);
+        assert!(
+            (20.0..45.0).contains(&b) && b <= cf + 1e-9,
+            "backlash {b} µm, closed form {cf} µm"
+        );
+        assert!(paper.is_finite() && (19.5..20.5).contains(&aw) && a == 30.0);
     }
     assert!(
-        rows[0][1..].iter().all(|&t| (t - 293.15).abs() < 1e-9),
+        rows[0][1..11].iter().all(|&t| (t - 293.15).abs() < 1e-9),
         "first row is the initial state"
     );
     let _ = std::fs::remove_dir_all(&dir);

@@ -7,7 +7,15 @@ use orbitlash::sim::simulate;
 #[test]
 fn regress_reference_solver_cost() {
     let sc = reference();
-    let stats = simulate(&sc.thermal, &sc.solver, sc.run.duration_s, &mut (), None).unwrap();
+    let stats = simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        sc.run.duration_s,
+        &mut (),
+        None,
+    )
+    .unwrap();
     let per_orbit = stats.steps as f64 / 6.0;
     assert!(
         (70.0..=100.0).contains(&per_orbit),
@@ -37,7 +45,15 @@ fn regress_mission_profile_runs_90_days() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml");
     let (sc, _) = load_file(&path).unwrap();
-    let stats = simulate(&sc.thermal, &sc.solver, sc.run.duration_s, &mut (), None).unwrap();
+    let stats = simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        sc.run.duration_s,
+        &mut (),
+        None,
+    )
+    .unwrap();
     // β passes 0 → 60°, below the 68° where eclipses stop: one eclipse per orbit.
     assert_eq!(stats.eclipse_entries, 1370);
     assert!(

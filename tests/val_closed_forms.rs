@@ -16,7 +16,7 @@ fn run_samples(
     every: f64,
 ) -> Samples {
     let mut s = Samples::every(every);
-    simulate(&sc.thermal, settings, t_end, &mut s, None).unwrap();
+    simulate(&sc.thermal, &sc.gears, settings, t_end, &mut s, None).unwrap();
     s
 }
 
@@ -130,7 +130,7 @@ fn val_published_black_sphere_settles_at_278_k() {
             4.0 * area
         ),
     );
-    let stats = simulate(&sc.thermal, &sc.solver, 20000.0, &mut (), None).unwrap();
+    let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, 20000.0, &mut (), None).unwrap();
     let t = stats.final_temperatures_k[0];
     let closed = (1360.0 / (4.0 * STEFAN_BOLTZMANN_W_PER_M2_K4)).powf(0.25);
     assert!(
@@ -164,7 +164,15 @@ fn val_published_eclipse_example() {
         f * period
     );
     // The stepping loop sees the same eclipses as the formula.
-    let stats = simulate(&sc.thermal, &sc.solver, 3.0 * period, &mut (), None).unwrap();
+    let stats = simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        3.0 * period,
+        &mut (),
+        None,
+    )
+    .unwrap();
     assert_eq!(stats.eclipse_entries, 3);
     assert!((stats.eclipse_time_s / (3.0 * period) - f).abs() < 1e-9);
 }
@@ -226,7 +234,7 @@ fn val_closed_form_thermostat_cycle() {
         ..sc.solver.clone()
     };
     let mut ev = Events::default();
-    let stats = simulate(&sc.thermal, &tight, 20000.0, &mut ev, None).unwrap();
+    let stats = simulate(&sc.thermal, &sc.gears, &tight, 20000.0, &mut ev, None).unwrap();
     let switches: Vec<(f64, bool)> =
         ev.0.iter()
             .filter_map(|e| match e.kind {
@@ -264,7 +272,15 @@ fn val_closed_form_eclipse_duration_with_drifting_beta() {
     );
     let env = &sc.thermal.environment;
     let mut ev = Events::default();
-    simulate(&sc.thermal, &sc.solver, 5.0 * 86400.0, &mut ev, None).unwrap();
+    simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        5.0 * 86400.0,
+        &mut ev,
+        None,
+    )
+    .unwrap();
     let period = env.orbit.period_s();
     let crit = env.orbit.critical_beta_rad();
     let mut checked = 0;

@@ -88,7 +88,7 @@ power_w = 0.6
     }
     let direct = k.lu().solve(&q).unwrap();
 
-    let stats = simulate(&sc.thermal, &sc.solver, 40000.0, &mut (), None).unwrap();
+    let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, 40000.0, &mut (), None).unwrap();
     for i in 0..n {
         let d = (stats.final_temperatures_k[i] - direct[i]).abs();
         assert!(

@@ -18,7 +18,15 @@ fn val_reference_mechanism_orbit6_extremes() {
     let sc = reference().with_orbits(6.0);
     let period = sc.period_s();
     let mut s = Samples::every(30.0);
-    simulate(&sc.thermal, &sc.solver, sc.run.duration_s, &mut s, None).unwrap();
+    simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        sc.run.duration_s,
+        &mut s,
+        None,
+    )
+    .unwrap();
     let net = &sc.thermal.network;
     let expected = [
         ("housing", -24.3, 62.7),
@@ -56,7 +64,7 @@ fn val_cases_null_recording_matches_within_noise() {
     let t_end = time.iter().flatten().copied().fold(0.0, f64::max);
     let sc = reference();
     let mut s = Samples::every(30.0);
-    simulate(&sc.thermal, &sc.solver, t_end, &mut s, None).unwrap();
+    simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut s, None).unwrap();
     let mut checked = 0;
     for sensor in &sc.sensors {
         let SensorTarget::Node(i) = sensor.target else {

@@ -8,7 +8,15 @@ use orbitlash::summary::Samples;
 fn samples(settings: &SolverSettings, orbits: f64) -> Samples {
     let sc = reference().with_orbits(orbits);
     let mut s = Samples::every(30.0);
-    simulate(&sc.thermal, settings, sc.run.duration_s, &mut s, None).unwrap();
+    simulate(
+        &sc.thermal,
+        &sc.gears,
+        settings,
+        sc.run.duration_s,
+        &mut s,
+        None,
+    )
+    .unwrap();
     s
 }
 

@@ -39,7 +39,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let mut steps = 0;
     for _ in 0..repeat {
         let start = Instant::now();
-        let stats = simulate(&sc.thermal, &sc.solver, t_end, &mut (), None)?;
+        let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut (), None)?;
         times.push(start.elapsed().as_secs_f64());
         steps = stats.steps;
     }
@@ -73,14 +73,14 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     // Accuracy against a step-converged run (fixed 0.5 s steps; TR-BDF2 is second order,
     // so its own error is ~(0.5/300)² of the default's).
     let mut ours = Samples::every(30.0);
-    simulate(&sc.thermal, &sc.solver, t_end, &mut ours, None)?;
+    simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut ours, None)?;
     let fine = SolverSettings {
         adaptive: false,
         max_step_s: 0.5,
         ..sc.solver.clone()
     };
     let mut reference = Samples::every(30.0);
-    simulate(&sc.thermal, &fine, t_end, &mut reference, None)?;
+    simulate(&sc.thermal, &sc.gears, &fine, t_end, &mut reference, None)?;
 
     outln!(
         o,

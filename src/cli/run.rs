@@ -95,8 +95,15 @@ pub fn run(a: RunArgs) -> Result<()> {
     let mut stats_obs = WindowStats::last(period_s.min(t_end_s));
     let mut observers = (&mut stats_obs, csv, log, progress);
     let wall = Instant::now();
-    let stats = simulate(&sc.thermal, &sc.solver, t_end_s, &mut observers, None)
-        .with_context(|| format!("running {}", loaded.file))?;
+    let stats = simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        t_end_s,
+        &mut observers,
+        None,
+    )
+    .with_context(|| format!("running {}", loaded.file))?;
     let wall_s = wall.elapsed().as_secs_f64();
 
     let mut o = format_summary(&sc.name, &sc.thermal, &stats, &stats_obs, period_s, wall_s);

@@ -1,18 +1,57 @@
-//! CSV export of a run: `time_s` then `<node>_k` for every diffusion node, one row per
-//! output interval (values from the solver's cubic interpolant), written atomically.
+//! CSV export of a run: `time_s`, `<node>_k` for every diffusion node, then for each
+//! gear pair `backlash_um` (exact worst case over the mesh cycle),
+//! `backlash_closed_form_um`, `backlash_paper_um`, `pressure_angle_deg` and
+//! `center_distance_mm` (prefixed `<pair>.` when there are several pairs). One row
+//! per output interval, values from the solver's cubic interpolant; written atomically.
 
 use std::io::Write;
 use std::path::Path;
 
 use super::atomic::{AtomicFile, OutputError};
-use crate::sim::{Observer, ObserverResult, RunStats, StepView};
-use crate::thermal::ThermalModel;
+use crate::gear::GearPair;
+use crate::sim::{Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan};
 
 pub struct CsvExport {
     file: Option<AtomicFile>,
     interval_s: f64,
     next_row: u64,
     row: Vec<f64>,
+    gear_values: Vec<f64>,
+}
+
+/// Gear columns, per pair.
+pub const GEAR_COLUMNS: [&str; 5] = [
+    "backlash_um",
+    "backlash_closed_form_um",
+    "backlash_paper_um",
+    "pressure_angle_deg",
+    "center_distance_mm",
+];
+
+/// Header names of the gear columns for `pairs`.
+pub fn gear_column_names(pairs: &[GearPair]) -> Vec<String> {
+    let mut v = Vec::new();
+    for p in pairs {
+        for c in GEAR_COLUMNS {
+            v.push(if pairs.len() == 1 {
+                c.to_string()
+            } else {
+                format!("{}.{c}", p.name)
+            });
+        }
+    }
+    v
+}
+
+/// The gear column values of a pair state, in `GEAR_COLUMNS` order and units.
+pub fn gear_values(m: &crate::gear::MeshState) -> [f64; 5] {
+    [
+        m.backlash_exact_m * 1e6,
+        m.backlash_closed_form_m * 1e6,
+        m.backlash_paper_m * 1e6,
+        m.pressure_angle_rad.to_degrees(),
+        m.center_distance_m * 1e3,
+    ]
 }
 
 impl CsvExport {
@@ -22,6 +61,7 @@ impl CsvExport {
             interval_s,
             next_row: 0,
             row: vec![],
+            gear_values: vec![],
         })
     }
 
@@ -31,19 +71,26 @@ impl CsvExport {
         for v in &self.row {
             write!(w, ",{v:.6}")?;
         }
+        for v in &self.gear_values {
+            write!(w, ",{v:.6}")?;
+        }
         writeln!(w)
     }
 }
 
 impl Observer for CsvExport {
-    fn on_start(&mut self, model: &ThermalModel, _t_end_s: f64, temps_k: &[f64]) -> ObserverResult {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
         let w = self.file.as_mut().expect("open").writer();
         write!(w, "time_s")?;
-        for n in &model.network.nodes {
+        for n in &r.model.network.nodes {
             write!(w, ",{}_k", n.name)?;
         }
+        for c in gear_column_names(r.gears) {
+            write!(w, ",{c}")?;
+        }
         writeln!(w)?;
-        self.row = temps_k.to_vec();
+        self.row = r.temps_k.to_vec();
+        self.gear_values = r.mesh.iter().flat_map(gear_values).collect();
         self.write_row(0.0)?;
         self.next_row = 1;
         Ok(())
@@ -57,6 +104,10 @@ impl Observer for CsvExport {
             }
             let mut row = std::mem::take(&mut self.row);
             step.temperatures_at(t, &mut row);
+            self.gear_values.clear();
+            for g in step.gears {
+                self.gear_values.extend(gear_values(&mesh_or_nan(g, &row)));
+            }
             self.row = row;
             self.write_row(t)?;
             self.next_row += 1;

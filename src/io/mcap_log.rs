@@ -10,8 +10,8 @@ use std::path::Path;
 use serde_json::{Map, Value, json};
 
 use super::atomic::{AtomicFile, OutputError};
-use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStats, StepView};
-use crate::thermal::ThermalModel;
+use super::csv_export::{gear_column_names, gear_values};
+use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView};
 
 /// Provenance stored in the log's metadata record and attachment.
 #[derive(Debug, Clone)]
@@ -36,6 +36,7 @@ struct Channels {
     orbit: u16,
     heat: u16,
     log: u16,
+    gears: u16,
 }
 
 #[derive(Default)]
@@ -46,15 +47,20 @@ struct Names {
     modes: Vec<String>,
     heater_power_w: Vec<f64>,
     period_s: f64,
+    gear_fields: Vec<String>,
+    pairs: Vec<String>,
 }
 
-/// A field name from a node or load name: `.` and `-` become `_`.
+/// A field name from a node or load name and a unit: `.` and `-` become `_`.
 pub fn field_name(name: &str, unit: &str) -> String {
-    let base: String = name
-        .chars()
+    format!("{}_{unit}", sanitize(name))
+}
+
+/// Every character but ASCII letters and digits becomes `_`.
+pub fn sanitize(name: &str) -> String {
+    name.chars()
         .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .collect();
-    format!("{base}_{unit}")
+        .collect()
 }
 
 fn ns(t_s: f64) -> u64 {
@@ -123,7 +129,9 @@ impl McapLog {
 const FOXGLOVE_LOG_SCHEMA: &str = r#"{"title":"foxglove.Log","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer","minimum":0},"nsec":{"type":"integer","minimum":0,"maximum":999999999}}},"level":{"type":"integer"},"message":{"type":"string"},"name":{"type":"string"},"file":{"type":"string"},"line":{"type":"integer","minimum":0}}}"#;
 
 impl Observer for McapLog {
-    fn on_start(&mut self, model: &ThermalModel, _t_end_s: f64, temps_k: &[f64]) -> ObserverResult {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        let model = r.model;
+        let temps_k = r.temps_k;
         let net = &model.network;
         self.names = Names {
             nodes: net.nodes.iter().map(|n| field_name(&n.name, "k")).collect(),
@@ -136,7 +144,13 @@ impl Observer for McapLog {
             modes: model.modes.iter().map(|m| m.name.clone()).collect(),
             heater_power_w: net.heaters.iter().map(|h| h.power_w).collect(),
             period_s: model.environment.orbit.period_s(),
+            gear_fields: gear_column_names(r.gears)
+                .iter()
+                .map(|c| sanitize(c))
+                .collect(),
+            pairs: r.gears.iter().map(|g| g.name.clone()).collect(),
         };
+        let gear_fields = self.names.gear_fields.clone();
         let mut temp_fields = vec!["time_s".to_string()];
         temp_fields.extend(self.names.nodes.iter().cloned());
         let mut heat_fields = self.names.loads.clone();
@@ -174,6 +188,12 @@ impl Observer for McapLog {
         let orbit = w.add_channel(s, "/orbit/state", "json", &empty)?;
         let s = w.add_schema("foxglove.Log", "jsonschema", FOXGLOVE_LOG_SCHEMA.as_bytes())?;
         let log = w.add_channel(s, "/events", "json", &empty)?;
+        let s = w.add_schema(
+            "orbitlash.GearMesh",
+            "jsonschema",
+            &number_schema("orbitlash.GearMesh", &gear_fields),
+        )?;
+        let gears = w.add_channel(s, "/gears/mesh", "json", &empty)?;
         let metadata: BTreeMap<String, String> = [
             ("tool", "orbitlash".to_string()),
             ("tool_version", env!("CARGO_PKG_VERSION").to_string()),
@@ -200,6 +220,7 @@ impl Observer for McapLog {
             orbit,
             heat,
             log,
+            gears,
         };
         let mut m = Map::new();
         m.insert("time_s".into(), json!(0.0));
@@ -239,7 +260,16 @@ impl Observer for McapLog {
             "sunlit": if e.sunlit { 1.0 } else { 0.0 },
             "orbit_number": (t / self.names.period_s).floor() + 1.0,
         });
-        self.write(self.channels.orbit, t, &orbit)
+        self.write(self.channels.orbit, t, &orbit)?;
+        if !step.mesh.is_empty() {
+            let mut g = Map::new();
+            let values = step.mesh.iter().flat_map(gear_values);
+            for (f, v) in self.names.gear_fields.iter().zip(values) {
+                g.insert(f.clone(), json!(v));
+            }
+            self.write(self.channels.gears, t, &Value::Object(g))?;
+        }
+        Ok(())
     }
 
     fn on_event(&mut self, event: &Event) -> ObserverResult {
@@ -255,6 +285,24 @@ impl Observer for McapLog {
             ),
             EventKind::ModeStart(k) => format!("mode {} start", self.names.modes[k]),
             EventKind::ModeEnd(k) => format!("mode {} end", self.names.modes[k]),
+            EventKind::MarginLow(k) => format!(
+                "gear pair {}: backlash below the minimum allowed",
+                self.names.pairs[k]
+            ),
+            EventKind::MarginRestored(k) => format!(
+                "gear pair {}: backlash margin restored",
+                self.names.pairs[k]
+            ),
+            EventKind::InterferenceStart(k) => format!(
+                "gear pair {}: interference (backlash ≤ 0)",
+                self.names.pairs[k]
+            ),
+            EventKind::InterferenceEnd(k) => {
+                format!("gear pair {}: interference ended", self.names.pairs[k])
+            }
+            EventKind::MeshInvalid(k) => {
+                format!("gear pair {}: no valid mesh", self.names.pairs[k])
+            }
         };
         self.log(event.t_s, 2, text)
     }

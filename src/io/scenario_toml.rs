@@ -10,6 +10,10 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
+use crate::gear::disc::{BoreFit, DiscMaterial};
+use crate::gear::involute::shifted_tooth_thickness;
+use crate::gear::strain::StrainLaw;
+use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
 use crate::orbit::{Environment, Incidence, Orbit, Profile};
 use crate::scenario::{DERIVED_QUANTITIES, RunControl, Scenario, Sensor, SensorTarget};
 use crate::sim::SolverSettings;
@@ -102,6 +106,92 @@ struct RawScenario {
     mode: Vec<RawMode>,
     #[serde(default)]
     sensor: Vec<RawSensor>,
+    #[serde(default)]
+    gear_pair: Vec<RawGearPair>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGearPair {
+    name: Option<String>,
+    module_mm: f64,
+    pressure_angle_deg: f64,
+    face_width_mm: f64,
+    center_distance_mm: f64,
+    reference_temperature_k: f64,
+    min_backlash_um: f64,
+    #[serde(default)]
+    center_distance: Option<RawCenterDistance>,
+    coating: RawCoating,
+    pinion: RawGear,
+    wheel: RawGear,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCenterDistance {
+    follows: String,
+    node: Option<String>,
+    alpha_per_k: Option<f64>,
+    dalpha_dt_per_k2: Option<f64>,
+    strain_polynomial: Option<RawPolynomial>,
+    strain_table: Option<RawStrainTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCoating {
+    thickness_um: f64,
+    alpha_per_k: f64,
+    poisson: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGear {
+    teeth: i64,
+    #[serde(default)]
+    profile_shift: f64,
+    tip_radius_mm: f64,
+    root_radius_mm: f64,
+    bore_radius_mm: f64,
+    tooth_thickness_mm: Option<f64>,
+    tooth_thinning_um: Option<f64>,
+    nodes: Vec<String>,
+    material: RawMaterial,
+    bore_fit: Option<String>,
+    shaft_node: Option<String>,
+    interference_um: Option<f64>,
+    shaft_material: Option<RawMaterial>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    /// Descriptive only (e.g. "17-4PH").
+    #[serde(default)]
+    #[allow(dead_code)]
+    name: String,
+    alpha_per_k: Option<f64>,
+    dalpha_dt_per_k2: Option<f64>,
+    strain_polynomial: Option<RawPolynomial>,
+    strain_table: Option<RawStrainTable>,
+    youngs_modulus_pa: f64,
+    poisson: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPolynomial {
+    coefficients: Vec<f64>,
+    scale: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStrainTable {
+    temperature_k: Vec<f64>,
+    strain: Vec<f64>,
 }
 
 #[derive(Deserialize)]
@@ -954,7 +1044,30 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
         });
     }
 
+    // Gear pairs.
+    let mut gears = Vec::new();
+    for (i, g) in raw.gear_pair.into_iter().enumerate() {
+        let p = KeyPath::new("gear_pair").at(i);
+        let pair = gear_pair(cx, &p, g, i, &nodes, &diffusion)?;
+        if gears.iter().any(|x: &GearPair| x.name == pair.name) {
+            return Err(cx.err(
+                &p.key("name"),
+                format!("gear pair `{}` is defined twice", pair.name),
+            ));
+        }
+        gears.push(pair);
+    }
+    for (i, s) in sensors.iter().enumerate() {
+        if matches!(s.target, SensorTarget::Derived(_)) && gears.is_empty() {
+            return Err(cx.err(
+                &KeyPath::new("sensor").at(i).key("quantity"),
+                "needs a [[gear_pair]] in the scenario",
+            ));
+        }
+    }
+
     Ok(Scenario {
+        gears,
         name: raw.scenario.name,
         description: raw.scenario.description,
         thermal: ThermalModel {
@@ -991,4 +1104,371 @@ fn check_name(
         return Err(cx.err(p, format!("node `{name}` is defined twice")));
     }
     Ok(())
+}
+
+fn strain_law(
+    cx: &Cx<'_>,
+    p: &KeyPath,
+    alpha: Option<f64>,
+    dalpha: Option<f64>,
+    poly: Option<RawPolynomial>,
+    table: Option<RawStrainTable>,
+) -> Result<StrainLaw, ScenarioError> {
+    let alpha_ok = |v: f64, key: &'static str| {
+        cx.within(&p.key(key), v, -1e-3, 1e-3, "expansion coefficient (1/K)")
+    };
+    match (alpha, dalpha, poly, table) {
+        (Some(a), None, None, None) => Ok(StrainLaw::Linear { alpha_per_k: alpha_ok(a, "alpha_per_k")? }),
+        (Some(a), Some(d), None, None) => Ok(StrainLaw::Quadratic {
+            alpha_per_k: alpha_ok(a, "alpha_per_k")?,
+            dalpha_dt_per_k2: cx.within(&p.key("dalpha_dt_per_k2"), d, -1e-5, 1e-5, "dα/dT (1/K²)")?,
+        }),
+        (None, None, Some(poly), None) => {
+            let pp = p.key("strain_polynomial");
+            if poly.coefficients.is_empty() {
+                return Err(cx.err(&pp.key("coefficients"), "must not be empty"));
+            }
+            for (k, c) in poly.coefficients.iter().enumerate() {
+                cx.finite(&pp.key("coefficients").at(k), *c)?;
+            }
+            cx.finite(&pp.key("scale"), poly.scale)?;
+            Ok(StrainLaw::Polynomial { coefficients: poly.coefficients, scale: poly.scale })
+        }
+        (None, None, None, Some(t)) => {
+            let tp = p.key("strain_table");
+            if t.temperature_k.len() < 2 || t.temperature_k.len() != t.strain.len() {
+                return Err(cx.err(&tp, "needs at least two points and as many `strain` as `temperature_k` entries"));
+            }
+            for (k, w) in t.temperature_k.windows(2).enumerate() {
+                if !(w[1] > w[0]) {
+                    return Err(cx.err(&tp.key("temperature_k").at(k + 1), "temperatures must increase strictly"));
+                }
+            }
+            for (k, v) in t.strain.iter().enumerate() {
+                cx.finite(&tp.key("strain").at(k), *v)?;
+            }
+            Ok(StrainLaw::Table { temperature_k: t.temperature_k, strain: t.strain })
+        }
+        _ => Err(cx.err(
+            p,
+            "give the thermal strain as `alpha_per_k` (optionally with `dalpha_dt_per_k2`), or `strain_polynomial`, or `strain_table`",
+        )),
+    }
+}
+
+fn disc_material(cx: &Cx<'_>, p: &KeyPath, m: RawMaterial) -> Result<DiscMaterial, ScenarioError> {
+    let youngs = cx.positive(&p.key("youngs_modulus_pa"), m.youngs_modulus_pa)?;
+    if youngs < 1e8 {
+        return Err(cx.err(
+            &p.key("youngs_modulus_pa"),
+            format!("is in pascal: {youngs} Pa is not a metal (steel is 2e11)"),
+        ));
+    }
+    let poisson = m.poisson;
+    cx.finite(&p.key("poisson"), poisson)?;
+    if !(poisson > -1.0 && poisson < 0.5) {
+        return Err(cx.err(
+            &p.key("poisson"),
+            format!("must be within −1 … 0.5 (got {poisson})"),
+        ));
+    }
+    Ok(DiscMaterial {
+        strain: strain_law(
+            cx,
+            p,
+            m.alpha_per_k,
+            m.dalpha_dt_per_k2,
+            m.strain_polynomial,
+            m.strain_table,
+        )?,
+        youngs_modulus_pa: youngs,
+        poisson,
+    })
+}
+
+/// Relative tolerance for node radii that must sit on the bore and the base circle.
+const RADIUS_TOLERANCE: f64 = 1e-5;
+
+fn gear_pair(
+    cx: &Cx<'_>,
+    p: &KeyPath,
+    g: RawGearPair,
+    index: usize,
+    nodes: &[DiffusionNode],
+    diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, ScenarioError>,
+) -> Result<GearPair, ScenarioError> {
+    let module_m = cx.positive(&p.key("module_mm"), g.module_mm)? * 1e-3;
+    let alpha0_deg = cx.finite(&p.key("pressure_angle_deg"), g.pressure_angle_deg)?;
+    if !(10.0..=35.0).contains(&alpha0_deg) {
+        return Err(cx.err(
+            &p.key("pressure_angle_deg"),
+            format!("must be within 10° … 35° (got {alpha0_deg}°)"),
+        ));
+    }
+    let alpha0 = alpha0_deg.to_radians();
+    let t_ref = cx.temperature(&p.key("reference_temperature_k"), g.reference_temperature_k)?;
+    let cp = p.key("coating");
+    let coating = Coating {
+        thickness_m: cx.non_negative(&cp.key("thickness_um"), g.coating.thickness_um)? * 1e-6,
+        alpha_per_k: cx.within(
+            &cp.key("alpha_per_k"),
+            g.coating.alpha_per_k,
+            -1e-3,
+            1e-3,
+            "expansion coefficient (1/K)",
+        )?,
+        poisson: {
+            let v = cx.finite(&cp.key("poisson"), g.coating.poisson)?;
+            if !(v > -1.0 && v < 0.5) {
+                return Err(cx.err(
+                    &cp.key("poisson"),
+                    format!("must be within −1 … 0.5 (got {v})"),
+                ));
+            }
+            v
+        },
+    };
+    let mut built = Vec::new();
+    for (key, raw) in [("pinion", g.pinion), ("wheel", g.wheel)] {
+        let gp = p.key(key);
+        let teeth = raw.teeth;
+        if !(5..=10_000).contains(&teeth) {
+            return Err(cx.err(
+                &gp.key("teeth"),
+                format!("must be within 5 … 10000 (got {teeth})"),
+            ));
+        }
+        let teeth = teeth as u32;
+        let shift = cx.within(
+            &gp.key("profile_shift"),
+            raw.profile_shift,
+            -2.0,
+            2.0,
+            "profile shift",
+        )?;
+        let r_ref = module_m * teeth as f64 / 2.0;
+        let r_b = r_ref * alpha0.cos();
+        let tip = cx.positive(&gp.key("tip_radius_mm"), raw.tip_radius_mm)? * 1e-3;
+        let root = cx.positive(&gp.key("root_radius_mm"), raw.root_radius_mm)? * 1e-3;
+        let bore = cx.positive(&gp.key("bore_radius_mm"), raw.bore_radius_mm)? * 1e-3;
+        let mm = |x: f64| format!("{:.6} mm", x * 1e3);
+        if bore >= r_b {
+            return Err(cx.err(
+                &gp.key("bore_radius_mm"),
+                format!(
+                    "bore radius {} must be below the base radius r_b = m z cos α₀ / 2 = {}",
+                    mm(bore),
+                    mm(r_b)
+                ),
+            ));
+        }
+        if bore >= root {
+            return Err(cx.err(
+                &gp.key("bore_radius_mm"),
+                format!(
+                    "bore radius {} must be below the root radius {}",
+                    mm(bore),
+                    mm(root)
+                ),
+            ));
+        }
+        if tip <= r_b || tip <= root {
+            return Err(cx.err(
+                &gp.key("tip_radius_mm"),
+                format!(
+                    "tip radius {} must exceed the base radius {} and the root radius {}",
+                    mm(tip),
+                    mm(r_b),
+                    mm(root)
+                ),
+            ));
+        }
+        let thickness = match (raw.tooth_thickness_mm, raw.tooth_thinning_um) {
+            (Some(s), None) => cx.positive(&gp.key("tooth_thickness_mm"), s)? * 1e-3,
+            (None, Some(t)) => {
+                let t = cx.finite(&gp.key("tooth_thinning_um"), t)?;
+                shifted_tooth_thickness(module_m, shift, alpha0) - t * 1e-6
+            }
+            _ => {
+                return Err(cx.err(
+                    &gp,
+                    "give exactly one of `tooth_thickness_mm` or `tooth_thinning_um`",
+                ));
+            }
+        };
+        let np = gp.key("nodes");
+        if raw.nodes.len() < 2 || raw.nodes.len() > MAX_GEAR_NODES {
+            return Err(cx.err(
+                &np,
+                format!("list 2 … {MAX_GEAR_NODES} nodes from the bore to the base circle"),
+            ));
+        }
+        let mut node_ids = Vec::new();
+        let mut radii = Vec::new();
+        for (k, name) in raw.nodes.iter().enumerate() {
+            let id = diffusion(&np.at(k), name)?;
+            let r = nodes[id].radius_m.ok_or_else(|| {
+                cx.err(
+                    &np.at(k),
+                    format!("node `{name}` needs `radius_mm` to be part of a gear profile"),
+                )
+            })?;
+            if radii.last().is_some_and(|&prev| r <= prev) {
+                return Err(cx.err(
+                    &np.at(k),
+                    "node radii must increase from the bore to the base circle",
+                ));
+            }
+            node_ids.push(id);
+            radii.push(r);
+        }
+        if (radii[0] - bore).abs() > RADIUS_TOLERANCE * bore {
+            return Err(cx.err(
+                &np.at(0),
+                format!(
+                    "the first node sits at {} but the bore radius is {}",
+                    mm(radii[0]),
+                    mm(bore)
+                ),
+            ));
+        }
+        let last = *radii.last().expect("two nodes");
+        if (last - r_b).abs() > RADIUS_TOLERANCE * r_b {
+            return Err(cx.err(
+                &np.at(radii.len() - 1),
+                format!(
+                    "the last node sits at {} but the base radius is {}",
+                    mm(last),
+                    mm(r_b)
+                ),
+            ));
+        }
+        let material = disc_material(cx, &gp.key("material"), raw.material)?;
+        let shaft_node = match &raw.shaft_node {
+            Some(n) => Some(diffusion(&gp.key("shaft_node"), n)?),
+            None => None,
+        };
+        let fit = match raw.bore_fit.as_deref() {
+            None | Some("free") => BoreFit::Free,
+            Some("rigid") => BoreFit::Rigid,
+            Some("elastic") => {
+                let shaft = raw
+                    .shaft_material
+                    .ok_or_else(|| cx.err(&gp, "an elastic bore fit needs `shaft_material`"))?;
+                if shaft_node.is_none() {
+                    return Err(cx.err(
+                        &gp,
+                        "an elastic bore fit needs `shaft_node` (the shaft's temperature)",
+                    ));
+                }
+                let sm = disc_material(cx, &gp.key("shaft_material"), shaft)?;
+                BoreFit::Elastic {
+                    interference_m: cx.finite(
+                        &gp.key("interference_um"),
+                        raw.interference_um.unwrap_or(0.0),
+                    )? * 1e-6,
+                    shaft_youngs_modulus_pa: sm.youngs_modulus_pa,
+                    shaft_poisson: sm.poisson,
+                    shaft_strain: sm.strain,
+                }
+            }
+            Some(other) => {
+                return Err(cx.err(
+                    &gp.key("bore_fit"),
+                    format!("unknown bore fit `{other}` (known: free, rigid, elastic)"),
+                ));
+            }
+        };
+        built.push(Gear {
+            name: key.to_string(),
+            teeth,
+            profile_shift: shift,
+            tip_radius_m: tip,
+            root_radius_m: root,
+            bore_radius_m: bore,
+            tooth_thickness_m: thickness,
+            material,
+            fit,
+            nodes: node_ids,
+            node_radii_m: radii,
+            shaft_node,
+        });
+    }
+    let center = match g.center_distance {
+        None => CenterDistance::Fixed,
+        Some(c) => {
+            let cp = p.key("center_distance");
+            match c.follows.as_str() {
+                "fixed" => CenterDistance::Fixed,
+                "housing" => {
+                    let node_name = c
+                        .node
+                        .as_deref()
+                        .ok_or_else(|| cx.err(&cp, "needs `node`: the housing node"))?;
+                    CenterDistance::Housing {
+                        node: diffusion(&cp.key("node"), node_name)?,
+                        strain: strain_law(
+                            cx,
+                            &cp,
+                            c.alpha_per_k,
+                            c.dalpha_dt_per_k2,
+                            c.strain_polynomial,
+                            c.strain_table,
+                        )?,
+                    }
+                }
+                other => {
+                    return Err(cx.err(
+                        &cp.key("follows"),
+                        format!("unknown `{other}` (known: fixed, housing)"),
+                    ));
+                }
+            }
+        }
+    };
+    let [pinion, wheel]: [Gear; 2] = built.try_into().map_err(|_| cx.err(p, "two gears"))?;
+    let pair = GearPair {
+        name: g.name.unwrap_or_else(|| {
+            if index == 0 {
+                "mesh".into()
+            } else {
+                format!("mesh{index}")
+            }
+        }),
+        module_m,
+        pressure_angle_rad: alpha0,
+        face_width_m: cx.positive(&p.key("face_width_mm"), g.face_width_mm)? * 1e-3,
+        center_distance_m: cx.positive(&p.key("center_distance_mm"), g.center_distance_mm)? * 1e-3,
+        center,
+        reference_temperature_k: t_ref,
+        coating,
+        min_backlash_m: cx.non_negative(&p.key("min_backlash_um"), g.min_backlash_um)? * 1e-6,
+        gears: [pinion, wheel],
+    };
+    // The assembled pair must mesh with positive backlash.
+    let nominal = pair.nominal_backlash_m();
+    let rb_sum = pair
+        .gears
+        .iter()
+        .map(|g| g.base_radius_m(module_m, alpha0))
+        .sum::<f64>();
+    if rb_sum >= pair.center_distance_m {
+        return Err(cx.err(
+            &p.key("center_distance_mm"),
+            "is shorter than the sum of the base radii",
+        ));
+    }
+    if nominal.is_nan() {
+        return Err(cx.err(
+            &p.key("center_distance_mm"),
+            "the gears do not mesh at this centre distance (contact ratio below 1)",
+        ));
+    }
+    if nominal <= 0.0 {
+        return Err(cx.err(
+            &p.key("center_distance_mm"),
+            format!("the pair has negative backlash at assembly ({:.3} µm): the teeth are too thick for this centre distance", nominal * 1e6),
+        ));
+    }
+    Ok(pair)
 }
