@@ -2,7 +2,8 @@
 //! (or the whole run when it is shorter), using the solver's cubic interpolant so that
 //! extremes between steps are not missed.
 
-use crate::sim::{Observer, ObserverResult, RunStart, StepView};
+use crate::gear::MeshState;
+use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView, mesh_or_nan};
 use crate::thermal::solver::{hermite, hermite_interior_extrema};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -164,6 +165,168 @@ impl Observer for Samples {
             step.temperatures_at(t, &mut row);
             self.times_s.push(t);
             self.temps_k.push(row);
+        }
+        Ok(())
+    }
+}
+
+/// Extremes of one gear pair's backlash over a window of the run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PairStats {
+    pub name: String,
+    /// Smallest exact backlash and when it happened.
+    pub min_exact_m: f64,
+    pub t_min_s: f64,
+    pub max_exact_m: f64,
+    pub t_max_s: f64,
+    pub min_closed_form_m: f64,
+    pub max_closed_form_m: f64,
+    pub min_paper_m: f64,
+    pub max_paper_m: f64,
+    pub min_margin_m: f64,
+    /// Times backlash reached zero / fell below the minimum allowed.
+    pub interference_events: u64,
+    pub margin_events: u64,
+    /// Samples with no valid mesh.
+    pub invalid_samples: u64,
+}
+
+impl PairStats {
+    fn new(name: &str) -> PairStats {
+        PairStats {
+            name: name.to_string(),
+            min_exact_m: f64::INFINITY,
+            t_min_s: f64::NAN,
+            max_exact_m: f64::NEG_INFINITY,
+            t_max_s: f64::NAN,
+            min_closed_form_m: f64::INFINITY,
+            max_closed_form_m: f64::NEG_INFINITY,
+            min_paper_m: f64::INFINITY,
+            max_paper_m: f64::NEG_INFINITY,
+            min_margin_m: f64::INFINITY,
+            interference_events: 0,
+            margin_events: 0,
+            invalid_samples: 0,
+        }
+    }
+
+    fn see(&mut self, t_s: f64, m: &MeshState) {
+        if m.backlash_exact_m.is_nan() {
+            self.invalid_samples += 1;
+            return;
+        }
+        if m.backlash_exact_m < self.min_exact_m {
+            self.min_exact_m = m.backlash_exact_m;
+            self.t_min_s = t_s;
+        }
+        if m.backlash_exact_m > self.max_exact_m {
+            self.max_exact_m = m.backlash_exact_m;
+            self.t_max_s = t_s;
+        }
+        self.min_closed_form_m = self.min_closed_form_m.min(m.backlash_closed_form_m);
+        self.max_closed_form_m = self.max_closed_form_m.max(m.backlash_closed_form_m);
+        self.min_paper_m = self.min_paper_m.min(m.backlash_paper_m);
+        self.max_paper_m = self.max_paper_m.max(m.backlash_paper_m);
+        self.min_margin_m = self.min_margin_m.min(m.margin_m);
+    }
+}
+
+/// Backlash extremes of every gear pair over the last `window_s` of the run. Each step
+/// is evaluated at its end and at three interior points of the solver's interpolant;
+/// an interior minimum is refined by golden-section search, so minima between long
+/// steps are not missed.
+#[derive(Debug, Clone, Default)]
+pub struct MeshStats {
+    window_s: f64,
+    start_s: f64,
+    pub pairs: Vec<PairStats>,
+    temps: Vec<f64>,
+}
+
+impl MeshStats {
+    pub fn last(window_s: f64) -> MeshStats {
+        MeshStats {
+            window_s,
+            ..Default::default()
+        }
+    }
+
+    pub fn window_start_s(&self) -> f64 {
+        self.start_s
+    }
+}
+
+impl Observer for MeshStats {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        self.start_s = (r.t_end_s - self.window_s).max(0.0);
+        self.pairs = r.gears.iter().map(|g| PairStats::new(&g.name)).collect();
+        self.temps = vec![0.0; r.temps_k.len()];
+        if self.start_s == 0.0 {
+            for (p, m) in self.pairs.iter_mut().zip(r.mesh) {
+                p.see(0.0, m);
+            }
+        }
+        Ok(())
+    }
+
+    fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
+        let (t0, t1) = (step.t0_s(), step.t1_s());
+        if t1 <= self.start_s || step.gears.is_empty() {
+            return Ok(());
+        }
+        let a = t0.max(self.start_s);
+        let mut temps = std::mem::take(&mut self.temps);
+        for (k, pair) in step.gears.iter().enumerate() {
+            let mut at = |t: f64| {
+                step.temperatures_at(t, &mut temps);
+                mesh_or_nan(pair, &temps)
+            };
+            let ts = [
+                a,
+                a + 0.25 * (t1 - a),
+                a + 0.5 * (t1 - a),
+                a + 0.75 * (t1 - a),
+            ];
+            let mut values = [0.0; 5];
+            for (i, &t) in ts.iter().enumerate() {
+                let m = at(t);
+                values[i] = m.backlash_exact_m;
+                self.pairs[k].see(t, &m);
+            }
+            values[4] = step.mesh[k].backlash_exact_m;
+            self.pairs[k].see(t1, &step.mesh[k]);
+            // Golden-section refinement around an interior minimum.
+            let i = (1..4)
+                .min_by(|&x, &y| values[x].total_cmp(&values[y]))
+                .unwrap_or(2);
+            if values[i] < values[0] && values[i] < values[4] {
+                let (mut lo, mut hi) = (ts[i - 1], if i + 1 < 4 { ts[i + 1] } else { t1 });
+                let g = 0.618_033_988_749_895;
+                for _ in 0..12 {
+                    let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+                    let (m1, m2) = (at(x1), at(x2));
+                    self.pairs[k].see(x1, &m1);
+                    self.pairs[k].see(x2, &m2);
+                    if m1.backlash_exact_m < m2.backlash_exact_m {
+                        hi = x2;
+                    } else {
+                        lo = x1;
+                    }
+                }
+            }
+        }
+        self.temps = temps;
+        Ok(())
+    }
+
+    fn on_event(&mut self, e: &Event) -> ObserverResult {
+        if e.t_s < self.start_s {
+            return Ok(());
+        }
+        match e.kind {
+            EventKind::InterferenceStart(k) => self.pairs[k].interference_events += 1,
+            EventKind::MarginLow(k) => self.pairs[k].margin_events += 1,
+            _ => {}
         }
         Ok(())
     }

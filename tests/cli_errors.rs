@@ -266,3 +266,70 @@ fn bad_orbit_count_on_the_command_line() {
         assert_failed("orbits", &out, &["--orbits"]);
     }
 }
+
+#[test]
+fn gear_bore_not_below_base_radius() {
+    assert_rejected(
+        "bore",
+        "bore_radius_mm = 3.0",
+        "bore_radius_mm = 9.5",
+        &[
+            "gear_pair[0].pinion.bore_radius_mm",
+            "base radius",
+            ":{line}:",
+        ],
+    );
+}
+
+#[test]
+fn gear_too_few_teeth() {
+    assert_rejected(
+        "teeth",
+        "teeth = 20",
+        "teeth = 4",
+        &["gear_pair[0].pinion.teeth", "5 … 10000"],
+    );
+}
+
+#[test]
+fn gear_negative_backlash_at_assembly() {
+    assert_rejected(
+        "thick-teeth",
+        "tooth_thinning_um = 19.4745         # s",
+        "tooth_thinning_um = -30.0           # s",
+        &[
+            "gear_pair[0].center_distance_mm",
+            "negative backlash at assembly",
+        ],
+    );
+}
+
+#[test]
+fn gear_pressure_angle_out_of_range() {
+    assert_rejected(
+        "alpha0",
+        "pressure_angle_deg = 20.0",
+        "pressure_angle_deg = 45.0",
+        &["gear_pair[0].pressure_angle_deg", "10° … 35°"],
+    );
+}
+
+#[test]
+fn gear_node_not_on_the_base_circle() {
+    assert_rejected(
+        "node-radius",
+        "radius_mm = 9.396926",
+        "radius_mm = 9.5",
+        &["gear_pair[0].pinion.nodes[2]", "base radius"],
+    );
+}
+
+#[test]
+fn gear_unknown_bore_fit() {
+    assert_rejected(
+        "fit",
+        "bore_fit = \"free\"",
+        "bore_fit = \"glued\"",
+        &["gear_pair[0].pinion.bore_fit", "free, rigid, elastic"],
+    );
+}

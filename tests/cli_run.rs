@@ -162,3 +162,49 @@ fn every_shipped_scenario_is_valid() {
         }
     }
 }
+
+#[test]
+fn backlash_calculator_table_and_json() {
+    let out = bin().arg("backlash").output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("32.600"), "nominal missing:\n{stdout}");
+    assert!(
+        stdout.contains("100.00") && stdout.contains("-75.00"),
+        "{stdout}"
+    );
+
+    let out = bin()
+        .args(["backlash", "--json", "--pinion-c", "65", "--wheel-c", "35"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cases = v["pairs"][0]["cases"].as_array().unwrap();
+    let given = cases.iter().find(|c| c["case"] == "given").unwrap();
+    // physics.md §4: pinion 40 K and wheel 10 K above 25 °C.
+    let exact = given["backlash_um"]["exact"].as_f64().unwrap();
+    let closed = given["backlash_um"]["closed_form"].as_f64().unwrap();
+    assert!(
+        (exact - 26.64).abs() < 0.005 && (closed - 28.10).abs() < 0.005,
+        "{exact} {closed}"
+    );
+    assert_eq!(
+        cases[0]["backlash_um"]["exact"].as_f64().unwrap().round(),
+        33.0
+    );
+
+    let out = bin()
+        .args(["backlash", "--pinion-c", "nan", "--wheel-c", "3"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+}

@@ -39,7 +39,8 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let mut steps = 0;
     for _ in 0..repeat {
         let start = Instant::now();
-        let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut (), None)?;
+        // The thermal part alone; gear evaluation is timed below.
+        let stats = simulate(&sc.thermal, &[], &sc.solver, t_end, &mut (), None)?;
         times.push(start.elapsed().as_secs_f64());
         steps = stats.steps;
     }
@@ -67,6 +68,38 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         median * 1e6 / orbits,
         median * 1e6 / steps as f64
     );
+    // Backlash: every pair evaluated at the node temperatures of the end of a run.
+    if !sc.gears.is_empty() {
+        let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut (), None)?;
+        let temps = stats.final_temperatures_k;
+        let evals = 200_000;
+        let mut times = Vec::new();
+        let mut sink = 0.0;
+        for _ in 0..5 {
+            let start = Instant::now();
+            for i in 0..evals {
+                let mut t = temps.clone();
+                let len = t.len();
+                t[i % len] += 1e-3 * (i % 7) as f64;
+                for g in &sc.gears {
+                    sink += g.evaluate(&t).map_or(0.0, |m| m.backlash_exact_m);
+                }
+            }
+            times.push(start.elapsed().as_secs_f64());
+        }
+        times.sort_by(f64::total_cmp);
+        outln!(
+            o,
+            "backlash: {:.3} µs per evaluation of all {} pair(s) (exact, closed form, paper), median of 5 × {evals}{}",
+            times[2] * 1e6 / evals as f64,
+            sc.gears.len(),
+            if sink.is_nan() {
+                " (some states invalid)"
+            } else {
+                ""
+            }
+        );
+    }
     if a.no_accuracy {
         return print_out(&o);
     }

@@ -8,6 +8,7 @@ macro_rules! outln {
     }};
 }
 
+mod backlash;
 mod bench;
 mod check;
 mod run;
@@ -39,6 +40,8 @@ enum Command {
     Check(check::CheckArgs),
     /// Measure the cost per step and per orbit of the thermal solver.
     Bench(bench::BenchArgs),
+    /// Static backlash calculator: every model variant at given temperatures.
+    Backlash(backlash::BacklashArgs),
 }
 
 pub fn dispatch(cli: Cli) -> Result<()> {
@@ -46,6 +49,7 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Run(a) => run::run(a),
         Command::Check(a) => check::check(a),
         Command::Bench(a) => bench::bench(a),
+        Command::Backlash(a) => backlash::backlash(a),
     }
 }
 

@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{McapLog, Provenance};
 use orbitlash::sim::{Observer, ObserverResult, RunStats, StepView, simulate};
-use orbitlash::summary::WindowStats;
+use orbitlash::summary::{MeshStats, PairStats, WindowStats};
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
 
@@ -93,7 +93,14 @@ pub fn run(a: RunArgs) -> Result<()> {
     });
 
     let mut stats_obs = WindowStats::last(period_s.min(t_end_s));
-    let mut observers = (&mut stats_obs, csv, log, progress);
+    let mut mesh_run = MeshStats::last(t_end_s);
+    let mut mesh_last = MeshStats::last(period_s.min(t_end_s));
+    let mut observers = (
+        (&mut stats_obs, &mut mesh_run, &mut mesh_last),
+        csv,
+        log,
+        progress,
+    );
     let wall = Instant::now();
     let stats = simulate(
         &sc.thermal,
@@ -107,6 +114,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     let wall_s = wall.elapsed().as_secs_f64();
 
     let mut o = format_summary(&sc.name, &sc.thermal, &stats, &stats_obs, period_s, wall_s);
+    o.push_str(&format_mesh(&sc, &mesh_run, &mesh_last));
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
@@ -221,5 +229,71 @@ fn format_summary(
         stats.steps as f64 / wall_s,
         wall_s * 1e3 / orbits
     );
+    o
+}
+
+fn format_mesh(sc: &orbitlash::scenario::Scenario, run: &MeshStats, last: &MeshStats) -> String {
+    let mut o = String::new();
+    let env = &sc.thermal.environment;
+    let phase = |t: f64| {
+        format!(
+            "t = {t:.1} s, orbit {}, θ = {:.1}° from noon, {}",
+            env.orbit.orbit_number(t),
+            env.orbit.orbit_angle_rad(t).to_degrees().rem_euclid(360.0),
+            if env.sunlit(t) { "sunlit" } else { "eclipse" }
+        )
+    };
+    for ((pair, r), l) in sc.gears.iter().zip(&run.pairs).zip(&last.pairs) {
+        outln!(
+            o,
+            "\ngear pair {} (normal backlash, µm; minimum allowed {:.1} µm):",
+            pair.name,
+            pair.min_backlash_m * 1e6
+        );
+        outln!(
+            o,
+            "  {:26} {:>9} {:>9} {:>9} {:>9}",
+            "",
+            "run min",
+            "run max",
+            "orbit min",
+            "orbit max"
+        );
+        let row = |o: &mut String, label: &str, f: &dyn Fn(&PairStats) -> (f64, f64)| {
+            let (a, b) = f(r);
+            let (c, d) = f(l);
+            outln!(
+                o,
+                "  {label:26} {:>9.3} {:>9.3} {:>9.3} {:>9.3}",
+                a * 1e6,
+                b * 1e6,
+                c * 1e6,
+                d * 1e6
+            );
+        };
+        row(&mut o, "exact (worst over a mesh)", &|p| {
+            (p.min_exact_m, p.max_exact_m)
+        });
+        row(&mut o, "closed form", &|p| {
+            (p.min_closed_form_m, p.max_closed_form_m)
+        });
+        row(&mut o, "paper (16)-(22)", &|p| {
+            (p.min_paper_m, p.max_paper_m)
+        });
+        outln!(o, "  smallest backlash at {}", phase(r.t_min_s));
+        outln!(o, "  largest backlash at  {}", phase(r.t_max_s));
+        outln!(
+            o,
+            "  margin {:.3} µm (smallest over the run); {} interference events, {} times below the minimum{}",
+            r.min_margin_m * 1e6,
+            r.interference_events,
+            r.margin_events,
+            if r.invalid_samples > 0 {
+                format!(", {} samples with no valid mesh", r.invalid_samples)
+            } else {
+                String::new()
+            }
+        );
+    }
     o
 }

@@ -60,7 +60,7 @@ pub enum MeshError {
 pub fn backlash(g1: &FlankGeometry, g2: &FlankGeometry, a_m: f64) -> Result<Backlash, MeshError> {
     let (rb1, rb2) = (g1.base_radius_m, g2.base_radius_m);
     let cos_aw = (rb1 + rb2) / a_m;
-    if !(cos_aw < 1.0) {
+    if cos_aw >= 1.0 || cos_aw.is_nan() {
         return Err(MeshError::BaseCirclesOverlap {
             sum_m: rb1 + rb2,
             a_m,

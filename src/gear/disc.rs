@@ -196,7 +196,6 @@ mod tests {
             shaft_strain: StrainLaw::Linear { alpha_per_k: 0.0 },
         };
         let free = base_circle_displacement(&radii, &temps, &m, &BoreFit::Free, t_ref, t_ref);
-        let rigid = base_circle_displacement(&radii, &temps, &m, &BoreFit::Rigid, t_ref, t_ref);
         // No interference and a warmer disc: the fit opens, the disc is free.
         let open = base_circle_displacement(&radii, &temps, &m, &shaft(200e9, 0.0), t_ref, t_ref);
         assert_eq!(open.bore_pressure_pa, 0.0);

@@ -80,6 +80,9 @@ pub struct GearPair {
     pub coating: Coating,
     pub min_backlash_m: f64,
     pub gears: [Gear; 2],
+    /// Nominal backlash minus the paper model's value at ΔT = 0 (see `paper`),
+    /// computed on first use.
+    pub paper_offset_m: std::sync::OnceLock<f64>,
 }
 
 /// One gear after deformation.

@@ -1140,7 +1140,7 @@ fn strain_law(
                 return Err(cx.err(&tp, "needs at least two points and as many `strain` as `temperature_k` entries"));
             }
             for (k, w) in t.temperature_k.windows(2).enumerate() {
-                if !(w[1] > w[0]) {
+                if w[1] <= w[0] || w[1].is_nan() || w[0].is_nan() {
                     return Err(cx.err(&tp.key("temperature_k").at(k + 1), "temperatures must increase strictly"));
                 }
             }
@@ -1444,6 +1444,7 @@ fn gear_pair(
         coating,
         min_backlash_m: cx.non_negative(&p.key("min_backlash_um"), g.min_backlash_um)? * 1e-6,
         gears: [pinion, wheel],
+        paper_offset_m: Default::default(),
     };
     // The assembled pair must mesh with positive backlash.
     let nominal = pair.nominal_backlash_m();

@@ -1,0 +1,216 @@
+//! `orbitlash backlash`: the static calculator (like the paper's Table 1): backlash of
+//! every gear pair at uniform temperatures or at given gear and housing temperatures,
+//! for each model variant.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args;
+use serde_json::json;
+
+use orbitlash::gear::{CenterDistance, GearPair, MeshState};
+use orbitlash::units::{c_to_k, k_to_c};
+
+use super::{load, print_out};
+
+#[derive(Args, Debug)]
+pub struct BacklashArgs {
+    /// Scenario file (TOML). Default: the embedded reference-hinge scenario.
+    scenario: Option<PathBuf>,
+    /// Uniform temperatures, °C (repeatable). Default: 100 and −75, after 25 (assembly).
+    #[arg(long = "uniform-c", allow_negative_numbers = true, value_parser = finite)]
+    uniform_c: Vec<f64>,
+    /// Pinion temperature, °C (all its nodes); with --wheel-c.
+    #[arg(long, allow_negative_numbers = true, value_parser = finite, requires = "wheel_c")]
+    pinion_c: Option<f64>,
+    /// Wheel temperature, °C (all its nodes); with --pinion-c.
+    #[arg(long, allow_negative_numbers = true, value_parser = finite, requires = "pinion_c")]
+    wheel_c: Option<f64>,
+    /// Housing temperature, °C, for a centre distance that follows the housing. Default 25.
+    #[arg(long, allow_negative_numbers = true, value_parser = finite)]
+    housing_c: Option<f64>,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+fn finite(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > -273.15 => Ok(v),
+        _ => Err(format!("`{s}` is not a temperature in °C above −273.15")),
+    }
+}
+
+struct Case {
+    label: String,
+    pinion_c: f64,
+    wheel_c: f64,
+    housing_c: f64,
+}
+
+pub fn backlash(a: BacklashArgs) -> Result<()> {
+    let loaded = load(a.scenario.as_deref())?;
+    let sc = &loaded.scenario;
+    if sc.gears.is_empty() {
+        bail!("{} has no [[gear_pair]]", loaded.file);
+    }
+    let n = sc.thermal.network.nodes.len();
+    let mut cases = Vec::new();
+    for pair in &sc.gears {
+        let t_ref_c = k_to_c(pair.reference_temperature_k);
+        let housing = a.housing_c.unwrap_or(t_ref_c);
+        let mut list = vec![Case {
+            label: "assembly".into(),
+            pinion_c: t_ref_c,
+            wheel_c: t_ref_c,
+            housing_c: t_ref_c,
+        }];
+        let uniform = if a.uniform_c.is_empty() && a.pinion_c.is_none() {
+            vec![100.0, -75.0]
+        } else {
+            a.uniform_c.clone()
+        };
+        for t in uniform {
+            list.push(Case {
+                label: "uniform".into(),
+                pinion_c: t,
+                wheel_c: t,
+                housing_c: a.housing_c.unwrap_or(t),
+            });
+        }
+        if let (Some(p), Some(w)) = (a.pinion_c, a.wheel_c) {
+            list.push(Case {
+                label: "given".into(),
+                pinion_c: p,
+                wheel_c: w,
+                housing_c: housing,
+            });
+        }
+        let states: Vec<(Case, MeshState)> = list
+            .into_iter()
+            .map(|c| {
+                let temps = temperatures(pair, n, &c);
+                pair.evaluate(&temps).map(|m| (c, m))
+            })
+            .collect::<Result<_, _>>()?;
+        cases.push((pair, states));
+    }
+    if a.json {
+        return print_out(&(serde_json::to_string_pretty(&to_json(&sc.name, &cases))? + "\n"));
+    }
+    let mut o = String::new();
+    for (pair, states) in &cases {
+        let centre = match pair.center {
+            CenterDistance::Fixed => "fixed centre distance".to_string(),
+            CenterDistance::Housing { .. } => "centre distance follows the housing".to_string(),
+        };
+        outln!(
+            o,
+            "{} / {}: {} × {} teeth, m = {} mm, {centre}, minimum allowed {:.1} µm",
+            sc.name,
+            pair.name,
+            pair.gears[0].teeth,
+            pair.gears[1].teeth,
+            pair.module_m * 1e3,
+            pair.min_backlash_m * 1e6
+        );
+        outln!(
+            o,
+            "  {:9} {:>8} {:>8} {:>8} | {:>9} {:>11} {:>9} | {:>9} {:>9} {:>8}",
+            "case",
+            "pinion",
+            "wheel",
+            "housing",
+            "exact",
+            "closed form",
+            "paper",
+            "α_w",
+            "a",
+            "margin"
+        );
+        outln!(
+            o,
+            "  {:9} {:>8} {:>8} {:>8} | {:>9} {:>11} {:>9} | {:>9} {:>9} {:>8}",
+            "",
+            "°C",
+            "°C",
+            "°C",
+            "µm",
+            "µm",
+            "µm",
+            "deg",
+            "mm",
+            "µm"
+        );
+        for (c, m) in states {
+            outln!(
+                o,
+                "  {:9} {:>8.2} {:>8.2} {:>8.2} | {:>9.3} {:>11.3} {:>9.3} | {:>9.4} {:>9.5} {:>8.3}",
+                c.label,
+                c.pinion_c,
+                c.wheel_c,
+                c.housing_c,
+                m.backlash_exact_m * 1e6,
+                m.backlash_closed_form_m * 1e6,
+                m.backlash_paper_m * 1e6,
+                m.pressure_angle_rad.to_degrees(),
+                m.center_distance_m * 1e3,
+                m.margin_m * 1e6
+            );
+        }
+        outln!(
+            o,
+            "  exact: smallest normal backlash over a mesh cycle (involute, unequal base pitches);"
+        );
+        outln!(
+            o,
+            "  closed form: pitch-averaged; paper: equations (16)–(22) with the corrections documented in src/gear/paper.rs"
+        );
+    }
+    print_out(&o)
+}
+
+/// Node temperatures for a case: each gear's nodes at its temperature, the housing node
+/// (if the centre distance follows one) at the housing's, everything else at assembly.
+fn temperatures(pair: &GearPair, n: usize, c: &Case) -> Vec<f64> {
+    let mut temps = vec![pair.reference_temperature_k; n];
+    for (g, t) in pair.gears.iter().zip([c.pinion_c, c.wheel_c]) {
+        for &i in g.nodes.iter().chain(g.shaft_node.iter()) {
+            temps[i] = c_to_k(t);
+        }
+    }
+    if let CenterDistance::Housing { node, .. } = pair.center {
+        temps[node] = c_to_k(c.housing_c);
+    }
+    temps
+}
+
+fn to_json(name: &str, cases: &[(&GearPair, Vec<(Case, MeshState)>)]) -> serde_json::Value {
+    json!({
+        "scenario": name,
+        "pairs": cases.iter().map(|(pair, states)| json!({
+            "name": pair.name,
+            "min_backlash_um": pair.min_backlash_m * 1e6,
+            "cases": states.iter().map(|(c, m)| json!({
+                "case": c.label,
+                "pinion_c": c.pinion_c,
+                "wheel_c": c.wheel_c,
+                "housing_c": c.housing_c,
+                "backlash_um": {
+                    "exact": m.backlash_exact_m * 1e6,
+                    "closed_form": m.backlash_closed_form_m * 1e6,
+                    "paper": m.backlash_paper_m * 1e6,
+                },
+                "margin_um": m.margin_m * 1e6,
+                "pressure_angle_deg": m.pressure_angle_rad.to_degrees(),
+                "center_distance_mm": m.center_distance_m * 1e3,
+                "contact_ratio": m.contact_ratio,
+                "base_radius_mm": m.gears.iter().map(|g| g.base_radius_m * 1e3).collect::<Vec<_>>(),
+                "base_circle_displacement_um": m.gears.iter().map(|g| g.base_displacement_m * 1e6).collect::<Vec<_>>(),
+                "base_pitch_mm": m.gears.iter().map(|g| g.base_pitch_m * 1e3).collect::<Vec<_>>(),
+                "base_tooth_thickness_mm": m.gears.iter().map(|g| g.base_thickness_m * 1e3).collect::<Vec<_>>(),
+                "coating_um": m.gears.iter().map(|g| g.coating_m * 1e6).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
