@@ -7,8 +7,9 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 
+use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
 use orbitlash::sim::{SolverSettings, simulate};
-use orbitlash::summary::Samples;
+use orbitlash::summary::{MeshStats, Samples, WindowStats};
 
 use super::{load, orbits_arg, print_out};
 
@@ -68,6 +69,70 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         median * 1e6 / orbits,
         median * 1e6 / steps as f64
     );
+    // Logging every step: the full run (summaries and gear evaluation included) with
+    // and without the MCAP log.
+    {
+        let dir = std::env::temp_dir().join(format!("orbitlash-bench-{}", std::process::id()));
+        let path = dir.join("bench.mcap");
+        let prov = || Provenance {
+            scenario_name: sc.name.clone(),
+            scenario_file: "<bench>".into(),
+            scenario_toml: String::new(),
+            solver: String::new(),
+            seed: None,
+        };
+        let run = |log: bool| -> Result<(f64, u64)> {
+            let mut summary = (
+                MeshStats::last(t_end),
+                MeshStats::last(period),
+                WindowStats::last(period),
+            );
+            let mut mcap = if log {
+                Some(McapLog::create(&path, prov(), LogCadence::Steps(1))?)
+            } else {
+                None
+            };
+            let start = Instant::now();
+            simulate(
+                &sc.thermal,
+                &sc.gears,
+                &sc.solver,
+                t_end,
+                &mut (&mut summary, &mut mcap),
+                None,
+            )?;
+            let wall = start.elapsed().as_secs_f64();
+            Ok((
+                wall,
+                if log {
+                    std::fs::metadata(&path)?.len()
+                } else {
+                    0
+                },
+            ))
+        };
+        let mut with = Vec::new();
+        let mut without = Vec::new();
+        let mut size = 0;
+        for _ in 0..repeat.min(15) {
+            without.push(run(false)?.0);
+            let (w, s) = run(true)?;
+            with.push(w);
+            size = s;
+        }
+        with.sort_by(f64::total_cmp);
+        without.sort_by(f64::total_cmp);
+        let (w, wo) = (with[with.len() / 2], without[without.len() / 2]);
+        outln!(
+            o,
+            "logging every step: {:.3} ms with the MCAP log vs {:.3} ms without (+{:.0} %), {:.1} kB per orbit",
+            w * 1e3,
+            wo * 1e3,
+            (w / wo - 1.0) * 100.0,
+            size as f64 / 1e3 / orbits
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
     // Backlash: every pair evaluated at the node temperatures of the end of a run.
     if !sc.gears.is_empty() {
         let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut (), None)?;

@@ -11,6 +11,7 @@ macro_rules! outln {
 mod backlash;
 mod bench;
 mod check;
+mod export;
 mod run;
 
 use std::path::{Path, PathBuf};
@@ -42,6 +43,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Static backlash calculator: every model variant at given temperatures.
     Backlash(backlash::BacklashArgs),
+    /// Convert an MCAP log back to CSV (the layout of `run --csv`).
+    ExportCsv(export::ExportArgs),
 }
 
 pub fn dispatch(cli: Cli) -> Result<()> {
@@ -50,6 +53,7 @@ pub fn dispatch(cli: Cli) -> Result<()> {
         Command::Check(a) => check::check(a),
         Command::Bench(a) => bench::bench(a),
         Command::Backlash(a) => backlash::backlash(a),
+        Command::ExportCsv(a) => export::export(a),
     }
 }
 

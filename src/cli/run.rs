@@ -2,14 +2,15 @@
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use orbitlash::io::csv_export::CsvExport;
-use orbitlash::io::mcap_log::{McapLog, Provenance};
+use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
 use orbitlash::sim::{Observer, ObserverResult, RunStats, StepView, simulate};
 use orbitlash::summary::{MeshStats, PairStats, WindowStats};
 use orbitlash::thermal::ThermalModel;
@@ -31,8 +32,12 @@ pub struct RunArgs {
     #[arg(long)]
     csv: Option<PathBuf>,
     /// Do not write an MCAP log.
-    #[arg(long)]
+    #[arg(long, conflicts_with_all = ["out", "log_every"])]
     no_log: bool,
+    /// Log cadence: every N steps (e.g. 10) or every interval of simulated time (e.g.
+    /// 60s). Default: every step.
+    #[arg(long, value_name = "N|SECONDSs")]
+    log_every: Option<LogCadence>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -62,7 +67,7 @@ pub fn run(a: RunArgs) -> Result<()> {
 
     // Open every output before the run, so a bad path fails now.
     let log_path = (!a.no_log).then(|| a.out.clone().unwrap_or_else(|| default_log_path(&sc.name)));
-    let log = match &log_path {
+    let mut log = match &log_path {
         Some(p) => Some(McapLog::create(
             p,
             Provenance {
@@ -73,7 +78,9 @@ pub fn run(a: RunArgs) -> Result<()> {
                     "tr-bdf2 tolerance_k={} max_step_s={} adaptive={}",
                     sc.solver.tolerance_k, sc.solver.max_step_s, sc.solver.adaptive
                 ),
+                seed: None,
             },
+            a.log_every.unwrap_or(LogCadence::Steps(1)),
         )?),
         None => None,
     };
@@ -95,22 +102,41 @@ pub fn run(a: RunArgs) -> Result<()> {
     let mut stats_obs = WindowStats::last(period_s.min(t_end_s));
     let mut mesh_run = MeshStats::last(t_end_s);
     let mut mesh_last = MeshStats::last(period_s.min(t_end_s));
-    let mut observers = (
-        (&mut stats_obs, &mut mesh_run, &mut mesh_last),
-        csv,
-        log,
-        progress,
-    );
+    let interrupt = interrupt_flag();
     let wall = Instant::now();
-    let stats = simulate(
-        &sc.thermal,
-        &sc.gears,
-        &sc.solver,
-        t_end_s,
-        &mut observers,
-        None,
-    )
-    .with_context(|| format!("running {}", loaded.file))?;
+    let result = {
+        let mut observers = (
+            (&mut stats_obs, &mut mesh_run, &mut mesh_last),
+            csv,
+            &mut log,
+            progress,
+        );
+        simulate(
+            &sc.thermal,
+            &sc.gears,
+            &sc.solver,
+            t_end_s,
+            &mut observers,
+            Some(interrupt),
+        )
+    };
+    let stats = match result {
+        Ok(stats) => stats,
+        Err(e) => {
+            // Close the log as the record of a failed run; other outputs are discarded.
+            let closed = log
+                .as_mut()
+                .map(|l| l.close_failed(f64::NAN, &e.to_string()));
+            let mut err = anyhow::Error::new(e).context(format!("running {}", loaded.file));
+            if let Some(Ok(p)) = closed {
+                err = err.context(format!(
+                    "the log {} holds the run up to the failure",
+                    p.display()
+                ));
+            }
+            return Err(err);
+        }
+    };
     let wall_s = wall.elapsed().as_secs_f64();
 
     let mut o = format_summary(&sc.name, &sc.thermal, &stats, &stats_obs, period_s, wall_s);
@@ -126,7 +152,26 @@ pub fn run(a: RunArgs) -> Result<()> {
             p.display()
         );
     }
-    print_out(&o)
+    print_out(&o)?;
+    if stats.interrupted {
+        anyhow::bail!(
+            "interrupted at t = {:.1} s of {:.1} s; the outputs above are complete up to then",
+            stats.t_end_s,
+            t_end_s
+        );
+    }
+    Ok(())
+}
+
+/// A flag set by Ctrl-C (SIGINT/SIGTERM): the run stops after the current step and
+/// closes its outputs properly.
+fn interrupt_flag() -> &'static AtomicBool {
+    static FLAG: AtomicBool = AtomicBool::new(false);
+    static HANDLER: std::sync::Once = std::sync::Once::new();
+    HANDLER.call_once(|| {
+        let _ = ctrlc::set_handler(|| FLAG.store(true, Ordering::Relaxed));
+    });
+    &FLAG
 }
 
 fn format_summary(

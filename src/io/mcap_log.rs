@@ -1,17 +1,72 @@
-//! MCAP run log (first version: JSON messages with a JSON schema per channel).
+//! MCAP run log with protobuf messages whose schemas are stored in the file, so that
+//! Foxglove and Rerun (whose MCAP importer decodes protobuf by reflection) plot every
+//! series by name.
 //!
-//! Log time is simulated time since t = 0 in integer nanoseconds, never wall clock,
-//! so two runs of the same scenario produce identical files. Field names are node
-//! names with `.` replaced by `_` and a unit suffix (`gear1_r2_k`).
+//! Topics (field names carry units):
+//! - `/thermal/temperature`: `time_s`, then `<node>_k` for every diffusion node
+//!   (node names lower-cased with `.` → `_`; the channel metadata maps each field back
+//!   to its node name as `node:<field>`);
+//! - `/thermal/heat`: `absorbed_w`, `dissipated_w`, `to_<boundary>_w`, then
+//!   `<load>_w` for every load and `<heater>_w` for every heater;
+//! - `/orbit/state`: `orbit_angle_deg` (from orbit noon), `beta_deg`,
+//!   `solar_flux_w_per_m2`, `sunlit` (1/0), `orbit_number`;
+//! - `/gears/<pair>`: exact / closed-form / paper backlash and margin (µm),
+//!   operating pressure angle, centre distance, contact ratio, and per gear (`pinion`,
+//!   `wheel`) the base-circle displacement, base radius, base pitch, base tooth
+//!   thickness, tip radius, coating, and the radial profile (`radius_mm[]`,
+//!   `temperature_k[]`);
+//! - `/events`: `foxglove.Log` (eclipse entry/exit, heater on/off, mode changes, margin
+//!   and interference, run end).
+//!
+//! Log time is simulated time since t = 0 in integer nanoseconds, never wall clock, so
+//! two runs of the same scenario give identical bytes. The scenario file is attached
+//! and a metadata record `orbitlash.provenance` names the tool version, scenario and
+//! its SHA-256, solver and settings; `orbitlash.run_end` says how the run ended.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use serde_json::{Map, Value, json};
+use sha2::{Digest, Sha256};
 
 use super::atomic::{AtomicFile, OutputError};
-use super::csv_export::{gear_column_names, gear_values};
-use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView};
+use super::log_schema::{
+    Kind, MessageType, descriptor_set, foxglove_log_descriptor_set, identifier,
+};
+use super::protobuf::Encoder;
+use crate::gear::{GearPair, MeshState};
+use crate::sim::{
+    Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan,
+};
+use crate::thermal::{Compiled, Flows, StepSwitches, ThermalModel};
+
+/// How often the log records the state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LogCadence {
+    /// Every n-th accepted step (1 = every step).
+    Steps(u64),
+    /// Every `dt` seconds of simulated time, from the solver's interpolant.
+    Interval(f64),
+}
+
+impl std::str::FromStr for LogCadence {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let bad = || {
+            format!("`{s}` is neither a step count (e.g. 10) nor an interval in seconds (e.g. 60s)")
+        };
+        if let Some(secs) = s.strip_suffix('s') {
+            let v: f64 = secs.trim().parse().map_err(|_| bad())?;
+            if v.is_finite() && v > 0.0 {
+                return Ok(LogCadence::Interval(v));
+            }
+            return Err(bad());
+        }
+        match s.trim().parse::<u64>() {
+            Ok(n) if n > 0 => Ok(LogCadence::Steps(n)),
+            _ => Err(bad()),
+        }
+    }
+}
 
 /// Provenance stored in the log's metadata record and attachment.
 #[derive(Debug, Clone)]
@@ -20,87 +75,114 @@ pub struct Provenance {
     pub scenario_file: String,
     pub scenario_toml: String,
     pub solver: String,
-}
-
-pub struct McapLog {
-    writer: Option<mcap::Writer<AtomicFile>>,
-    provenance: Provenance,
-    channels: Channels,
-    names: Names,
-    seq: u32,
+    pub seed: Option<u64>,
 }
 
 #[derive(Default)]
 struct Channels {
     temperature: u16,
-    orbit: u16,
     heat: u16,
+    orbit: u16,
+    gears: Vec<u16>,
     log: u16,
-    gears: u16,
+}
+
+/// Owns the MCAP writer and everything needed to turn a sample (time, temperatures,
+/// switch states) into messages. It runs on its own thread once the run has started,
+/// so the simulation only copies a few numbers per step; records arrive in order, so
+/// the file is the same as if written inline.
+struct LogWriter {
+    path: PathBuf,
+    writer: mcap::Writer<AtomicFile>,
+    ch: Channels,
+    enc: Encoder,
+    seq: u32,
+    model: ThermalModel,
+    gears: Vec<GearPair>,
+    compiled: Compiled,
+    flows: Flows,
+    scratch: Vec<f64>,
+    heater_power_w: Vec<f64>,
+    heaters_on: Vec<bool>,
+    modes_active: Vec<bool>,
+}
+
+/// Layout of one sample in a batch: t, sunlit, temperatures, heater states, mode states.
+#[derive(Debug, Clone, Copy, Default)]
+struct Layout {
+    nodes: usize,
+    heaters: usize,
+    modes: usize,
+}
+
+impl Layout {
+    fn stride(&self) -> usize {
+        2 + self.nodes + self.heaters + self.modes
+    }
+}
+
+enum Item {
+    /// A sample at this offset of `Batch::values`.
+    Sample(usize),
+    Event {
+        t_s: f64,
+        level: i64,
+        text: String,
+    },
 }
 
 #[derive(Default)]
-struct Names {
-    nodes: Vec<String>,
-    loads: Vec<String>,
-    heaters: Vec<String>,
-    modes: Vec<String>,
-    heater_power_w: Vec<f64>,
-    period_s: f64,
-    gear_fields: Vec<String>,
-    pairs: Vec<String>,
+struct Batch {
+    values: Vec<f64>,
+    items: Vec<Item>,
 }
 
-/// A field name from a node or load name and a unit: `.` and `-` become `_`.
-pub fn field_name(name: &str, unit: &str) -> String {
-    format!("{}_{unit}", sanitize(name))
+enum ToWriter {
+    Batch(Batch),
+    Finish(BTreeMap<String, String>),
 }
 
-/// Every character but ASCII letters and digits becomes `_`.
-pub fn sanitize(name: &str) -> String {
-    name.chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
-        .collect()
+struct WriterThread {
+    tx: std::sync::mpsc::SyncSender<ToWriter>,
+    handle: std::thread::JoinHandle<Result<PathBuf, OutputError>>,
+    failed: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+/// Samples handed to the writer thread at a time.
+const BATCH_SAMPLES: usize = 32;
+
+enum State {
+    /// Created, before the run starts.
+    Open(Box<mcap::Writer<AtomicFile>>),
+    Running(WriterThread),
+    Closed,
+}
+
+pub struct McapLog {
+    path: PathBuf,
+    state: State,
+    cadence: LogCadence,
+    provenance: Provenance,
+    layout: Layout,
+    batch: Batch,
+    next_sample: u64,
+    temps: Vec<f64>,
+    names: Names,
 }
 
 fn ns(t_s: f64) -> u64 {
     (t_s * 1e9).round().max(0.0) as u64
 }
 
-fn number_schema(title: &str, fields: &[String]) -> Vec<u8> {
-    let props: Map<String, Value> = fields
-        .iter()
-        .map(|f| (f.clone(), json!({"type": "number"})))
-        .collect();
-    serde_json::to_vec(&json!({"title": title, "type": "object", "properties": props}))
-        .expect("json")
+fn out_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
+    OutputError {
+        path: path.display().to_string(),
+        source: std::io::Error::other(e.to_string()),
+    }
 }
 
-impl McapLog {
-    pub fn create(path: &Path, provenance: Provenance) -> Result<McapLog, OutputError> {
-        let file = AtomicFile::create(path)?;
-        let writer = mcap::WriteOptions::new()
-            .library(format!("orbitlash {}", env!("CARGO_PKG_VERSION")))
-            .create(file)
-            .map_err(|e| OutputError {
-                path: path.display().to_string(),
-                source: std::io::Error::other(e),
-            })?;
-        Ok(McapLog {
-            writer: Some(writer),
-            provenance,
-            channels: Channels::default(),
-            names: Names::default(),
-            seq: 0,
-        })
-    }
-
-    fn w(&mut self) -> &mut mcap::Writer<AtomicFile> {
-        self.writer.as_mut().expect("log open")
-    }
-
-    fn write(&mut self, channel: u16, t_s: f64, msg: &Value) -> ObserverResult {
-        let data = serde_json::to_vec(msg)?;
+impl LogWriter {
+    fn write_encoded(&mut self, channel: u16, t_s: f64) -> Result<(), OutputError> {
         self.seq += 1;
         let header = mcap::records::MessageHeader {
             channel_id: channel,
@@ -108,98 +190,444 @@ impl McapLog {
             log_time: ns(t_s),
             publish_time: ns(t_s),
         };
-        self.w().write_to_known_channel(&header, &data)?;
+        let r = self.writer.write_to_known_channel(&header, &self.enc.buf);
+        self.enc.clear();
+        r.map_err(|e| out_err(&self.path, e))
+    }
+
+    fn event(&mut self, t_s: f64, level: i64, message: &str) -> Result<(), OutputError> {
+        let secs = t_s.floor();
+        self.enc.clear();
+        self.enc.message(1, |m| {
+            m.int64(1, secs as i64);
+            m.int64(2, ((t_s - secs) * 1e9).round().min(999_999_999.0) as i64);
+        });
+        self.enc.int64(2, level);
+        self.enc.string(3, message);
+        self.enc.string(4, "orbitlash");
+        self.enc.string(5, "");
+        self.enc.fixed32(6, 0);
+        self.write_encoded(self.ch.log, t_s)
+    }
+
+    /// Writes every topic for one sample laid out as `Layout` says.
+    fn sample(&mut self, layout: Layout, v: &[f64]) -> Result<(), OutputError> {
+        let t_s = v[0];
+        let sunlit = v[1] != 0.0;
+        let temps = &v[2..2 + layout.nodes];
+        for (h, &x) in self.heaters_on.iter_mut().zip(&v[2 + layout.nodes..]) {
+            *h = x != 0.0;
+        }
+        for (m, &x) in self
+            .modes_active
+            .iter_mut()
+            .zip(&v[2 + layout.nodes + layout.heaters..])
+        {
+            *m = x != 0.0;
+        }
+        // Temperatures.
+        self.enc.clear();
+        self.enc.double(1, t_s);
+        for (i, &t) in temps.iter().enumerate() {
+            self.enc.double(i as u32 + 2, t);
+        }
+        self.write_encoded(self.ch.temperature, t_s)?;
+
+        // Heat flows at t.
+        let env = self.model.environment.state_with(t_s, sunlit);
+        let sw = StepSwitches {
+            heaters_on: &self.heaters_on,
+            modes_active: &self.modes_active,
+        };
+        self.compiled.set_time(&self.model, &env, sw);
+        self.compiled
+            .heat_w(temps, &mut self.scratch, Some(&mut self.flows));
+        self.enc.clear();
+        self.enc.double(1, self.flows.absorbed_w);
+        self.enc.double(2, self.flows.dissipated_w);
+        let mut f = 3;
+        for &q in self
+            .flows
+            .to_boundary_w
+            .iter()
+            .chain(&self.compiled.each_load_w)
+        {
+            self.enc.double(f, q);
+            f += 1;
+        }
+        for (&on, &p) in self.heaters_on.iter().zip(&self.heater_power_w) {
+            self.enc.double(f, if on { p } else { 0.0 });
+            f += 1;
+        }
+        self.write_encoded(self.ch.heat, t_s)?;
+
+        // Orbit.
+        let orbit = &self.model.environment.orbit;
+        self.enc.clear();
+        self.enc
+            .double(1, env.orbit_angle_rad.to_degrees().rem_euclid(360.0));
+        self.enc.double(2, env.beta_rad.to_degrees());
+        self.enc.double(3, env.solar_flux_w_per_m2);
+        self.enc.double(4, if sunlit { 1.0 } else { 0.0 });
+        self.enc.double(5, orbit.orbit_number(t_s) as f64);
+        self.write_encoded(self.ch.orbit, t_s)?;
+
+        // Gear pairs.
+        for k in 0..self.gears.len() {
+            let m = mesh_or_nan(&self.gears[k], temps);
+            self.enc.clear();
+            encode_mesh(&mut self.enc, &self.gears[k], &m, temps);
+            self.write_encoded(self.ch.gears[k], t_s)?;
+        }
         Ok(())
     }
 
-    fn log(&mut self, t_s: f64, level: u8, message: String) -> ObserverResult {
-        let secs = t_s.floor();
-        let msg = json!({
-            "timestamp": {"sec": secs as u64, "nsec": ((t_s - secs) * 1e9).round() as u64},
-            "level": level,
-            "message": message,
-            "name": "orbitlash",
-            "file": "",
-            "line": 0
-        });
-        self.write(self.channels.log, t_s, &msg)
+    fn batch(&mut self, layout: Layout, b: &Batch) -> Result<(), OutputError> {
+        for item in &b.items {
+            match item {
+                Item::Sample(at) => self.sample(layout, &b.values[*at..*at + layout.stride()])?,
+                Item::Event { t_s, level, text } => self.event(*t_s, *level, text)?,
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(mut self, end: BTreeMap<String, String>) -> Result<PathBuf, OutputError> {
+        let path = self.path.clone();
+        self.writer
+            .write_metadata(&mcap::records::Metadata {
+                name: "orbitlash.run_end".into(),
+                metadata: end,
+            })
+            .map_err(|e| out_err(&path, e))?;
+        self.writer.finish().map_err(|e| out_err(&path, e))?;
+        self.writer.into_inner().commit()
     }
 }
 
-const FOXGLOVE_LOG_SCHEMA: &str = r#"{"title":"foxglove.Log","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer","minimum":0},"nsec":{"type":"integer","minimum":0,"maximum":999999999}}},"level":{"type":"integer"},"message":{"type":"string"},"name":{"type":"string"},"file":{"type":"string"},"line":{"type":"integer","minimum":0}}}"#;
+impl McapLog {
+    /// Opens the log (a temporary file until the run ends); fails now if `path`
+    /// cannot be written.
+    pub fn create(
+        path: &Path,
+        provenance: Provenance,
+        cadence: LogCadence,
+    ) -> Result<McapLog, OutputError> {
+        let file = AtomicFile::create(path)?;
+        let writer = mcap::WriteOptions::new()
+            .library(format!("orbitlash {}", env!("CARGO_PKG_VERSION")))
+            .profile("")
+            .compression(None)
+            .chunk_size(Some(1 << 16))
+            .calculate_chunk_crcs(false)
+            .create(file)
+            .map_err(|e| out_err(path, e))?;
+        Ok(McapLog {
+            path: path.to_path_buf(),
+            state: State::Open(Box::new(writer)),
+            cadence,
+            provenance,
+            layout: Layout::default(),
+            batch: Batch::default(),
+            next_sample: 0,
+            temps: vec![],
+            names: Names::default(),
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Queues a sample: time, sunlit flag, `self.temps`, switch states.
+    fn push_sample(
+        &mut self,
+        t_s: f64,
+        sunlit: bool,
+        heaters_on: &[bool],
+        modes_active: &[bool],
+    ) -> ObserverResult {
+        let v = &mut self.batch.values;
+        let at = v.len();
+        v.push(t_s);
+        v.push(if sunlit { 1.0 } else { 0.0 });
+        v.extend_from_slice(&self.temps);
+        v.extend(heaters_on.iter().map(|&b| if b { 1.0 } else { 0.0 }));
+        v.extend(modes_active.iter().map(|&b| if b { 1.0 } else { 0.0 }));
+        self.batch.items.push(Item::Sample(at));
+        if self.batch.items.len() >= BATCH_SAMPLES {
+            self.send_batch()?;
+        }
+        Ok(())
+    }
+
+    fn send_batch(&mut self) -> ObserverResult {
+        if self.batch.items.is_empty() {
+            return Ok(());
+        }
+        if let State::Running(t) = &self.state {
+            if t.failed.load(std::sync::atomic::Ordering::Relaxed) {
+                return Err(format!("writing {} failed", self.path.display()).into());
+            }
+            let next = Batch {
+                values: Vec::with_capacity(self.batch.values.capacity()),
+                items: Vec::with_capacity(BATCH_SAMPLES + 8),
+            };
+            let batch = std::mem::replace(&mut self.batch, next);
+            t.tx.send(ToWriter::Batch(batch))
+                .map_err(|_| format!("the writer of {} stopped", self.path.display()))?;
+        }
+        Ok(())
+    }
+
+    /// Closes the log after a failed run: the data so far, an error event and a
+    /// `run_end` record saying so. The file is then valid and complete as a record of
+    /// a failed run.
+    pub fn close_failed(&mut self, t_s: f64, reason: &str) -> Result<PathBuf, OutputError> {
+        self.batch.items.push(Item::Event {
+            t_s: if t_s.is_finite() { t_s } else { 0.0 },
+            level: 4,
+            text: format!("run failed: {reason}"),
+        });
+        self.finish("failed", t_s, reason)
+    }
+
+    fn finish(&mut self, status: &str, t_s: f64, detail: &str) -> Result<PathBuf, OutputError> {
+        let path = self.path.clone();
+        let end: BTreeMap<String, String> = [
+            ("status", status.to_string()),
+            ("t_end_s", format!("{t_s}")),
+            ("detail", detail.to_string()),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect();
+        let _ = self.send_batch(); // a writer failure is collected below
+        match std::mem::replace(&mut self.state, State::Closed) {
+            State::Open(mut w) => {
+                w.write_metadata(&mcap::records::Metadata {
+                    name: "orbitlash.run_end".into(),
+                    metadata: end,
+                })
+                .map_err(|e| out_err(&path, e))?;
+                w.finish().map_err(|e| out_err(&path, e))?;
+                w.into_inner().commit()
+            }
+            State::Running(t) => {
+                let _ = t.tx.send(ToWriter::Finish(end));
+                drop(t.tx);
+                t.handle
+                    .join()
+                    .map_err(|_| out_err(&path, "the writer thread panicked"))?
+            }
+            State::Closed => Ok(path),
+        }
+    }
+}
+
+/// Runs `w` on a thread fed by batches until `Finish`.
+fn spawn_writer(mut w: LogWriter, layout: Layout) -> WriterThread {
+    let (tx, rx) = std::sync::mpsc::sync_channel::<ToWriter>(8);
+    let failed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = failed.clone();
+    let handle = std::thread::Builder::new()
+        .name("mcap-writer".into())
+        .spawn(move || {
+            let mut error: Option<OutputError> = None;
+            for msg in rx {
+                match msg {
+                    ToWriter::Batch(b) => {
+                        if error.is_none()
+                            && let Err(e) = w.batch(layout, &b)
+                        {
+                            error = Some(e);
+                            flag.store(true, std::sync::atomic::Ordering::Relaxed);
+                        }
+                    }
+                    ToWriter::Finish(end) => {
+                        return match error {
+                            Some(e) => Err(e),
+                            None => w.finish(end),
+                        };
+                    }
+                }
+            }
+            // Dropped without finishing (the run failed elsewhere): the temporary file
+            // is removed with the writer.
+            Err(error
+                .unwrap_or_else(|| out_err(&w.path, "the run ended before the log was closed")))
+        })
+        .expect("spawn the MCAP writer thread");
+    WriterThread { tx, handle, failed }
+}
+
+/// Writes one `orbitlash.GearMesh` message.
+fn encode_mesh(e: &mut Encoder, pair: &GearPair, m: &MeshState, temps: &[f64]) {
+    e.double(1, m.backlash_exact_m * 1e6);
+    e.double(2, m.backlash_closed_form_m * 1e6);
+    e.double(3, m.backlash_paper_m * 1e6);
+    e.double(4, m.margin_m * 1e6);
+    e.double(5, m.pressure_angle_rad.to_degrees());
+    e.double(6, m.center_distance_m * 1e3);
+    e.double(7, m.contact_ratio);
+    for (k, g) in pair.gears.iter().enumerate() {
+        let d = m.gears[k];
+        e.message(8 + k as u32, |e| {
+            e.double(1, d.base_displacement_m * 1e6);
+            e.double(2, d.base_radius_m * 1e3);
+            e.double(3, d.base_pitch_m * 1e3);
+            e.double(4, d.base_thickness_m * 1e3);
+            e.double(5, d.tip_radius_m * 1e3);
+            e.double(6, d.coating_m * 1e6);
+            e.packed_doubles(7, g.node_radii_m.iter().map(|r| r * 1e3));
+            e.packed_doubles(8, g.nodes.iter().map(|&i| temps[i]));
+        });
+    }
+}
+
+fn gear_types() -> Vec<MessageType> {
+    let mesh = MessageType::new("GearMesh")
+        .with("backlash_exact_um", Kind::Double)
+        .with("backlash_closed_form_um", Kind::Double)
+        .with("backlash_paper_um", Kind::Double)
+        .with("margin_um", Kind::Double)
+        .with("pressure_angle_deg", Kind::Double)
+        .with("center_distance_mm", Kind::Double)
+        .with("contact_ratio", Kind::Double)
+        .with("pinion", Kind::Message("GearDeformation".into()))
+        .with("wheel", Kind::Message("GearDeformation".into()));
+    let gear = MessageType::new("GearDeformation")
+        .with("base_circle_displacement_um", Kind::Double)
+        .with("base_radius_mm", Kind::Double)
+        .with("base_pitch_mm", Kind::Double)
+        .with("base_tooth_thickness_mm", Kind::Double)
+        .with("tip_radius_mm", Kind::Double)
+        .with("coating_um", Kind::Double)
+        .with("radius_mm", Kind::RepeatedDouble)
+        .with("temperature_k", Kind::RepeatedDouble);
+    vec![mesh, gear]
+}
+
+/// Unique identifiers for `names` with `suffix`, disambiguated by a counter.
+fn field_names(
+    names: impl Iterator<Item = String>,
+    suffix: &str,
+    taken: &mut Vec<String>,
+) -> Vec<String> {
+    names
+        .map(|n| {
+            let base = format!("{}_{suffix}", identifier(&n));
+            let mut name = base.clone();
+            let mut k = 2;
+            while taken.contains(&name) {
+                name = format!("{base}{k}");
+                k += 1;
+            }
+            taken.push(name.clone());
+            name
+        })
+        .collect()
+}
 
 impl Observer for McapLog {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
-        let model = r.model;
-        let temps_k = r.temps_k;
-        let net = &model.network;
-        self.names = Names {
-            nodes: net.nodes.iter().map(|n| field_name(&n.name, "k")).collect(),
-            loads: net.loads.iter().map(|l| field_name(&l.name, "w")).collect(),
-            heaters: net
-                .heaters
-                .iter()
-                .map(|h| field_name(&h.name, "w"))
-                .collect(),
-            modes: model.modes.iter().map(|m| m.name.clone()).collect(),
-            heater_power_w: net.heaters.iter().map(|h| h.power_w).collect(),
-            period_s: model.environment.orbit.period_s(),
-            gear_fields: gear_column_names(r.gears)
-                .iter()
-                .map(|c| sanitize(c))
-                .collect(),
-            pairs: r.gears.iter().map(|g| g.name.clone()).collect(),
+        let State::Open(mut writer) = std::mem::replace(&mut self.state, State::Closed) else {
+            return Err("the log was already started".into());
         };
-        let gear_fields = self.names.gear_fields.clone();
-        let mut temp_fields = vec!["time_s".to_string()];
-        temp_fields.extend(self.names.nodes.iter().cloned());
-        let mut heat_fields = self.names.loads.clone();
-        heat_fields.extend(self.names.heaters.iter().cloned());
-        let orbit_fields: Vec<String> = [
-            "orbit_angle_deg",
-            "beta_deg",
-            "solar_flux_w_per_m2",
-            "sunlit",
-            "orbit_number",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        let empty = BTreeMap::new();
+        let w = &mut writer;
+        let model = r.model;
+        let net = &model.network;
+        let mut taken = vec!["time_s".to_string()];
+        let node_fields = field_names(net.nodes.iter().map(|n| n.name.clone()), "k", &mut taken);
+        let mut temperature = MessageType::new("NodeTemperatures").with("time_s", Kind::Double);
+        for f in &node_fields {
+            temperature = temperature.with(f, Kind::Double);
+        }
+        let mut taken = vec!["absorbed_w".to_string(), "dissipated_w".to_string()];
+        let mut heat = MessageType::new("HeatFlows")
+            .with("absorbed_w", Kind::Double)
+            .with("dissipated_w", Kind::Double);
+        for f in field_names(
+            net.boundaries.iter().map(|b| format!("to_{}", b.name)),
+            "w",
+            &mut taken,
+        ) {
+            heat = heat.with(&f, Kind::Double);
+        }
+        for f in field_names(net.loads.iter().map(|l| l.name.clone()), "w", &mut taken) {
+            heat = heat.with(&f, Kind::Double);
+        }
+        for f in field_names(net.heaters.iter().map(|h| h.name.clone()), "w", &mut taken) {
+            heat = heat.with(&f, Kind::Double);
+        }
+        let orbit = MessageType::new("OrbitState")
+            .with("orbit_angle_deg", Kind::Double)
+            .with("beta_deg", Kind::Double)
+            .with("solar_flux_w_per_m2", Kind::Double)
+            .with("sunlit", Kind::Double)
+            .with("orbit_number", Kind::Double);
+
         let p = self.provenance.clone();
-        let w = self.w();
+        let cadence = match self.cadence {
+            LogCadence::Steps(n) => format!("every {n} step(s)"),
+            LogCadence::Interval(dt) => format!("every {dt} s"),
+        };
+        let mut node_map = BTreeMap::new();
+        for (f, n) in node_fields.iter().zip(&net.nodes) {
+            node_map.insert(format!("node:{f}"), n.name.clone());
+        }
+        let empty = BTreeMap::new();
         let s = w.add_schema(
             "orbitlash.NodeTemperatures",
-            "jsonschema",
-            &number_schema("orbitlash.NodeTemperatures", &temp_fields),
+            "protobuf",
+            &descriptor_set("NodeTemperatures", &[temperature]),
         )?;
-        let temperature = w.add_channel(s, "/thermal/temperature", "json", &empty)?;
+        let temperature = w.add_channel(s, "/thermal/temperature", "protobuf", &node_map)?;
         let s = w.add_schema(
             "orbitlash.HeatFlows",
-            "jsonschema",
-            &number_schema("orbitlash.HeatFlows", &heat_fields),
+            "protobuf",
+            &descriptor_set("HeatFlows", &[heat]),
         )?;
-        let heat = w.add_channel(s, "/thermal/heat", "json", &empty)?;
+        let heat = w.add_channel(s, "/thermal/heat", "protobuf", &empty)?;
         let s = w.add_schema(
             "orbitlash.OrbitState",
-            "jsonschema",
-            &number_schema("orbitlash.OrbitState", &orbit_fields),
+            "protobuf",
+            &descriptor_set("OrbitState", &[orbit]),
         )?;
-        let orbit = w.add_channel(s, "/orbit/state", "json", &empty)?;
-        let s = w.add_schema("foxglove.Log", "jsonschema", FOXGLOVE_LOG_SCHEMA.as_bytes())?;
-        let log = w.add_channel(s, "/events", "json", &empty)?;
-        let s = w.add_schema(
-            "orbitlash.GearMesh",
-            "jsonschema",
-            &number_schema("orbitlash.GearMesh", &gear_fields),
-        )?;
-        let gears = w.add_channel(s, "/gears/mesh", "json", &empty)?;
+        let orbit = w.add_channel(s, "/orbit/state", "protobuf", &empty)?;
+        let mut gears = Vec::new();
+        if !r.gears.is_empty() {
+            let s = w.add_schema(
+                "orbitlash.GearMesh",
+                "protobuf",
+                &descriptor_set("GearMesh", &gear_types()),
+            )?;
+            for g in r.gears {
+                let meta: BTreeMap<String, String> =
+                    [("pair".to_string(), g.name.clone())].into_iter().collect();
+                gears.push(w.add_channel(
+                    s,
+                    &format!("/gears/{}", identifier(&g.name)),
+                    "protobuf",
+                    &meta,
+                )?);
+            }
+        }
+        let s = w.add_schema("foxglove.Log", "protobuf", &foxglove_log_descriptor_set())?;
+        let log = w.add_channel(s, "/events", "protobuf", &empty)?;
+
+        let sha = Sha256::digest(p.scenario_toml.as_bytes());
+        let sha: String = sha.iter().map(|b| format!("{b:02x}")).collect();
         let metadata: BTreeMap<String, String> = [
             ("tool", "orbitlash".to_string()),
             ("tool_version", env!("CARGO_PKG_VERSION").to_string()),
             ("scenario_name", p.scenario_name.clone()),
             ("scenario_file", p.scenario_file.clone()),
+            ("scenario_sha256", sha),
             ("solver", p.solver.clone()),
+            ("seed", p.seed.map_or("none".into(), |s| s.to_string())),
+            ("t_end_s", format!("{}", r.t_end_s)),
+            ("log_cadence", cadence),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
@@ -208,117 +636,164 @@ impl Observer for McapLog {
             name: "orbitlash.provenance".into(),
             metadata,
         })?;
+        let file_name = match Path::new(&p.scenario_file).file_name() {
+            Some(f) if !p.scenario_file.starts_with('<') => f.to_string_lossy().into_owned(),
+            _ => format!("{}.toml", p.scenario_name),
+        };
         w.attach(&mcap::Attachment {
             log_time: 0,
             create_time: 0,
-            name: format!("{}.toml", p.scenario_name),
+            name: file_name,
             media_type: "application/toml".into(),
             data: std::borrow::Cow::Owned(p.scenario_toml.into_bytes()),
         })?;
-        self.channels = Channels {
+        let ch = Channels {
             temperature,
-            orbit,
             heat,
-            log,
+            orbit,
             gears,
+            log,
         };
-        let mut m = Map::new();
-        m.insert("time_s".into(), json!(0.0));
-        for (f, &v) in self.names.nodes.iter().zip(temps_k) {
-            m.insert(f.clone(), json!(v));
-        }
-        self.write(temperature, 0.0, &Value::Object(m))
+        let mut lw = LogWriter {
+            path: self.path.clone(),
+            writer: *writer,
+            ch,
+            enc: Encoder::default(),
+            seq: 0,
+            model: model.clone(),
+            gears: r.gears.to_vec(),
+            compiled: Compiled::new(net),
+            flows: Flows::default(),
+            scratch: vec![0.0; net.nodes.len()],
+            heater_power_w: net.heaters.iter().map(|h| h.power_w).collect(),
+            heaters_on: vec![false; net.heaters.len()],
+            modes_active: vec![false; model.modes.len()],
+        };
+        self.names = Names {
+            pairs: r.gears.iter().map(|g| g.name.clone()).collect(),
+            heaters: net.heaters.iter().map(|h| h.name.clone()).collect(),
+            modes: model.modes.iter().map(|m| m.name.clone()).collect(),
+        };
+        self.layout = Layout {
+            nodes: net.nodes.len(),
+            heaters: net.heaters.len(),
+            modes: model.modes.len(),
+        };
+        // The initial state, then the writer moves to its thread.
+        self.temps = r.temps_k.to_vec();
+        let heaters_on: Vec<bool> = net
+            .heaters
+            .iter()
+            .map(|h| r.temps_k[h.sensor_node] <= h.on_k)
+            .collect();
+        let modes_active: Vec<bool> = model.modes.iter().map(|m| m.active(0.0)).collect();
+        self.push_sample(
+            0.0,
+            model.environment.sunlit(0.0),
+            &heaters_on,
+            &modes_active,
+        )?;
+        let first = std::mem::take(&mut self.batch);
+        lw.batch(self.layout, &first)?;
+        self.next_sample = 1;
+        self.state = State::Running(spawn_writer(lw, self.layout));
+        Ok(())
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        let t = step.t1_s();
-        let mut m = Map::new();
-        m.insert("time_s".into(), json!(t));
-        for (f, &v) in self.names.nodes.iter().zip(step.temps1_k()) {
-            m.insert(f.clone(), json!(v));
-        }
-        self.write(self.channels.temperature, t, &Value::Object(m))?;
-        let mut h = Map::new();
-        for (f, &v) in self.names.loads.iter().zip(step.load_w) {
-            h.insert(f.clone(), json!(v));
-        }
-        for ((f, &on), &p) in self
-            .names
-            .heaters
-            .iter()
-            .zip(step.heaters_on)
-            .zip(&self.names.heater_power_w)
-        {
-            h.insert(f.clone(), json!(if on { p } else { 0.0 }));
-        }
-        self.write(self.channels.heat, t, &Value::Object(h))?;
-        let e = &step.env1;
-        let orbit = json!({
-            "orbit_angle_deg": e.orbit_angle_rad.to_degrees().rem_euclid(360.0),
-            "beta_deg": e.beta_rad.to_degrees(),
-            "solar_flux_w_per_m2": e.solar_flux_w_per_m2,
-            "sunlit": if e.sunlit { 1.0 } else { 0.0 },
-            "orbit_number": (t / self.names.period_s).floor() + 1.0,
-        });
-        self.write(self.channels.orbit, t, &orbit)?;
-        if !step.mesh.is_empty() {
-            let mut g = Map::new();
-            let values = step.mesh.iter().flat_map(gear_values);
-            for (f, v) in self.names.gear_fields.iter().zip(values) {
-                g.insert(f.clone(), json!(v));
+        match self.cadence {
+            LogCadence::Steps(n) => {
+                if step.index.is_multiple_of(n) {
+                    self.temps.copy_from_slice(step.temps1_k());
+                    self.push_sample(
+                        step.t1_s(),
+                        step.env1.sunlit,
+                        step.heaters_on,
+                        step.modes_active,
+                    )?;
+                }
             }
-            self.write(self.channels.gears, t, &Value::Object(g))?;
+            LogCadence::Interval(dt) => loop {
+                let t = self.next_sample as f64 * dt;
+                if t > step.t1_s() * (1.0 + 1e-12) {
+                    break;
+                }
+                let mut temps = std::mem::take(&mut self.temps);
+                step.temperatures_at(t, &mut temps);
+                self.temps = temps;
+                self.push_sample(t, step.env1.sunlit, step.heaters_on, step.modes_active)?;
+                self.next_sample += 1;
+            },
         }
         Ok(())
     }
 
     fn on_event(&mut self, event: &Event) -> ObserverResult {
-        let text = match event.kind {
-            EventKind::EclipseEntry => "eclipse entry".to_string(),
-            EventKind::EclipseExit => "eclipse exit".to_string(),
-            EventKind::HeaterOn(k) => {
-                format!("heater {} on", self.names.heaters[k].trim_end_matches("_w"))
-            }
-            EventKind::HeaterOff(k) => format!(
-                "heater {} off",
-                self.names.heaters[k].trim_end_matches("_w")
-            ),
-            EventKind::ModeStart(k) => format!("mode {} start", self.names.modes[k]),
-            EventKind::ModeEnd(k) => format!("mode {} end", self.names.modes[k]),
-            EventKind::MarginLow(k) => format!(
-                "gear pair {}: backlash below the minimum allowed",
-                self.names.pairs[k]
-            ),
-            EventKind::MarginRestored(k) => format!(
-                "gear pair {}: backlash margin restored",
-                self.names.pairs[k]
-            ),
-            EventKind::InterferenceStart(k) => format!(
-                "gear pair {}: interference (backlash ≤ 0)",
-                self.names.pairs[k]
-            ),
-            EventKind::InterferenceEnd(k) => {
-                format!("gear pair {}: interference ended", self.names.pairs[k])
-            }
-            EventKind::MeshInvalid(k) => {
-                format!("gear pair {}: no valid mesh", self.names.pairs[k])
-            }
-        };
-        self.log(event.t_s, 2, text)
+        let (level, text) = event_text(event.kind, &self.names);
+        self.batch.items.push(Item::Event {
+            t_s: event.t_s,
+            level,
+            text,
+        });
+        Ok(())
     }
 
     fn on_finish(&mut self, stats: &RunStats) -> ObserverResult {
-        if stats.interrupted {
-            self.log(
-                stats.t_end_s,
-                3,
-                format!("run interrupted at t = {:.1} s", stats.t_end_s),
-            )?;
-        }
-        let mut w = self.writer.take().expect("log open");
-        w.finish()?;
-        let file = w.into_inner();
-        file.commit()?;
+        let (status, detail) = if stats.interrupted {
+            self.batch.items.push(Item::Event {
+                t_s: stats.t_end_s,
+                level: 3,
+                text: format!("run interrupted at t = {:.3} s", stats.t_end_s),
+            });
+            (
+                "interrupted",
+                "stopped on request; the data up to t_end_s are complete",
+            )
+        } else {
+            ("complete", "")
+        };
+        self.finish(status, stats.t_end_s, detail)?;
         Ok(())
+    }
+}
+
+/// Names used in event texts.
+#[derive(Debug, Clone, Default)]
+struct Names {
+    pairs: Vec<String>,
+    heaters: Vec<String>,
+    modes: Vec<String>,
+}
+
+fn event_text(kind: EventKind, n: &Names) -> (i64, String) {
+    match kind {
+        EventKind::EclipseEntry => (2, "eclipse entry".to_string()),
+        EventKind::EclipseExit => (2, "eclipse exit".to_string()),
+        EventKind::HeaterOn(k) => (2, format!("heater {} on", n.heaters[k])),
+        EventKind::HeaterOff(k) => (2, format!("heater {} off", n.heaters[k])),
+        EventKind::ModeStart(k) => (2, format!("mode {} starts", n.modes[k])),
+        EventKind::ModeEnd(k) => (2, format!("mode {} ends", n.modes[k])),
+        EventKind::MarginLow(k) => (
+            3,
+            format!(
+                "gear pair {}: backlash below the minimum allowed",
+                n.pairs[k]
+            ),
+        ),
+        EventKind::MarginRestored(k) => (
+            2,
+            format!(
+                "gear pair {}: backlash back above the minimum allowed",
+                n.pairs[k]
+            ),
+        ),
+        EventKind::InterferenceStart(k) => (
+            4,
+            format!("gear pair {}: interference (backlash ≤ 0)", n.pairs[k]),
+        ),
+        EventKind::InterferenceEnd(k) => {
+            (3, format!("gear pair {}: interference ended", n.pairs[k]))
+        }
+        EventKind::MeshInvalid(k) => (4, format!("gear pair {}: no valid mesh", n.pairs[k])),
     }
 }

@@ -2,5 +2,8 @@
 
 pub mod atomic;
 pub mod csv_export;
+pub mod log_schema;
 pub mod mcap_log;
+pub mod mcap_read;
+pub mod protobuf;
 pub mod scenario_toml;

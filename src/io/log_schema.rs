@@ -1,0 +1,227 @@
+//! Protobuf schemas of the log's messages, built at run time (node, load and gear
+//! names become field names, so every series is readable by name in Foxglove and
+//! Rerun) and stored in the MCAP file as `FileDescriptorSet`s.
+
+use prost::Message;
+use prost_types::field_descriptor_proto::{Label, Type};
+use prost_types::{
+    DescriptorProto, EnumDescriptorProto, EnumValueDescriptorProto, FieldDescriptorProto,
+    FileDescriptorProto, FileDescriptorSet,
+};
+
+/// A field of a message being described.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Field {
+    pub name: String,
+    pub number: u32,
+    pub kind: Kind,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum Kind {
+    Double,
+    RepeatedDouble,
+    /// A message type of the same package, by short name.
+    Message(String),
+}
+
+/// A message type: short name and fields.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MessageType {
+    pub name: String,
+    pub fields: Vec<Field>,
+}
+
+impl MessageType {
+    pub fn new(name: &str) -> MessageType {
+        MessageType {
+            name: name.to_string(),
+            fields: vec![],
+        }
+    }
+
+    /// Appends a field numbered after the last one.
+    pub fn with(mut self, name: &str, kind: Kind) -> MessageType {
+        let number = self.fields.len() as u32 + 1;
+        self.fields.push(Field {
+            name: name.to_string(),
+            number,
+            kind,
+        });
+        self
+    }
+}
+
+pub const PACKAGE: &str = "orbitlash";
+
+/// A field name made of ASCII letters, digits and `_`, not starting with a digit.
+pub fn identifier(name: &str) -> String {
+    let mut s: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if s.chars().next().is_none_or(|c| c.is_ascii_digit()) {
+        s.insert(0, '_');
+    }
+    s
+}
+
+fn field(f: &Field) -> FieldDescriptorProto {
+    let (ty, label, type_name) = match &f.kind {
+        Kind::Double => (Type::Double, Label::Optional, None),
+        Kind::RepeatedDouble => (Type::Double, Label::Repeated, None),
+        Kind::Message(m) => (
+            Type::Message,
+            Label::Optional,
+            Some(format!(".{PACKAGE}.{m}")),
+        ),
+    };
+    FieldDescriptorProto {
+        name: Some(f.name.clone()),
+        number: Some(f.number as i32),
+        label: Some(label as i32),
+        r#type: Some(ty as i32),
+        type_name,
+        json_name: Some(f.name.clone()),
+        ..Default::default()
+    }
+}
+
+/// The encoded `FileDescriptorSet` of `types` (the first is the channel's message).
+pub fn descriptor_set(file_name: &str, types: &[MessageType]) -> Vec<u8> {
+    let file = FileDescriptorProto {
+        name: Some(format!("{PACKAGE}/{file_name}.proto")),
+        package: Some(PACKAGE.into()),
+        message_type: types
+            .iter()
+            .map(|t| DescriptorProto {
+                name: Some(t.name.clone()),
+                field: t.fields.iter().map(field).collect(),
+                ..Default::default()
+            })
+            .collect(),
+        syntax: Some("proto3".into()),
+        ..Default::default()
+    };
+    FileDescriptorSet { file: vec![file] }.encode_to_vec()
+}
+
+/// `foxglove.Log` (foxglove/schemas, `Log.proto`) with `google.protobuf.Timestamp`.
+pub fn foxglove_log_descriptor_set() -> Vec<u8> {
+    let scalar = |name: &str, number: i32, ty: Type| FieldDescriptorProto {
+        name: Some(name.into()),
+        number: Some(number),
+        label: Some(Label::Optional as i32),
+        r#type: Some(ty as i32),
+        json_name: Some(name.into()),
+        ..Default::default()
+    };
+    let timestamp = FileDescriptorProto {
+        name: Some("google/protobuf/timestamp.proto".into()),
+        package: Some("google.protobuf".into()),
+        message_type: vec![DescriptorProto {
+            name: Some("Timestamp".into()),
+            field: vec![
+                scalar("seconds", 1, Type::Int64),
+                scalar("nanos", 2, Type::Int32),
+            ],
+            ..Default::default()
+        }],
+        syntax: Some("proto3".into()),
+        ..Default::default()
+    };
+    let level = EnumDescriptorProto {
+        name: Some("Level".into()),
+        value: ["UNKNOWN", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL"]
+            .iter()
+            .enumerate()
+            .map(|(i, n)| EnumValueDescriptorProto {
+                name: Some((*n).into()),
+                number: Some(i as i32),
+                ..Default::default()
+            })
+            .collect(),
+        ..Default::default()
+    };
+    let log = FileDescriptorProto {
+        name: Some("foxglove/Log.proto".into()),
+        package: Some("foxglove".into()),
+        dependency: vec!["google/protobuf/timestamp.proto".into()],
+        message_type: vec![DescriptorProto {
+            name: Some("Log".into()),
+            field: vec![
+                FieldDescriptorProto {
+                    type_name: Some(".google.protobuf.Timestamp".into()),
+                    ..scalar("timestamp", 1, Type::Message)
+                },
+                FieldDescriptorProto {
+                    type_name: Some(".foxglove.Log.Level".into()),
+                    ..scalar("level", 2, Type::Enum)
+                },
+                scalar("message", 3, Type::String),
+                scalar("name", 4, Type::String),
+                scalar("file", 5, Type::String),
+                scalar("line", 6, Type::Fixed32),
+            ],
+            enum_type: vec![level],
+            ..Default::default()
+        }],
+        syntax: Some("proto3".into()),
+        ..Default::default()
+    };
+    FileDescriptorSet {
+        file: vec![timestamp, log],
+    }
+    .encode_to_vec()
+}
+
+/// Field names and kinds of a message type in an encoded descriptor set, with nested
+/// message types resolved: `(number → (name, kind))` plus the nested types' tables.
+#[derive(Debug, Clone, Default)]
+pub struct DecodedType {
+    pub fields: Vec<(u32, String, Kind)>,
+    pub nested: std::collections::HashMap<String, DecodedType>,
+}
+
+/// Reads the type `full_name` (e.g. `orbitlash.GearMesh`) from an encoded descriptor
+/// set. Only the kinds this crate writes are kept (double, repeated double, message).
+pub fn decode_type(descriptor_set: &[u8], full_name: &str) -> Option<DecodedType> {
+    let set = FileDescriptorSet::decode(descriptor_set).ok()?;
+    let mut all = std::collections::HashMap::new();
+    for f in &set.file {
+        let pkg = f.package.clone().unwrap_or_default();
+        for m in &f.message_type {
+            all.insert(format!("{pkg}.{}", m.name()), m.clone());
+        }
+    }
+    fn build(
+        all: &std::collections::HashMap<String, DescriptorProto>,
+        name: &str,
+        depth: usize,
+    ) -> Option<DecodedType> {
+        let m = all.get(name)?;
+        let mut t = DecodedType::default();
+        for f in &m.field {
+            let kind = match (f.r#type(), f.label()) {
+                (Type::Double, Label::Repeated) => Kind::RepeatedDouble,
+                (Type::Double, _) => Kind::Double,
+                (Type::Message, _) if depth < 8 => {
+                    let tn = f.type_name().trim_start_matches('.').to_string();
+                    t.nested.insert(tn.clone(), build(all, &tn, depth + 1)?);
+                    Kind::Message(tn)
+                }
+                _ => continue,
+            };
+            t.fields
+                .push((f.number() as u32, f.name().to_string(), kind));
+        }
+        Some(t)
+    }
+    build(&all, full_name, 0)
+}
