@@ -82,7 +82,9 @@ fn flatten(
                             .collect(),
                         Wire::Fixed64(b) => vec![*b],
                         other => {
-                            return Err(format!("{path}: expected packed doubles, found {other:?}"));
+                            return Err(format!(
+                                "{path}: expected packed doubles, found {other:?}"
+                            ));
                         }
                     };
                     for b in bytes {

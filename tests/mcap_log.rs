@@ -1,0 +1,248 @@
+//! MCAP logs: contents by name, provenance, cadence, round trip through export-csv,
+//! and what an interrupted or killed run leaves behind.
+
+mod common;
+
+use std::path::Path;
+use std::time::Duration;
+
+use common::{bin, tmpdir};
+use orbitlash::io::mcap_read::read_log;
+use sha2::{Digest, Sha256};
+
+fn reference_file() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml")
+}
+
+fn run_ok(args: &[&str]) -> String {
+    let out = bin().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+#[test]
+fn log_holds_every_series_by_name_and_its_provenance() {
+    let dir = tmpdir("log-contents");
+    let log = dir.join("ref.mcap");
+    let scenario = reference_file();
+    run_ok(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    let t = read_log(&log).unwrap();
+
+    let meta = &t.channel_metadata["/thermal/temperature"];
+    for node in ["housing", "motor", "gear1.r0", "gear2.r2"] {
+        let field = format!("{}_k", node.replace('.', "_"));
+        assert_eq!(
+            meta.get(&format!("node:{field}")).map(String::as_str),
+            Some(node)
+        );
+        let c = t.column(&format!("/thermal/temperature.{field}")).unwrap();
+        assert!(t.rows.iter().all(|(_, r)| r[c].is_finite() && r[c] > 200.0));
+    }
+    for field in [
+        "backlash_exact_um",
+        "margin_um",
+        "pinion.base_pitch_mm",
+        "wheel.temperature_k[2]",
+        "pinion.radius_mm[0]",
+    ] {
+        let c = t
+            .column(&format!("/gears/mesh.{field}"))
+            .unwrap_or_else(|| panic!("{field}"));
+        assert!(t.rows.iter().all(|(_, r)| r[c].is_finite()), "{field}");
+    }
+    for field in [
+        "/thermal/heat.sun_housing_w",
+        "/thermal/heat.to_space_w",
+        "/orbit/state.beta_deg",
+        "/orbit/state.sunlit",
+    ] {
+        assert!(t.column(field).is_some(), "{field}");
+    }
+    // Log time = simulated time in ns, the first sample at t = 0, one per step.
+    assert_eq!(t.rows[0].0, 0);
+    let time = t.column("/thermal/temperature.time_s").unwrap();
+    assert!(
+        t.rows
+            .iter()
+            .all(|(ns, r)| (*ns as f64 * 1e-9 - r[time]).abs() < 1e-6)
+    );
+    assert!(t.rows.windows(2).all(|w| w[1].0 > w[0].0));
+
+    let text = std::fs::read(&scenario).unwrap();
+    let prov = &t.metadata["orbitlash.provenance"];
+    let sha: String = Sha256::digest(&text)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    assert_eq!(prov["scenario_sha256"], sha);
+    assert_eq!(prov["tool_version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(prov["scenario_name"], "reference-hinge");
+    assert!(prov["solver"].contains("tr-bdf2"));
+    assert_eq!(t.metadata["orbitlash.run_end"]["status"], "complete");
+    assert_eq!(
+        t.attachments,
+        vec![("reference-hinge.toml".to_string(), text)]
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn export_csv_round_trips_the_run_csv() {
+    let dir = tmpdir("roundtrip");
+    let (log, csv, back) = (dir.join("r.mcap"), dir.join("r.csv"), dir.join("back.csv"));
+    run_ok(&[
+        "run",
+        "--quiet",
+        "--orbits",
+        "2",
+        "--log-every",
+        "30s",
+        "--out",
+        log.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    run_ok(&[
+        "export-csv",
+        log.to_str().unwrap(),
+        "--out",
+        back.to_str().unwrap(),
+    ]);
+    let (a, b) = (
+        std::fs::read_to_string(&csv).unwrap(),
+        std::fs::read_to_string(&back).unwrap(),
+    );
+    assert!(a.lines().count() > 300);
+    assert_eq!(a, b, "export-csv of the log differs from the run's CSV");
+    // --all adds every other series.
+    let all = run_ok(&["export-csv", log.to_str().unwrap(), "--all"]);
+    let header = all.lines().next().unwrap();
+    assert!(header.starts_with(a.lines().next().unwrap()));
+    assert!(
+        header.contains("/orbit/state.orbit_angle_deg")
+            && header.contains("/gears/mesh.wheel.base_radius_mm")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn log_cadence_by_steps_and_by_interval() {
+    let dir = tmpdir("cadence");
+    let rows = |args: &[&str]| {
+        let log = dir.join("c.mcap");
+        let mut a = vec![
+            "run",
+            "--quiet",
+            "--orbits",
+            "1",
+            "--out",
+            log.to_str().unwrap(),
+        ];
+        a.extend_from_slice(args);
+        run_ok(&a);
+        read_log(&log).unwrap().rows.len()
+    };
+    let every = rows(&[]);
+    let steps = every - 1;
+    assert_eq!(rows(&["--log-every", "10"]), steps / 10 + 1);
+    assert_eq!(
+        rows(&["--log-every", "600s"]),
+        (5676.978f64 / 600.0).floor() as usize + 1
+    );
+    for bad in ["0", "-5s", "ten", "0s"] {
+        let out = bin()
+            .args(["run", "--quiet", &format!("--log-every={bad}")])
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "--log-every {bad} accepted");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--log-every"));
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Starts a long run and returns it once its temporary log exists.
+fn start_long_run(dir: &Path) -> (std::process::Child, std::path::PathBuf, std::path::PathBuf) {
+    let (log, csv) = (dir.join("long.mcap"), dir.join("long.csv"));
+    let child = bin()
+        .args(["run", "--quiet", "--orbits", "50000", "--log-every", "60s"])
+        .args([
+            "--out",
+            log.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let partial = dir.join("long.mcap.partial");
+    for _ in 0..200 {
+        if partial.exists() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    (child, log, csv)
+}
+
+fn signal(child: &std::process::Child, sig: &str) {
+    let status = std::process::Command::new("kill")
+        .args([sig, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+#[test]
+fn ctrl_c_closes_the_log_and_says_so() {
+    let dir = tmpdir("interrupt");
+    let (child, log, csv) = start_long_run(&dir);
+    signal(&child, "-INT");
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "an interrupted run must not exit 0");
+    assert!(stderr.contains("interrupted at t ="), "{stderr}");
+    let t = read_log(&log).unwrap();
+    let end = &t.metadata["orbitlash.run_end"];
+    assert_eq!(end["status"], "interrupted");
+    let t_end: f64 = end["t_end_s"].parse().unwrap();
+    assert!(t_end > 0.0 && t_end < 50000.0 * 5676.978);
+    let last = t.rows.last().unwrap().0 as f64 * 1e-9;
+    assert!(last <= t_end + 1e-6 && t_end - last <= 60.0 + 1e-6);
+    // The CSV is complete up to the same time.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let last_csv: f64 = text
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(last_csv <= t_end && t_end - last_csv <= 30.0 + 1e-6);
+    assert!(!dir.join("long.mcap.partial").exists() && !dir.join("long.csv.partial").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_killed_run_leaves_no_file_under_the_final_name() {
+    let dir = tmpdir("kill");
+    let (mut child, log, csv) = start_long_run(&dir);
+    signal(&child, "-KILL");
+    let _ = child.wait();
+    assert!(!log.exists(), "a killed run left {}", log.display());
+    assert!(!csv.exists(), "a killed run left {}", csv.display());
+    let _ = std::fs::remove_dir_all(&dir);
+}
