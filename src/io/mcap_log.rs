@@ -433,7 +433,18 @@ fn spawn_writer(mut w: LogWriter, layout: Layout) -> WriterThread {
     let handle = std::thread::Builder::new()
         .name("mcap-writer".into())
         .spawn(move || {
-            let mut error: Option<OutputError> = None;
+            // An older log under the same name goes now, in parallel with the run.
+            // (`AtomicFile::commit` explains why it is removed before the rename.)
+            let mut error: Option<OutputError> = match std::fs::remove_file(&w.path) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                    flag.store(true, std::sync::atomic::Ordering::Relaxed);
+                    Some(OutputError {
+                        path: w.path.display().to_string(),
+                        source: e,
+                    })
+                }
+                _ => None,
+            };
             for msg in rx {
                 match msg {
                     ToWriter::Batch(b) => {
