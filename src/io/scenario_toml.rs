@@ -906,22 +906,31 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             },
         });
     }
-    for (i, s) in raw.albedo.into_iter().enumerate() {
-        let p = KeyPath::new("albedo").at(i);
-        let node = diffusion(&p.key("node"), &s.node)?;
-        let aa = cx.product(
-            &p,
-            (s.absorptivity_area_m2, "absorptivity_area_m2"),
-            (s.absorptivity, "absorptivity"),
-            (s.area_m2, "area_m2"),
-            1.0,
-        )?;
+    // Earth-facing loads: an area product and a view factor, (R/(R+h))² by default.
+    let earth_face = |p: &KeyPath,
+                      product: (Option<f64>, &'static str),
+                      a: (Option<f64>, &'static str),
+                      area: Option<f64>,
+                      vf: Option<f64>| {
+        let aa = cx.product(p, product, a, (area, "area_m2"), 1.0)?;
         let vf = cx.within(
             &p.key("view_factor"),
-            s.view_factor.unwrap_or(view_factor_default),
+            vf.unwrap_or(view_factor_default),
             0.0,
             1.0,
             "view factor",
+        )?;
+        Ok::<_, ScenarioError>((aa, vf))
+    };
+    for (i, s) in raw.albedo.into_iter().enumerate() {
+        let p = KeyPath::new("albedo").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let (aa, vf) = earth_face(
+            &p,
+            (s.absorptivity_area_m2, "absorptivity_area_m2"),
+            (s.absorptivity, "absorptivity"),
+            s.area_m2,
+            s.view_factor,
         )?;
         loads.push(Load {
             name: load_name(s.name, "albedo", &s.node, i),
@@ -935,19 +944,12 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     for (i, s) in raw.earth_ir.into_iter().enumerate() {
         let p = KeyPath::new("earth_ir").at(i);
         let node = diffusion(&p.key("node"), &s.node)?;
-        let ea = cx.product(
+        let (ea, vf) = earth_face(
             &p,
             (s.emissivity_area_m2, "emissivity_area_m2"),
             (s.emissivity, "emissivity"),
-            (s.area_m2, "area_m2"),
-            1.0,
-        )?;
-        let vf = cx.within(
-            &p.key("view_factor"),
-            s.view_factor.unwrap_or(view_factor_default),
-            0.0,
-            1.0,
-            "view factor",
+            s.area_m2,
+            s.view_factor,
         )?;
         loads.push(Load {
             name: load_name(s.name, "earth_ir", &s.node, i),

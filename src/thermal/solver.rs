@@ -91,6 +91,49 @@ impl NewtonMonitor {
     }
 }
 
+/// One implicit stage: solve C y − D h f(y) = k for y by simplified Newton iterations
+/// with the factorised iteration matrix C − D h J.
+struct Stage<'a> {
+    compiled: &'a Compiled,
+    cap: &'a [f64],
+    dh: f64,
+}
+
+impl Stage<'_> {
+    /// Iterates from the guess in `y`; false when Newton does not converge.
+    #[allow(clippy::too_many_arguments)]
+    fn solve(
+        &self,
+        lu: &mut Lu,
+        y: &mut [f64],
+        k: &[f64],
+        f: &mut [f64],
+        r: &mut [f64],
+        monitor: &mut NewtonMonitor,
+        iterations: &mut usize,
+    ) -> bool {
+        for it in 0..NEWTON_MAX_ITER {
+            *iterations += 1;
+            self.compiled.heat_w(y, f, None);
+            for i in 0..y.len() {
+                r[i] = k[i] - (self.cap[i] * y[i] - self.dh * f[i]);
+            }
+            lu.solve(r);
+            let mut dmax = 0.0f64;
+            for i in 0..y.len() {
+                y[i] += r[i];
+                dmax = dmax.max(r[i].abs());
+            }
+            match monitor.update(it, dmax) {
+                Newton::Converged => return true,
+                Newton::Diverged => return false,
+                Newton::Continue => {}
+            }
+        }
+        false
+    }
+}
+
 /// One accepted or rejected trial step, with everything observers and the energy
 /// bookkeeping need. Buffers are owned by the stepper and reused.
 #[derive(Debug, Clone, Default)]
@@ -127,6 +170,8 @@ pub struct Stepper {
     fg: Vec<f64>,
     yg: Vec<f64>,
     r: Vec<f64>,
+    /// Right-hand side of the current stage.
+    k: Vec<f64>,
     /// Contraction rate of the last Newton iteration, to judge the first update.
     theta: f64,
     newton_tol_k: f64,
@@ -156,6 +201,7 @@ impl Stepper {
             fg: vec![0.0; n],
             yg: vec![0.0; n],
             r: vec![0.0; n],
+            k: vec![0.0; n],
             theta: 0.5,
             newton_tol_k: (NEWTON_TOL_FRACTION * tolerance_k).max(1e-9),
             start_is_last_end: false,
@@ -232,74 +278,56 @@ impl Stepper {
             d.rates0_k_per_s[i] = self.f0[i] / cap[i];
         }
 
-        // Stage 1: trapezoidal rule to t0 + γh.
+        // Stage 1: trapezoidal rule to t0 + γh: C yγ − D h f(yγ) = C y0 + D h f0.
         self.compiled
             .set_time(model, &env_at(t0_s + GAMMA * h_s), sw);
         for i in 0..n {
             self.yg[i] = temps0_k[i] + GAMMA * h_s * d.rates0_k_per_s[i];
+            self.k[i] = cap[i] * temps0_k[i] + D * h_s * self.f0[i];
         }
         let mut monitor = NewtonMonitor::new(newton_tol_k, self.theta);
-        let mut converged = false;
-        for it in 0..NEWTON_MAX_ITER {
-            d.newton_iterations += 1;
-            self.compiled.heat_w(&self.yg, &mut self.f, None);
-            for i in 0..n {
-                self.r[i] =
-                    -(cap[i] * (self.yg[i] - temps0_k[i]) - D * h_s * (self.f0[i] + self.f[i]));
-            }
-            self.lu.solve(&mut self.r);
-            let mut dmax = 0.0f64;
-            for i in 0..n {
-                self.yg[i] += self.r[i];
-                dmax = dmax.max(self.r[i].abs());
-            }
-            match monitor.update(it, dmax) {
-                Newton::Converged => {
-                    converged = true;
-                    break;
-                }
-                Newton::Diverged => break,
-                Newton::Continue => {}
-            }
-        }
-        if !converged {
+        let stage = Stage {
+            compiled: &self.compiled,
+            cap,
+            dh: D * h_s,
+        };
+        if !stage.solve(
+            &mut self.lu,
+            &mut self.yg,
+            &self.k,
+            &mut self.f,
+            &mut self.r,
+            &mut monitor,
+            &mut d.newton_iterations,
+        ) {
             self.jac_stale = true;
             return Err(StepFailure::NewtonDiverged);
         }
         self.compiled
             .heat_w(&self.yg, &mut self.fg, Some(&mut d.flows[1]));
 
-        // Stage 2: BDF2 to t0 + h.
+        // Stage 2: BDF2 to t0 + h: C y1 − D h f(y1) = C (A yγ − B y0).
         self.compiled.set_time(model, &env_at(t0_s + h_s), sw);
         let y1 = &mut d.temps1_k;
         for i in 0..n {
             y1[i] = temps0_k[i] + (self.yg[i] - temps0_k[i]) / GAMMA;
+            self.k[i] = cap[i] * (A * self.yg[i] - B * temps0_k[i]);
         }
         monitor = NewtonMonitor::new(newton_tol_k, monitor.theta);
-        converged = false;
-        for it in 0..NEWTON_MAX_ITER {
-            d.newton_iterations += 1;
-            self.compiled.heat_w(y1, &mut self.f, None);
-            for i in 0..n {
-                self.r[i] =
-                    -(cap[i] * (y1[i] - A * self.yg[i] + B * temps0_k[i]) - D * h_s * self.f[i]);
-            }
-            self.lu.solve(&mut self.r);
-            let mut dmax = 0.0f64;
-            for i in 0..n {
-                y1[i] += self.r[i];
-                dmax = dmax.max(self.r[i].abs());
-            }
-            match monitor.update(it, dmax) {
-                Newton::Converged => {
-                    converged = true;
-                    break;
-                }
-                Newton::Diverged => break,
-                Newton::Continue => {}
-            }
-        }
-        if !converged {
+        let stage = Stage {
+            compiled: &self.compiled,
+            cap,
+            dh: D * h_s,
+        };
+        if !stage.solve(
+            &mut self.lu,
+            y1,
+            &self.k,
+            &mut self.f,
+            &mut self.r,
+            &mut monitor,
+            &mut d.newton_iterations,
+        ) {
             self.jac_stale = true;
             return Err(StepFailure::NewtonDiverged);
         }
