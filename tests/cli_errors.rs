@@ -333,3 +333,43 @@ fn gear_unknown_bore_fit() {
         &["gear_pair[0].pinion.bore_fit", "free, rigid, elastic"],
     );
 }
+
+#[test]
+fn not_a_number_is_rejected() {
+    assert_rejected(
+        "nan",
+        "capacitance_j_per_k = 4.06",
+        "capacitance_j_per_k = nan",
+        &["node[2].capacitance_j_per_k", "finite", ":{line}:"],
+    );
+    assert_rejected(
+        "inf",
+        "conductance_w_per_k = 0.30",
+        "conductance_w_per_k = inf",
+        &["conductor[1].conductance_w_per_k", "finite"],
+    );
+}
+
+#[test]
+fn empty_and_binary_files() {
+    let dir = tmpdir("empty");
+    let empty = dir.join("empty.toml");
+    std::fs::write(&empty, "").unwrap();
+    let out = bin().arg("check").arg(&empty).output().unwrap();
+    assert_failed("empty", &out, &[empty.to_str().unwrap(), "scenario"]);
+    let binary = dir.join("binary.toml");
+    std::fs::write(&binary, [0xff, 0xfe, 0x00, 0x41]).unwrap();
+    let out = bin().arg("check").arg(&binary).output().unwrap();
+    assert_failed("binary", &out, &[binary.to_str().unwrap()]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_log_that_is_not_mcap_is_a_clear_error() {
+    let dir = tmpdir("bad-log");
+    let log = dir.join("not.mcap");
+    std::fs::write(&log, "time_s,housing_c\n0,20\n").unwrap();
+    let out = bin().arg("export-csv").arg(&log).output().unwrap();
+    assert_failed("bad-log", &out, &[log.to_str().unwrap(), "MCAP"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -6,6 +6,7 @@ use common::scenario;
 use orbitlash::constants::STEFAN_BOLTZMANN_W_PER_M2_K4;
 use orbitlash::sim::{Event, EventKind, Observer, ObserverResult, SolverSettings, simulate};
 use orbitlash::summary::Samples;
+use std::f64::consts::PI;
 
 const NO_ECLIPSE_ENV: &str = "beta_deg = 90.0\nspace_sink_k = 0.0";
 
@@ -315,4 +316,69 @@ fn val_closed_form_eclipse_duration_with_drifting_beta() {
         "eclipses stopped early, at β {}°",
         beta_last.to_degrees()
     );
+}
+
+#[test]
+fn val_closed_form_orbit_averaged_environment_loads() {
+    // Heat absorbed over one orbit at β = 20° (eclipse half-angle φ), per unit αA:
+    //   tracking face  S T (1 − φ/π)
+    //   zenith face    S T cos β / π                 (lit only on the day side)
+    //   nadir face     S T cos β (1 − sin φ) / π     (lit between terminator and eclipse)
+    //   albedo         S a F T cos β / π
+    //   Earth IR       q F T
+    let (s, albedo, q) = (1361.0, 0.3, 237.0);
+    let sc = scenario(
+        "",
+        &format!(
+            "beta_deg = 20.0\nsolar_flux_w_per_m2 = {s}\nalbedo = {albedo}\nearth_ir_w_per_m2 = {q}"
+        ),
+        "orbits = 1\n[solver]\nmax_step_s = 20.0\ntolerance_k = 1e-4",
+        "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1e9\ninitial_temperature_k = 300.0\n",
+    );
+    let orbit = sc.thermal.environment.orbit.clone();
+    let (t, f_view) = (orbit.period_s(), orbit.earth_view_factor());
+    let beta = 20f64.to_radians();
+    let phi = orbit.eclipse_half_angle_rad(beta);
+    let cases = [
+        (
+            "[[sun]]\nnode = \"n\"\nabsorptivity_area_m2 = 1.0\nincidence = \"tracking\"",
+            s * t * (1.0 - phi / PI),
+        ),
+        (
+            "[[sun]]\nnode = \"n\"\nabsorptivity_area_m2 = 1.0\nincidence = \"zenith\"",
+            s * t * beta.cos() / PI,
+        ),
+        (
+            "[[sun]]\nnode = \"n\"\nabsorptivity_area_m2 = 1.0\nincidence = \"nadir\"",
+            s * t * beta.cos() * (1.0 - phi.sin()) / PI,
+        ),
+        (
+            "[[albedo]]\nnode = \"n\"\nabsorptivity_area_m2 = 1.0",
+            s * albedo * f_view * t * beta.cos() / PI,
+        ),
+        (
+            "[[earth_ir]]\nnode = \"n\"\nemissivity_area_m2 = 1.0",
+            q * f_view * t,
+        ),
+    ];
+    for (load, want) in cases {
+        let sc = scenario(
+            "",
+            &format!(
+                "beta_deg = 20.0\nsolar_flux_w_per_m2 = {s}\nalbedo = {albedo}\nearth_ir_w_per_m2 = {q}"
+            ),
+            // Short steps: the faces' illumination has kinks (terminator) that steps do
+            // not land on, where the quadrature error is O(h²).
+            "orbits = 1\n[solver]\nmax_step_s = 5.0\ntolerance_k = 1e-4",
+            &format!(
+                "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1e9\ninitial_temperature_k = 300.0\n{load}\n"
+            ),
+        );
+        let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, t, &mut (), None).unwrap();
+        let got = stats.energy.absorbed_j;
+        assert!(
+            (got - want).abs() < 1e-4 * want,
+            "{load}: {got} J, closed form {want} J"
+        );
+    }
 }
