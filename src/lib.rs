@@ -7,11 +7,11 @@
 //!
 //! ```text
 //! scenario file ──io::scenario_toml──▶ Scenario (validated model)
-//!     ──sim::simulate (thermal::solver, orbit)──▶ Observer callbacks
-//!     ──▶ summary::WindowStats, io::csv_export, io::mcap_log ──▶ reports (cli)
+//!     ──sim::simulate (thermal::solver, orbit, gear at every step)──▶ Observer callbacks
+//!     ──▶ summary, io::csv_export, io::mcap_log ──▶ reports (cli)
 //! ```
 //!
-//! Physics (`orbit`, `thermal`, `sim`, `summary`) knows nothing of files or the CLI;
+//! Physics (`orbit`, `thermal`, `gear`, `sim`, `summary`) knows nothing of files or the CLI;
 //! `io` holds everything that reads or writes files; `cli` maps commands to the
 //! pipeline. See `docs/ARCHITECTURE.md` for the module map and invariants.
 

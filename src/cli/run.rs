@@ -67,6 +67,11 @@ pub fn run(a: RunArgs) -> Result<()> {
 
     // Open every output before the run, so a bad path fails now.
     let log_path = (!a.no_log).then(|| a.out.clone().unwrap_or_else(|| default_log_path(&sc.name)));
+    if let (Some(l), Some(c)) = (&log_path, &a.csv)
+        && l == c
+    {
+        anyhow::bail!("--csv and the log are the same file: {}", c.display());
+    }
     let mut log = match &log_path {
         Some(p) => Some(McapLog::create(
             p,
