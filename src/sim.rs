@@ -370,48 +370,22 @@ pub fn simulate<O: Observer>(
         }
 
         // Thermostats: land on the earliest switching time inside the step.
-        let mut switched: Option<usize> = None;
+        let switch = earliest_thermostat_switch(net, &heaters_on, &stepper.data);
+        let switched = switch.map(|(k, _)| k);
+        if let Some((_, s)) = switch
+            && s * h_try > MIN_STEP_S
+            && s < 1.0
         {
-            let mut best_s = f64::INFINITY;
-            for (k, ht) in net.heaters.iter().enumerate() {
-                let i = ht.sensor_node;
-                let d = &stepper.data;
-                let (target, crossed) = if heaters_on[k] {
-                    (ht.off_k, d.temps1_k[i] >= ht.off_k)
-                } else {
-                    (ht.on_k, d.temps1_k[i] <= ht.on_k)
-                };
-                if !crossed {
-                    continue;
-                }
-                let g = |s: f64| {
-                    hermite(
-                        d.temps0_k[i],
-                        d.temps1_k[i],
-                        d.rates0_k_per_s[i],
-                        d.rates1_k_per_s[i],
-                        d.h_s,
-                        s,
-                    ) - target
-                };
-                let s = first_root(&g, heaters_on[k]);
-                if s < best_s {
-                    best_s = s;
-                    switched = Some(k);
-                }
-            }
-            if switched.is_some() && best_s * h_try > MIN_STEP_S && best_s < 1.0 {
-                h_try *= best_s;
-                lands = false;
-                stepper
-                    .step(model, &env_at, sw, t, &y, h_try)
-                    .map_err(|e| SimError::StepFailed {
-                        t_s: t,
-                        h_s: h_try,
-                        source: e,
-                    })?;
-                stats.newton_iterations += stepper.data.newton_iterations as u64;
-            }
+            h_try *= s;
+            lands = false;
+            stepper
+                .step(model, &env_at, sw, t, &y, h_try)
+                .map_err(|e| SimError::StepFailed {
+                    t_s: t,
+                    h_s: h_try,
+                    source: e,
+                })?;
+            stats.newton_iterations += stepper.data.newton_iterations as u64;
         }
 
         // Accept.
@@ -455,9 +429,7 @@ pub fn simulate<O: Observer>(
             } else {
                 EventKind::EclipseExit
             };
-            observer
-                .on_event(&Event { t_s: t, kind })
-                .map_err(SimError::Observer)?;
+            emit(observer, t, kind)?;
             next_shadow = env.next_shadow_crossing(t, t_end_s);
             just_after_event = true;
         }
@@ -473,9 +445,7 @@ pub fn simulate<O: Observer>(
                 } else {
                     EventKind::ModeEnd(k)
                 };
-                observer
-                    .on_event(&Event { t_s: t, kind })
-                    .map_err(SimError::Observer)?;
+                emit(observer, t, kind)?;
             }
         }
         if let Some(k) = switched {
@@ -487,9 +457,7 @@ pub fn simulate<O: Observer>(
             } else {
                 EventKind::HeaterOff(k)
             };
-            observer
-                .on_event(&Event { t_s: t, kind })
-                .map_err(SimError::Observer)?;
+            emit(observer, t, kind)?;
         }
 
         if !just_after_event {
@@ -536,6 +504,48 @@ pub fn simulate<O: Observer>(
     stats.final_temperatures_k = y;
     observer.on_finish(&stats).map_err(SimError::Observer)?;
     Ok(stats)
+}
+
+fn emit<O: Observer>(observer: &mut O, t_s: f64, kind: EventKind) -> Result<(), SimError> {
+    observer
+        .on_event(&Event { t_s, kind })
+        .map_err(SimError::Observer)
+}
+
+/// The heater whose thermostat switches first within the step, and where (fraction of
+/// the step, from the solver's cubic interpolant of the sensor node).
+fn earliest_thermostat_switch(
+    net: &crate::thermal::Network,
+    heaters_on: &[bool],
+    d: &StepData,
+) -> Option<(usize, f64)> {
+    let mut best: Option<(usize, f64)> = None;
+    for (k, ht) in net.heaters.iter().enumerate() {
+        let i = ht.sensor_node;
+        let (target, crossed) = if heaters_on[k] {
+            (ht.off_k, d.temps1_k[i] >= ht.off_k)
+        } else {
+            (ht.on_k, d.temps1_k[i] <= ht.on_k)
+        };
+        if !crossed {
+            continue;
+        }
+        let g = |s: f64| {
+            hermite(
+                d.temps0_k[i],
+                d.temps1_k[i],
+                d.rates0_k_per_s[i],
+                d.rates1_k_per_s[i],
+                d.h_s,
+                s,
+            ) - target
+        };
+        let s = first_root(&g, heaters_on[k]);
+        if best.is_none_or(|(_, b)| s < b) {
+            best = Some((k, s));
+        }
+    }
+    best
 }
 
 /// Reports gear-pair state changes (margin, interference, validity) as events.
