@@ -127,6 +127,8 @@ fn check_prints_derived_quantities() {
         "half-angle 66.526°",
         "fraction 0.36959",
         "stiffness ratio",
+        "normal backlash 32.600 µm",
+        "contact ratio 1.6",
         "gear1.r0",
     ] {
         assert!(stdout.contains(needle), "`{needle}` missing:\n{stdout}");

@@ -113,6 +113,47 @@ pub fn check(a: CheckArgs) -> Result<()> {
         tc.fastest_s,
         tc.stiffness_ratio()
     );
+    for pair in &sc.gears {
+        let m = pair
+            .evaluate(&vec![pair.reference_temperature_k; net.nodes.len()])
+            .map_err(|e| anyhow::anyhow!("gear pair {}: {e}", pair.name))?;
+        outln!(
+            o,
+            "\ngear pair {} at assembly ({:.2} °C)",
+            pair.name,
+            pair.reference_temperature_k - 273.15
+        );
+        outln!(
+            o,
+            "  centre distance {:.4} mm, operating pressure angle {:.4}°, contact ratio {:.3}",
+            m.center_distance_m * 1e3,
+            m.pressure_angle_rad.to_degrees(),
+            m.contact_ratio
+        );
+        for (g, d) in pair.gears.iter().zip(&m.gears) {
+            outln!(
+                o,
+                "  {:6} z = {:3}  r_b = {:.6} mm  p_b = {:.6} mm  s_b = {:.6} mm (coated)  nodes {}",
+                g.name,
+                g.teeth,
+                d.base_radius_m * 1e3,
+                d.base_pitch_m * 1e3,
+                d.base_thickness_m * 1e3,
+                g.nodes
+                    .iter()
+                    .map(|&i| net.nodes[i].name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+        outln!(
+            o,
+            "  normal backlash {:.3} µm, minimum allowed {:.3} µm, margin {:.3} µm",
+            m.backlash_exact_m * 1e6,
+            pair.min_backlash_m * 1e6,
+            m.margin_m * 1e6
+        );
+    }
     outln!(o, "\nrun");
     outln!(
         o,
