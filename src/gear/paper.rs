@@ -73,13 +73,14 @@ fn raw(pair: &GearPair, dt: [(f64, f64); 2], a_m: f64) -> f64 {
     let yb1 = std::f64::consts::TAU * rbp[0] / g[0].teeth as f64;
     // (21). CORRECTION 2: the printed bracket lacks the base-circle term 2 inv α₀ of the
     // standard base tooth thickness s_b = r_b (s/r + 2 inv α₀); added.
+    let (inv_a0, inv_ap, inv_asm) = (inv(a0), inv(ap), inv(alpha_asm));
     let nb = |k: usize| {
         let s = g[k].tooth_thickness_m;
         let r = g[k].reference_radius_m(m);
-        (rbp[k] + k1) * (s / r + 2.0 * inv(a0) - (inv(ap) - inv(alpha_asm)))
+        (rbp[k] + k1) * (s / r + 2.0 * inv_a0 - (inv_ap - inv_asm))
     };
     // (22). CORRECTION 3: the second N_b1 is N_b2.
-    yb1 - nb(0) - nb(1) + 2.0 * (rbp[0] + rbp[1] + k1) * inv(ap)
+    yb1 - nb(0) - nb(1) + 2.0 * (rbp[0] + rbp[1] + k1) * inv_ap
     // CORRECTION 4 (in `backlash_m`): the coating terms of (17)–(22) do not return the
     // nominal backlash at ΔT = 0 (K′ enters the radii, the pitch and the thicknesses),
     // so the model is used for the change from ΔT = 0, added to the nominal backlash.
