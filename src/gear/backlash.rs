@@ -101,8 +101,8 @@ pub fn backlash(g1: &FlankGeometry, g2: &FlankGeometry, a_m: f64) -> Result<Back
 }
 
 /// The same worst case found the slow way: the phase of gear 1 scanned over one base
-/// pitch and the pairs on each line of action enumerated. Kept for tests and for
-/// `orbitlash backlash --check`; `backlash` must agree with it.
+/// pitch and the pairs on each line of action enumerated. `backlash` must agree with
+/// it (tested below).
 pub fn backlash_by_scan(g1: &FlankGeometry, g2: &FlankGeometry, a_m: f64, phases: usize) -> f64 {
     let (rb1, rb2) = (g1.base_radius_m, g2.base_radius_m);
     let aw = ((rb1 + rb2) / a_m).acos();
@@ -137,4 +137,58 @@ pub fn backlash_by_scan(g1: &FlankGeometry, g2: &FlankGeometry, a_m: f64, phases
         worst = worst.min(j);
     }
     worst
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A standard 1 mm pair (z1, z2), each gear scaled by its own λ.
+    fn pair(z1: u32, z2: u32, l1: f64, l2: f64) -> (FlankGeometry, FlankGeometry, f64) {
+        let (m, a0) = (1e-3, 20f64.to_radians());
+        let g = |z: u32, l: f64| {
+            let r = m * z as f64 / 2.0;
+            let rb = r * a0.cos();
+            FlankGeometry {
+                teeth: z,
+                base_radius_m: rb * l,
+                base_thickness_m: l
+                    * rb
+                    * ((std::f64::consts::FRAC_PI_2 * m - 20e-6) / r + 2.0 * inv(a0)),
+                tip_radius_m: l * (r + m),
+            }
+        };
+        (g(z1, l1), g(z2, l2), m * (z1 + z2) as f64 / 2.0)
+    }
+
+    #[test]
+    fn closed_form_worst_case_matches_the_phase_scan() {
+        let mut checked = 0;
+        for (z1, z2) in [(20, 40), (17, 53), (31, 31), (12, 90)] {
+            for d1 in [-150.0, -40.0, 0.0, 25.0, 90.0] {
+                for d2 in [-120.0, -10.0, 0.0, 60.0] {
+                    let (g1, g2, a) = pair(z1, z2, 1.0 + 11e-6 * d1, 1.0 + 11e-6 * d2);
+                    let Ok(fast) = backlash(&g1, &g2, a) else {
+                        continue;
+                    };
+                    let scan = backlash_by_scan(&g1, &g2, a, 4000);
+                    // The scan samples phases, so it can only find a larger minimum;
+                    // the plateau of the worst case is wide enough here to be hit.
+                    assert!(
+                        fast.exact_m <= scan + 1e-15,
+                        "{z1}/{z2} {d1}/{d2}: {} > {scan}",
+                        fast.exact_m
+                    );
+                    assert!(
+                        scan - fast.exact_m < 1e-12,
+                        "{z1}/{z2} {d1}/{d2}: {} vs {scan}",
+                        fast.exact_m
+                    );
+                    assert!(fast.exact_m <= fast.closed_form_m + 1e-15);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 60, "{checked}");
+    }
 }

@@ -201,11 +201,6 @@ impl GearPair {
         })
     }
 
-    /// The pair with every node at the same temperature `t_k` (and the housing too).
-    pub fn evaluate_uniform(&self, t_k: f64, n_nodes: usize) -> Result<MeshState, MeshError> {
-        self.evaluate(&vec![t_k; n_nodes])
-    }
-
     /// Nominal normal backlash at the assembly temperature, m.
     pub fn nominal_backlash_m(&self) -> f64 {
         let m = self.module_m;

@@ -47,10 +47,6 @@ impl AtomicFile {
         self.writer.as_mut().expect("file not yet committed")
     }
 
-    pub fn path(&self) -> &Path {
-        &self.final_path
-    }
-
     /// Flushes and renames the file into place. The rename is atomic, so a crash of
     /// the program never leaves a partial file under the final name. There is no
     /// fsync: it would double the cost of a logged run, and outputs are reproducible.

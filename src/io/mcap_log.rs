@@ -335,10 +335,6 @@ impl McapLog {
         })
     }
 
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
     /// Queues a sample: time, sunlit flag, `self.temps`, switch states.
     fn push_sample(
         &mut self,

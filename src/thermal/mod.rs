@@ -138,13 +138,6 @@ impl Network {
     pub fn initial_temperatures_k(&self) -> Vec<f64> {
         self.nodes.iter().map(|n| n.initial_temperature_k).collect()
     }
-
-    pub fn node_ref_name(&self, r: NodeRef) -> &str {
-        match r {
-            NodeRef::Diffusion(i) => &self.nodes[i].name,
-            NodeRef::Boundary(i) => &self.boundaries[i].name,
-        }
-    }
 }
 
 impl ThermalModel {
