@@ -39,7 +39,8 @@ enum Command {
     Run(run::RunArgs),
     /// Validate a scenario and print derived quantities without running it.
     Check(check::CheckArgs),
-    /// Measure the cost per step and per orbit of the thermal solver.
+    /// Measure the cost of the thermal solver (per step, per orbit, accuracy), of the
+    /// backlash evaluation and of logging.
     Bench(bench::BenchArgs),
     /// Static backlash calculator: every model variant at given temperatures.
     Backlash(backlash::BacklashArgs),

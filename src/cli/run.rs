@@ -105,13 +105,21 @@ pub fn run(a: RunArgs) -> Result<()> {
     });
 
     let mut stats_obs = WindowStats::last(period_s.min(t_end_s));
+    // Over the whole run: reported instead when an interrupted run ends before the
+    // last orbit's window.
+    let mut stats_run = WindowStats::last(t_end_s);
     let mut mesh_run = MeshStats::last(t_end_s);
     let mut mesh_last = MeshStats::last(period_s.min(t_end_s));
     let interrupt = interrupt_flag();
     let wall = Instant::now();
     let result = {
         let mut observers = (
-            (&mut stats_obs, &mut mesh_run, &mut mesh_last),
+            (
+                &mut stats_obs,
+                &mut stats_run,
+                &mut mesh_run,
+                &mut mesh_last,
+            ),
             csv,
             &mut log,
             progress,
@@ -144,7 +152,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     };
     let wall_s = wall.elapsed().as_secs_f64();
 
-    let mut o = format_summary(&sc.name, &sc.thermal, &stats, &stats_obs, period_s, wall_s);
+    let window = if stats.t_end_s > stats_obs.window_start_s() {
+        &stats_obs
+    } else {
+        &stats_run
+    };
+    let mut o = format_summary(&sc.name, &sc.thermal, &stats, window, period_s, wall_s);
     o.push_str(&format_mesh(&sc, &mesh_run, &mesh_last));
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
@@ -213,12 +226,20 @@ fn format_summary(
         stats.eclipse_time_s / stats.t_end_s
     );
     let last_orbit = (window.window_start_s() / period_s).round() as u64 + 1;
-    outln!(
-        o,
-        "\nlast orbit (orbit {last_orbit}, t = {:.1} … {:.1} s):",
-        window.window_start_s(),
-        stats.t_end_s
-    );
+    if window.window_start_s() == 0.0 && stats.t_end_s > 1.5 * period_s {
+        outln!(
+            o,
+            "\nthe whole run (interrupted before its last orbit), t = 0 … {:.1} s:",
+            stats.t_end_s
+        );
+    } else {
+        outln!(
+            o,
+            "\nlast orbit (orbit {last_orbit}, t = {:.1} … {:.1} s):",
+            window.window_start_s(),
+            stats.t_end_s
+        );
+    }
     let width = model
         .network
         .nodes
@@ -309,16 +330,24 @@ fn format_mesh(sc: &orbitlash::scenario::Scenario, run: &MeshStats, last: &MeshS
             "orbit min",
             "orbit max"
         );
+        // "–" where a window saw no step (an interrupted run).
+        let um = |v: f64| {
+            if v.is_finite() {
+                format!("{:.3}", v * 1e6)
+            } else {
+                "–".to_string()
+            }
+        };
         let row = |o: &mut String, label: &str, f: &dyn Fn(&PairStats) -> (f64, f64)| {
             let (a, b) = f(r);
             let (c, d) = f(l);
             outln!(
                 o,
-                "  {label:26} {:>9.3} {:>9.3} {:>9.3} {:>9.3}",
-                a * 1e6,
-                b * 1e6,
-                c * 1e6,
-                d * 1e6
+                "  {label:26} {:>9} {:>9} {:>9} {:>9}",
+                um(a),
+                um(b),
+                um(c),
+                um(d)
             );
         };
         row(&mut o, "exact (worst over a mesh)", &|p| {
