@@ -282,6 +282,14 @@ pub fn simulate<O: Observer>(
         .filter(|&b| b > 0.0 && b < t_end_s)
         .collect();
     let mut next_bp = 0usize;
+    let kinks = model.load_kink_angles_rad();
+    let next_kink = |t: f64| {
+        kinks
+            .iter()
+            .map(|&a| env.orbit.next_angle_mod_pi_s(t, a))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut t_kink = next_kink(0.0);
     let mut next_shadow = env.next_shadow_crossing(0.0, t_end_s);
     // Sunlit or eclipsed between shadow events: decided once at the start (just after
     // t = 0) and toggled at every crossing the solver lands on.
@@ -329,7 +337,7 @@ pub fn simulate<O: Observer>(
         // Next scheduled event.
         let t_shadow = next_shadow.map_or(f64::INFINITY, |(ts, _)| ts);
         let t_bp = breakpoints.get(next_bp).copied().unwrap_or(f64::INFINITY);
-        let t_event = t_shadow.min(t_bp).min(t_end_s);
+        let t_event = t_shadow.min(t_bp).min(t_kink).min(t_end_s);
         let dt_event = t_event - t;
         let mut h_try = h.min(settings.max_step_s);
         let mut lands = false;
@@ -431,6 +439,10 @@ pub fn simulate<O: Observer>(
             };
             emit(observer, t, kind)?;
             next_shadow = env.next_shadow_crossing(t, t_end_s);
+            just_after_event = true;
+        }
+        if t >= t_kink {
+            t_kink = next_kink(t);
             just_after_event = true;
         }
         while breakpoints.get(next_bp).is_some_and(|&b| b <= t) {

@@ -58,6 +58,18 @@ impl Orbit {
         (self.earth_radius_m / self.radius_m()).asin()
     }
 
+    /// The first time strictly after `t_s` at which θ ≡ `angle_rad` (mod π).
+    pub fn next_angle_mod_pi_s(&self, t_s: f64, angle_rad: f64) -> f64 {
+        let omega = 2.0 * PI / self.period_s();
+        let theta = self.orbit_angle_rad(t_s);
+        let k = ((theta - angle_rad) / PI).floor() + 1.0;
+        let mut t = t_s + (angle_rad + k * PI - theta) / omega;
+        if t <= t_s + 1e-9 * (1.0 + t_s.abs()) {
+            t += PI / omega;
+        }
+        t
+    }
+
     /// Eclipse half-angle φ about orbit midnight, rad:
     /// cos φ = √((R+h)² − R²) / ((R+h) cos β); 0 when there is no eclipse.
     pub fn eclipse_half_angle_rad(&self, beta_rad: f64) -> f64 {

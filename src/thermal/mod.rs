@@ -141,6 +141,31 @@ impl Network {
 }
 
 impl ThermalModel {
+    /// Orbit angles (mod π) where a load's slope jumps: the terminator (θ = π/2 mod π)
+    /// for albedo and for Sun on zenith or nadir faces, θ = 0 mod π for ram and wake
+    /// faces. The solver lands steps on them.
+    pub fn load_kink_angles_rad(&self) -> Vec<f64> {
+        let mut v = Vec::new();
+        for l in &self.network.loads {
+            let a = match &l.kind {
+                LoadKind::Albedo { .. }
+                | LoadKind::Sun {
+                    incidence: Incidence::Zenith | Incidence::Nadir,
+                    ..
+                } => std::f64::consts::FRAC_PI_2,
+                LoadKind::Sun {
+                    incidence: Incidence::Ram | Incidence::Wake,
+                    ..
+                } => 0.0,
+                _ => continue,
+            };
+            if !v.contains(&a) {
+                v.push(a);
+            }
+        }
+        v
+    }
+
     /// Every time at which a load or boundary changes its law (table knots, mode
     /// window edges), sorted and deduplicated. The solver lands steps on them.
     pub fn breakpoints_s(&self) -> Vec<f64> {
