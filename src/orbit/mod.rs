@@ -300,6 +300,7 @@ impl Environment {
 mod tests {
     use super::*;
     use crate::constants::*;
+    use std::f64::consts::FRAC_PI_2;
 
     fn reference() -> Environment {
         Environment {
@@ -349,6 +350,24 @@ mod tests {
             assert!((ca.0 - cb.0).abs() < 1e-6, "{} vs {}", ca.0, cb.0);
             a = ca.0;
             b = cb.0;
+        }
+    }
+
+    #[test]
+    fn angle_crossings_every_half_orbit() {
+        let env = reference();
+        let o = &env.orbit;
+        let half = o.period_s() / 2.0;
+        let mut t = 0.0;
+        for k in 0..6 {
+            let next = o.next_angle_mod_pi_s(t, FRAC_PI_2);
+            assert!(next > t);
+            assert!(
+                (next - (half / 2.0 + k as f64 * half)).abs() < 1e-6,
+                "{k}: {next}"
+            );
+            assert!(o.orbit_angle_rad(next).cos().abs() < 1e-9);
+            t = next;
         }
     }
 
