@@ -329,3 +329,79 @@ fn val_cases_null_backlash_matches_independent_implementation() {
         );
     }
 }
+
+#[test]
+fn val_closed_form_lame_shrink_fit_and_rigid_bore() {
+    // Pinion on an elastic steel shaft with 2 µm radial interference, at the assembly
+    // temperature: contact pressure p = δ / (g_a + g_s) with the Lamé compliances of a
+    // disc bore g_a = a((1−ν)a² + (1+ν)b²)/(E(b² − a²)) and of a solid shaft
+    // g_s = a(1−ν_s)/E_s; the rim then moves out by 2 p a² b / (E (b² − a²)).
+    let elastic = with(&[(
+        "nodes = [\"gear1.r0\", \"gear1.r1\", \"gear1.r2\"]\nbore_fit = \"free\"",
+        "nodes = [\"gear1.r0\", \"gear1.r1\", \"gear1.r2\"]\nbore_fit = \"elastic\"\nshaft_node = \"shaft1\"\ninterference_um = 2.0\n\
+         shaft_material = { alpha_per_k = 11.0e-6, youngs_modulus_pa = 197e9, poisson = 0.27 }",
+    )]);
+    let m = uniform(&elastic, 298.15);
+    let (a, b, e, nu) = (3e-3f64, 9.396926e-3f64, 197e9, 0.27);
+    let g_a = a * ((1.0 - nu) * a * a + (1.0 + nu) * b * b) / (e * (b * b - a * a));
+    let g_s = a * (1.0 - nu) / e;
+    let p = 2e-6 / (g_a + g_s);
+    let u_b = 2.0 * p * a * a * b / (e * (b * b - a * a));
+    assert!(
+        (m.gears[0].bore_pressure_pa - p).abs() < 1e-6 * p,
+        "p {} vs {p}",
+        m.gears[0].bore_pressure_pa
+    );
+    assert!(
+        (m.gears[0].base_displacement_m - u_b).abs() < 1e-6 * u_b,
+        "u_b {} vs {u_b}",
+        m.gears[0].base_displacement_m
+    );
+    assert!(
+        m.backlash_exact_m < 32.6e-6,
+        "a shrink fit grows the pinion and closes the backlash"
+    );
+    // Warming the pinion (not its shaft) by 80 K opens the fit: free disc again.
+    let free = reference();
+    let mut temps = vec![298.15; elastic.thermal.network.nodes.len()];
+    for &i in &elastic.gears[0].gears[0].nodes {
+        temps[i] += 80.0;
+    }
+    let warm = elastic.gears[0].evaluate(&temps).unwrap();
+    assert_eq!(warm.gears[0].bore_pressure_pa, 0.0);
+    assert_eq!(
+        warm.gears[0].base_displacement_m,
+        free.gears[0].evaluate(&temps).unwrap().gears[0].base_displacement_m
+    );
+
+    // A bore bonded to a rigid shaft, uniform ΔT:
+    // u(b) = 2(1+ν) b I / ((1+ν) b² + (1−ν) a²), I = α ΔT (b² − a²)/2.
+    let rigid = with(&[(
+        "nodes = [\"gear1.r0\", \"gear1.r1\", \"gear1.r2\"]\nbore_fit = \"free\"",
+        "nodes = [\"gear1.r0\", \"gear1.r1\", \"gear1.r2\"]\nbore_fit = \"rigid\"",
+    )]);
+    let dt = -60.0;
+    let m = uniform(&rigid, 298.15 + dt);
+    let i = 11e-6 * dt * (b * b - a * a) / 2.0;
+    let want = 2.0 * (1.0 + nu) * b * i / ((1.0 + nu) * b * b + (1.0 - nu) * a * a);
+    let got = m.gears[0].base_displacement_m;
+    assert!(
+        (got - want).abs() < 1e-6 * want.abs(),
+        "rigid {got} vs {want}"
+    );
+}
+
+#[test]
+fn alpha_polynomial_in_a_scenario() {
+    // α(T) = 11e-6 /K written as a polynomial gives the constant-α results.
+    let sc = with(&[(
+        "[gear_pair.wheel.material]\nname = \"17-4PH\"\nalpha_per_k = 11.0e-6",
+        "[gear_pair.wheel.material]\nname = \"17-4PH\"\nalpha_polynomial = [11.0e-6, 0.0]",
+    )]);
+    let base = reference();
+    for t in [200.0, 298.15, 350.0] {
+        let a = uniform(&sc, t).backlash_exact_m;
+        let b = uniform(&base, t).backlash_exact_m;
+        assert!((a - b).abs() < 1e-15, "{t}: {a} vs {b}");
+    }
+}

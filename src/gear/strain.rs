@@ -15,6 +15,8 @@ pub enum StrainLaw {
     /// ΔL/L = scale · Σ cᵢ Tⁱ (a published fit, e.g. NIST cryogenic data), shifted so
     /// that ε(T_ref) = 0.
     Polynomial { coefficients: Vec<f64>, scale: f64 },
+    /// α(T) = Σ aᵢ Tⁱ (1/K), integrated exactly: ε = ∫ α dT from T_ref.
+    AlphaPolynomial { coefficients: Vec<f64> },
     /// ΔL/L tabulated against T (linear interpolation, held at the ends), shifted so
     /// that ε(T_ref) = 0.
     Table {
@@ -40,6 +42,18 @@ impl StrainLaw {
                 let p = |t: f64| coefficients.iter().rev().fold(0.0, |acc, c| acc * t + c);
                 scale * (p(t_k) - p(t_ref_k))
             }
+            StrainLaw::AlphaPolynomial { coefficients } => {
+                // antiderivative Σ aᵢ Tⁱ⁺¹/(i+1)
+                let p = |t: f64| {
+                    coefficients
+                        .iter()
+                        .enumerate()
+                        .rev()
+                        .fold(0.0, |acc, (i, c)| acc * t + c / (i + 1) as f64)
+                        * t
+                };
+                p(t_k) - p(t_ref_k)
+            }
             StrainLaw::Table {
                 temperature_k,
                 strain,
@@ -58,6 +72,9 @@ impl StrainLaw {
                 alpha_per_k,
                 dalpha_dt_per_k2,
             } => alpha_per_k + dalpha_dt_per_k2 * (t_k - t_ref_k),
+            StrainLaw::AlphaPolynomial { coefficients } => {
+                coefficients.iter().rev().fold(0.0, |acc, c| acc * t_k + c)
+            }
             _ => {
                 let h = 0.01;
                 (self.strain(t_k + h, t_ref_k) - self.strain(t_k - h, t_ref_k)) / (2.0 * h)
@@ -103,6 +120,17 @@ mod tests {
             alpha_per_k: 11e-6,
             dalpha_dt_per_k2: 2e-8,
         };
+        // The same α(T) as a polynomial in T: α = (11e-6 − 2e-8 T_ref) + 2e-8 T.
+        let ap = StrainLaw::AlphaPolynomial {
+            coefficients: vec![11e-6 - 2e-8 * t_ref, 2e-8],
+        };
+        for t in [150.0, 250.0, 298.15, 400.0] {
+            assert!(
+                (ap.strain(t, t_ref) - q.strain(t, t_ref)).abs() < 1e-15,
+                "{t}"
+            );
+            assert!((ap.alpha_at(t, t_ref) - q.alpha_at(t, t_ref)).abs() < 1e-11);
+        }
         // ε = ∫ α(T) dT: 11e-6·(−100) + ½·2e-8·100²
         assert!((q.strain(t_ref - 100.0, t_ref) - (-1.1e-3 + 1e-4)).abs() < 1e-15);
     }

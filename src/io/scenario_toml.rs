@@ -135,6 +135,7 @@ struct RawCenterDistance {
     alpha_per_k: Option<f64>,
     dalpha_dt_per_k2: Option<f64>,
     strain_polynomial: Option<RawPolynomial>,
+    alpha_polynomial: Option<Vec<f64>>,
     strain_table: Option<RawStrainTable>,
 }
 
@@ -175,6 +176,7 @@ struct RawMaterial {
     alpha_per_k: Option<f64>,
     dalpha_dt_per_k2: Option<f64>,
     strain_polynomial: Option<RawPolynomial>,
+    alpha_polynomial: Option<Vec<f64>>,
     strain_table: Option<RawStrainTable>,
     youngs_modulus_pa: f64,
     poisson: f64,
@@ -1108,14 +1110,36 @@ fn check_name(
     Ok(())
 }
 
-fn strain_law(
-    cx: &Cx<'_>,
-    p: &KeyPath,
+/// The keys that give a thermal strain law (exactly one form).
+struct StrainKeys {
     alpha: Option<f64>,
     dalpha: Option<f64>,
     poly: Option<RawPolynomial>,
+    alpha_poly: Option<Vec<f64>>,
     table: Option<RawStrainTable>,
-) -> Result<StrainLaw, ScenarioError> {
+}
+
+fn strain_law(cx: &Cx<'_>, p: &KeyPath, keys: StrainKeys) -> Result<StrainLaw, ScenarioError> {
+    let StrainKeys {
+        alpha,
+        dalpha,
+        poly,
+        alpha_poly,
+        table,
+    } = keys;
+    if let Some(coefficients) = alpha_poly {
+        if alpha.is_some() || dalpha.is_some() || poly.is_some() || table.is_some() {
+            return Err(cx.err(p, "give only one thermal strain law"));
+        }
+        let ap = p.key("alpha_polynomial");
+        if coefficients.is_empty() {
+            return Err(cx.err(&ap, "must not be empty"));
+        }
+        for (k, c) in coefficients.iter().enumerate() {
+            cx.finite(&ap.at(k), *c)?;
+        }
+        return Ok(StrainLaw::AlphaPolynomial { coefficients });
+    }
     let alpha_ok = |v: f64, key: &'static str| {
         cx.within(&p.key(key), v, -1e-3, 1e-3, "expansion coefficient (1/K)")
     };
@@ -1153,7 +1177,7 @@ fn strain_law(
         }
         _ => Err(cx.err(
             p,
-            "give the thermal strain as `alpha_per_k` (optionally with `dalpha_dt_per_k2`), or `strain_polynomial`, or `strain_table`",
+            "give the thermal strain as `alpha_per_k` (optionally with `dalpha_dt_per_k2`), or `alpha_polynomial`, or `strain_polynomial`, or `strain_table`",
         )),
     }
 }
@@ -1178,10 +1202,13 @@ fn disc_material(cx: &Cx<'_>, p: &KeyPath, m: RawMaterial) -> Result<DiscMateria
         strain: strain_law(
             cx,
             p,
-            m.alpha_per_k,
-            m.dalpha_dt_per_k2,
-            m.strain_polynomial,
-            m.strain_table,
+            StrainKeys {
+                alpha: m.alpha_per_k,
+                dalpha: m.dalpha_dt_per_k2,
+                poly: m.strain_polynomial,
+                alpha_poly: m.alpha_polynomial,
+                table: m.strain_table,
+            },
         )?,
         youngs_modulus_pa: youngs,
         poisson,
@@ -1412,10 +1439,13 @@ fn gear_pair(
                         strain: strain_law(
                             cx,
                             &cp,
-                            c.alpha_per_k,
-                            c.dalpha_dt_per_k2,
-                            c.strain_polynomial,
-                            c.strain_table,
+                            StrainKeys {
+                                alpha: c.alpha_per_k,
+                                dalpha: c.dalpha_dt_per_k2,
+                                poly: c.strain_polynomial,
+                                alpha_poly: c.alpha_polynomial,
+                                table: c.strain_table,
+                            },
                         )?,
                     }
                 }
