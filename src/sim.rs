@@ -231,6 +231,8 @@ pub struct RunStats {
     pub steps: u64,
     pub rejected_steps: u64,
     pub newton_iterations: u64,
+    /// Factorisations of the iteration matrix (the rest reuse one).
+    pub factorizations: u64,
     pub eclipse_time_s: f64,
     pub eclipse_entries: u64,
     pub heater_switches: u64,
@@ -506,6 +508,7 @@ pub fn simulate<O: Observer>(
         };
     }
     stats.t_end_s = t;
+    stats.factorizations = stepper.factorizations;
     stats.energy.stored_j = net
         .nodes
         .iter()

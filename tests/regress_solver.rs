@@ -32,6 +32,13 @@ fn regress_reference_solver_cost() {
         "{newton} Newton iterations per step (was 3.9)"
     );
     assert_eq!(stats.eclipse_entries, 6);
+    // The iteration matrix is reused across many steps (was 214 for 516 steps).
+    assert!(
+        stats.factorizations * 2 < stats.steps,
+        "{} factorisations for {} steps",
+        stats.factorizations,
+        stats.steps
+    );
     // The balance closes to the Newton tolerance (1 % of the step tolerance).
     assert!(
         stats.energy.relative_error() < 1e-5,

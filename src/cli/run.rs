@@ -286,9 +286,10 @@ fn format_summary(
     );
     outln!(
         o,
-        "\nsolver: tr-bdf2, {} steps ({} rejected), {:.2} Newton iterations/step, {} eclipse entries, {} heater switches",
+        "\nsolver: tr-bdf2, {} steps ({} rejected, {} factorisations), {:.2} Newton iterations/step, {} eclipse entries, {} heater switches",
         stats.steps,
         stats.rejected_steps,
+        stats.factorizations,
         stats.newton_iterations as f64 / stats.steps.max(1) as f64,
         stats.eclipse_entries,
         stats.heater_switches

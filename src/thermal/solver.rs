@@ -91,49 +91,6 @@ impl NewtonMonitor {
     }
 }
 
-/// One implicit stage: solve C y − D h f(y) = k for y by simplified Newton iterations
-/// with the factorised iteration matrix C − D h J.
-struct Stage<'a> {
-    compiled: &'a Compiled,
-    cap: &'a [f64],
-    dh: f64,
-}
-
-impl Stage<'_> {
-    /// Iterates from the guess in `y`; false when Newton does not converge.
-    #[allow(clippy::too_many_arguments)]
-    fn solve(
-        &self,
-        lu: &mut Lu,
-        y: &mut [f64],
-        k: &[f64],
-        f: &mut [f64],
-        r: &mut [f64],
-        monitor: &mut NewtonMonitor,
-        iterations: &mut usize,
-    ) -> bool {
-        for it in 0..NEWTON_MAX_ITER {
-            *iterations += 1;
-            self.compiled.heat_w(y, f, None);
-            for i in 0..y.len() {
-                r[i] = k[i] - (self.cap[i] * y[i] - self.dh * f[i]);
-            }
-            lu.solve(r);
-            let mut dmax = 0.0f64;
-            for i in 0..y.len() {
-                y[i] += r[i];
-                dmax = dmax.max(r[i].abs());
-            }
-            match monitor.update(it, dmax) {
-                Newton::Converged => return true,
-                Newton::Diverged => return false,
-                Newton::Continue => {}
-            }
-        }
-        false
-    }
-}
-
 /// One accepted or rejected trial step, with everything observers and the energy
 /// bookkeeping need. Buffers are owned by the stepper and reused.
 #[derive(Debug, Clone, Default)]
@@ -233,23 +190,21 @@ impl Stepper {
     ) -> Result<(), StepFailure> {
         let newton_tol_k = self.newton_tol_k;
         let n = self.compiled.n;
-        let cap = &self.cap;
-        let d = &mut self.data;
-        d.t0_s = t0_s;
-        d.h_s = h_s;
-        d.newton_iterations = 0;
-        d.temps0_k.copy_from_slice(temps0_k);
+        self.data.t0_s = t0_s;
+        self.data.h_s = h_s;
+        self.data.newton_iterations = 0;
+        self.data.temps0_k.copy_from_slice(temps0_k);
 
         // f0 and the iteration matrix W = C − D h J(T0).
         if self.start_is_last_end {
             // Nothing changed since the accepted step that ended here: f0 is its f1.
             std::mem::swap(&mut self.f0, &mut self.f);
-            let [first, _, last] = &mut d.flows;
+            let [first, _, last] = &mut self.data.flows;
             std::mem::swap(first, last);
         } else {
             self.compiled.set_time(model, &env_at(t0_s), sw);
             self.compiled
-                .heat_w(temps0_k, &mut self.f0, Some(&mut d.flows[0]));
+                .heat_w(temps0_k, &mut self.f0, Some(&mut self.data.flows[0]));
         }
         self.start_is_last_end = false;
         // The iteration matrix is kept while the step size is unchanged and Newton
@@ -265,7 +220,7 @@ impl Stepper {
                 for j in 0..n {
                     w[i * n + j] = -D * h_s * self.jac[i * n + j];
                 }
-                w[i * n + i] += cap[i];
+                w[i * n + i] += self.cap[i];
             }
             self.factorizations += 1;
             if self.lu.factor().is_err() {
@@ -275,59 +230,32 @@ impl Stepper {
             self.lu_h = h_s;
         }
         for i in 0..n {
-            d.rates0_k_per_s[i] = self.f0[i] / cap[i];
+            self.data.rates0_k_per_s[i] = self.f0[i] / self.cap[i];
         }
 
         // Stage 1: trapezoidal rule to t0 + γh: C yγ − D h f(yγ) = C y0 + D h f0.
         self.compiled
             .set_time(model, &env_at(t0_s + GAMMA * h_s), sw);
         for i in 0..n {
-            self.yg[i] = temps0_k[i] + GAMMA * h_s * d.rates0_k_per_s[i];
-            self.k[i] = cap[i] * temps0_k[i] + D * h_s * self.f0[i];
+            self.yg[i] = temps0_k[i] + GAMMA * h_s * self.data.rates0_k_per_s[i];
+            self.k[i] = self.cap[i] * temps0_k[i] + D * h_s * self.f0[i];
         }
         let mut monitor = NewtonMonitor::new(newton_tol_k, self.theta);
-        let stage = Stage {
-            compiled: &self.compiled,
-            cap,
-            dh: D * h_s,
-        };
-        if !stage.solve(
-            &mut self.lu,
-            &mut self.yg,
-            &self.k,
-            &mut self.f,
-            &mut self.r,
-            &mut monitor,
-            &mut d.newton_iterations,
-        ) {
+        if !self.newton(StageTarget::Gamma, D * h_s, &mut monitor) {
             self.jac_stale = true;
             return Err(StepFailure::NewtonDiverged);
         }
         self.compiled
-            .heat_w(&self.yg, &mut self.fg, Some(&mut d.flows[1]));
+            .heat_w(&self.yg, &mut self.fg, Some(&mut self.data.flows[1]));
 
         // Stage 2: BDF2 to t0 + h: C y1 − D h f(y1) = C (A yγ − B y0).
         self.compiled.set_time(model, &env_at(t0_s + h_s), sw);
-        let y1 = &mut d.temps1_k;
         for i in 0..n {
-            y1[i] = temps0_k[i] + (self.yg[i] - temps0_k[i]) / GAMMA;
-            self.k[i] = cap[i] * (A * self.yg[i] - B * temps0_k[i]);
+            self.data.temps1_k[i] = temps0_k[i] + (self.yg[i] - temps0_k[i]) / GAMMA;
+            self.k[i] = self.cap[i] * (A * self.yg[i] - B * temps0_k[i]);
         }
         monitor = NewtonMonitor::new(newton_tol_k, monitor.theta);
-        let stage = Stage {
-            compiled: &self.compiled,
-            cap,
-            dh: D * h_s,
-        };
-        if !stage.solve(
-            &mut self.lu,
-            y1,
-            &self.k,
-            &mut self.f,
-            &mut self.r,
-            &mut monitor,
-            &mut d.newton_iterations,
-        ) {
+        if !self.newton(StageTarget::End, D * h_s, &mut monitor) {
             self.jac_stale = true;
             return Err(StepFailure::NewtonDiverged);
         }
@@ -335,21 +263,30 @@ impl Stepper {
         if self.theta > JACOBIAN_REFRESH_THETA {
             self.jac_stale = true;
         }
-        if y1.iter().any(|&t| !(t.is_finite() && t > 0.0)) {
+        if self
+            .data
+            .temps1_k
+            .iter()
+            .any(|&t| !(t.is_finite() && t > 0.0))
+        {
             return Err(StepFailure::NonPhysical);
         }
-        self.compiled.heat_w(y1, &mut self.f, Some(&mut d.flows[2]));
+        self.compiled.heat_w(
+            &self.data.temps1_k,
+            &mut self.f,
+            Some(&mut self.data.flows[2]),
+        );
 
         // Error estimate, filtered: e = W⁻¹ C (ERR_CONST · 2h ((F1 − Fγ)/(1−γ) − (Fγ − F0)/γ)).
         for i in 0..n {
-            let f1 = self.f[i] / cap[i];
-            let fg = self.fg[i] / cap[i];
-            let f0 = d.rates0_k_per_s[i];
-            d.rates1_k_per_s[i] = f1;
+            let f1 = self.f[i] / self.cap[i];
+            let fg = self.fg[i] / self.cap[i];
+            let f0 = self.data.rates0_k_per_s[i];
+            self.data.rates1_k_per_s[i] = f1;
             let raw = ERR_CONST * 2.0 * h_s * ((f1 - fg) / (1.0 - GAMMA) - (fg - f0) / GAMMA);
-            d.error_k[i] = cap[i] * raw;
+            self.data.error_k[i] = self.cap[i] * raw;
         }
-        self.lu.solve(&mut d.error_k);
+        self.lu.solve(&mut self.data.error_k);
         Ok(())
     }
 }
@@ -360,6 +297,46 @@ impl Stepper {
     /// not call this after a rejected step or an event.
     pub fn continue_from_last_end(&mut self) {
         self.start_is_last_end = true;
+    }
+}
+
+/// Which stage value a Newton solve updates.
+#[derive(Debug, Clone, Copy)]
+enum StageTarget {
+    /// y at t0 + γh (`Stepper::yg`).
+    Gamma,
+    /// y at t0 + h (`StepData::temps1_k`).
+    End,
+}
+
+impl Stepper {
+    /// One implicit stage: solves C y − dh f(y) = k (k in `self.k`) for y, from the
+    /// guess already in place, by simplified Newton iterations with the factorised
+    /// iteration matrix C − dh J. False when Newton does not converge.
+    fn newton(&mut self, target: StageTarget, dh: f64, monitor: &mut NewtonMonitor) -> bool {
+        let y = match target {
+            StageTarget::Gamma => &mut self.yg,
+            StageTarget::End => &mut self.data.temps1_k,
+        };
+        for it in 0..NEWTON_MAX_ITER {
+            self.data.newton_iterations += 1;
+            self.compiled.heat_w(y, &mut self.f, None);
+            for i in 0..y.len() {
+                self.r[i] = self.k[i] - (self.cap[i] * y[i] - dh * self.f[i]);
+            }
+            self.lu.solve(&mut self.r);
+            let mut dmax = 0.0f64;
+            for i in 0..y.len() {
+                y[i] += self.r[i];
+                dmax = dmax.max(self.r[i].abs());
+            }
+            match monitor.update(it, dmax) {
+                Newton::Converged => return true,
+                Newton::Diverged => return false,
+                Newton::Continue => {}
+            }
+        }
+        false
     }
 }
 
