@@ -329,8 +329,10 @@ pub fn simulate<O: Observer>(
     // A load that switches (eclipse, breakpoint, heater) breaks the smoothness the
     // controller relies on; the first step after one starts from the size that worked
     // after the previous one.
-    let mut h_after_event = settings.max_step_s / 30.0;
-    let mut just_after_event = false;
+    // One memory per kind of event: entering eclipse, leaving it, a heater switching,
+    // anything else (table point, mode edge, load kink) disturb the solution differently.
+    let mut h_after_event = [settings.max_step_s / 30.0; 4];
+    let mut event_class: Option<usize> = None;
     while t < t_end_s {
         if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
             stats.interrupted = true;
@@ -426,8 +428,13 @@ pub fn simulate<O: Observer>(
         t = t_new;
         y.copy_from_slice(&stepper.data.temps1_k);
 
-        let event_happened_before_step = just_after_event;
-        just_after_event = false;
+        let class_before_step = event_class.take();
+        let mark = |class: usize, slot: &mut Option<usize>| {
+            // the class whose restart step is shortest wins when events coincide
+            if slot.is_none_or(|c| h_after_event[class] < h_after_event[c]) {
+                *slot = Some(class);
+            }
+        };
 
         // Events at the new time.
         if lands && t_event == t_shadow {
@@ -441,15 +448,15 @@ pub fn simulate<O: Observer>(
             };
             emit(observer, t, kind)?;
             next_shadow = env.next_shadow_crossing(t, t_end_s);
-            just_after_event = true;
+            mark(if entering { 0 } else { 1 }, &mut event_class);
         }
         if t >= t_kink {
             t_kink = next_kink(t);
-            just_after_event = true;
+            mark(3, &mut event_class);
         }
         while breakpoints.get(next_bp).is_some_and(|&b| b <= t) {
             next_bp += 1;
-            just_after_event = true;
+            mark(3, &mut event_class);
         }
         for (k, m) in model.modes.iter().enumerate() {
             let now = m.active(t + 1e-9 * (1.0 + t));
@@ -465,7 +472,7 @@ pub fn simulate<O: Observer>(
         if let Some(k) = switched {
             heaters_on[k] = !heaters_on[k];
             stats.heater_switches += 1;
-            just_after_event = true;
+            mark(2, &mut event_class);
             let kind = if heaters_on[k] {
                 EventKind::HeaterOn(k)
             } else {
@@ -474,7 +481,7 @@ pub fn simulate<O: Observer>(
             emit(observer, t, kind)?;
         }
 
-        if !just_after_event {
+        if event_class.is_none() {
             stepper.continue_from_last_end();
         }
 
@@ -490,18 +497,17 @@ pub fn simulate<O: Observer>(
             // reuses its factorised iteration matrix.
             let fac = if (1.0..1.2).contains(&fac) { 1.0 } else { fac };
             let proposed = h_try * fac.clamp(0.2, 3.0);
-            if event_happened_before_step {
-                h_after_event = proposed;
+            if let Some(c) = class_before_step {
+                h_after_event[c] = proposed;
             }
             let next = if lands || switched.is_some() {
                 proposed.max(h)
             } else {
                 proposed
             };
-            if just_after_event {
-                next.min(h_after_event)
-            } else {
-                next
+            match event_class {
+                Some(c) => next.min(h_after_event[c]),
+                None => next,
             }
         } else {
             settings.max_step_s
