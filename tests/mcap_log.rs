@@ -246,3 +246,48 @@ fn a_killed_run_leaves_no_file_under_the_final_name() {
     assert!(!csv.exists(), "a killed run left {}", csv.display());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn scene_view_is_optional_and_decodes() {
+    let dir = tmpdir("scene");
+    let log = dir.join("s.mcap");
+    run_ok(&[
+        "run",
+        "--quiet",
+        "--orbits",
+        "1",
+        "--scene",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    let bytes = std::fs::read(&log).unwrap();
+    let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+    let scene = summary
+        .channels
+        .values()
+        .find(|c| c.topic == "/gears/mesh/scene")
+        .expect("scene channel");
+    assert_eq!(scene.schema.as_ref().unwrap().name, "foxglove.SceneUpdate");
+    let stats = summary.stats.unwrap();
+    let n = stats.channel_message_counts[&scene.id];
+    assert_eq!(n as usize, (5676.978f64 / 300.0).floor() as usize + 1);
+    // The series are unchanged by it, and without --scene there is no such channel.
+    assert!(
+        read_log(&log)
+            .unwrap()
+            .column("/gears/mesh.backlash_exact_um")
+            .is_some()
+    );
+    let plain = dir.join("p.mcap");
+    run_ok(&[
+        "run",
+        "--quiet",
+        "--orbits",
+        "1",
+        "--out",
+        plain.to_str().unwrap(),
+    ]);
+    let t = read_log(&plain).unwrap();
+    assert!(!t.channel_metadata.contains_key("/gears/mesh/scene"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -32,8 +32,13 @@ pub struct RunArgs {
     #[arg(long)]
     csv: Option<PathBuf>,
     /// Do not write an MCAP log.
-    #[arg(long, conflicts_with_all = ["out", "log_every"])]
+    #[arg(long, conflicts_with_all = ["out", "log_every", "scene"])]
     no_log: bool,
+    /// Add a 3-D view of the gear pairs to the log (foxglove.SceneUpdate on
+    /// /gears/<pair>/scene, tooth outlines coloured by rim temperature), one update
+    /// every 300 s of simulated time.
+    #[arg(long)]
+    scene: bool,
     /// Log cadence: every N steps (e.g. 10) or every interval of simulated time (e.g.
     /// 60s). Default: every step.
     #[arg(long, value_name = "N|SECONDSs")]
@@ -72,7 +77,7 @@ pub fn run(a: RunArgs) -> Result<()> {
     {
         anyhow::bail!("--csv and the log are the same file: {}", c.display());
     }
-    let mut log = match &log_path {
+    let log = match &log_path {
         Some(p) => Some(McapLog::create(
             p,
             Provenance {
@@ -88,6 +93,10 @@ pub fn run(a: RunArgs) -> Result<()> {
             a.log_every.unwrap_or(LogCadence::Steps(1)),
         )?),
         None => None,
+    };
+    let mut log = match log {
+        Some(l) if a.scene => Some(l.with_scene(300.0)),
+        other => other,
     };
     let csv = match &a.csv {
         Some(p) => Some(CsvExport::create(p, sc.run.output_interval_s)?),

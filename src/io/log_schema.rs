@@ -225,3 +225,164 @@ pub fn decode_type(descriptor_set: &[u8], full_name: &str) -> Option<DecodedType
     }
     build(&all, full_name, 0)
 }
+
+/// A field of a foxglove schema: (name, number, type, repeated, message type).
+type FoxField = (&'static str, i32, Type, bool, Option<&'static str>);
+
+fn fox_message(name: &str, fields: &[FoxField]) -> DescriptorProto {
+    DescriptorProto {
+        name: Some(name.into()),
+        field: fields
+            .iter()
+            .map(|&(n, num, ty, repeated, type_name)| FieldDescriptorProto {
+                name: Some(n.into()),
+                number: Some(num),
+                label: Some(if repeated {
+                    Label::Repeated
+                } else {
+                    Label::Optional
+                } as i32),
+                r#type: Some(ty as i32),
+                type_name: type_name.map(Into::into),
+                json_name: Some(n.into()),
+                ..Default::default()
+            })
+            .collect(),
+        ..Default::default()
+    }
+}
+
+/// `foxglove.SceneUpdate` as far as line primitives go (the field numbers of
+/// foxglove's schemas; fields this crate does not write are left out, which protobuf
+/// decoders ignore).
+pub fn foxglove_scene_descriptor_set() -> Vec<u8> {
+    use Type::{Bool, Double, Enum, Int32, Int64, Message, String as Str};
+    let file = |name: &str, package: &str, deps: &[&str], messages: Vec<DescriptorProto>| {
+        FileDescriptorProto {
+            name: Some(name.into()),
+            package: Some(package.into()),
+            dependency: deps.iter().map(|d| (*d).into()).collect(),
+            message_type: messages,
+            syntax: Some("proto3".into()),
+            ..Default::default()
+        }
+    };
+    let google = file(
+        "google/protobuf/time.proto",
+        "google.protobuf",
+        &[],
+        vec![
+            fox_message(
+                "Timestamp",
+                &[
+                    ("seconds", 1, Int64, false, None),
+                    ("nanos", 2, Int32, false, None),
+                ],
+            ),
+            fox_message(
+                "Duration",
+                &[
+                    ("seconds", 1, Int64, false, None),
+                    ("nanos", 2, Int32, false, None),
+                ],
+            ),
+        ],
+    );
+    let xyz = |extra: Option<FoxField>| {
+        let mut v = vec![
+            ("x", 1, Double, false, None),
+            ("y", 2, Double, false, None),
+            ("z", 3, Double, false, None),
+        ];
+        v.extend(extra);
+        v
+    };
+    let mut line = fox_message(
+        "LinePrimitive",
+        &[
+            ("type", 1, Enum, false, Some(".foxglove.LinePrimitive.Type")),
+            ("pose", 2, Message, false, Some(".foxglove.Pose")),
+            ("thickness", 3, Double, false, None),
+            ("scale_invariant", 4, Bool, false, None),
+            ("points", 5, Message, true, Some(".foxglove.Point3")),
+            ("color", 6, Message, false, Some(".foxglove.Color")),
+        ],
+    );
+    line.enum_type.push(EnumDescriptorProto {
+        name: Some("Type".into()),
+        value: ["LINE_STRIP", "LINE_LOOP", "LINE_LIST"]
+            .iter()
+            .enumerate()
+            .map(|(i, n)| EnumValueDescriptorProto {
+                name: Some((*n).into()),
+                number: Some(i as i32),
+                ..Default::default()
+            })
+            .collect(),
+        ..Default::default()
+    });
+    let foxglove = file(
+        "foxglove/SceneUpdate.proto",
+        "foxglove",
+        &["google/protobuf/time.proto"],
+        vec![
+            fox_message("Vector3", &xyz(None)),
+            fox_message("Point3", &xyz(None)),
+            fox_message("Quaternion", &xyz(Some(("w", 4, Double, false, None)))),
+            fox_message(
+                "Color",
+                &[
+                    ("r", 1, Double, false, None),
+                    ("g", 2, Double, false, None),
+                    ("b", 3, Double, false, None),
+                    ("a", 4, Double, false, None),
+                ],
+            ),
+            fox_message(
+                "Pose",
+                &[
+                    ("position", 1, Message, false, Some(".foxglove.Vector3")),
+                    (
+                        "orientation",
+                        2,
+                        Message,
+                        false,
+                        Some(".foxglove.Quaternion"),
+                    ),
+                ],
+            ),
+            line,
+            fox_message(
+                "SceneEntity",
+                &[
+                    (
+                        "timestamp",
+                        1,
+                        Message,
+                        false,
+                        Some(".google.protobuf.Timestamp"),
+                    ),
+                    ("frame_id", 2, Str, false, None),
+                    ("id", 3, Str, false, None),
+                    (
+                        "lifetime",
+                        4,
+                        Message,
+                        false,
+                        Some(".google.protobuf.Duration"),
+                    ),
+                    ("frame_locked", 5, Bool, false, None),
+                    ("lines", 11, Message, true, Some(".foxglove.LinePrimitive")),
+                ],
+            ),
+            fox_message(
+                "SceneUpdate",
+                &[("entities", 2, Message, true, Some(".foxglove.SceneEntity"))],
+            ),
+        ],
+    );
+    FileDescriptorSet {
+        file: vec![google, foxglove],
+    }
+    .encode_to_vec()
+}

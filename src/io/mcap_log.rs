@@ -30,9 +30,11 @@ use sha2::{Digest, Sha256};
 
 use super::atomic::{AtomicFile, OutputError};
 use super::log_schema::{
-    Kind, MessageType, descriptor_set, foxglove_log_descriptor_set, identifier,
+    Kind, MessageType, descriptor_set, foxglove_log_descriptor_set, foxglove_scene_descriptor_set,
+    identifier,
 };
 use super::protobuf::Encoder;
+use super::scene;
 use crate::gear::{GearPair, MeshState};
 use crate::sim::{
     Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan,
@@ -84,7 +86,15 @@ struct Channels {
     heat: u16,
     orbit: u16,
     gears: Vec<u16>,
+    scenes: Vec<u16>,
     log: u16,
+}
+
+/// The optional 3-D view (`--scene`).
+struct SceneState {
+    interval_s: f64,
+    next_s: f64,
+    outlines: Vec<[scene::PlacedOutline; 2]>,
 }
 
 /// Owns the MCAP writer and everything needed to turn a sample (time, temperatures,
@@ -105,6 +115,7 @@ struct LogWriter {
     heater_power_w: Vec<f64>,
     heaters_on: Vec<bool>,
     modes_active: Vec<bool>,
+    scene: Option<SceneState>,
 }
 
 /// Layout of one sample in a batch: t, sunlit, temperatures, heater states, mode states.
@@ -168,6 +179,7 @@ pub struct McapLog {
     next_sample: u64,
     temps: Vec<f64>,
     names: Names,
+    scene_interval_s: Option<f64>,
 }
 
 fn ns(t_s: f64) -> u64 {
@@ -279,6 +291,38 @@ impl LogWriter {
             encode_mesh(&mut self.enc, &self.gears[k], &m, temps);
             self.write_encoded(self.ch.gears[k], t_s)?;
         }
+        // The 3-D view, at its own interval.
+        if let Some(sc) = &mut self.scene
+            && t_s >= sc.next_s - 1e-9
+        {
+            while sc.next_s <= t_s + 1e-9 {
+                sc.next_s += sc.interval_s;
+            }
+            for k in 0..self.gears.len() {
+                let pair = &self.gears[k];
+                let rim = |g: usize| temps[*pair.gears[g].nodes.last().expect("nodes")];
+                self.enc.clear();
+                scene::encode_scene(
+                    &mut self.enc,
+                    &identifier(&pair.name),
+                    &sc.outlines[k],
+                    [rim(0), rim(1)],
+                    t_s,
+                    ["pinion", "wheel"],
+                );
+                let channel = self.ch.scenes[k];
+                self.seq += 1;
+                let header = mcap::records::MessageHeader {
+                    channel_id: channel,
+                    sequence: self.seq,
+                    log_time: ns(t_s),
+                    publish_time: ns(t_s),
+                };
+                self.writer
+                    .write_to_known_channel(&header, &self.enc.buf)
+                    .map_err(|e| out_err(&self.path, e))?;
+            }
+        }
         Ok(())
     }
 
@@ -332,7 +376,15 @@ impl McapLog {
             next_sample: 0,
             temps: vec![],
             names: Names::default(),
+            scene_interval_s: None,
         })
+    }
+
+    /// Adds the 3-D view of the gear pairs (`foxglove.SceneUpdate` on
+    /// `/gears/<pair>/scene`), one update every `interval_s` of simulated time.
+    pub fn with_scene(mut self, interval_s: f64) -> McapLog {
+        self.scene_interval_s = Some(interval_s);
+        self
     }
 
     /// Queues a sample: time, sunlit flag, `self.temps`, switch states.
@@ -620,6 +672,22 @@ impl Observer for McapLog {
                 )?);
             }
         }
+        let mut scenes = Vec::new();
+        if self.scene_interval_s.is_some() && !r.gears.is_empty() {
+            let s = w.add_schema(
+                "foxglove.SceneUpdate",
+                "protobuf",
+                &foxglove_scene_descriptor_set(),
+            )?;
+            for g in r.gears {
+                scenes.push(w.add_channel(
+                    s,
+                    &format!("/gears/{}/scene", identifier(&g.name)),
+                    "protobuf",
+                    &empty,
+                )?);
+            }
+        }
         let s = w.add_schema("foxglove.Log", "protobuf", &foxglove_log_descriptor_set())?;
         let log = w.add_channel(s, "/events", "protobuf", &empty)?;
 
@@ -659,6 +727,7 @@ impl Observer for McapLog {
             heat,
             orbit,
             gears,
+            scenes,
             log,
         };
         let mut lw = LogWriter {
@@ -675,6 +744,14 @@ impl Observer for McapLog {
             heater_power_w: net.heaters.iter().map(|h| h.power_w).collect(),
             heaters_on: vec![false; net.heaters.len()],
             modes_active: vec![false; model.modes.len()],
+            scene: self
+                .scene_interval_s
+                .filter(|_| !r.gears.is_empty())
+                .map(|interval_s| SceneState {
+                    interval_s,
+                    next_s: 0.0,
+                    outlines: r.gears.iter().map(scene::pair_outlines_m).collect(),
+                }),
         };
         self.names = Names {
             pairs: r.gears.iter().map(|g| g.name.clone()).collect(),

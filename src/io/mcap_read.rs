@@ -112,7 +112,7 @@ fn flatten(
     Ok(())
 }
 
-/// Reads every protobuf channel of the log at `path` (foxglove.Log events skipped).
+/// Reads every protobuf channel of the log at `path` (foxglove.* channels skipped).
 pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|source| LogReadError::Io {
@@ -156,7 +156,8 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
         let Some(schema) = ch.schema.as_ref() else {
             continue;
         };
-        if ch.message_encoding != "protobuf" || schema.name == "foxglove.Log" {
+        // foxglove.* messages (events, the 3-D view) are not series.
+        if ch.message_encoding != "protobuf" || schema.name.starts_with("foxglove.") {
             continue;
         }
         let t = types

@@ -7,3 +7,4 @@ pub mod mcap_log;
 pub mod mcap_read;
 pub mod protobuf;
 pub mod scenario_toml;
+pub mod scene;

@@ -6,8 +6,8 @@
 #[derive(Debug, Default, Clone)]
 pub struct Encoder {
     pub buf: Vec<u8>,
-    /// Reused for nested messages, whose length must precede them.
-    nested: Vec<u8>,
+    /// Buffers reused for nested messages, whose length must precede them.
+    pool: Vec<Vec<u8>>,
 }
 
 const VARINT: u32 = 0;
@@ -68,18 +68,20 @@ impl Encoder {
         }
     }
 
-    /// A nested message written by `f` (not itself nesting further messages).
+    /// A nested message written by `f` (which may nest further).
     pub fn message(&mut self, field: u32, f: impl FnOnce(&mut Encoder)) {
+        let mut buf = self.pool.pop().unwrap_or_default();
+        buf.clear();
         let mut inner = Encoder {
-            buf: std::mem::take(&mut self.nested),
-            nested: Vec::new(),
+            buf,
+            pool: std::mem::take(&mut self.pool),
         };
-        inner.buf.clear();
         f(&mut inner);
+        self.pool = inner.pool;
         self.key(field, LEN);
         self.varint(inner.buf.len() as u64);
         self.buf.extend_from_slice(&inner.buf);
-        self.nested = inner.buf;
+        self.pool.push(inner.buf);
     }
 }
 
@@ -151,7 +153,10 @@ mod tests {
         e.int64(3, -2);
         e.string(4, "eclipse entry");
         e.packed_doubles(5, [1.0, -2.5].into_iter());
-        e.message(6, |m| m.double(1, 7.0));
+        e.message(6, |m| {
+            m.double(1, 7.0);
+            m.message(2, |n| n.uint64(1, 5));
+        });
         e.fixed32(7, 9);
         let f = fields(&e.buf).unwrap();
         assert_eq!(f[0], (1, Wire::Fixed64(293.15f64.to_le_bytes())));
@@ -160,10 +165,12 @@ mod tests {
         assert_eq!(f[3], (4, Wire::Len(b"eclipse entry")));
         assert!(matches!(f[4], (5, Wire::Len(b)) if b.len() == 16));
         let Wire::Len(inner) = f[5].1 else { panic!() };
-        assert_eq!(
-            fields(inner).unwrap(),
-            vec![(1, Wire::Fixed64(7.0f64.to_le_bytes()))]
-        );
+        let inner = fields(inner).unwrap();
+        assert_eq!(inner[0], (1, Wire::Fixed64(7.0f64.to_le_bytes())));
+        let Wire::Len(deeper) = inner[1].1 else {
+            panic!()
+        };
+        assert_eq!(fields(deeper).unwrap(), vec![(1, Wire::Varint(5))]);
         assert_eq!(f[6], (7, Wire::Fixed32(9u32.to_le_bytes())));
         assert!(fields(&[0x0a, 0x05, 1]).is_err());
     }

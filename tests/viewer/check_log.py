@@ -35,6 +35,7 @@ def foxglove_side(path, allow_interrupted):
     expected = {}            # topic -> [field]
     counts = defaultdict(int)
     logs = set()
+    scenes = set()
     with open(path, "rb") as f:
         r = make_reader(f, decoder_factories=[DecoderFactory()])
         s = r.get_summary()
@@ -63,8 +64,10 @@ def foxglove_side(path, allow_interrupted):
                 if not nodes:
                     fail("/thermal/temperature has no node:<field> metadata")
                 expected[ch.topic] = sorted(nodes)
-            elif ch.topic.startswith("/gears/"):
+            elif sc.name == "orbitlash.GearMesh":
                 expected[ch.topic] = GEAR_FIELDS
+            elif sc.name == "foxglove.SceneUpdate":
+                scenes.add(ch.topic)
         print(f"[foxglove] {len(s.channels)} channels, {s.statistics.message_count} messages; "
               f"scenario {prov.get('scenario_name')!r} sha256 {prov.get('scenario_sha256', '')[:12]}…, run_end {end!r}")
         values = defaultdict(lambda: defaultdict(list))
@@ -76,6 +79,8 @@ def foxglove_side(path, allow_interrupted):
             last[ch.topic] = msg.log_time
             for field in expected.get(ch.topic, []):
                 values[ch.topic][field].append(getattr(dec, field))
+        for topic in scenes:
+            print(f"[foxglove] {topic}: {counts[topic]} foxglove.SceneUpdate messages (3-D view)")
         if sum(counts.values()) != s.statistics.message_count:
             fail("decoded message count differs from the summary statistics")
         for topic, fields in expected.items():
