@@ -292,36 +292,29 @@ impl LogWriter {
             self.write_encoded(self.ch.gears[k], t_s)?;
         }
         // The 3-D view, at its own interval.
-        if let Some(sc) = &mut self.scene
-            && t_s >= sc.next_s - 1e-9
-        {
-            while sc.next_s <= t_s + 1e-9 {
-                sc.next_s += sc.interval_s;
+        let due = match &mut self.scene {
+            Some(sc) if t_s >= sc.next_s - 1e-9 => {
+                while sc.next_s <= t_s + 1e-9 {
+                    sc.next_s += sc.interval_s;
+                }
+                true
             }
-            for k in 0..self.gears.len() {
-                let pair = &self.gears[k];
-                let rim = |g: usize| temps[*pair.gears[g].nodes.last().expect("nodes")];
-                self.enc.clear();
-                scene::encode_scene(
-                    &mut self.enc,
-                    &identifier(&pair.name),
-                    &sc.outlines[k],
-                    [rim(0), rim(1)],
-                    t_s,
-                    ["pinion", "wheel"],
-                );
-                let channel = self.ch.scenes[k];
-                self.seq += 1;
-                let header = mcap::records::MessageHeader {
-                    channel_id: channel,
-                    sequence: self.seq,
-                    log_time: ns(t_s),
-                    publish_time: ns(t_s),
-                };
-                self.writer
-                    .write_to_known_channel(&header, &self.enc.buf)
-                    .map_err(|e| out_err(&self.path, e))?;
-            }
+            _ => false,
+        };
+        for k in 0..if due { self.gears.len() } else { 0 } {
+            let pair = &self.gears[k];
+            let rim = |g: usize| temps[*pair.gears[g].nodes.last().expect("nodes")];
+            let outlines = &self.scene.as_ref().expect("due").outlines[k];
+            self.enc.clear();
+            scene::encode_scene(
+                &mut self.enc,
+                &identifier(&pair.name),
+                outlines,
+                [rim(0), rim(1)],
+                t_s,
+                ["pinion", "wheel"],
+            );
+            self.write_encoded(self.ch.scenes[k], t_s)?;
         }
         Ok(())
     }
