@@ -382,3 +382,64 @@ fn val_closed_form_orbit_averaged_environment_loads() {
         );
     }
 }
+
+#[test]
+fn val_closed_form_boundary_ramp_and_scheduled_dissipation() {
+    // A node coupled (G) to a boundary ramping at r K/s for 1000 s, then held:
+    //   T(t) = T0 + r t − r τ (1 − e^{−t/τ}),  t ≤ 1000 s, τ = C/G;
+    //   afterwards it relaxes to the held temperature.
+    // A second node receives P W only in the mode window [500 s, 1500 s) and loses it
+    // through G to a fixed boundary: T = Tb + (P/G)(1 − e^{−(t−500)/τ}) inside the window.
+    let (c, g, t0, r, p) = (50.0f64, 0.5f64, 280.0f64, 0.02f64, 3.0f64);
+    let tau = c / g;
+    let sc = scenario(
+        "",
+        NO_ECLIPSE_ENV,
+        "duration_s = 3000.0",
+        &format!(
+            "[[mode]]\nname = \"on\"\nwindows_s = [[500.0, 1500.0]]\n\
+             [[node]]\nname = \"a\"\ncapacitance_j_per_k = {c}\ninitial_temperature_k = {t0}\n\
+             [[node]]\nname = \"b\"\ncapacitance_j_per_k = {c}\ninitial_temperature_k = {t0}\n\
+             [[boundary]]\nname = \"ramp\"\ntemperature_k = {{ time_s = [0.0, 1000.0], value = [{t0}, {}] }}\n\
+             [[boundary]]\nname = \"fixed\"\ntemperature_k = {t0}\n\
+             [[conductor]]\nbetween = [\"a\", \"ramp\"]\nconductance_w_per_k = {g}\n\
+             [[conductor]]\nbetween = [\"b\", \"fixed\"]\nconductance_w_per_k = {g}\n\
+             [[dissipation]]\nnode = \"b\"\npower_w = {p}\nwhen = \"on\"\n",
+            t0 + r * 1000.0
+        ),
+    );
+    let s = run_samples(&sc, &sc.solver, 3000.0, 10.0);
+    let a_end = t0 + r * 1000.0 - r * tau * (1.0 - (-1000.0 / tau).exp());
+    let exact_a = |t: f64| {
+        if t <= 1000.0 {
+            t0 + r * t - r * tau * (1.0 - (-t / tau).exp())
+        } else {
+            let held = t0 + r * 1000.0;
+            held + (a_end - held) * (-(t - 1000.0) / tau).exp()
+        }
+    };
+    let b_end = t0 + p / g * (1.0 - (-1000.0 / tau).exp());
+    let exact_b = |t: f64| {
+        if t < 500.0 {
+            t0
+        } else if t <= 1500.0 {
+            t0 + p / g * (1.0 - (-(t - 500.0) / tau).exp())
+        } else {
+            t0 + (b_end - t0) * (-(t - 1500.0) / tau).exp()
+        }
+    };
+    for (&t, y) in s.times_s.iter().zip(&s.temps_k) {
+        assert!(
+            (y[0] - exact_a(t)).abs() < 0.01,
+            "ramped node at {t} s: {} vs {}",
+            y[0],
+            exact_a(t)
+        );
+        assert!(
+            (y[1] - exact_b(t)).abs() < 0.01,
+            "scheduled node at {t} s: {} vs {}",
+            y[1],
+            exact_b(t)
+        );
+    }
+}
