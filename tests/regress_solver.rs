@@ -79,3 +79,52 @@ fn regress_mission_profile_runs_90_days() {
         "eclipse fraction over the mission {measured}"
     );
 }
+
+#[test]
+fn regress_reference_orbit6_golden_values() {
+    // Golden values of the reference run as of this version (the physics behind them
+    // is validated in tests/val_*): a change beyond these tolerances is a change of
+    // results and must be explained.
+    use orbitlash::summary::{MeshStats, WindowStats};
+    let sc = reference();
+    let period = sc.period_s();
+    let mut nodes = WindowStats::last(period);
+    let mut mesh = MeshStats::last(period);
+    simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        sc.run.duration_s,
+        &mut (&mut nodes, &mut mesh),
+        None,
+    )
+    .unwrap();
+    let golden = [
+        ("housing", -24.74, 62.81, 28.35),
+        ("gear1.r2", -18.85, 61.71, 28.36),
+        ("gear2.r2", -16.30, 61.13, 28.37),
+    ];
+    let stats = nodes.nodes();
+    for (name, lo, hi, mean) in golden {
+        let s = stats.iter().find(|s| s.name == name).unwrap();
+        let c = |k: f64| k - 273.15;
+        assert!((c(s.min_k) - lo).abs() < 0.01, "{name} min {}", c(s.min_k));
+        assert!((c(s.max_k) - hi).abs() < 0.01, "{name} max {}", c(s.max_k));
+        assert!(
+            (c(s.mean_k) - mean).abs() < 0.01,
+            "{name} mean {}",
+            c(s.mean_k)
+        );
+    }
+    let p = &mesh.pairs[0];
+    assert!(
+        (p.min_exact_m * 1e6 - 24.398).abs() < 0.002,
+        "min backlash {}",
+        p.min_exact_m * 1e6
+    );
+    assert!(
+        (p.max_exact_m * 1e6 - 41.982).abs() < 0.002,
+        "max backlash {}",
+        p.max_exact_m * 1e6
+    );
+}
