@@ -114,69 +114,33 @@ pub fn descriptor_set(file_name: &str, types: &[MessageType]) -> Vec<u8> {
 
 /// `foxglove.Log` (foxglove/schemas, `Log.proto`) with `google.protobuf.Timestamp`.
 pub fn foxglove_log_descriptor_set() -> Vec<u8> {
-    let scalar = |name: &str, number: i32, ty: Type| FieldDescriptorProto {
-        name: Some(name.into()),
-        number: Some(number),
-        label: Some(Label::Optional as i32),
-        r#type: Some(ty as i32),
-        json_name: Some(name.into()),
-        ..Default::default()
-    };
-    let timestamp = FileDescriptorProto {
-        name: Some("google/protobuf/timestamp.proto".into()),
-        package: Some("google.protobuf".into()),
-        message_type: vec![DescriptorProto {
-            name: Some("Timestamp".into()),
-            field: vec![
-                scalar("seconds", 1, Type::Int64),
-                scalar("nanos", 2, Type::Int32),
-            ],
-            ..Default::default()
-        }],
-        syntax: Some("proto3".into()),
-        ..Default::default()
-    };
-    let level = EnumDescriptorProto {
-        name: Some("Level".into()),
-        value: ["UNKNOWN", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL"]
-            .iter()
-            .enumerate()
-            .map(|(i, n)| EnumValueDescriptorProto {
-                name: Some((*n).into()),
-                number: Some(i as i32),
-                ..Default::default()
-            })
-            .collect(),
-        ..Default::default()
-    };
-    let log = FileDescriptorProto {
-        name: Some("foxglove/Log.proto".into()),
-        package: Some("foxglove".into()),
-        dependency: vec!["google/protobuf/timestamp.proto".into()],
-        message_type: vec![DescriptorProto {
-            name: Some("Log".into()),
-            field: vec![
-                FieldDescriptorProto {
-                    type_name: Some(".google.protobuf.Timestamp".into()),
-                    ..scalar("timestamp", 1, Type::Message)
-                },
-                FieldDescriptorProto {
-                    type_name: Some(".foxglove.Log.Level".into()),
-                    ..scalar("level", 2, Type::Enum)
-                },
-                scalar("message", 3, Type::String),
-                scalar("name", 4, Type::String),
-                scalar("file", 5, Type::String),
-                scalar("line", 6, Type::Fixed32),
-            ],
-            enum_type: vec![level],
-            ..Default::default()
-        }],
-        syntax: Some("proto3".into()),
-        ..Default::default()
-    };
+    use Type::{Enum, Fixed32, Message, String as Str};
+    let mut log = fox_message(
+        "Log",
+        &[
+            (
+                "timestamp",
+                1,
+                Message,
+                false,
+                Some(".google.protobuf.Timestamp"),
+            ),
+            ("level", 2, Enum, false, Some(".foxglove.Log.Level")),
+            ("message", 3, Str, false, None),
+            ("name", 4, Str, false, None),
+            ("file", 5, Str, false, None),
+            ("line", 6, Fixed32, false, None),
+        ],
+    );
+    log.enum_type.push(enum_type(
+        "Level",
+        &["UNKNOWN", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL"],
+    ));
     FileDescriptorSet {
-        file: vec![timestamp, log],
+        file: vec![
+            google_time_file(),
+            proto_file("foxglove/Log.proto", "foxglove", &[GOOGLE_TIME], vec![log]),
+        ],
     }
     .encode_to_vec()
 }
@@ -256,38 +220,7 @@ fn fox_message(name: &str, fields: &[FoxField]) -> DescriptorProto {
 /// foxglove's schemas; fields this crate does not write are left out, which protobuf
 /// decoders ignore).
 pub fn foxglove_scene_descriptor_set() -> Vec<u8> {
-    use Type::{Bool, Double, Enum, Int32, Int64, Message, String as Str};
-    let file = |name: &str, package: &str, deps: &[&str], messages: Vec<DescriptorProto>| {
-        FileDescriptorProto {
-            name: Some(name.into()),
-            package: Some(package.into()),
-            dependency: deps.iter().map(|d| (*d).into()).collect(),
-            message_type: messages,
-            syntax: Some("proto3".into()),
-            ..Default::default()
-        }
-    };
-    let google = file(
-        "google/protobuf/time.proto",
-        "google.protobuf",
-        &[],
-        vec![
-            fox_message(
-                "Timestamp",
-                &[
-                    ("seconds", 1, Int64, false, None),
-                    ("nanos", 2, Int32, false, None),
-                ],
-            ),
-            fox_message(
-                "Duration",
-                &[
-                    ("seconds", 1, Int64, false, None),
-                    ("nanos", 2, Int32, false, None),
-                ],
-            ),
-        ],
-    );
+    use Type::{Bool, Double, Enum, Message, String as Str};
     let xyz = |extra: Option<FoxField>| {
         let mut v = vec![
             ("x", 1, Double, false, None),
@@ -308,23 +241,12 @@ pub fn foxglove_scene_descriptor_set() -> Vec<u8> {
             ("color", 6, Message, false, Some(".foxglove.Color")),
         ],
     );
-    line.enum_type.push(EnumDescriptorProto {
-        name: Some("Type".into()),
-        value: ["LINE_STRIP", "LINE_LOOP", "LINE_LIST"]
-            .iter()
-            .enumerate()
-            .map(|(i, n)| EnumValueDescriptorProto {
-                name: Some((*n).into()),
-                number: Some(i as i32),
-                ..Default::default()
-            })
-            .collect(),
-        ..Default::default()
-    });
-    let foxglove = file(
+    line.enum_type
+        .push(enum_type("Type", &["LINE_STRIP", "LINE_LOOP", "LINE_LIST"]));
+    let foxglove = proto_file(
         "foxglove/SceneUpdate.proto",
         "foxglove",
-        &["google/protobuf/time.proto"],
+        &[GOOGLE_TIME],
         vec![
             fox_message("Vector3", &xyz(None)),
             fox_message("Point3", &xyz(None)),
@@ -382,7 +304,62 @@ pub fn foxglove_scene_descriptor_set() -> Vec<u8> {
         ],
     );
     FileDescriptorSet {
-        file: vec![google, foxglove],
+        file: vec![google_time_file(), foxglove],
     }
     .encode_to_vec()
+}
+
+/// An enum type whose values are numbered in order.
+fn enum_type(name: &str, values: &[&str]) -> EnumDescriptorProto {
+    EnumDescriptorProto {
+        name: Some(name.into()),
+        value: values
+            .iter()
+            .enumerate()
+            .map(|(i, n)| EnumValueDescriptorProto {
+                name: Some((*n).into()),
+                number: Some(i as i32),
+                ..Default::default()
+            })
+            .collect(),
+        ..Default::default()
+    }
+}
+
+fn proto_file(
+    name: &str,
+    package: &str,
+    deps: &[&str],
+    messages: Vec<DescriptorProto>,
+) -> FileDescriptorProto {
+    FileDescriptorProto {
+        name: Some(name.into()),
+        package: Some(package.into()),
+        dependency: deps.iter().map(|d| (*d).into()).collect(),
+        message_type: messages,
+        syntax: Some("proto3".into()),
+        ..Default::default()
+    }
+}
+
+const GOOGLE_TIME: &str = "google/protobuf/time.proto";
+
+/// `google.protobuf.Timestamp` and `Duration` (same wire form: seconds, nanos).
+fn google_time_file() -> FileDescriptorProto {
+    use Type::{Int32, Int64};
+    let time = |name: &str| {
+        fox_message(
+            name,
+            &[
+                ("seconds", 1, Int64, false, None),
+                ("nanos", 2, Int32, false, None),
+            ],
+        )
+    };
+    proto_file(
+        GOOGLE_TIME,
+        "google.protobuf",
+        &[],
+        vec![time("Timestamp"), time("Duration")],
+    )
 }
