@@ -231,16 +231,19 @@ impl PairStats {
     }
 }
 
-/// Backlash extremes of every gear pair over the last `window_s` of the run. Each step
-/// is evaluated at its end and at three interior points of the solver's interpolant;
-/// an interior minimum is refined by golden-section search, so minima between long
-/// steps are not missed.
+/// Backlash extremes of every gear pair over the whole run (`run_pairs`) and over its
+/// last `window_s` (`pairs`), from the same evaluations. Each step is evaluated at its
+/// end and at three interior points of the solver's interpolant; an interior minimum
+/// is refined by golden-section search, so minima between long steps are not missed.
 #[derive(Debug, Clone, Default)]
 pub struct MeshStats {
     window_s: f64,
     start_s: f64,
     pub pairs: Vec<PairStats>,
+    pub run_pairs: Vec<PairStats>,
     temps: Vec<f64>,
+    /// Exact backlash at the end of the previous step, per pair.
+    last_m: Vec<f64>,
 }
 
 impl MeshStats {
@@ -254,47 +257,54 @@ impl MeshStats {
     pub fn window_start_s(&self) -> f64 {
         self.start_s
     }
+
+    fn see(&mut self, k: usize, t_s: f64, m: &MeshState) {
+        self.run_pairs[k].see(t_s, m);
+        if t_s >= self.start_s {
+            self.pairs[k].see(t_s, m);
+        }
+    }
 }
 
 impl Observer for MeshStats {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
         self.start_s = (r.t_end_s - self.window_s).max(0.0);
         self.pairs = r.gears.iter().map(|g| PairStats::new(&g.name)).collect();
+        self.run_pairs = self.pairs.clone();
         self.temps = vec![0.0; r.temps_k.len()];
-        if self.start_s == 0.0 {
-            for (p, m) in self.pairs.iter_mut().zip(r.mesh) {
-                p.see(0.0, m);
-            }
+        self.last_m = r.mesh.iter().map(|m| m.backlash_exact_m).collect();
+        for k in 0..self.pairs.len() {
+            self.see(k, 0.0, &r.mesh[k]);
         }
         Ok(())
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
         let (t0, t1) = (step.t0_s(), step.t1_s());
-        if t1 <= self.start_s || step.gears.is_empty() {
+        if step.gears.is_empty() {
             return Ok(());
         }
-        let a = t0.max(self.start_s);
+        let h = t1 - t0;
         let mut temps = std::mem::take(&mut self.temps);
         for (k, pair) in step.gears.iter().enumerate() {
             let mut at = |t: f64| {
                 step.temperatures_at(t, &mut temps);
                 mesh_or_nan(pair, &temps)
             };
-            let ts = [
-                a,
-                a + 0.25 * (t1 - a),
-                a + 0.5 * (t1 - a),
-                a + 0.75 * (t1 - a),
-            ];
-            let mut values = [0.0; 5];
-            for (i, &t) in ts.iter().enumerate() {
-                let m = at(t);
-                values[i] = m.backlash_exact_m;
-                self.pairs[k].see(t, &m);
+            // The window's first instant, when this step straddles it.
+            if t0 < self.start_s && self.start_s < t1 {
+                let m = at(self.start_s);
+                self.pairs[k].see(self.start_s, &m);
             }
-            values[4] = step.mesh[k].backlash_exact_m;
-            self.pairs[k].see(t1, &step.mesh[k]);
+            let ts = [t0, t0 + 0.25 * h, t0 + 0.5 * h, t0 + 0.75 * h];
+            let mut values = [self.last_m[k], 0.0, 0.0, 0.0, step.mesh[k].backlash_exact_m];
+            for i in 1..4 {
+                let m = at(ts[i]);
+                values[i] = m.backlash_exact_m;
+                self.see(k, ts[i], &m);
+            }
+            self.see(k, t1, &step.mesh[k]);
+            self.last_m[k] = values[4];
             // Golden-section refinement around an interior minimum.
             let i = (1..4)
                 .min_by(|&x, &y| values[x].total_cmp(&values[y]))
@@ -305,8 +315,8 @@ impl Observer for MeshStats {
                 for _ in 0..12 {
                     let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
                     let (m1, m2) = (at(x1), at(x2));
-                    self.pairs[k].see(x1, &m1);
-                    self.pairs[k].see(x2, &m2);
+                    self.see(k, x1, &m1);
+                    self.see(k, x2, &m2);
                     if m1.backlash_exact_m < m2.backlash_exact_m {
                         hi = x2;
                     } else {
@@ -320,12 +330,16 @@ impl Observer for MeshStats {
     }
 
     fn on_event(&mut self, e: &Event) -> ObserverResult {
-        if e.t_s < self.start_s {
-            return Ok(());
-        }
+        let in_window = e.t_s >= self.start_s;
         match e.kind {
-            EventKind::InterferenceStart(k) => self.pairs[k].interference_events += 1,
-            EventKind::MarginLow(k) => self.pairs[k].margin_events += 1,
+            EventKind::InterferenceStart(k) => {
+                self.run_pairs[k].interference_events += 1;
+                self.pairs[k].interference_events += u64::from(in_window);
+            }
+            EventKind::MarginLow(k) => {
+                self.run_pairs[k].margin_events += 1;
+                self.pairs[k].margin_events += u64::from(in_window);
+            }
             _ => {}
         }
         Ok(())

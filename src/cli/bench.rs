@@ -82,10 +82,11 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             seed: None,
         };
         let run = |log: bool| -> Result<(f64, u64)> {
+            // the observers `run` uses besides the outputs
             let mut summary = (
-                MeshStats::last(t_end),
                 MeshStats::last(period),
                 WindowStats::last(period),
+                WindowStats::last(t_end),
             );
             let mut mcap = if log {
                 Some(McapLog::create(&path, prov(), LogCadence::Steps(1))?)

@@ -117,18 +117,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     // Over the whole run: reported instead when an interrupted run ends before the
     // last orbit's window.
     let mut stats_run = WindowStats::last(t_end_s);
-    let mut mesh_run = MeshStats::last(t_end_s);
-    let mut mesh_last = MeshStats::last(period_s.min(t_end_s));
+    let mut mesh = MeshStats::last(period_s.min(t_end_s));
     let interrupt = interrupt_flag();
     let wall = Instant::now();
     let result = {
         let mut observers = (
-            (
-                &mut stats_obs,
-                &mut stats_run,
-                &mut mesh_run,
-                &mut mesh_last,
-            ),
+            (&mut stats_obs, &mut stats_run, &mut mesh),
             csv,
             &mut log,
             progress,
@@ -167,7 +161,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         &stats_run
     };
     let mut o = format_summary(&sc.name, &sc.thermal, &stats, window, period_s, wall_s);
-    o.push_str(&format_mesh(&sc, &mesh_run, &mesh_last));
+    o.push_str(&format_mesh(&sc, &mesh));
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
@@ -313,7 +307,7 @@ fn format_summary(
     o
 }
 
-fn format_mesh(sc: &orbitlash::scenario::Scenario, run: &MeshStats, last: &MeshStats) -> String {
+fn format_mesh(sc: &orbitlash::scenario::Scenario, mesh: &MeshStats) -> String {
     let mut o = String::new();
     let env = &sc.thermal.environment;
     let phase = |t: f64| {
@@ -324,7 +318,7 @@ fn format_mesh(sc: &orbitlash::scenario::Scenario, run: &MeshStats, last: &MeshS
             if env.sunlit(t) { "sunlit" } else { "eclipse" }
         )
     };
-    for ((pair, r), l) in sc.gears.iter().zip(&run.pairs).zip(&last.pairs) {
+    for ((pair, r), l) in sc.gears.iter().zip(&mesh.run_pairs).zip(&mesh.pairs) {
         outln!(
             o,
             "\ngear pair {} (normal backlash, µm; minimum allowed {:.1} µm):",

@@ -16,6 +16,9 @@ pub struct AtomicFile {
     final_path: PathBuf,
     tmp_path: PathBuf,
     writer: Option<BufWriter<File>>,
+    /// Logical write position, so that asking for it (as the MCAP writer often does)
+    /// does not flush the buffer.
+    position: u64,
 }
 
 impl AtomicFile {
@@ -40,6 +43,7 @@ impl AtomicFile {
             final_path: path.to_path_buf(),
             tmp_path,
             writer: Some(BufWriter::with_capacity(1 << 16, file)),
+            position: 0,
         })
     }
 
@@ -73,7 +77,9 @@ impl AtomicFile {
 
 impl Write for AtomicFile {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        self.writer().write(buf)
+        let n = self.writer().write(buf)?;
+        self.position += n as u64;
+        Ok(n)
     }
     fn flush(&mut self) -> std::io::Result<()> {
         self.writer().flush()
@@ -82,7 +88,11 @@ impl Write for AtomicFile {
 
 impl Seek for AtomicFile {
     fn seek(&mut self, pos: SeekFrom) -> std::io::Result<u64> {
-        self.writer().seek(pos)
+        if pos == SeekFrom::Current(0) {
+            return Ok(self.position);
+        }
+        self.position = self.writer().seek(pos)?;
+        Ok(self.position)
     }
 }
 

@@ -133,8 +133,9 @@ impl Layout {
 }
 
 enum Item {
-    /// A sample at this offset of `Batch::values`.
-    Sample(usize),
+    /// A sample at this offset of `Batch::values`, with the gear states already
+    /// computed for it from this index of `Batch::meshes` (step ends), if any.
+    Sample(usize, Option<usize>),
     Event {
         t_s: f64,
         level: i64,
@@ -145,6 +146,7 @@ enum Item {
 #[derive(Default)]
 struct Batch {
     values: Vec<f64>,
+    meshes: Vec<MeshState>,
     items: Vec<Item>,
 }
 
@@ -223,7 +225,12 @@ impl LogWriter {
     }
 
     /// Writes every topic for one sample laid out as `Layout` says.
-    fn sample(&mut self, layout: Layout, v: &[f64]) -> Result<(), OutputError> {
+    fn sample(
+        &mut self,
+        layout: Layout,
+        v: &[f64],
+        meshes: Option<&[MeshState]>,
+    ) -> Result<(), OutputError> {
         let t_s = v[0];
         let sunlit = v[1] != 0.0;
         let temps = &v[2..2 + layout.nodes];
@@ -286,7 +293,10 @@ impl LogWriter {
 
         // Gear pairs.
         for k in 0..self.gears.len() {
-            let m = mesh_or_nan(&self.gears[k], temps);
+            let m = match meshes {
+                Some(ms) => ms[k],
+                None => mesh_or_nan(&self.gears[k], temps),
+            };
             self.enc.clear();
             encode_mesh(&mut self.enc, &self.gears[k], &m, temps);
             self.write_encoded(self.ch.gears[k], t_s)?;
@@ -322,7 +332,10 @@ impl LogWriter {
     fn batch(&mut self, layout: Layout, b: &Batch) -> Result<(), OutputError> {
         for item in &b.items {
             match item {
-                Item::Sample(at) => self.sample(layout, &b.values[*at..*at + layout.stride()])?,
+                Item::Sample(at, mesh) => {
+                    let meshes = mesh.map(|m| &b.meshes[m..m + self.gears.len()]);
+                    self.sample(layout, &b.values[*at..*at + layout.stride()], meshes)?
+                }
                 Item::Event { t_s, level, text } => self.event(*t_s, *level, text)?,
             }
         }
@@ -387,6 +400,7 @@ impl McapLog {
         sunlit: bool,
         heaters_on: &[bool],
         modes_active: &[bool],
+        mesh: Option<&[MeshState]>,
     ) -> ObserverResult {
         let v = &mut self.batch.values;
         let at = v.len();
@@ -395,7 +409,12 @@ impl McapLog {
         v.extend_from_slice(&self.temps);
         v.extend(heaters_on.iter().map(|&b| if b { 1.0 } else { 0.0 }));
         v.extend(modes_active.iter().map(|&b| if b { 1.0 } else { 0.0 }));
-        self.batch.items.push(Item::Sample(at));
+        let mesh = mesh.map(|ms| {
+            let at = self.batch.meshes.len();
+            self.batch.meshes.extend_from_slice(ms);
+            at
+        });
+        self.batch.items.push(Item::Sample(at, mesh));
         if self.batch.items.len() >= BATCH_SAMPLES {
             self.send_batch()?;
         }
@@ -412,6 +431,7 @@ impl McapLog {
             }
             let next = Batch {
                 values: Vec::with_capacity(self.batch.values.capacity()),
+                meshes: Vec::with_capacity(self.batch.meshes.capacity()),
                 items: Vec::with_capacity(BATCH_SAMPLES + 8),
             };
             let batch = std::mem::replace(&mut self.batch, next);
@@ -467,13 +487,25 @@ impl McapLog {
 }
 
 /// Runs `w` on a thread fed by batches until `Finish`.
-fn spawn_writer(mut w: LogWriter, layout: Layout) -> WriterThread {
+fn spawn_writer(
+    setup: impl FnOnce() -> Result<LogWriter, OutputError> + Send + 'static,
+    layout: Layout,
+) -> WriterThread {
     let (tx, rx) = std::sync::mpsc::sync_channel::<ToWriter>(8);
     let failed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let flag = failed.clone();
     let handle = std::thread::Builder::new()
         .name("mcap-writer".into())
         .spawn(move || {
+            let mut w = match setup() {
+                Ok(w) => w,
+                Err(e) => {
+                    flag.store(true, std::sync::atomic::Ordering::Relaxed);
+                    // drain until told to finish, then report
+                    for _ in rx {}
+                    return Err(e);
+                }
+            };
             // An older log under the same name goes now, in parallel with the run.
             // (`AtomicFile::commit` explains why it is removed before the rename.)
             let mut error: Option<OutputError> = match std::fs::remove_file(&w.path) {
@@ -581,199 +613,263 @@ fn field_names(
         .collect()
 }
 
-impl Observer for McapLog {
-    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
-        let State::Open(mut writer) = std::mem::replace(&mut self.state, State::Closed) else {
-            return Err("the log was already started".into());
-        };
-        let w = &mut writer;
-        let model = r.model;
-        let net = &model.network;
-        let mut taken = vec!["time_s".to_string()];
-        let node_fields = field_names(net.nodes.iter().map(|n| n.name.clone()), "k", &mut taken);
-        let mut temperature = MessageType::new("NodeTemperatures").with("time_s", Kind::Double);
-        for f in &node_fields {
-            temperature = temperature.with(f, Kind::Double);
-        }
-        let mut taken = vec!["absorbed_w".to_string(), "dissipated_w".to_string()];
-        let mut heat = MessageType::new("HeatFlows")
-            .with("absorbed_w", Kind::Double)
-            .with("dissipated_w", Kind::Double);
-        for f in field_names(
-            net.boundaries.iter().map(|b| format!("to_{}", b.name)),
-            "w",
-            &mut taken,
-        ) {
-            heat = heat.with(&f, Kind::Double);
-        }
-        for f in field_names(net.loads.iter().map(|l| l.name.clone()), "w", &mut taken) {
-            heat = heat.with(&f, Kind::Double);
-        }
-        for f in field_names(net.heaters.iter().map(|h| h.name.clone()), "w", &mut taken) {
-            heat = heat.with(&f, Kind::Double);
-        }
-        let orbit = MessageType::new("OrbitState")
-            .with("orbit_angle_deg", Kind::Double)
-            .with("beta_deg", Kind::Double)
-            .with("solar_flux_w_per_m2", Kind::Double)
-            .with("sunlit", Kind::Double)
-            .with("orbit_number", Kind::Double);
+/// Writes the schemas, channels, provenance and attachment of a new log and returns
+/// the writer ready for samples (runs on the writer thread).
+#[allow(clippy::too_many_arguments)]
+fn open_log_writer(
+    path: &Path,
+    mut writer: Box<mcap::Writer<AtomicFile>>,
+    provenance: Provenance,
+    cadence: LogCadence,
+    model: ThermalModel,
+    pairs: &[GearPair],
+    t_end_s: f64,
+    scene_interval_s: Option<f64>,
+) -> Result<LogWriter, OutputError> {
+    let w = &mut writer;
+    let model = &model;
+    let net = &model.network;
+    let mut taken = vec!["time_s".to_string()];
+    let node_fields = field_names(net.nodes.iter().map(|n| n.name.clone()), "k", &mut taken);
+    let mut temperature = MessageType::new("NodeTemperatures").with("time_s", Kind::Double);
+    for f in &node_fields {
+        temperature = temperature.with(f, Kind::Double);
+    }
+    let mut taken = vec!["absorbed_w".to_string(), "dissipated_w".to_string()];
+    let mut heat = MessageType::new("HeatFlows")
+        .with("absorbed_w", Kind::Double)
+        .with("dissipated_w", Kind::Double);
+    for f in field_names(
+        net.boundaries.iter().map(|b| format!("to_{}", b.name)),
+        "w",
+        &mut taken,
+    ) {
+        heat = heat.with(&f, Kind::Double);
+    }
+    for f in field_names(net.loads.iter().map(|l| l.name.clone()), "w", &mut taken) {
+        heat = heat.with(&f, Kind::Double);
+    }
+    for f in field_names(net.heaters.iter().map(|h| h.name.clone()), "w", &mut taken) {
+        heat = heat.with(&f, Kind::Double);
+    }
+    let orbit = MessageType::new("OrbitState")
+        .with("orbit_angle_deg", Kind::Double)
+        .with("beta_deg", Kind::Double)
+        .with("solar_flux_w_per_m2", Kind::Double)
+        .with("sunlit", Kind::Double)
+        .with("orbit_number", Kind::Double);
 
-        let p = self.provenance.clone();
-        let cadence = match self.cadence {
-            LogCadence::Steps(n) => format!("every {n} step(s)"),
-            LogCadence::Interval(dt) => format!("every {dt} s"),
-        };
-        let mut node_map = BTreeMap::new();
-        for (f, n) in node_fields.iter().zip(&net.nodes) {
-            node_map.insert(format!("node:{f}"), n.name.clone());
-        }
-        let empty = BTreeMap::new();
-        let s = w.add_schema(
+    let p = provenance;
+    let cadence = match cadence {
+        LogCadence::Steps(n) => format!("every {n} step(s)"),
+        LogCadence::Interval(dt) => format!("every {dt} s"),
+    };
+    let mut node_map = BTreeMap::new();
+    for (f, n) in node_fields.iter().zip(&net.nodes) {
+        node_map.insert(format!("node:{f}"), n.name.clone());
+    }
+    let empty = BTreeMap::new();
+    let s = w
+        .add_schema(
             "orbitlash.NodeTemperatures",
             "protobuf",
             &descriptor_set("NodeTemperatures", &[temperature]),
-        )?;
-        let temperature = w.add_channel(s, "/thermal/temperature", "protobuf", &node_map)?;
-        let s = w.add_schema(
+        )
+        .map_err(|e| out_err(path, e))?;
+    let temperature = w
+        .add_channel(s, "/thermal/temperature", "protobuf", &node_map)
+        .map_err(|e| out_err(path, e))?;
+    let s = w
+        .add_schema(
             "orbitlash.HeatFlows",
             "protobuf",
             &descriptor_set("HeatFlows", &[heat]),
-        )?;
-        let heat = w.add_channel(s, "/thermal/heat", "protobuf", &empty)?;
-        let s = w.add_schema(
+        )
+        .map_err(|e| out_err(path, e))?;
+    let heat = w
+        .add_channel(s, "/thermal/heat", "protobuf", &empty)
+        .map_err(|e| out_err(path, e))?;
+    let s = w
+        .add_schema(
             "orbitlash.OrbitState",
             "protobuf",
             &descriptor_set("OrbitState", &[orbit]),
-        )?;
-        let orbit = w.add_channel(s, "/orbit/state", "protobuf", &empty)?;
-        let mut gears = Vec::new();
-        if !r.gears.is_empty() {
-            let s = w.add_schema(
+        )
+        .map_err(|e| out_err(path, e))?;
+    let orbit = w
+        .add_channel(s, "/orbit/state", "protobuf", &empty)
+        .map_err(|e| out_err(path, e))?;
+    let mut gears = Vec::new();
+    if !pairs.is_empty() {
+        let s = w
+            .add_schema(
                 "orbitlash.GearMesh",
                 "protobuf",
                 &descriptor_set("GearMesh", &gear_types()),
-            )?;
-            for g in r.gears {
-                let meta: BTreeMap<String, String> =
-                    [("pair".to_string(), g.name.clone())].into_iter().collect();
-                gears.push(w.add_channel(
+            )
+            .map_err(|e| out_err(path, e))?;
+        for g in pairs {
+            let meta: BTreeMap<String, String> =
+                [("pair".to_string(), g.name.clone())].into_iter().collect();
+            gears.push(
+                w.add_channel(
                     s,
                     &format!("/gears/{}", identifier(&g.name)),
                     "protobuf",
                     &meta,
-                )?);
-            }
+                )
+                .map_err(|e| out_err(path, e))?,
+            );
         }
-        let mut scenes = Vec::new();
-        if self.scene_interval_s.is_some() && !r.gears.is_empty() {
-            let s = w.add_schema(
+    }
+    let mut scenes = Vec::new();
+    if scene_interval_s.is_some() && !pairs.is_empty() {
+        let s = w
+            .add_schema(
                 "foxglove.SceneUpdate",
                 "protobuf",
                 &foxglove_scene_descriptor_set(),
-            )?;
-            for g in r.gears {
-                scenes.push(w.add_channel(
+            )
+            .map_err(|e| out_err(path, e))?;
+        for g in pairs {
+            scenes.push(
+                w.add_channel(
                     s,
                     &format!("/gears/{}/scene", identifier(&g.name)),
                     "protobuf",
                     &empty,
-                )?);
-            }
+                )
+                .map_err(|e| out_err(path, e))?,
+            );
         }
-        let s = w.add_schema("foxglove.Log", "protobuf", &foxglove_log_descriptor_set())?;
-        let log = w.add_channel(s, "/events", "protobuf", &empty)?;
+    }
+    let s = w
+        .add_schema("foxglove.Log", "protobuf", &foxglove_log_descriptor_set())
+        .map_err(|e| out_err(path, e))?;
+    let log = w
+        .add_channel(s, "/events", "protobuf", &empty)
+        .map_err(|e| out_err(path, e))?;
 
-        let sha = Sha256::digest(p.scenario_toml.as_bytes());
-        let sha: String = sha.iter().map(|b| format!("{b:02x}")).collect();
-        let metadata: BTreeMap<String, String> = [
-            ("tool", "orbitlash".to_string()),
-            ("tool_version", env!("CARGO_PKG_VERSION").to_string()),
-            ("scenario_name", p.scenario_name.clone()),
-            ("scenario_file", p.scenario_file.clone()),
-            ("scenario_sha256", sha),
-            ("solver", p.solver.clone()),
-            ("seed", p.seed.map_or("none".into(), |s| s.to_string())),
-            ("t_end_s", format!("{}", r.t_end_s)),
-            ("log_cadence", cadence),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect();
-        w.write_metadata(&mcap::records::Metadata {
-            name: "orbitlash.provenance".into(),
-            metadata,
-        })?;
-        let file_name = match Path::new(&p.scenario_file).file_name() {
-            Some(f) if !p.scenario_file.starts_with('<') => f.to_string_lossy().into_owned(),
-            _ => format!("{}.toml", p.scenario_name),
+    let sha = Sha256::digest(p.scenario_toml.as_bytes());
+    let sha: String = sha.iter().map(|b| format!("{b:02x}")).collect();
+    let metadata: BTreeMap<String, String> = [
+        ("tool", "orbitlash".to_string()),
+        ("tool_version", env!("CARGO_PKG_VERSION").to_string()),
+        ("scenario_name", p.scenario_name.clone()),
+        ("scenario_file", p.scenario_file.clone()),
+        ("scenario_sha256", sha),
+        ("solver", p.solver.clone()),
+        ("seed", p.seed.map_or("none".into(), |s| s.to_string())),
+        ("t_end_s", format!("{}", t_end_s)),
+        ("log_cadence", cadence),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    w.write_metadata(&mcap::records::Metadata {
+        name: "orbitlash.provenance".into(),
+        metadata,
+    })
+    .map_err(|e| out_err(path, e))?;
+    let file_name = match Path::new(&p.scenario_file).file_name() {
+        Some(f) if !p.scenario_file.starts_with('<') => f.to_string_lossy().into_owned(),
+        _ => format!("{}.toml", p.scenario_name),
+    };
+    w.attach(&mcap::Attachment {
+        log_time: 0,
+        create_time: 0,
+        name: file_name,
+        media_type: "application/toml".into(),
+        data: std::borrow::Cow::Owned(p.scenario_toml.into_bytes()),
+    })
+    .map_err(|e| out_err(path, e))?;
+    let ch = Channels {
+        temperature,
+        heat,
+        orbit,
+        gears,
+        scenes,
+        log,
+    };
+    Ok(LogWriter {
+        path: path.to_path_buf(),
+        writer: *writer,
+        ch,
+        enc: Encoder::default(),
+        seq: 0,
+        model: model.clone(),
+        gears: pairs.to_vec(),
+        compiled: Compiled::new(net),
+        flows: Flows::default(),
+        scratch: vec![0.0; net.nodes.len()],
+        heater_power_w: net.heaters.iter().map(|h| h.power_w).collect(),
+        heaters_on: vec![false; net.heaters.len()],
+        modes_active: vec![false; model.modes.len()],
+        scene: scene_interval_s
+            .filter(|_| !pairs.is_empty())
+            .map(|interval_s| SceneState {
+                interval_s,
+                next_s: 0.0,
+                outlines: pairs.iter().map(scene::pair_outlines_m).collect(),
+            }),
+    })
+}
+
+impl Observer for McapLog {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        let State::Open(writer) = std::mem::replace(&mut self.state, State::Closed) else {
+            return Err("the log was already started".into());
         };
-        w.attach(&mcap::Attachment {
-            log_time: 0,
-            create_time: 0,
-            name: file_name,
-            media_type: "application/toml".into(),
-            data: std::borrow::Cow::Owned(p.scenario_toml.into_bytes()),
-        })?;
-        let ch = Channels {
-            temperature,
-            heat,
-            orbit,
-            gears,
-            scenes,
-            log,
-        };
-        let mut lw = LogWriter {
-            path: self.path.clone(),
-            writer: *writer,
-            ch,
-            enc: Encoder::default(),
-            seq: 0,
-            model: model.clone(),
-            gears: r.gears.to_vec(),
-            compiled: Compiled::new(net),
-            flows: Flows::default(),
-            scratch: vec![0.0; net.nodes.len()],
-            heater_power_w: net.heaters.iter().map(|h| h.power_w).collect(),
-            heaters_on: vec![false; net.heaters.len()],
-            modes_active: vec![false; model.modes.len()],
-            scene: self
-                .scene_interval_s
-                .filter(|_| !r.gears.is_empty())
-                .map(|interval_s| SceneState {
-                    interval_s,
-                    next_s: 0.0,
-                    outlines: r.gears.iter().map(scene::pair_outlines_m).collect(),
-                }),
-        };
+        let (path, provenance, cadence, model, gears, t_end_s, scene_interval_s) = (
+            self.path.clone(),
+            self.provenance.clone(),
+            self.cadence,
+            r.model.clone(),
+            r.gears.to_vec(),
+            r.t_end_s,
+            self.scene_interval_s,
+        );
+        let net = &r.model.network;
         self.names = Names {
             pairs: r.gears.iter().map(|g| g.name.clone()).collect(),
             heaters: net.heaters.iter().map(|h| h.name.clone()).collect(),
-            modes: model.modes.iter().map(|m| m.name.clone()).collect(),
+            modes: r.model.modes.iter().map(|m| m.name.clone()).collect(),
         };
         self.layout = Layout {
             nodes: net.nodes.len(),
             heaters: net.heaters.len(),
-            modes: model.modes.len(),
+            modes: r.model.modes.len(),
         };
-        // The initial state, then the writer moves to its thread.
+        // The initial state goes out with the first batch; the writer thread writes the
+        // schemas, provenance and attachment while the run starts.
         self.temps = r.temps_k.to_vec();
         let heaters_on: Vec<bool> = net
             .heaters
             .iter()
             .map(|h| r.temps_k[h.sensor_node] <= h.on_k)
             .collect();
-        let modes_active: Vec<bool> = model.modes.iter().map(|m| m.active(0.0)).collect();
+        let modes_active: Vec<bool> = r.model.modes.iter().map(|m| m.active(0.0)).collect();
         self.push_sample(
             0.0,
-            model.environment.sunlit(0.0),
+            r.model.environment.sunlit(0.0),
             &heaters_on,
             &modes_active,
+            Some(r.mesh),
         )?;
-        let first = std::mem::take(&mut self.batch);
-        lw.batch(self.layout, &first)?;
         self.next_sample = 1;
-        self.state = State::Running(spawn_writer(lw, self.layout));
+        let setup = move || {
+            open_log_writer(
+                &path,
+                writer,
+                provenance,
+                cadence,
+                model,
+                &gears,
+                t_end_s,
+                scene_interval_s,
+            )
+        };
+        self.state = State::Running(spawn_writer(setup, self.layout));
         Ok(())
     }
 
@@ -787,6 +883,7 @@ impl Observer for McapLog {
                         step.env1.sunlit,
                         step.heaters_on,
                         step.modes_active,
+                        Some(step.mesh),
                     )?;
                 }
             }
@@ -798,7 +895,13 @@ impl Observer for McapLog {
                 let mut temps = std::mem::take(&mut self.temps);
                 step.temperatures_at(t, &mut temps);
                 self.temps = temps;
-                self.push_sample(t, step.env1.sunlit, step.heaters_on, step.modes_active)?;
+                self.push_sample(
+                    t,
+                    step.env1.sunlit,
+                    step.heaters_on,
+                    step.modes_active,
+                    None,
+                )?;
                 self.next_sample += 1;
             },
         }
