@@ -669,86 +669,65 @@ fn open_log_writer(
         node_map.insert(format!("node:{f}"), n.name.clone());
     }
     let empty = BTreeMap::new();
-    let s = w
-        .add_schema(
-            "orbitlash.NodeTemperatures",
-            "protobuf",
-            &descriptor_set("NodeTemperatures", &[temperature]),
-        )
-        .map_err(|e| out_err(path, e))?;
-    let temperature = w
-        .add_channel(s, "/thermal/temperature", "protobuf", &node_map)
-        .map_err(|e| out_err(path, e))?;
-    let s = w
-        .add_schema(
-            "orbitlash.HeatFlows",
-            "protobuf",
-            &descriptor_set("HeatFlows", &[heat]),
-        )
-        .map_err(|e| out_err(path, e))?;
-    let heat = w
-        .add_channel(s, "/thermal/heat", "protobuf", &empty)
-        .map_err(|e| out_err(path, e))?;
-    let s = w
-        .add_schema(
-            "orbitlash.OrbitState",
-            "protobuf",
-            &descriptor_set("OrbitState", &[orbit]),
-        )
-        .map_err(|e| out_err(path, e))?;
-    let orbit = w
-        .add_channel(s, "/orbit/state", "protobuf", &empty)
-        .map_err(|e| out_err(path, e))?;
+    let schema = |w: &mut mcap::Writer<AtomicFile>, name: &str, data: &[u8]| {
+        w.add_schema(name, "protobuf", data)
+            .map_err(|e| out_err(path, e))
+    };
+    let channel =
+        |w: &mut mcap::Writer<AtomicFile>, s: u16, topic: &str, meta: &BTreeMap<String, String>| {
+            w.add_channel(s, topic, "protobuf", meta)
+                .map_err(|e| out_err(path, e))
+        };
+    let s = schema(
+        w,
+        "orbitlash.NodeTemperatures",
+        &descriptor_set("NodeTemperatures", &[temperature]),
+    )?;
+    let temperature = channel(w, s, "/thermal/temperature", &node_map)?;
+    let s = schema(
+        w,
+        "orbitlash.HeatFlows",
+        &descriptor_set("HeatFlows", &[heat]),
+    )?;
+    let heat = channel(w, s, "/thermal/heat", &empty)?;
+    let s = schema(
+        w,
+        "orbitlash.OrbitState",
+        &descriptor_set("OrbitState", &[orbit]),
+    )?;
+    let orbit = channel(w, s, "/orbit/state", &empty)?;
     let mut gears = Vec::new();
     if !pairs.is_empty() {
-        let s = w
-            .add_schema(
-                "orbitlash.GearMesh",
-                "protobuf",
-                &descriptor_set("GearMesh", &gear_types()),
-            )
-            .map_err(|e| out_err(path, e))?;
+        let s = schema(
+            w,
+            "orbitlash.GearMesh",
+            &descriptor_set("GearMesh", &gear_types()),
+        )?;
         for g in pairs {
             let meta: BTreeMap<String, String> =
                 [("pair".to_string(), g.name.clone())].into_iter().collect();
-            gears.push(
-                w.add_channel(
-                    s,
-                    &format!("/gears/{}", identifier(&g.name)),
-                    "protobuf",
-                    &meta,
-                )
-                .map_err(|e| out_err(path, e))?,
-            );
+            gears.push(channel(
+                w,
+                s,
+                &format!("/gears/{}", identifier(&g.name)),
+                &meta,
+            )?);
         }
     }
     let mut scenes = Vec::new();
     if scene_interval_s.is_some() && !pairs.is_empty() {
-        let s = w
-            .add_schema(
-                "foxglove.SceneUpdate",
-                "protobuf",
-                &foxglove_scene_descriptor_set(),
-            )
-            .map_err(|e| out_err(path, e))?;
+        let s = schema(w, "foxglove.SceneUpdate", &foxglove_scene_descriptor_set())?;
         for g in pairs {
-            scenes.push(
-                w.add_channel(
-                    s,
-                    &format!("/gears/{}/scene", identifier(&g.name)),
-                    "protobuf",
-                    &empty,
-                )
-                .map_err(|e| out_err(path, e))?,
-            );
+            scenes.push(channel(
+                w,
+                s,
+                &format!("/gears/{}/scene", identifier(&g.name)),
+                &empty,
+            )?);
         }
     }
-    let s = w
-        .add_schema("foxglove.Log", "protobuf", &foxglove_log_descriptor_set())
-        .map_err(|e| out_err(path, e))?;
-    let log = w
-        .add_channel(s, "/events", "protobuf", &empty)
-        .map_err(|e| out_err(path, e))?;
+    let s = schema(w, "foxglove.Log", &foxglove_log_descriptor_set())?;
+    let log = channel(w, s, "/events", &empty)?;
 
     let sha = Sha256::digest(p.scenario_toml.as_bytes());
     let sha: String = sha.iter().map(|b| format!("{b:02x}")).collect();
