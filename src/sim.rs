@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::EnvState;
-use crate::thermal::solver::{StepData, StepFailure, Stepper, W0, W1, hermite};
+use crate::thermal::solver::{StepData, StepFailure, Stepper, W0, W1};
 use crate::thermal::{StepSwitches, ThermalModel};
 
 /// Integration settings. Defaults meet 0.05 K against a step-converged solution on
@@ -112,15 +112,7 @@ impl StepView<'_> {
     /// Temperature of node `i` at `t_s` within the step (cubic Hermite).
     pub fn temperature_at(&self, i: usize, t_s: f64) -> f64 {
         let d = self.data;
-        let s = ((t_s - d.t0_s) / d.h_s).clamp(0.0, 1.0);
-        hermite(
-            d.temps0_k[i],
-            d.temps1_k[i],
-            d.rates0_k_per_s[i],
-            d.rates1_k_per_s[i],
-            d.h_s,
-            s,
-        )
+        d.temperature_at_fraction(i, ((t_s - d.t0_s) / d.h_s).clamp(0.0, 1.0))
     }
     /// All node temperatures at `t_s` within the step.
     pub fn temperatures_at(&self, t_s: f64, out_k: &mut [f64]) {
@@ -551,16 +543,7 @@ fn earliest_thermostat_switch(
         if !crossed {
             continue;
         }
-        let g = |s: f64| {
-            hermite(
-                d.temps0_k[i],
-                d.temps1_k[i],
-                d.rates0_k_per_s[i],
-                d.rates1_k_per_s[i],
-                d.h_s,
-                s,
-            ) - target
-        };
+        let g = |s: f64| d.temperature_at_fraction(i, s) - target;
         let s = first_root(&g, heaters_on[k]);
         if best.is_none_or(|(_, b)| s < b) {
             best = Some((k, s));

@@ -4,7 +4,7 @@
 
 use crate::gear::MeshState;
 use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView, mesh_or_nan};
-use crate::thermal::solver::{hermite, hermite_interior_extrema};
+use crate::thermal::solver::hermite_interior_extrema;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeStats {
@@ -97,7 +97,7 @@ impl Observer for WindowStats {
                 d.h_s,
             );
             let sa = (a - t0) / h;
-            let p = |s: f64| hermite(y0, y1, f0, f1, h, s);
+            let p = |s: f64| d.temperature_at_fraction(i, s);
             self.see(i, p(sa));
             self.see(i, y1);
             if sa == 0.0 {

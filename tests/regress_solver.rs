@@ -2,12 +2,12 @@
 //! makes the solver take many more steps, reject steps, or leak energy shows here.
 
 use orbitlash::io::scenario_toml::{load_file, reference};
-use orbitlash::sim::simulate;
+use orbitlash::scenario::Scenario;
+use orbitlash::sim::{RunStats, simulate};
 
-#[test]
-fn regress_reference_solver_cost() {
-    let sc = reference();
-    let stats = simulate(
+/// The scenario run for its own duration, with no observer.
+fn run_to_end(sc: &Scenario) -> RunStats {
+    simulate(
         &sc.thermal,
         &sc.gears,
         &sc.solver,
@@ -15,7 +15,13 @@ fn regress_reference_solver_cost() {
         &mut (),
         None,
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn regress_reference_solver_cost() {
+    let sc = reference();
+    let stats = run_to_end(&sc);
     let per_orbit = stats.steps as f64 / 6.0;
     assert!(
         (70.0..=100.0).contains(&per_orbit),
@@ -52,15 +58,7 @@ fn regress_mission_profile_runs_90_days() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml");
     let (sc, _) = load_file(&path).unwrap();
-    let stats = simulate(
-        &sc.thermal,
-        &sc.gears,
-        &sc.solver,
-        sc.run.duration_s,
-        &mut (),
-        None,
-    )
-    .unwrap();
+    let stats = run_to_end(&sc);
     // β passes 0 → 60°, below the 68° where eclipses stop: one eclipse per orbit.
     assert_eq!(stats.eclipse_entries, 1370);
     assert!(
