@@ -1,4 +1,5 @@
-//! orbitlash command line: parse → load scenario → run → report.
+//! orbitlash command line: parse → load scenario → run → report. The outcome maps to
+//! the exit status here and only here: 0 pass, 1 a verdict failed, 2 error.
 
 mod cli;
 
@@ -9,9 +10,10 @@ use clap::Parser;
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
     match cli::dispatch(args) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(cli::Outcome::Pass) => ExitCode::SUCCESS,
+        Ok(cli::Outcome::Fail) => ExitCode::from(1),
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", cli::error_chain(&e));
             ExitCode::from(2)
         }
     }

@@ -44,7 +44,151 @@ pub enum SensorTarget {
 /// Derived quantities a sensor may name.
 pub const DERIVED_QUANTITIES: [&str; 1] = ["backlash_um"];
 
+/// Longest run, s (about 31.7 years). Beyond it the time of day no longer resolves the
+/// solver's shortest step (1e-7 s) in double precision.
+pub const MAX_DURATION_S: f64 = 1e9;
+
+/// Shortest interval between CSV rows, s.
+pub const MIN_OUTPUT_INTERVAL_S: f64 = 1e-3;
+
+/// Longest name of a scenario, node, boundary, load, heater, mode or gear pair.
+pub const MAX_NAME_LEN: usize = 100;
+
+/// Checks a name given in a scenario: 1 … 100 characters from `A–Z a–z 0–9 _ - .`,
+/// beginning with a letter, a digit or `_`. Names become file names (the default log
+/// `logs/<scenario>.mcap`), log field names and key paths, so nothing that could leave
+/// a folder (`/`, `..`) or break a CSV header (`,`, spaces) gets in.
+pub fn check_name(name: &str) -> Result<(), String> {
+    let first_ok = name
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_');
+    let rest_ok = name
+        .chars()
+        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+    if name.is_empty() {
+        Err("must not be empty".into())
+    } else if name.len() > MAX_NAME_LEN {
+        Err(format!("is longer than {MAX_NAME_LEN} characters"))
+    } else if !(first_ok && rest_ok) {
+        Err(format!(
+            "`{name}` is not a valid name: use letters, digits, `_`, `-` and `.`, beginning with a letter, digit or `_`"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// A likely mistake that leaves the scenario valid: `check` and `run` print these.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Warning {
+    /// The key path it concerns, e.g. `node.housing.initial_temperature_k`.
+    pub key: String,
+    pub message: String,
+}
+
+impl std::fmt::Display for Warning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "`{}`: {}", self.key, self.message)
+    }
+}
+
+/// A name as a key-path segment: quoted as in TOML when it holds a dot.
+pub fn key_segment(name: &str) -> String {
+    if name.contains('.') {
+        format!("\"{name}\"")
+    } else {
+        name.to_string()
+    }
+}
+
+/// Temperatures (K) below which a node's initial or reference temperature or a heater
+/// set point most likely is a Celsius value typed as kelvin (150 K = −123 °C).
+pub const CELSIUS_AS_KELVIN_BELOW_K: f64 = 150.0;
+
 impl Scenario {
+    /// Likely mistakes: a node with no path to a boundary (its temperature can run
+    /// away), a fixed step longer than the fastest node's time constant, temperatures
+    /// that look like °C typed as kelvin. O(nodes + links).
+    pub fn warnings(&self) -> Vec<Warning> {
+        use crate::thermal::analysis::{node_time_constants_s, unanchored_nodes};
+        let net = &self.thermal.network;
+        let mut w = Vec::new();
+        let node_key =
+            |i: usize, key: &str| format!("node.{}.{key}", key_segment(&net.nodes[i].name));
+        let loose: Vec<usize> = unanchored_nodes(net)
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &u)| u.then_some(i))
+            .collect();
+        if let Some(&first) = loose.first() {
+            let names: Vec<&str> = loose
+                .iter()
+                .take(8)
+                .map(|&i| net.nodes[i].name.as_str())
+                .collect();
+            w.push(Warning {
+                key: node_key(first, "name"),
+                message: format!(
+                    "{} node(s) have no conductive or radiative path to a boundary (space or a [[boundary]]): {}{}; their temperature can run away under any load",
+                    loose.len(),
+                    names.join(", "),
+                    if loose.len() > names.len() { ", …" } else { "" }
+                ),
+            });
+        }
+        if !self.solver.adaptive {
+            let temps = net.initial_temperatures_k();
+            let tau = node_time_constants_s(&self.thermal, &temps, 0.0);
+            if let Some((i, &t)) = tau
+                .iter()
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(b.1))
+                .filter(|(_, t)| self.solver.max_step_s > **t)
+            {
+                w.push(Warning {
+                    key: "solver.max_step_s".into(),
+                    message: format!(
+                        "the fixed step of {} s (adaptive = false) exceeds the time constant of node {} ({t:.3e} s): its transients are not resolved; use adaptive = true or a step below {t:.3e} s",
+                        self.solver.max_step_s, net.nodes[i].name
+                    ),
+                });
+            }
+        }
+        let celsius = |key: String, v: f64, w: &mut Vec<Warning>| {
+            if v < CELSIUS_AS_KELVIN_BELOW_K {
+                w.push(Warning {
+                    key,
+                    message: format!(
+                        "{v} K ({:.2} °C) looks like a Celsius value typed as kelvin; {v} °C is {:.2} K",
+                        v - 273.15,
+                        v + 273.15
+                    ),
+                });
+            }
+        };
+        for (i, n) in net.nodes.iter().enumerate() {
+            celsius(
+                node_key(i, "initial_temperature_k"),
+                n.initial_temperature_k,
+                &mut w,
+            );
+        }
+        for h in &net.heaters {
+            let k = format!("heater.{}", key_segment(&h.name));
+            celsius(format!("{k}.on_k"), h.on_k, &mut w);
+            celsius(format!("{k}.off_k"), h.off_k, &mut w);
+        }
+        for g in &self.gears {
+            celsius(
+                format!("gear_pair.{}.reference_temperature_k", key_segment(&g.name)),
+                g.reference_temperature_k,
+                &mut w,
+            );
+        }
+        w
+    }
+
     /// Orbital period, s.
     pub fn period_s(&self) -> f64 {
         self.thermal.environment.orbit.period_s()

@@ -38,6 +38,17 @@ impl Default for SolverSettings {
 /// Steps shorter than this are not attempted, s.
 pub const MIN_STEP_S: f64 = 1e-7;
 
+/// Tightest local error per step a scenario may ask for, K: the Newton iterations stop
+/// at 1 % of it, which stays well above the round-off of temperatures near 300 K
+/// (~1e-13 K) and of the stage sums.
+pub const MIN_TOLERANCE_K: f64 = 1e-6;
+/// Loosest, K: beyond it the step controller no longer tracks an orbit's transients.
+pub const MAX_TOLERANCE_K: f64 = 10.0;
+/// Smallest `max_step_s`, s: no node of a lumped spacecraft network needs shorter steps
+/// to be resolved (gear rims and thin films settle in ≳ 0.1 s), and a millisecond step
+/// over an orbit is already 6 million steps.
+pub const MIN_MAX_STEP_S: f64 = 1e-3;
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EventKind {
     EclipseEntry,
@@ -236,16 +247,96 @@ pub struct RunStats {
 
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
-    #[error("solver failed at t = {t_s:.6} s with step {h_s:.3e} s: {source}")]
+    #[error("solver failed at t = {t_s:.6} s with step {h_s:.3e} s: {cause}")]
     StepFailed {
         t_s: f64,
         h_s: f64,
-        source: StepFailure,
+        cause: StepFailure,
     },
-    #[error("observer failed: {0}")]
-    Observer(Box<dyn std::error::Error + Send + Sync>),
+    #[error("writing the outputs failed")]
+    Observer(#[source] Box<dyn std::error::Error + Send + Sync>),
     #[error("invalid run length {0} s")]
     BadDuration(f64),
+    #[error(
+        "node {node} reached {temperature_k:.4e} K at t = {t_s:.3} s: temperatures must stay within 0 … {MAX_TEMPERATURE_K} K; {cause}"
+    )]
+    NonPhysical {
+        node: String,
+        t_s: f64,
+        temperature_k: f64,
+        /// The likely cause, in words.
+        cause: String,
+    },
+    #[error("the step at t = {t_s} s is below the time resolution of the run")]
+    TimeResolution { t_s: f64 },
+}
+
+/// Highest temperature a result may reach, K: above the vaporisation point of every
+/// spacecraft material. A node that gets there has no way to lose its heat.
+pub const MAX_TEMPERATURE_K: f64 = 10_000.0;
+
+/// Why node `i` may have left the physical range, in words for the error message.
+fn likely_cause(
+    model: &ThermalModel,
+    temps_k: &[f64],
+    t_s: f64,
+    i: usize,
+    h_s: f64,
+    adaptive: bool,
+) -> String {
+    use crate::thermal::analysis::{node_time_constant_s, unanchored_nodes};
+    if unanchored_nodes(&model.network)[i] {
+        return "it has no conductive or radiative path to a boundary (space or a [[boundary]]), \
+so the heat it receives has nowhere to go; link it (see `orbitlash check`)"
+            .to_string();
+    }
+    let tau = node_time_constant_s(model, temps_k, t_s, i);
+    if !adaptive && h_s > tau {
+        return format!(
+            "the fixed step of {h_s:.4} s is {:.0}× the node's time constant of {tau:.3e} s \
+(C over the sum of its conductances, see `orbitlash check`); use solver.adaptive = true or a \
+solver.max_step_s below {tau:.3e} s",
+            h_s / tau
+        );
+    }
+    format!(
+        "the step of {h_s:.4} s could not resolve it (node time constant {tau:.3e} s); check its \
+loads, capacitance and conductances, or tighten solver.tolerance_k"
+    )
+}
+
+/// The first node whose interpolant over the step falls to 0 K or below, rises above
+/// [`MAX_TEMPERATURE_K`] or is not finite: (node, fraction of the step, value). Cheap when all is well: a node whose
+/// values and rates at both ends keep the cubic Hermite above
+/// min(y0, y1) − 4/27 h (|y0'| + |y1'|) > 0 (and a quadratic node whose three stage values
+/// are positive and monotone) needs no search for its extrema.
+fn first_nonphysical(d: &StepData) -> Option<(usize, f64, f64)> {
+    let h = d.h_s;
+    for i in 0..d.temps1_k.len() {
+        let (y0, y1) = (d.temps0_k[i], d.temps1_k[i]);
+        if !(y1.is_finite() && d.rates1_k_per_s[i].is_finite())
+            || y1 <= 0.0
+            || y1 > MAX_TEMPERATURE_K
+        {
+            return Some((i, 1.0, y1));
+        }
+        let safe = if d.quadratic[i] {
+            let yg = d.temps_gamma_k[i];
+            yg > 0.0 && (yg - y0) * (y1 - yg) >= 0.0
+        } else {
+            let slack = 4.0 / 27.0 * h * (d.rates0_k_per_s[i].abs() + d.rates1_k_per_s[i].abs());
+            y0.min(y1) - slack > 0.0 && y0.max(y1) + slack <= MAX_TEMPERATURE_K
+        };
+        if safe {
+            continue;
+        }
+        for (s, v) in d.interior_extrema(i).into_iter().flatten() {
+            if !(v > 0.0 && v <= MAX_TEMPERATURE_K) {
+                return Some((i, s, v));
+            }
+        }
+    }
+    None
 }
 
 /// Integrates `model` from t = 0 to `t_end_s`.
@@ -358,7 +449,7 @@ pub fn simulate<O: Observer>(
                 return Err(SimError::StepFailed {
                     t_s: t,
                     h_s: h_try,
-                    source: e,
+                    cause: e,
                 });
             }
             h = h_try * 0.25;
@@ -387,13 +478,35 @@ pub fn simulate<O: Observer>(
                 .map_err(|e| SimError::StepFailed {
                     t_s: t,
                     h_s: h_try,
-                    source: e,
+                    cause: e,
                 })?;
             stats.newton_iterations += stepper.data.newton_iterations as u64;
         }
 
+        // Every output (step ends, and the interpolant observers sample between them)
+        // must stay above 0 K. An adaptive run retries with a shorter step; a fixed-step
+        // run cannot, and ends with the node, the time and the likely cause.
+        if let Some((i, s, v)) = first_nonphysical(&stepper.data) {
+            let h_now = stepper.data.h_s;
+            // Below 0 K a shorter step can help; a run-away to 10 000 K cannot.
+            if v <= 0.0 && settings.adaptive && h_now * 0.5 > MIN_STEP_S {
+                h = h_now * 0.5;
+                stats.rejected_steps += 1;
+                continue;
+            }
+            return Err(SimError::NonPhysical {
+                node: net.nodes[i].name.clone(),
+                t_s: t + s * h_now,
+                temperature_k: v,
+                cause: likely_cause(model, &y, t, i, h_now, settings.adaptive),
+            });
+        }
+
         // Accept.
         let t_new = if lands { t_event } else { t + h_try };
+        if t_new <= t {
+            return Err(SimError::TimeResolution { t_s: t });
+        }
         stepper.data.h_s = t_new - t;
         accumulate_energy(&mut stats.energy, &stepper.data);
         stats.steps += 1;

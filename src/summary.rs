@@ -4,7 +4,6 @@
 
 use crate::gear::MeshState;
 use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView, mesh_or_nan};
-use crate::thermal::solver::hermite_interior_extrema;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeStats {
@@ -89,22 +88,13 @@ impl Observer for WindowStats {
         let d = step.data;
         self.covered_s += t1 - a;
         for i in 0..self.names.len() {
-            let (y0, y1, f0, f1, h) = (
-                d.temps0_k[i],
-                d.temps1_k[i],
-                d.rates0_k_per_s[i],
-                d.rates1_k_per_s[i],
-                d.h_s,
-            );
+            let (y1, h) = (d.temps1_k[i], d.h_s);
             let sa = (a - t0) / h;
             let p = |s: f64| d.temperature_at_fraction(i, s);
             self.see(i, p(sa));
             self.see(i, y1);
             if sa == 0.0 {
-                for v in hermite_interior_extrema(y0, y1, f0, f1, h)
-                    .into_iter()
-                    .flatten()
-                {
+                for (_, v) in d.interior_extrema(i).into_iter().flatten() {
                     self.see(i, v);
                 }
             } else {
@@ -187,8 +177,28 @@ pub struct PairStats {
     /// Times backlash reached zero / fell below the minimum allowed.
     pub interference_events: u64,
     pub margin_events: u64,
-    /// Samples with no valid mesh.
+    /// Samples with no valid mesh, and the first time one was seen.
     pub invalid_samples: u64,
+    pub t_first_invalid_s: f64,
+}
+
+/// Whether a gear pair kept its minimum backlash.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PairVerdict {
+    /// The exact backlash stayed at or above the minimum allowed.
+    Pass,
+    /// The backlash fell below the minimum allowed (but stayed positive).
+    MarginViolated,
+    /// The teeth interfere: backlash reached zero.
+    Interference,
+    /// No valid mesh at some time (base circles overlap or contact lost).
+    NoValidMesh,
+}
+
+impl PairVerdict {
+    pub fn passes(self) -> bool {
+        self == PairVerdict::Pass
+    }
 }
 
 impl PairStats {
@@ -207,11 +217,28 @@ impl PairStats {
             interference_events: 0,
             margin_events: 0,
             invalid_samples: 0,
+            t_first_invalid_s: f64::NAN,
+        }
+    }
+
+    /// The verdict over the samples seen (the worst of them).
+    pub fn verdict(&self) -> PairVerdict {
+        if self.invalid_samples > 0 {
+            PairVerdict::NoValidMesh
+        } else if self.min_exact_m <= 0.0 || self.interference_events > 0 {
+            PairVerdict::Interference
+        } else if self.min_margin_m < 0.0 || self.margin_events > 0 {
+            PairVerdict::MarginViolated
+        } else {
+            PairVerdict::Pass
         }
     }
 
     fn see(&mut self, t_s: f64, m: &MeshState) {
         if m.backlash_exact_m.is_nan() {
+            if self.invalid_samples == 0 {
+                self.t_first_invalid_s = t_s;
+            }
             self.invalid_samples += 1;
             return;
         }

@@ -188,7 +188,7 @@ fn zero_time_step() {
         "step",
         "max_step_s = 300.0",
         "max_step_s = 0.0",
-        &["solver.max_step_s", "> 0"],
+        &["solver.max_step_s", "at least 0.001 s"],
     );
 }
 

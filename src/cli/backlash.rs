@@ -11,7 +11,7 @@ use serde_json::json;
 use orbitlash::gear::{CenterDistance, GearPair, MeshState};
 use orbitlash::units::{c_to_k, k_to_c};
 
-use super::{load, print_out};
+use super::{Outcome, load, print_out};
 
 #[derive(Args, Debug)]
 pub struct BacklashArgs {
@@ -48,7 +48,36 @@ struct Case {
     housing_c: f64,
 }
 
-pub fn backlash(a: BacklashArgs) -> Result<()> {
+/// The case with the smallest margin, and whether every case keeps the minimum
+/// backlash with teeth that do not interfere.
+fn worst(states: &[(Case, MeshState)]) -> (&Case, &MeshState, bool) {
+    let (c, m) = states
+        .iter()
+        .min_by(|x, y| x.1.margin_m.total_cmp(&y.1.margin_m))
+        .map(|(c, m)| (c, m))
+        .expect("the assembly case");
+    let pass = states
+        .iter()
+        .all(|(_, m)| m.margin_m >= 0.0 && m.backlash_exact_m > 0.0);
+    (c, m, pass)
+}
+
+fn verdict_line(pair: &GearPair, states: &[(Case, MeshState)]) -> String {
+    let (c, m, pass) = worst(states);
+    format!(
+        "{} {}: smallest margin {:.3} µm (backlash {:.3} µm, minimum {:.1} µm) in case {} (pinion {:.2} °C, wheel {:.2} °C)",
+        if pass { "PASS" } else { "FAIL" },
+        pair.name,
+        m.margin_m * 1e6,
+        m.backlash_exact_m * 1e6,
+        pair.min_backlash_m * 1e6,
+        c.label,
+        c.pinion_c,
+        c.wheel_c
+    )
+}
+
+pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
     let loaded = load(a.scenario.as_deref())?;
     let sc = &loaded.scenario;
     if sc.gears.is_empty() {
@@ -95,10 +124,15 @@ pub fn backlash(a: BacklashArgs) -> Result<()> {
             .collect::<Result<_, _>>()?;
         cases.push((pair, states));
     }
+    let pass = cases.iter().all(|(_, states)| worst(states).2);
     if a.json {
-        return print_out(&(serde_json::to_string_pretty(&to_json(&sc.name, &cases))? + "\n"));
+        print_out(&(serde_json::to_string_pretty(&to_json(&sc.name, &cases))? + "\n"))?;
+        return Ok(Outcome::from_pass(pass));
     }
     let mut o = String::new();
+    for (pair, states) in &cases {
+        outln!(o, "{}", verdict_line(pair, states));
+    }
     for (pair, states) in &cases {
         let centre = match pair.center {
             CenterDistance::Fixed => "fixed centre distance".to_string(),
@@ -167,7 +201,8 @@ pub fn backlash(a: BacklashArgs) -> Result<()> {
             "  closed form: pitch-averaged; paper: equations (16)–(22) with the corrections documented in src/gear/paper.rs"
         );
     }
-    print_out(&o)
+    print_out(&o)?;
+    Ok(Outcome::from_pass(pass))
 }
 
 /// Node temperatures for a case: each gear's nodes at its temperature, the housing node
@@ -188,8 +223,11 @@ fn temperatures(pair: &GearPair, n: usize, c: &Case) -> Vec<f64> {
 fn to_json(name: &str, cases: &[(&GearPair, Vec<(Case, MeshState)>)]) -> serde_json::Value {
     json!({
         "scenario": name,
+        "pass": cases.iter().all(|(_, states)| worst(states).2),
         "pairs": cases.iter().map(|(pair, states)| json!({
             "name": pair.name,
+            "verdict": if worst(states).2 { "pass" } else { "fail" },
+            "min_margin_um": worst(states).1.margin_m * 1e6,
             "min_backlash_um": pair.min_backlash_m * 1e6,
             "cases": states.iter().map(|(c, m)| json!({
                 "case": c.label,

@@ -8,6 +8,7 @@ use anyhow::Result;
 use clap::Args;
 
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
+use orbitlash::io::output::OutputPolicy;
 use orbitlash::sim::{SolverSettings, simulate};
 use orbitlash::summary::{MeshStats, Samples, WindowStats};
 
@@ -20,9 +21,9 @@ pub struct BenchArgs {
     /// Orbits per timed run.
     #[arg(long, value_parser = orbits_arg, default_value = "6")]
     orbits: f64,
-    /// Timed repetitions (the median is reported).
-    #[arg(long, default_value_t = 31)]
-    repeat: usize,
+    /// Timed repetitions (the median is reported), at least 1.
+    #[arg(long, default_value_t = 31, value_parser = clap::value_parser!(u32).range(1..))]
+    repeat: u32,
     /// Skip the accuracy comparison with a step-converged run (for profiling).
     #[arg(long)]
     no_accuracy: bool,
@@ -34,7 +35,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let sc = loaded.scenario.with_orbits(a.orbits);
     let t_end = sc.run.duration_s;
     let period = sc.period_s();
-    let repeat = a.repeat.max(1);
+    let repeat = a.repeat as usize;
 
     let mut times = Vec::with_capacity(repeat);
     let mut steps = 0;
@@ -89,7 +90,12 @@ pub fn bench(a: BenchArgs) -> Result<()> {
                 WindowStats::last(t_end),
             );
             let mut mcap = if log {
-                Some(McapLog::create(&path, prov(), LogCadence::Steps(1))?)
+                Some(McapLog::create(
+                    &path,
+                    prov(),
+                    LogCadence::Steps(1),
+                    &OutputPolicy::default_in_logs(&[]),
+                )?)
             } else {
                 None
             };

@@ -22,7 +22,20 @@ pub fn check(a: CheckArgs) -> Result<()> {
     let env = &sc.thermal.environment;
     let orbit = &env.orbit;
     let net = &sc.thermal.network;
-    outln!(o, "{}: valid ({})", loaded.file, sc.name);
+    let warnings = sc.warnings();
+    outln!(
+        o,
+        "{}: valid ({}){}",
+        loaded.file,
+        sc.name,
+        match warnings.len() {
+            0 => String::new(),
+            n => format!(", {n} warning(s)"),
+        }
+    );
+    for w in &warnings {
+        outln!(o, "warning: {w}");
+    }
     if !sc.description.is_empty() {
         outln!(o, "  {}", sc.description);
     }

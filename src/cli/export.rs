@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use clap::Args;
 
-use orbitlash::io::atomic::AtomicFile;
+use orbitlash::io::atomic::{AtomicFile, OutputPolicy};
 use orbitlash::io::csv_export::GEAR_COLUMNS;
 use orbitlash::io::mcap_read::read_log;
 
@@ -114,7 +114,7 @@ pub fn export(a: ExportArgs) -> Result<()> {
     match &a.out {
         None => print_out(&text),
         Some(p) => {
-            let mut f = AtomicFile::create(p)?;
+            let mut f = AtomicFile::create(p, &OutputPolicy::reading(&[&a.log]))?;
             f.write_all(text.as_bytes())?;
             f.commit()?;
             Ok(())

@@ -26,7 +26,10 @@ use orbitlash::scenario::Scenario;
 #[command(
     name = "orbitlash",
     version,
-    about = "Orbital thermal transients of spacecraft mechanisms and the backlash of their gears"
+    about = "Orbital thermal transients of spacecraft mechanisms and the backlash of their gears",
+    after_help = "Exit status: 0 when the command succeeded and, for `run` and `backlash`, every gear pair \
+kept its minimum backlash; 1 when a gear pair's margin was violated or its teeth interfere; \
+2 on any error (bad input, unwritable output, solver failure, interrupted run)."
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -48,14 +51,44 @@ enum Command {
     ExportCsv(export::ExportArgs),
 }
 
-pub fn dispatch(cli: Cli) -> Result<()> {
+/// How a command that ran to its end came out; errors are the `Err` of [`dispatch`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Done, and every verdict passed (exit status 0).
+    Pass,
+    /// Done, but a verdict failed: a margin violated, interference (exit status 1).
+    Fail,
+}
+
+impl Outcome {
+    pub fn from_pass(pass: bool) -> Outcome {
+        if pass { Outcome::Pass } else { Outcome::Fail }
+    }
+}
+
+pub fn dispatch(cli: Cli) -> Result<Outcome> {
+    let done = |r: Result<()>| r.map(|()| Outcome::Pass);
     match cli.command {
         Command::Run(a) => run::run(a),
-        Command::Check(a) => check::check(a),
-        Command::Bench(a) => bench::bench(a),
+        Command::Check(a) => done(check::check(a)),
+        Command::Bench(a) => done(bench::bench(a)),
         Command::Backlash(a) => backlash::backlash(a),
-        Command::ExportCsv(a) => export::export(a),
+        Command::ExportCsv(a) => done(export::export(a)),
     }
+}
+
+/// An error and its causes on one line, outermost first, each cause once (a cause
+/// already quoted by the message before it is not repeated).
+pub fn error_chain(e: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if parts.last().is_some_and(|p| p.ends_with(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
 }
 
 /// A scenario as loaded: the model, its TOML text and where it came from.
@@ -63,6 +96,15 @@ pub struct Loaded {
     pub scenario: Scenario,
     pub toml: String,
     pub file: String,
+    /// The scenario file, when it came from one (an input outputs must not replace).
+    pub path: Option<PathBuf>,
+}
+
+impl Loaded {
+    /// The files this scenario was read from.
+    pub fn inputs(&self) -> Vec<&Path> {
+        self.path.iter().map(PathBuf::as_path).collect()
+    }
 }
 
 /// Loads `path`, or the embedded reference scenario when `None`.
@@ -74,12 +116,14 @@ pub fn load(path: Option<&Path>) -> Result<Loaded> {
                 scenario,
                 toml,
                 file: p.display().to_string(),
+                path: Some(p.to_path_buf()),
             })
         }
         None => Ok(Loaded {
             scenario: scenario_toml::reference(),
             toml: REFERENCE_HINGE_TOML.to_string(),
             file: format!("<embedded {REFERENCE_HINGE_NAME}.toml>"),
+            path: None,
         }),
     }
 }
@@ -94,8 +138,13 @@ pub fn orbits_arg(s: &str) -> Result<f64, String> {
     }
 }
 
-pub fn default_log_path(name: &str) -> PathBuf {
-    PathBuf::from("logs").join(format!("{name}.mcap"))
+/// The default log of a scenario: `logs/<name>.mcap`. Scenario names are checked
+/// (`scenario::check_name`) so that this stays inside `logs/`; a name that would not is
+/// refused here as well.
+pub fn default_log_path(name: &str) -> Result<PathBuf> {
+    orbitlash::scenario::check_name(name)
+        .map_err(|m| anyhow::anyhow!("scenario name {m}; it names the default log"))?;
+    Ok(PathBuf::from("logs").join(format!("{name}.mcap")))
 }
 
 /// Writes a report to stdout; a closed pipe (`| head`) is not an error.

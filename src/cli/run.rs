@@ -5,18 +5,20 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Result, anyhow};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
+use orbitlash::io::output::{OutputPolicy, check_output, resolved};
+use orbitlash::scenario::Scenario;
 use orbitlash::sim::{Observer, ObserverResult, RunStats, StepView, simulate};
-use orbitlash::summary::{MeshStats, PairStats, WindowStats};
+use orbitlash::summary::{MeshStats, PairStats, PairVerdict, WindowStats};
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
 
-use super::{default_log_path, load, orbits_arg, print_out};
+use super::{Outcome, default_log_path, error_chain, load, orbits_arg, print_out};
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
@@ -46,6 +48,10 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Also print the solver's statistics (steps, rejections, factorisations, Newton
+    /// iterations, wall time).
+    #[arg(long, short)]
+    verbose: bool,
 }
 
 struct Progress(ProgressBar, f64);
@@ -61,21 +67,40 @@ impl Observer for Progress {
     }
 }
 
-pub fn run(a: RunArgs) -> Result<()> {
+pub fn run(a: RunArgs) -> Result<Outcome> {
     let loaded = load(a.scenario.as_deref())?;
-    let mut sc = loaded.scenario;
+    let mut sc = loaded.scenario.clone();
     if let Some(o) = a.orbits {
         sc = sc.with_orbits(o);
     }
     let period_s = sc.period_s();
     let t_end_s = sc.run.duration_s;
+    for w in sc.warnings() {
+        eprintln!("warning: {}: {w}", loaded.file);
+    }
 
-    // Open every output before the run, so a bad path fails now.
-    let log_path = (!a.no_log).then(|| a.out.clone().unwrap_or_else(|| default_log_path(&sc.name)));
+    // Open every output before the run, so a bad path fails now. No output may be an
+    // input (the scenario file), a device, a FIFO or a link (`io::output`).
+    let inputs = loaded.inputs();
+    let (log_path, log_policy) = match (&a.out, a.no_log) {
+        (_, true) => (None, OutputPolicy::reading(&inputs)),
+        (Some(p), false) => (Some(p.clone()), OutputPolicy::reading(&inputs)),
+        (None, false) => (
+            Some(default_log_path(&sc.name)?),
+            OutputPolicy::default_in_logs(&inputs),
+        ),
+    };
     if let (Some(l), Some(c)) = (&log_path, &a.csv)
-        && l == c
+        && resolved(l) == resolved(c)
     {
-        anyhow::bail!("--csv and the log are the same file: {}", c.display());
+        anyhow::bail!(
+            "--csv {} and the log {} are the same file",
+            c.display(),
+            l.display()
+        );
+    }
+    if let Some(c) = &a.csv {
+        check_output(c, &OutputPolicy::reading(&inputs))?;
     }
     let log = match &log_path {
         Some(p) => Some(McapLog::create(
@@ -91,6 +116,7 @@ pub fn run(a: RunArgs) -> Result<()> {
                 seed: None,
             },
             a.log_every.unwrap_or(LogCadence::Steps(1)),
+            &log_policy,
         )?),
         None => None,
     };
@@ -99,7 +125,11 @@ pub fn run(a: RunArgs) -> Result<()> {
         other => other,
     };
     let csv = match &a.csv {
-        Some(p) => Some(CsvExport::create(p, sc.run.output_interval_s)?),
+        Some(p) => Some(CsvExport::create(
+            p,
+            sc.run.output_interval_s,
+            &OutputPolicy::reading(&inputs),
+        )?),
         None => None,
     };
     let progress = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
@@ -140,17 +170,25 @@ pub fn run(a: RunArgs) -> Result<()> {
         Ok(stats) => stats,
         Err(e) => {
             // Close the log as the record of a failed run; other outputs are discarded.
-            let closed = log
-                .as_mut()
-                .map(|l| l.close_failed(f64::NAN, &e.to_string()));
-            let mut err = anyhow::Error::new(e).context(format!("running {}", loaded.file));
-            if let Some(Ok(p)) = closed {
-                err = err.context(format!(
-                    "the log {} holds the run up to the failure",
+            // The message: the cause first, then where the partial output is.
+            let cause = error_chain(&anyhow::Error::new(e));
+            let closed = log.as_mut().map(|l| l.close_failed(f64::NAN, &cause));
+            let mut msg = format!("running {}: {cause}", loaded.file);
+            match closed {
+                Some(Ok(p)) => msg.push_str(&format!(
+                    "\n  the log {} holds the run up to the failure",
                     p.display()
-                ));
+                )),
+                Some(Err(e)) => msg.push_str(&format!(
+                    "\n  the log could not be closed: {}",
+                    error_chain(&e.into())
+                )),
+                None => {}
             }
-            return Err(err);
+            if a.csv.is_some() {
+                msg.push_str("\n  no CSV was written");
+            }
+            return Err(anyhow!(msg));
         }
     };
     let wall_s = wall.elapsed().as_secs_f64();
@@ -160,8 +198,13 @@ pub fn run(a: RunArgs) -> Result<()> {
     } else {
         &stats_run
     };
-    let mut o = format_summary(&sc.name, &sc.thermal, &stats, window, period_s, wall_s);
+    let verdicts: Vec<PairVerdict> = mesh.run_pairs.iter().map(PairStats::verdict).collect();
+    let mut o = format_verdict(&sc, &stats, &mesh);
+    o.push_str(&format_summary(&sc.thermal, &stats, window, period_s));
     o.push_str(&format_mesh(&sc, &mesh));
+    if a.verbose {
+        o.push_str(&format_solver(&stats, wall_s, t_end_s / period_s));
+    }
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
@@ -174,14 +217,105 @@ pub fn run(a: RunArgs) -> Result<()> {
         );
     }
     print_out(&o)?;
+    let pass = verdicts.iter().all(|v| v.passes());
     if stats.interrupted {
         anyhow::bail!(
-            "interrupted at t = {:.1} s of {:.1} s; the outputs above are complete up to then",
+            "interrupted at t = {:.1} s of {:.1} s; the outputs above are complete up to then (verdict so far: {})",
             stats.t_end_s,
-            t_end_s
+            t_end_s,
+            if pass { "PASS" } else { "FAIL" }
         );
     }
-    Ok(())
+    Ok(Outcome::from_pass(pass))
+}
+
+/// Where in the orbit `t` falls, for reports.
+fn orbit_phase(sc: &Scenario, t: f64) -> String {
+    let env = &sc.thermal.environment;
+    format!(
+        "t = {t:.1} s, orbit {}, θ = {:.1}° from noon, {}",
+        env.orbit.orbit_number(t),
+        env.orbit.orbit_angle_rad(t).to_degrees().rem_euclid(360.0),
+        if env.sunlit(t) { "sunlit" } else { "eclipse" }
+    )
+}
+
+/// The first lines of the summary: one PASS/FAIL line per gear pair.
+fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
+    let mut o = String::new();
+    outln!(
+        o,
+        "{}: {:.2} orbits, {:.1} s simulated{}",
+        sc.name,
+        stats.t_end_s / sc.period_s(),
+        stats.t_end_s,
+        if stats.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
+    );
+    if sc.gears.is_empty() {
+        outln!(o, "no gear pair: no backlash verdict");
+    }
+    for (pair, r) in sc.gears.iter().zip(&mesh.run_pairs) {
+        let min_um = pair.min_backlash_m * 1e6;
+        let line = match r.verdict() {
+            PairVerdict::Pass => format!(
+                "PASS {}: margin {:.3} µm (smallest backlash {:.3} µm ≥ {:.1} µm minimum) at {}",
+                pair.name,
+                r.min_margin_m * 1e6,
+                r.min_exact_m * 1e6,
+                min_um,
+                orbit_phase(sc, r.t_min_s)
+            ),
+            PairVerdict::MarginViolated => format!(
+                "FAIL {}: margin {:.3} µm (smallest backlash {:.3} µm < {:.1} µm minimum) at {}",
+                pair.name,
+                r.min_margin_m * 1e6,
+                r.min_exact_m * 1e6,
+                min_um,
+                orbit_phase(sc, r.t_min_s)
+            ),
+            PairVerdict::Interference => format!(
+                "FAIL {}: interference, margin {:.3} µm (smallest backlash {:.3} µm ≤ 0) at {}",
+                pair.name,
+                r.min_margin_m * 1e6,
+                r.min_exact_m * 1e6,
+                orbit_phase(sc, r.t_min_s)
+            ),
+            PairVerdict::NoValidMesh => format!(
+                "FAIL {}: no valid mesh (base circles overlap or contact ratio below 1) from {}",
+                pair.name,
+                orbit_phase(sc, r.t_first_invalid_s)
+            ),
+        };
+        outln!(o, "{line}");
+    }
+    o
+}
+
+/// Solver internals (`--verbose`).
+fn format_solver(stats: &RunStats, wall_s: f64, orbits: f64) -> String {
+    let mut o = String::new();
+    outln!(
+        o,
+        "\nsolver: tr-bdf2, {} steps ({} rejected, {} factorisations), {:.2} Newton iterations/step, {} eclipse entries, {} heater switches",
+        stats.steps,
+        stats.rejected_steps,
+        stats.factorizations,
+        stats.newton_iterations as f64 / stats.steps.max(1) as f64,
+        stats.eclipse_entries,
+        stats.heater_switches
+    );
+    outln!(
+        o,
+        "wall time {:.3} ms, {:.0} steps/s, {:.3} ms/orbit",
+        wall_s * 1e3,
+        stats.steps as f64 / wall_s,
+        wall_s * 1e3 / orbits
+    );
+    o
 }
 
 /// A flag set by Ctrl-C (SIGINT/SIGTERM): the run stops after the current step and
@@ -196,26 +330,13 @@ fn interrupt_flag() -> &'static AtomicBool {
 }
 
 fn format_summary(
-    name: &str,
     model: &ThermalModel,
     stats: &RunStats,
     window: &WindowStats,
     period_s: f64,
-    wall_s: f64,
 ) -> String {
     let mut o = String::new();
     let env = &model.environment;
-    let orbits = stats.t_end_s / period_s;
-    outln!(
-        o,
-        "{name}: {orbits:.2} orbits, {:.1} s simulated{}",
-        stats.t_end_s,
-        if stats.interrupted {
-            " (interrupted)"
-        } else {
-            ""
-        }
-    );
     let (b_lo, b_hi) = env.beta_rad.range();
     outln!(
         o,
@@ -287,37 +408,12 @@ fn format_summary(
         e.error_j(),
         e.relative_error()
     );
-    outln!(
-        o,
-        "\nsolver: tr-bdf2, {} steps ({} rejected, {} factorisations), {:.2} Newton iterations/step, {} eclipse entries, {} heater switches",
-        stats.steps,
-        stats.rejected_steps,
-        stats.factorizations,
-        stats.newton_iterations as f64 / stats.steps.max(1) as f64,
-        stats.eclipse_entries,
-        stats.heater_switches
-    );
-    outln!(
-        o,
-        "wall time {:.3} ms, {:.0} steps/s, {:.3} ms/orbit",
-        wall_s * 1e3,
-        stats.steps as f64 / wall_s,
-        wall_s * 1e3 / orbits
-    );
     o
 }
 
-fn format_mesh(sc: &orbitlash::scenario::Scenario, mesh: &MeshStats) -> String {
+fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
     let mut o = String::new();
-    let env = &sc.thermal.environment;
-    let phase = |t: f64| {
-        format!(
-            "t = {t:.1} s, orbit {}, θ = {:.1}° from noon, {}",
-            env.orbit.orbit_number(t),
-            env.orbit.orbit_angle_rad(t).to_degrees().rem_euclid(360.0),
-            if env.sunlit(t) { "sunlit" } else { "eclipse" }
-        )
-    };
+    let phase = |t: f64| orbit_phase(sc, t);
     for ((pair, r), l) in sc.gears.iter().zip(&mesh.run_pairs).zip(&mesh.pairs) {
         outln!(
             o,
@@ -327,12 +423,12 @@ fn format_mesh(sc: &orbitlash::scenario::Scenario, mesh: &MeshStats) -> String {
         );
         outln!(
             o,
-            "  {:26} {:>9} {:>9} {:>9} {:>9}",
+            "  {:26} {:>9} {:>9} {:>15} {:>15}",
             "",
             "run min",
             "run max",
-            "orbit min",
-            "orbit max"
+            "last orbit min",
+            "last orbit max"
         );
         // "–" where a window saw no step (an interrupted run).
         let um = |v: f64| {
@@ -347,7 +443,7 @@ fn format_mesh(sc: &orbitlash::scenario::Scenario, mesh: &MeshStats) -> String {
             let (c, d) = f(l);
             outln!(
                 o,
-                "  {label:26} {:>9} {:>9} {:>9} {:>9}",
+                "  {label:26} {:>9} {:>9} {:>15} {:>15}",
                 um(a),
                 um(b),
                 um(c),

@@ -5,12 +5,8 @@ use std::fs::File;
 use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-#[derive(Debug, thiserror::Error)]
-#[error("cannot write {path}: {source}")]
-pub struct OutputError {
-    pub path: String,
-    pub source: std::io::Error,
-}
+pub use super::output::{OutputError, OutputPolicy};
+use super::output::{check_output, temporary_path};
 
 pub struct AtomicFile {
     final_path: PathBuf,
@@ -22,23 +18,24 @@ pub struct AtomicFile {
 }
 
 impl AtomicFile {
-    /// Creates `<path>.partial` next to `path` (creating parent folders); fails now if
-    /// the location cannot be written.
-    pub fn create(path: &Path) -> Result<AtomicFile, OutputError> {
-        let err = |source| OutputError {
-            path: path.display().to_string(),
-            source,
-        };
-        if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
-            std::fs::create_dir_all(parent).map_err(err)?;
+    /// Creates `<path>.partial` next to `path` after checking `path` against `policy`
+    /// (`io::output`: never an input, a device, a FIFO or a link; parent folders only
+    /// for defaults under `logs/`); fails now if the location cannot be written.
+    pub fn create(path: &Path, policy: &OutputPolicy) -> Result<AtomicFile, OutputError> {
+        let err = |source| OutputError::io(path, source);
+        check_output(path, policy)?;
+        let tmp_path = temporary_path(path, policy);
+        // A stale temporary file of an earlier, killed run (or whatever else sits under
+        // that name: a link is removed, not followed) makes way for a new one.
+        match std::fs::remove_file(&tmp_path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(err(e)),
+            _ => {}
         }
-        if path.is_dir() {
-            return Err(err(std::io::Error::other("it is a directory")));
-        }
-        let mut tmp = path.as_os_str().to_owned();
-        tmp.push(".partial");
-        let tmp_path = PathBuf::from(tmp);
-        let file = File::create(&tmp_path).map_err(err)?;
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp_path)
+            .map_err(err)?;
         Ok(AtomicFile {
             final_path: path.to_path_buf(),
             tmp_path,
@@ -55,10 +52,7 @@ impl AtomicFile {
     /// the program never leaves a partial file under the final name. There is no
     /// fsync: it would double the cost of a logged run, and outputs are reproducible.
     pub fn commit(mut self) -> Result<PathBuf, OutputError> {
-        let err = |source| OutputError {
-            path: self.final_path.display().to_string(),
-            source,
-        };
+        let err = |source| OutputError::io(&self.final_path, source);
         let w = self.writer.take().expect("committed twice");
         let file = w.into_inner().map_err(|e| err(e.into_error()))?;
         drop(file);

@@ -7,7 +7,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use super::atomic::{AtomicFile, OutputError};
+use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use crate::gear::GearPair;
 use crate::sim::{Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan};
 
@@ -55,9 +55,13 @@ pub fn gear_values(m: &crate::gear::MeshState) -> [f64; 5] {
 }
 
 impl CsvExport {
-    pub fn create(path: &Path, interval_s: f64) -> Result<CsvExport, OutputError> {
+    pub fn create(
+        path: &Path,
+        interval_s: f64,
+        policy: &OutputPolicy,
+    ) -> Result<CsvExport, OutputError> {
         Ok(CsvExport {
-            file: Some(AtomicFile::create(path)?),
+            file: Some(AtomicFile::create(path, policy)?),
             interval_s,
             next_row: 0,
             row: vec![],

@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 
 use sha2::{Digest, Sha256};
 
-use super::atomic::{AtomicFile, OutputError};
+use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use super::log_schema::{
     Kind, MessageType, descriptor_set, foxglove_log_descriptor_set, foxglove_scene_descriptor_set,
     identifier,
@@ -189,10 +189,7 @@ fn ns(t_s: f64) -> u64 {
 }
 
 fn out_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
-    OutputError {
-        path: path.display().to_string(),
-        source: std::io::Error::other(e.to_string()),
-    }
+    OutputError::other(path, e)
 }
 
 impl LogWriter {
@@ -362,8 +359,9 @@ impl McapLog {
         path: &Path,
         provenance: Provenance,
         cadence: LogCadence,
+        policy: &OutputPolicy,
     ) -> Result<McapLog, OutputError> {
-        let file = AtomicFile::create(path)?;
+        let file = AtomicFile::create(path, policy)?;
         let writer = mcap::WriteOptions::new()
             .library(format!("orbitlash {}", env!("CARGO_PKG_VERSION")))
             .profile("")
@@ -511,10 +509,7 @@ fn spawn_writer(
             let mut error: Option<OutputError> = match std::fs::remove_file(&w.path) {
                 Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
                     flag.store(true, std::sync::atomic::Ordering::Relaxed);
-                    Some(OutputError {
-                        path: w.path.display().to_string(),
-                        source: e,
-                    })
+                    Some(OutputError::io(&w.path, e))
                 }
                 _ => None,
             };

@@ -9,7 +9,7 @@ use super::protobuf::{Wire, fields};
 
 #[derive(Debug, thiserror::Error)]
 pub enum LogReadError {
-    #[error("cannot read {file}: {source}")]
+    #[error("cannot read {file}")]
     Io {
         file: String,
         source: std::io::Error,

@@ -11,12 +11,15 @@ use serde::Deserialize;
 
 use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
 use crate::gear::disc::{BoreFit, DiscMaterial};
-use crate::gear::involute::shifted_tooth_thickness;
+use crate::gear::involute::{inv, shifted_tooth_thickness};
 use crate::gear::strain::StrainLaw;
 use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
 use crate::orbit::{Environment, Incidence, Orbit, Profile};
-use crate::scenario::{DERIVED_QUANTITIES, RunControl, Scenario, Sensor, SensorTarget};
-use crate::sim::SolverSettings;
+use crate::scenario::{
+    DERIVED_QUANTITIES, MAX_DURATION_S, MIN_OUTPUT_INTERVAL_S, RunControl, Scenario, Sensor,
+    SensorTarget,
+};
+use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K, SolverSettings};
 use crate::thermal::{
     BoundaryNode, Conductor, DiffusionNode, Heater, Load, LoadKind, Mode, Network, NodeRef,
     Radiator, ThermalModel, When,
@@ -29,7 +32,7 @@ pub const REFERENCE_HINGE_NAME: &str = "reference-hinge";
 
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
-    #[error("cannot read scenario {file}: {source}")]
+    #[error("cannot read scenario {file}")]
     Read {
         file: String,
         source: std::io::Error,
@@ -278,14 +281,14 @@ struct RawBoundary {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawConductor {
-    between: [String; 2],
+    between: Vec<String>,
     conductance_w_per_k: f64,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawRadiation {
-    between: [String; 2],
+    between: Vec<String>,
     emissivity_area_m2: Option<f64>,
     emissivity: Option<f64>,
     area_m2: Option<f64>,
@@ -348,8 +351,8 @@ struct RawHeater {
 #[serde(deny_unknown_fields)]
 struct RawMode {
     name: String,
-    windows_s: Option<Vec<[f64; 2]>>,
-    windows_days: Option<Vec<[f64; 2]>>,
+    windows_s: Option<Vec<Vec<f64>>>,
+    windows_days: Option<Vec<Vec<f64>>>,
 }
 
 #[derive(Deserialize)]
@@ -435,6 +438,16 @@ impl Cx<'_> {
             Ok(v)
         } else {
             Err(self.err(path, format!("must be > 0 (got {v})")))
+        }
+    }
+
+    /// A finite value ≥ `lo` (a physically sensible lower bound, named in the error).
+    fn at_least(&self, path: &KeyPath, v: f64, lo: f64, unit: &str) -> Result<f64, ScenarioError> {
+        self.finite(path, v)?;
+        if v >= lo {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be at least {lo} {unit} (got {v})")))
         }
     }
 
@@ -595,19 +608,24 @@ fn locate(text: &str, path: &KeyPath) -> Option<usize> {
 
 // ---------------------------------------------------------------- validation
 
+/// Orbital periods the model accepts, s: 10 minutes … 30 days.
+pub const MIN_PERIOD_S: f64 = 600.0;
+pub const MAX_PERIOD_S: f64 = 30.0 * SECONDS_PER_DAY;
+
 const SPACE: &str = "space";
 
 fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     let meta_p = KeyPath::new("scenario");
-    if raw.scenario.name.trim().is_empty() {
-        return Err(cx.err(&meta_p.key("name"), "must not be empty"));
-    }
+    valid_name(cx, &meta_p.key("name"), &raw.scenario.name)?;
 
     // Orbit.
     let op = KeyPath::new("orbit");
-    let earth_radius_m = cx.positive(
+    let earth_radius_m = cx.within(
         &op.key("earth_radius_m"),
         raw.orbit.earth_radius_m.unwrap_or(EARTH_RADIUS_M),
+        1e5,
+        1e8,
+        "the central body's radius (m)",
     )?;
     let altitude_m = cx.finite(&op.key("altitude_m"), raw.orbit.altitude_m)?;
     if !(100e3..=100_000e3).contains(&altitude_m) {
@@ -619,17 +637,37 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     let orbit = Orbit {
         altitude_m,
         earth_radius_m,
-        mu_m3_per_s2: cx.positive(
+        mu_m3_per_s2: cx.within(
             &op.key("mu_m3_per_s2"),
             raw.orbit.mu_m3_per_s2.unwrap_or(EARTH_MU_M3_PER_S2),
+            1e9,
+            1e17,
+            "gravitational parameter (m³/s²; Earth 3.986e14)",
         )?,
+        // Reduced modulo 360° exactly (fmod is exact) before the conversion, so that a
+        // large angle keeps its fraction of a turn.
         orbit_angle_at_start_rad: cx
             .finite(
                 &op.key("orbit_angle_at_start_deg"),
                 raw.orbit.orbit_angle_at_start_deg.unwrap_or(0.0),
             )?
+            .rem_euclid(360.0)
             .to_radians(),
     };
+    let period_s = orbit.period_s();
+    if !(MIN_PERIOD_S..=MAX_PERIOD_S).contains(&period_s) {
+        let which = if raw.orbit.mu_m3_per_s2.is_some() {
+            "mu_m3_per_s2"
+        } else {
+            "altitude_m"
+        };
+        return Err(cx.err(
+            &op.key(which),
+            format!(
+                "gives an orbital period of {period_s:.3e} s; it must be within {MIN_PERIOD_S} … {MAX_PERIOD_S:.0} s (10 min … 30 days)"
+            ),
+        ));
+    }
 
     // Environment and mission profile.
     let ep = KeyPath::new("environment");
@@ -666,11 +704,22 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
 
     // Run control.
     let rp = KeyPath::new("run");
-    let period_s = environment.orbit.period_s();
+    let duration = |key: &'static str, v: f64, unit_s: f64| {
+        let d = cx.positive(&rp.key(key), v)? * unit_s;
+        if d > MAX_DURATION_S {
+            return Err(cx.err(
+                &rp.key(key),
+                format!(
+                    "gives a run of {d:.3e} s; runs are limited to {MAX_DURATION_S:.0e} s (31.7 years), where time still resolves the shortest step"
+                ),
+            ));
+        }
+        Ok(d)
+    };
     let duration_s = match (raw.run.orbits, raw.run.duration_s, raw.run.duration_days) {
-        (Some(o), None, None) => cx.positive(&rp.key("orbits"), o)? * period_s,
-        (None, Some(s), None) => cx.positive(&rp.key("duration_s"), s)?,
-        (None, None, Some(d)) => cx.positive(&rp.key("duration_days"), d)? * SECONDS_PER_DAY,
+        (Some(o), None, None) => duration("orbits", o, period_s)?,
+        (None, Some(s), None) => duration("duration_s", s, 1.0)?,
+        (None, None, Some(d)) => duration("duration_days", d, SECONDS_PER_DAY)?,
         _ => {
             return Err(cx.err(
                 &rp,
@@ -680,9 +729,11 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     };
     let run = RunControl {
         duration_s,
-        output_interval_s: cx.positive(
+        output_interval_s: cx.at_least(
             &rp.key("output_interval_s"),
             raw.run.output_interval_s.unwrap_or(30.0),
+            MIN_OUTPUT_INTERVAL_S,
+            "s",
         )?,
     };
 
@@ -698,13 +749,18 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     }
     let defaults = SolverSettings::default();
     let solver = SolverSettings {
-        tolerance_k: cx.positive(
+        tolerance_k: cx.within(
             &sp.key("tolerance_k"),
             raw.solver.tolerance_k.unwrap_or(defaults.tolerance_k),
+            MIN_TOLERANCE_K,
+            MAX_TOLERANCE_K,
+            "the local error per step (K)",
         )?,
-        max_step_s: cx.positive(
+        max_step_s: cx.at_least(
             &sp.key("max_step_s"),
             raw.solver.max_step_s.unwrap_or(defaults.max_step_s),
+            MIN_MAX_STEP_S,
+            "s",
         )?,
         adaptive: raw.solver.adaptive.unwrap_or(defaults.adaptive),
     };
@@ -779,8 +835,17 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             )),
         }
     };
-    let pair = |p: &KeyPath, between: &[String; 2]| -> Result<(NodeRef, NodeRef), ScenarioError> {
+    let pair = |p: &KeyPath, between: &[String]| -> Result<(NodeRef, NodeRef), ScenarioError> {
         let bp = p.key("between");
+        if between.len() != 2 {
+            return Err(cx.err(
+                &bp,
+                format!(
+                    "lists {} node(s); a link joins exactly two: between = [\"a\", \"b\"]",
+                    between.len()
+                ),
+            ));
+        }
         let a = lookup(&bp.at(0), &between[0])?;
         let b = lookup(&bp.at(1), &between[1])?;
         if a == b {
@@ -828,7 +893,8 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     let mut modes = Vec::new();
     for (i, m) in raw.mode.into_iter().enumerate() {
         let p = KeyPath::new("mode").at(i);
-        if m.name.trim().is_empty() || ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
+        valid_name(cx, &p.key("name"), &m.name)?;
+        if ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
             return Err(cx.err(&p.key("name"), format!("`{}` cannot name a mode", m.name)));
         }
         if modes.iter().any(|x: &Mode| x.name == m.name) {
@@ -844,8 +910,14 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
         };
         let mut windows_s = Vec::new();
         let mut last_end = f64::NEG_INFINITY;
-        for (k, [a, b]) in windows.into_iter().enumerate() {
+        for (k, w) in windows.into_iter().enumerate() {
             let wp = p.key(wkey).at(k);
+            let [a, b] = w[..] else {
+                return Err(cx.err(
+                    &wp,
+                    format!("a window is [start, end] (got {} numbers)", w.len()),
+                ));
+            };
             cx.finite(&wp, a)?;
             cx.finite(&wp, b)?;
             if b <= a || a < last_end {
@@ -900,7 +972,12 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             })?,
         };
         loads.push(Load {
-            name: load_name(s.name, "sun", &s.node, i),
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "sun",
+                &s.node,
+                i,
+            ),
             node,
             kind: LoadKind::Sun {
                 absorptivity_area_m2: aa,
@@ -935,7 +1012,12 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             s.view_factor,
         )?;
         loads.push(Load {
-            name: load_name(s.name, "albedo", &s.node, i),
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "albedo",
+                &s.node,
+                i,
+            ),
             node,
             kind: LoadKind::Albedo {
                 absorptivity_area_m2: aa,
@@ -954,7 +1036,12 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             s.view_factor,
         )?;
         loads.push(Load {
-            name: load_name(s.name, "earth_ir", &s.node, i),
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "earth_ir",
+                &s.node,
+                i,
+            ),
             node,
             kind: LoadKind::EarthIr {
                 emissivity_area_m2: ea,
@@ -982,7 +1069,12 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             })?),
         };
         loads.push(Load {
-            name: load_name(s.name, "dissipation", &s.node, i),
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "dissipation",
+                &s.node,
+                i,
+            ),
             node,
             kind: LoadKind::Dissipation {
                 power_w: power,
@@ -1007,7 +1099,8 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             ));
         }
         heaters.push(Heater {
-            name: h.name.unwrap_or_else(|| format!("heater.{}", h.node)),
+            name: optional_name(cx, &p.key("name"), h.name)?
+                .unwrap_or_else(|| format!("heater.{}", h.node)),
             node,
             sensor_node,
             power_w: cx.positive(&p.key("power_w"), h.power_w)?,
@@ -1092,18 +1185,31 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     })
 }
 
+/// A name that may become a file name, a log field and a key path
+/// ([`crate::scenario::check_name`]).
+fn valid_name(cx: &Cx<'_>, p: &KeyPath, name: &str) -> Result<(), ScenarioError> {
+    crate::scenario::check_name(name).map_err(|m| cx.err(p, m))
+}
+
+/// An optional user-given name, checked like node names.
+fn optional_name(
+    cx: &Cx<'_>,
+    p: &KeyPath,
+    name: Option<String>,
+) -> Result<Option<String>, ScenarioError> {
+    if let Some(n) = &name {
+        valid_name(cx, p, n)?;
+    }
+    Ok(name)
+}
+
 fn check_name(
     cx: &Cx<'_>,
     p: &KeyPath,
     name: &str,
     names: &HashMap<String, NodeRef>,
 ) -> Result<(), ScenarioError> {
-    if name.trim().is_empty() || name.contains(',') || name.chars().any(char::is_whitespace) {
-        return Err(cx.err(
-            p,
-            format!("`{name}` is not a valid node name (no spaces or commas)"),
-        ));
-    }
+    valid_name(cx, p, name)?;
     if names.contains_key(name) {
         return Err(cx.err(p, format!("node `{name}` is defined twice")));
     }
@@ -1312,11 +1418,17 @@ fn gear_pair(
                 ),
             ));
         }
-        let thickness = match (raw.tooth_thickness_mm, raw.tooth_thinning_um) {
-            (Some(s), None) => cx.positive(&gp.key("tooth_thickness_mm"), s)? * 1e-3,
+        let (thickness, tkey) = match (raw.tooth_thickness_mm, raw.tooth_thinning_um) {
+            (Some(s), None) => (
+                cx.positive(&gp.key("tooth_thickness_mm"), s)? * 1e-3,
+                "tooth_thickness_mm",
+            ),
             (None, Some(t)) => {
                 let t = cx.finite(&gp.key("tooth_thinning_um"), t)?;
-                shifted_tooth_thickness(module_m, shift, alpha0) - t * 1e-6
+                (
+                    shifted_tooth_thickness(module_m, shift, alpha0) - t * 1e-6,
+                    "tooth_thinning_um",
+                )
             }
             _ => {
                 return Err(cx.err(
@@ -1325,6 +1437,32 @@ fn gear_pair(
                 ));
             }
         };
+        // The tooth must exist and fit: 0 < s < π m on the reference circle, and not
+        // come to a point below the tip (s_a > 0 on the tip circle).
+        let pitch = std::f64::consts::PI * module_m;
+        if !(thickness > 0.0 && thickness < pitch) {
+            return Err(cx.err(
+                &gp.key(tkey),
+                format!(
+                    "gives a tooth thickness of {} on the reference circle; it must be within 0 … {} (the circular pitch π m)",
+                    mm(thickness),
+                    mm(pitch)
+                ),
+            ));
+        }
+        let alpha_tip = (r_b / tip).acos();
+        let tip_thickness = tip * (thickness / r_ref + 2.0 * inv(alpha0) - 2.0 * inv(alpha_tip));
+        if tip_thickness <= 0.0 {
+            return Err(cx.err(
+                &gp.key(tkey),
+                format!(
+                    "gives a tooth thickness of {} on the reference circle, which comes to a point below the tip radius {} (thickness at the tip {})",
+                    mm(thickness),
+                    mm(tip),
+                    mm(tip_thickness)
+                ),
+            ));
+        }
         let np = gp.key("nodes");
         if raw.nodes.len() < 2 || raw.nodes.len() > MAX_GEAR_NODES {
             return Err(cx.err(
@@ -1460,7 +1598,7 @@ fn gear_pair(
     };
     let [pinion, wheel]: [Gear; 2] = built.try_into().map_err(|_| cx.err(p, "two gears"))?;
     let pair = GearPair {
-        name: g.name.unwrap_or_else(|| {
+        name: optional_name(cx, &p.key("name"), g.name)?.unwrap_or_else(|| {
             if index == 0 {
                 "mesh".into()
             } else {

@@ -79,3 +79,86 @@ pub fn time_constants(net: &Network, temps_k: &[f64], boundary_k: &[f64]) -> Tim
         fastest_s: 1.0 / hi,
     }
 }
+
+/// Time constant of every diffusion node at time `t_s` and temperatures `temps_k`:
+/// C_i over the sum of its conductances, radiation linearised as in
+/// [`linearized_conductance`], s; infinite for a node with no link. O(links).
+pub fn node_time_constants_s(model: &super::ThermalModel, temps_k: &[f64], t_s: f64) -> Vec<f64> {
+    let net = &model.network;
+    let boundary_k: Vec<f64> = net
+        .boundaries
+        .iter()
+        .map(|b| b.temperature_k.at(t_s))
+        .collect();
+    let temp = |r: NodeRef| match r {
+        NodeRef::Diffusion(j) => temps_k[j].max(0.0),
+        NodeRef::Boundary(b) => boundary_k[b],
+    };
+    let mut g = vec![0.0; net.nodes.len()];
+    let mut add = |a: NodeRef, b: NodeRef, x: f64| {
+        for r in [a, b] {
+            if let NodeRef::Diffusion(i) = r {
+                g[i] += x;
+            }
+        }
+    };
+    for c in &net.conductors {
+        add(c.a, c.b, c.conductance_w_per_k);
+    }
+    for r in &net.radiators {
+        let (ta, tb) = (temp(r.a), temp(r.b));
+        add(
+            r.a,
+            r.b,
+            STEFAN_BOLTZMANN_W_PER_M2_K4 * r.emissivity_area_m2 * (ta * ta + tb * tb) * (ta + tb),
+        );
+    }
+    net.nodes
+        .iter()
+        .zip(g)
+        .map(|(n, g)| n.capacitance_j_per_k / g)
+        .collect()
+}
+
+/// [`node_time_constants_s`] of node `i`.
+pub fn node_time_constant_s(
+    model: &super::ThermalModel,
+    temps_k: &[f64],
+    t_s: f64,
+    i: usize,
+) -> f64 {
+    node_time_constants_s(model, temps_k, t_s)[i]
+}
+
+/// Per diffusion node: true when no chain of conductors or radiative links joins it to
+/// a boundary node, so the heat it receives has nowhere to go and its temperature can
+/// run away (or, with no load, it drifts with its neighbours forever). O(links).
+pub fn unanchored_nodes(net: &Network) -> Vec<bool> {
+    let n = net.nodes.len();
+    // Union-find over diffusion nodes plus one extra element standing for "a boundary".
+    let mut parent: Vec<usize> = (0..=n).collect();
+    fn find(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    let index = |r: NodeRef| match r {
+        NodeRef::Diffusion(i) => i,
+        NodeRef::Boundary(_) => n,
+    };
+    let links = net
+        .conductors
+        .iter()
+        .map(|c| (c.a, c.b))
+        .chain(net.radiators.iter().map(|r| (r.a, r.b)));
+    for (a, b) in links {
+        let (ra, rb) = (find(&mut parent, index(a)), find(&mut parent, index(b)));
+        if ra != rb {
+            parent[ra] = rb;
+        }
+    }
+    let anchor = find(&mut parent, n);
+    (0..n).map(|i| find(&mut parent, i) != anchor).collect()
+}

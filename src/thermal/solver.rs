@@ -107,20 +107,52 @@ pub struct StepData {
     /// Local error estimate per node, K.
     pub error_k: Vec<f64>,
     pub newton_iterations: usize,
+    /// Stage values at t0 + γh, K.
+    pub temps_gamma_k: Vec<f64>,
+    /// Per node: interpolate with the quadratic through the three stage values instead
+    /// of the cubic Hermite of the end values and rates. Set for a node much faster than
+    /// the step (a thin film, a small part stiffly coupled): its end rates are those of
+    /// the fast transient the L-stable method damps, not of the smooth solution, and the
+    /// cubic would overshoot by hundreds of kelvin. Detected when the cubic misses the
+    /// stage value at t0 + γh by more than the step tolerance.
+    pub quadratic: Vec<bool>,
 }
 
 impl StepData {
-    /// Temperature of node `i` at fraction `s` ∈ [0, 1] of the step, from the cubic
-    /// Hermite interpolant of the end values and rates, K.
+    /// Temperature of node `i` at fraction `s` ∈ [0, 1] of the step, K: the cubic
+    /// Hermite interpolant of the end values and rates, or for a node marked
+    /// `quadratic` the quadratic through the stage values.
     pub fn temperature_at_fraction(&self, i: usize, s: f64) -> f64 {
-        hermite(
-            self.temps0_k[i],
-            self.temps1_k[i],
-            self.rates0_k_per_s[i],
-            self.rates1_k_per_s[i],
-            self.h_s,
-            s,
-        )
+        if self.quadratic[i] {
+            quadratic(self.temps0_k[i], self.temps_gamma_k[i], self.temps1_k[i], s)
+        } else {
+            hermite(
+                self.temps0_k[i],
+                self.temps1_k[i],
+                self.rates0_k_per_s[i],
+                self.rates1_k_per_s[i],
+                self.h_s,
+                s,
+            )
+        }
+    }
+
+    /// Interior extrema (fraction of the step, value) of node `i`'s interpolant.
+    pub fn interior_extrema(&self, i: usize) -> [Option<(f64, f64)>; 2] {
+        let (y0, y1) = (self.temps0_k[i], self.temps1_k[i]);
+        if self.quadratic[i] {
+            // p(s) = y0 + b s + c s²: one extremum at −b / 2c.
+            let yg = self.temps_gamma_k[i];
+            let g = GAMMA;
+            let c = ((yg - y0) / g - (y1 - y0)) / (g - 1.0);
+            let b = (y1 - y0) - c;
+            let s = -b / (2.0 * c);
+            let inside = c != 0.0 && s > 0.0 && s < 1.0;
+            return [inside.then(|| (s, quadratic(y0, yg, y1, s))), None];
+        }
+        let (dy0, dy1, h) = (self.rates0_k_per_s[i], self.rates1_k_per_s[i], self.h_s);
+        hermite_interior_extrema_at(y0, y1, dy0, dy1, h)
+            .map(|s| s.map(|s| (s, hermite(y0, y1, dy0, dy1, h, s))))
     }
 
     /// Largest |error| over all nodes, K.
@@ -145,6 +177,9 @@ pub struct Stepper {
     /// Contraction rate of the last Newton iteration, to judge the first update.
     theta: f64,
     newton_tol_k: f64,
+    /// Largest miss of the cubic interpolant at t0 + γh before a node is interpolated
+    /// by the quadratic through its stage values, K (the step tolerance).
+    interpolant_tol_k: f64,
     /// The next step starts from the end of the last one, with the same switches.
     start_is_last_end: bool,
     /// Step size the current factorisation was made for (NaN: none).
@@ -174,6 +209,7 @@ impl Stepper {
             k: vec![0.0; n],
             theta: 0.5,
             newton_tol_k: (NEWTON_TOL_FRACTION * tolerance_k).max(1e-9),
+            interpolant_tol_k: tolerance_k,
             start_is_last_end: false,
             lu_h: f64::NAN,
             jac_stale: true,
@@ -184,6 +220,8 @@ impl Stepper {
                 rates0_k_per_s: vec![0.0; n],
                 rates1_k_per_s: vec![0.0; n],
                 error_k: vec![0.0; n],
+                temps_gamma_k: vec![0.0; n],
+                quadratic: vec![false; n],
                 ..StepData::default()
             },
         }
@@ -296,6 +334,10 @@ impl Stepper {
             let fg = self.fg[i] / self.cap[i];
             let f0 = self.data.rates0_k_per_s[i];
             self.data.rates1_k_per_s[i] = f1;
+            let (y0, yg, y1) = (temps0_k[i], self.yg[i], self.data.temps1_k[i]);
+            self.data.temps_gamma_k[i] = yg;
+            self.data.quadratic[i] =
+                (hermite(y0, y1, f0, f1, h_s, GAMMA) - yg).abs() > self.interpolant_tol_k;
             let raw = ERR_CONST * 2.0 * h_s * ((f1 - fg) / (1.0 - GAMMA) - (fg - f0) / GAMMA);
             self.data.error_k[i] = self.cap[i] * raw;
         }
@@ -363,8 +405,28 @@ pub fn hermite(y0: f64, y1: f64, dy0: f64, dy1: f64, h: f64, s: f64) -> f64 {
         + (s3 - s2) * h * dy1
 }
 
+/// The quadratic through (0, y0), (γ, yγ), (1, y1), at `s`.
+pub fn quadratic(y0: f64, yg: f64, y1: f64, s: f64) -> f64 {
+    let g = GAMMA;
+    y0 * (s - g) * (s - 1.0) / g
+        + yg * s * (s - 1.0) / (g * (g - 1.0))
+        + y1 * s * (s - g) / (1.0 - g)
+}
+
 /// Interior extrema (s in (0,1)) of the cubic Hermite interpolant, as values.
 pub fn hermite_interior_extrema(y0: f64, y1: f64, dy0: f64, dy1: f64, h: f64) -> [Option<f64>; 2] {
+    hermite_interior_extrema_at(y0, y1, dy0, dy1, h)
+        .map(|s| s.map(|s| hermite(y0, y1, dy0, dy1, h, s)))
+}
+
+/// Where (s in (0,1)) the cubic Hermite interpolant has its interior extrema.
+pub fn hermite_interior_extrema_at(
+    y0: f64,
+    y1: f64,
+    dy0: f64,
+    dy1: f64,
+    h: f64,
+) -> [Option<f64>; 2] {
     // p'(s) = a s² + b s + c
     let m0 = h * dy0;
     let m1 = h * dy1;
@@ -374,7 +436,7 @@ pub fn hermite_interior_extrema(y0: f64, y1: f64, dy0: f64, dy1: f64, h: f64) ->
     let mut out = [None, None];
     let mut push = |s: f64, k: usize| {
         if s > 0.0 && s < 1.0 {
-            out[k] = Some(hermite(y0, y1, dy0, dy1, h, s));
+            out[k] = Some(s);
         }
     };
     if a.abs() < 1e-300 {

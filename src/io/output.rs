@@ -1,0 +1,278 @@
+//! Where an output may be written. Every output file of every command goes through
+//! [`check_output`] (via [`super::atomic::AtomicFile::create`]), which refuses:
+//!
+//! - a path that is, or is a hard link to, a file the command reads (its inputs);
+//! - an existing file that is not a regular file (a device such as `/dev/full`, a FIFO,
+//!   a socket, a directory);
+//! - a symbolic link, whatever it points to: orbitlash never writes through a link
+//!   (the target might be an input, or a file the user did not mean to replace); give
+//!   the link's target instead;
+//! - a path whose folder does not exist, unless the path is a default output under the
+//!   project's `logs/`, whose folder is then created.
+//!
+//! Outputs are written to a temporary sibling and renamed into place when complete
+//! (`atomic`), so the checks here are what stands between a typo and a lost input.
+
+use std::path::{Path, PathBuf};
+
+/// What the command reads, and whether the output's folder may be created.
+#[derive(Debug, Clone, Default)]
+pub struct OutputPolicy {
+    /// Files the command reads; no output may resolve to one of them.
+    pub inputs: Vec<PathBuf>,
+    /// Create missing parent folders (only for default paths under `logs/`).
+    pub create_parents: bool,
+}
+
+impl OutputPolicy {
+    /// A user-given output path for a command that reads `inputs`.
+    pub fn reading(inputs: &[&Path]) -> OutputPolicy {
+        OutputPolicy {
+            inputs: inputs.iter().map(|p| p.to_path_buf()).collect(),
+            create_parents: false,
+        }
+    }
+
+    /// A default output under `logs/` (its folder is created when missing).
+    pub fn default_in_logs(inputs: &[&Path]) -> OutputPolicy {
+        OutputPolicy {
+            create_parents: true,
+            ..OutputPolicy::reading(inputs)
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot write {path}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("refusing to write {path}: {reason}")]
+    Refused { path: String, reason: String },
+}
+
+impl OutputError {
+    pub fn io(path: &Path, source: std::io::Error) -> OutputError {
+        OutputError::Io {
+            path: path.display().to_string(),
+            source,
+        }
+    }
+
+    pub fn refused(path: &Path, reason: impl Into<String>) -> OutputError {
+        OutputError::Refused {
+            path: path.display().to_string(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Any other failure while writing `path`.
+    pub fn other(path: &Path, message: impl std::fmt::Display) -> OutputError {
+        OutputError::io(path, std::io::Error::other(message.to_string()))
+    }
+}
+
+/// (device, inode) of the file `path` resolves to, following links.
+fn identity(path: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+}
+
+/// True when `a` and `b` are the same file (same inode, through any link or path).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (identity(a), identity(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// The absolute path `path` stands for: its folder resolved through links, then its
+/// file name. Two outputs of one command must not resolve to the same path.
+pub fn resolved(path: &Path) -> PathBuf {
+    let file = path.file_name().map(PathBuf::from).unwrap_or_default();
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    match std::fs::canonicalize(&parent) {
+        Ok(p) => p.join(file),
+        Err(_) => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+    }
+}
+
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = meta.file_type();
+    if t.is_dir() {
+        "a directory"
+    } else if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if t.is_socket() {
+        "a socket"
+    } else if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Checks that `path` may be written under `policy` (see the module docs), creating
+/// its folder when the policy allows.
+pub fn check_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputError> {
+    if path.as_os_str().is_empty() {
+        return Err(OutputError::refused(path, "the path is empty"));
+    }
+    if path.file_name().is_none() {
+        return Err(OutputError::refused(
+            path,
+            "the path names a folder, not a file",
+        ));
+    }
+    match std::fs::symlink_metadata(path) {
+        Ok(meta) if meta.file_type().is_symlink() => {
+            let target = std::fs::read_link(path)
+                .map(|t| format!(" (to {})", t.display()))
+                .unwrap_or_default();
+            return Err(OutputError::refused(
+                path,
+                format!(
+                    "it is a symbolic link{target}; orbitlash does not write through links, give the target's path instead"
+                ),
+            ));
+        }
+        Ok(meta) if !meta.file_type().is_file() => {
+            return Err(OutputError::refused(
+                path,
+                format!("it is {}, not a regular file", kind_of(&meta)),
+            ));
+        }
+        Ok(_) => {
+            if let Some(input) = policy.inputs.iter().find(|i| same_file(path, i)) {
+                return Err(OutputError::refused(
+                    path,
+                    if input == path {
+                        "it is an input of this command; choose another output path".to_string()
+                    } else {
+                        format!(
+                            "it is the same file as {}, an input of this command; choose another output path",
+                            input.display()
+                        )
+                    },
+                ));
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(OutputError::io(path, e)),
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => return Ok(()),
+    };
+    match std::fs::metadata(parent) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => Err(OutputError::refused(
+            path,
+            format!("{} is not a directory", parent.display()),
+        )),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if policy.create_parents {
+                std::fs::create_dir_all(parent).map_err(|e| OutputError::io(path, e))
+            } else {
+                Err(OutputError::refused(
+                    path,
+                    format!("no such directory: {}", parent.display()),
+                ))
+            }
+        }
+        Err(e) => Err(OutputError::io(path, e)),
+    }
+}
+
+/// The temporary sibling an output is written to before it is renamed into place:
+/// `<path>.partial`, or `<path>.<k>.partial` when that name is an input (recovering
+/// `run.mcap.partial` into `run.mcap`).
+pub fn temporary_path(path: &Path, policy: &OutputPolicy) -> PathBuf {
+    let with = |suffix: &str| {
+        let mut s = path.as_os_str().to_owned();
+        s.push(suffix);
+        PathBuf::from(s)
+    };
+    let first = with(".partial");
+    let is_input = |p: &Path| {
+        let r = resolved(p);
+        policy
+            .inputs
+            .iter()
+            .any(|i| same_file(p, i) || resolved(i) == r)
+    };
+    if !is_input(&first) {
+        return first;
+    }
+    (1..)
+        .map(|k| with(&format!(".{k}.partial")))
+        .find(|p| !is_input(p))
+        .expect("a free temporary name")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("orbitlash-output-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn refuses_inputs_links_and_devices() {
+        let d = dir("refuse");
+        let input = d.join("s.toml");
+        std::fs::write(&input, "x").unwrap();
+        let policy = OutputPolicy::reading(&[&input]);
+        // the input itself, by another spelling, and through a hard link
+        assert!(check_output(&input, &policy).is_err());
+        assert!(check_output(&d.join(".").join("s.toml"), &policy).is_err());
+        std::fs::hard_link(&input, d.join("hard.toml")).unwrap();
+        assert!(check_output(&d.join("hard.toml"), &policy).is_err());
+        // a link, even to a file that is not an input
+        std::fs::write(d.join("other"), "y").unwrap();
+        std::os::unix::fs::symlink(d.join("other"), d.join("link")).unwrap();
+        let e = check_output(&d.join("link"), &policy)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("symbolic link"), "{e}");
+        // devices and folders
+        assert!(check_output(Path::new("/dev/null"), &policy).is_err());
+        assert!(check_output(&d, &policy).is_err());
+        // a new file in an existing folder is fine, one in a missing folder is not
+        assert!(check_output(&d.join("new.mcap"), &policy).is_ok());
+        let e = check_output(&d.join("missing/new.mcap"), &policy).unwrap_err();
+        assert!(e.to_string().contains("no such directory"), "{e}");
+        assert!(!d.join("missing").exists());
+        let logs = OutputPolicy::default_in_logs(&[&input]);
+        assert!(check_output(&d.join("logs/new.mcap"), &logs).is_ok());
+        assert!(d.join("logs").is_dir());
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn temporary_name_avoids_inputs() {
+        let d = dir("tmp");
+        let partial = d.join("run.mcap.partial");
+        std::fs::write(&partial, "x").unwrap();
+        let policy = OutputPolicy::reading(&[&partial]);
+        let t = temporary_path(&d.join("run.mcap"), &policy);
+        assert_eq!(t, d.join("run.mcap.1.partial"));
+        let t = temporary_path(&d.join("other.mcap"), &policy);
+        assert_eq!(t, d.join("other.mcap.partial"));
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}
