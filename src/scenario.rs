@@ -194,9 +194,15 @@ impl Scenario {
         self.thermal.environment.orbit.period_s()
     }
 
-    /// The same scenario run for `orbits` orbits.
-    pub fn with_orbits(mut self, orbits: f64) -> Scenario {
-        self.run.duration_s = orbits * self.period_s();
-        self
+    /// The same scenario run for `orbits` orbits; refused beyond [`MAX_DURATION_S`].
+    pub fn with_orbits(mut self, orbits: f64) -> Result<Scenario, String> {
+        let d = orbits * self.period_s();
+        if !(d.is_finite() && d > 0.0 && d <= MAX_DURATION_S) {
+            return Err(format!(
+                "gives a run of {d:.3e} s; runs are limited to {MAX_DURATION_S:.0e} s (31.7 years)"
+            ));
+        }
+        self.run.duration_s = d;
+        Ok(self)
     }
 }

@@ -737,3 +737,87 @@ fn first_root(g: &dyn Fn(f64) -> f64, rising: bool) -> f64 {
     }
     1.0
 }
+
+/// Most steps a run may take without `--force` (about a minute of solver time on a
+/// small network, 400 years of the reference orbit).
+pub const MAX_STEPS: f64 = 5e7;
+
+/// A run's size, estimated before it starts (see [`estimate_run`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunEstimate {
+    /// Accepted steps the run will take.
+    pub steps: f64,
+    /// Wall time of the solver and gear evaluation, s (observers come on top).
+    pub wall_s: f64,
+    /// Simulated time and steps of the pilot stretch the estimate comes from (0 when
+    /// the pilot failed and only the lower bound `t_end / max_step` is known).
+    pub pilot_s: f64,
+    pub pilot_steps: u64,
+}
+
+/// Steps and wall time of a run to `t_end_s`, extrapolated from a pilot stretch from
+/// t = 0 (at most `pilot_end_s` of simulated time, 20 000 steps or 0.25 s of wall
+/// time) observed by `observer` (pass the run's own in-memory observers, so that their
+/// cost is counted), and never below `t_end_s / max_step_s`. The first orbit holds the
+/// start-up transient, so the estimate errs on the high side (17 % more steps than a
+/// 2000-orbit reference run takes). A pilot that fails is no estimate: the run itself
+/// then reports the failure with its log.
+pub fn estimate_run<O: Observer>(
+    model: &ThermalModel,
+    gears: &[GearPair],
+    settings: &SolverSettings,
+    t_end_s: f64,
+    pilot_end_s: f64,
+    observer: &mut O,
+) -> RunEstimate {
+    struct Budget<'a> {
+        start: std::time::Instant,
+        steps: u64,
+        stop: &'a AtomicBool,
+    }
+    impl Observer for Budget<'_> {
+        fn on_step(&mut self, _: &StepView<'_>) -> ObserverResult {
+            self.steps += 1;
+            if self.steps >= 20_000
+                || (self.steps.is_multiple_of(64) && self.start.elapsed().as_secs_f64() > 0.25)
+            {
+                self.stop.store(true, Ordering::Relaxed);
+            }
+            Ok(())
+        }
+    }
+    let lower = t_end_s / settings.max_step_s;
+    let stop = AtomicBool::new(false);
+    let mut budget = Budget {
+        start: std::time::Instant::now(),
+        steps: 0,
+        stop: &stop,
+    };
+    let pilot_end = pilot_end_s.min(t_end_s);
+    match simulate(
+        model,
+        gears,
+        settings,
+        pilot_end,
+        &mut (&mut budget, observer),
+        Some(&stop),
+    ) {
+        Ok(stats) if stats.t_end_s > 0.0 && stats.steps > 0 => {
+            let wall = budget.start.elapsed().as_secs_f64();
+            let scale = t_end_s / stats.t_end_s;
+            let steps = (stats.steps as f64 * scale).max(lower);
+            RunEstimate {
+                steps,
+                wall_s: wall / stats.steps as f64 * steps,
+                pilot_s: stats.t_end_s,
+                pilot_steps: stats.steps,
+            }
+        }
+        _ => RunEstimate {
+            steps: lower,
+            wall_s: f64::NAN,
+            pilot_s: 0.0,
+            pilot_steps: 0,
+        },
+    }
+}

@@ -15,7 +15,7 @@ fn val_reference_mechanism_orbit6_extremes() {
     // §5 was read from a series sampled every 30 s (the recording cadence): the
     // housing's minimum sits at eclipse exit, 22 s after the last sample before it,
     // so the extremes are compared on the same 30 s grid.
-    let sc = reference().with_orbits(6.0);
+    let sc = reference().with_orbits(6.0).unwrap();
     let period = sc.period_s();
     let mut s = Samples::every(30.0);
     simulate(

@@ -6,7 +6,7 @@ use orbitlash::sim::{SolverSettings, simulate};
 use orbitlash::summary::Samples;
 
 fn samples(settings: &SolverSettings, orbits: f64) -> Samples {
-    let sc = reference().with_orbits(orbits);
+    let sc = reference().with_orbits(orbits).unwrap();
     let mut s = Samples::every(30.0);
     simulate(
         &sc.thermal,

@@ -9,7 +9,7 @@ use clap::Args;
 
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
 use orbitlash::io::output::OutputPolicy;
-use orbitlash::sim::{SolverSettings, simulate};
+use orbitlash::sim::{MAX_STEPS, SolverSettings, estimate_run, simulate};
 use orbitlash::summary::{MeshStats, Samples, WindowStats};
 
 use super::{load, orbits_arg, print_out};
@@ -32,7 +32,25 @@ pub struct BenchArgs {
 pub fn bench(a: BenchArgs) -> Result<()> {
     let mut o = String::new();
     let loaded = load(a.scenario.as_deref())?;
-    let sc = loaded.scenario.with_orbits(a.orbits);
+    let sc = loaded
+        .scenario
+        .with_orbits(a.orbits)
+        .map_err(|m| anyhow::anyhow!("--orbits {}: {m}", a.orbits))?;
+    let est = estimate_run(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        sc.run.duration_s,
+        sc.period_s(),
+        &mut (),
+    );
+    if est.steps > MAX_STEPS {
+        anyhow::bail!(
+            "--orbits {}: one timed run would take about {:.2e} steps, more than the limit of {MAX_STEPS:.0e}",
+            a.orbits,
+            est.steps
+        );
+    }
     let t_end = sc.run.duration_s;
     let period = sc.period_s();
     let repeat = a.repeat as usize;

@@ -36,6 +36,16 @@ const GEAR_FIELDS: [&str; 5] = [
 
 pub fn export(a: ExportArgs) -> Result<()> {
     let table = read_log(&a.log)?;
+    if let Some(t) = &table.truncated {
+        eprintln!(
+            "note: {} was cut off: read {} messages up to t = {:.3} s ({} of {} bytes were whole)",
+            a.log.display(),
+            t.messages,
+            t.t_end_s,
+            t.recovered_bytes,
+            t.file_bytes
+        );
+    }
     let temp_topic = "/thermal/temperature";
     if table.column(&format!("{temp_topic}.time_s")).is_none() {
         bail!(

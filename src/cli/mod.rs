@@ -12,6 +12,7 @@ mod backlash;
 mod bench;
 mod check;
 mod export;
+mod recover;
 mod run;
 
 use std::path::{Path, PathBuf};
@@ -47,8 +48,12 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Static backlash calculator: every model variant at given temperatures.
     Backlash(backlash::BacklashArgs),
-    /// Convert an MCAP log back to CSV (the layout of `run --csv`).
+    /// Convert an MCAP log back to CSV (the layout of `run --csv`); a cut-off log is
+    /// read up to its last whole message.
     ExportCsv(export::ExportArgs),
+    /// Make a killed run's log (`<name>.partial`) or a truncated copy into a valid MCAP
+    /// file holding everything up to its last whole message.
+    Recover(recover::RecoverArgs),
 }
 
 /// How a command that ran to its end came out; errors are the `Err` of [`dispatch`].
@@ -74,6 +79,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
         Command::Bench(a) => done(bench::bench(a)),
         Command::Backlash(a) => backlash::backlash(a),
         Command::ExportCsv(a) => done(export::export(a)),
+        Command::Recover(a) => done(recover::recover(a)),
     }
 }
 

@@ -10,10 +10,12 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use orbitlash::io::csv_export::CsvExport;
-use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
-use orbitlash::io::output::{OutputPolicy, check_output, resolved};
+use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
+use orbitlash::io::output::{OutputPolicy, available_bytes, check_output, resolved};
 use orbitlash::scenario::Scenario;
-use orbitlash::sim::{Observer, ObserverResult, RunStats, StepView, simulate};
+use orbitlash::sim::{
+    MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run, simulate,
+};
 use orbitlash::summary::{MeshStats, PairStats, PairVerdict, WindowStats};
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
@@ -48,6 +50,13 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
+    /// Run even when the estimate exceeds the hard limit of steps (5e7).
+    #[arg(long)]
+    force: bool,
+    /// Check the scenario and the outputs, print the estimate of steps, time and output
+    /// sizes, and stop before running (nothing is written).
+    #[arg(long)]
+    dry_run: bool,
     /// Also print the solver's statistics (steps, rejections, factorisations, Newton
     /// iterations, wall time).
     #[arg(long, short)]
@@ -71,7 +80,9 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     let loaded = load(a.scenario.as_deref())?;
     let mut sc = loaded.scenario.clone();
     if let Some(o) = a.orbits {
-        sc = sc.with_orbits(o);
+        sc = sc
+            .with_orbits(o)
+            .map_err(|m| anyhow!("--orbits {o}: {m}"))?;
     }
     let period_s = sc.period_s();
     let t_end_s = sc.run.duration_s;
@@ -102,6 +113,14 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(c) = &a.csv {
         check_output(c, &OutputPolicy::reading(&inputs))?;
     }
+    if let Some(l) = &log_path {
+        check_output(l, &log_policy)?;
+    }
+    bounded(&a, &sc, log_path.as_deref())?;
+    if a.dry_run {
+        return Ok(Outcome::Pass);
+    }
+
     let log = match &log_path {
         Some(p) => Some(McapLog::create(
             p,
@@ -227,6 +246,112 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         );
     }
     Ok(Outcome::from_pass(pass))
+}
+
+/// Refuses a run over the step limit (unless `--force`) or whose outputs would not fit
+/// on their file systems; says what a long or large run will take.
+fn bounded(a: &RunArgs, sc: &Scenario, log: Option<&std::path::Path>) -> Result<()> {
+    let t_end_s = sc.run.duration_s;
+    // The pilot carries the run's summaries; the log adds about a third.
+    let window = sc.period_s().min(t_end_s);
+    let mut summaries = (
+        WindowStats::last(window),
+        WindowStats::last(t_end_s),
+        MeshStats::last(window),
+    );
+    let mut est = estimate_run(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        t_end_s,
+        sc.period_s(),
+        &mut summaries,
+    );
+    if log.is_some() {
+        est.wall_s *= 1.35;
+    }
+    if est.steps > MAX_STEPS && !a.force {
+        anyhow::bail!(
+            "the run would take about {:.2e} steps ({:.3e} s simulated{}), more than the limit of {MAX_STEPS:.0e}: \
+shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --force",
+            est.steps,
+            t_end_s,
+            if est.wall_s.is_finite() {
+                format!(", about {} of computing", duration(est.wall_s))
+            } else {
+                String::new()
+            }
+        );
+    }
+    let cadence = a.log_every.unwrap_or(LogCadence::Steps(1));
+    let log_bytes = log.map(|_| {
+        cadence.samples(est.steps, t_end_s) * estimated_bytes_per_sample(&sc.thermal, &sc.gears)
+            + if a.scene {
+                (t_end_s / 300.0) * 25e3 * sc.gears.len() as f64
+            } else {
+                0.0
+            }
+    });
+    // A CSV row: the time and every column at ~11 characters.
+    let csv_bytes = a.csv.as_ref().map(|_| {
+        let columns = 1 + sc.thermal.network.nodes.len() + 5 * sc.gears.len();
+        (t_end_s / sc.run.output_interval_s + 1.0) * columns as f64 * 11.0
+    });
+    let outputs = [
+        (log, log_bytes, "log"),
+        (a.csv.as_deref(), csv_bytes, "CSV"),
+    ];
+    for (path, bytes) in outputs.iter().filter_map(|(p, b, _)| Some(((*p)?, (*b)?))) {
+        // Both outputs may share a file system: ask for their sum on each.
+        let need: f64 = outputs.iter().filter_map(|o| o.1).sum::<f64>().max(bytes);
+        if let Some(free) = available_bytes(path)
+            && need > free as f64
+        {
+            anyhow::bail!(
+                "the outputs would take about {} but the file system of {} has {} free; \
+log less often (--log-every 60s), skip the log (--no-log) or shorten the run",
+                size(need),
+                path.display(),
+                size(free as f64)
+            );
+        }
+    }
+    let total: f64 = outputs.iter().filter_map(|o| o.1).sum();
+    if est.wall_s > 5.0 || total > 100e6 || a.dry_run {
+        let parts: Vec<String> = outputs
+            .iter()
+            .filter_map(|(_, b, what)| b.map(|b| format!("{what} about {}", size(b))))
+            .collect();
+        eprintln!(
+            "estimate: about {:.3e} steps, {} of computing{}{}",
+            est.steps,
+            if est.wall_s.is_finite() {
+                duration(est.wall_s)
+            } else {
+                "an unknown time".into()
+            },
+            if parts.is_empty() { "" } else { ", " },
+            parts.join(", ")
+        );
+    }
+    Ok(())
+}
+
+fn size(bytes: f64) -> String {
+    match bytes {
+        b if b >= 1e9 => format!("{:.1} GB", b / 1e9),
+        b if b >= 1e6 => format!("{:.1} MB", b / 1e6),
+        b => format!("{:.0} kB", b / 1e3),
+    }
+}
+
+fn duration(s: f64) -> String {
+    match s {
+        s if s >= 86400.0 => format!("{:.1} days", s / 86400.0),
+        s if s >= 3600.0 => format!("{:.1} h", s / 3600.0),
+        s if s >= 60.0 => format!("{:.1} min", s / 60.0),
+        s => format!("{s:.1} s"),
+    }
 }
 
 /// Where in the orbit `t` falls, for reports.

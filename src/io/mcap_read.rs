@@ -39,6 +39,8 @@ pub struct LogTable {
     pub metadata: HashMap<String, BTreeMap<String, String>>,
     /// Attachments: (name, bytes).
     pub attachments: Vec<(String, Vec<u8>)>,
+    /// The file was cut off: what was read of it.
+    pub truncated: Option<Truncation>,
 }
 
 impl LogTable {
@@ -112,48 +114,50 @@ fn flatten(
     Ok(())
 }
 
-/// Reads every protobuf channel of the log at `path` (foxglove.* channels skipped).
+/// How much of a cut-off log was read (see `mcap_scan`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Truncation {
+    pub recovered_bytes: usize,
+    pub file_bytes: usize,
+    pub messages: usize,
+    /// Log time of the last message read, s.
+    pub t_end_s: f64,
+}
+
+/// Reads every protobuf channel of the log at `path` (foxglove.* channels skipped). A
+/// log that was cut off (a killed run's `.partial`, a truncated copy) is read up to its
+/// last whole message; `LogTable::truncated` then says how much that was.
 pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|source| LogReadError::Io {
         file: file.clone(),
         source,
     })?;
-    let mcap_err = |e: mcap::McapError| LogReadError::Mcap {
+    let scan = super::mcap_scan::scan(&bytes).map_err(|e| LogReadError::Mcap {
         file: file.clone(),
         message: e.to_string(),
-    };
-    let summary = mcap::Summary::read(&bytes)
-        .map_err(mcap_err)?
-        .ok_or_else(|| LogReadError::Mcap {
-            file: file.clone(),
-            message: "no summary section (the file was not closed)".into(),
-        })?;
+    })?;
     let mut table = LogTable::default();
-    for (_, ch) in summary.channels.iter() {
+    for ch in scan.channels.values() {
         table
             .channel_metadata
             .insert(ch.topic.clone(), ch.metadata.clone());
     }
-    for record in mcap::read::LinearReader::new(&bytes).map_err(mcap_err)? {
-        match record.map_err(mcap_err)? {
-            mcap::records::Record::Metadata(m) => {
-                table.metadata.insert(m.name, m.metadata);
-            }
-            mcap::records::Record::Attachment { header, data, .. } => {
-                table.attachments.push((header.name, data.into_owned()));
-            }
-            _ => {}
-        }
+    for m in &scan.metadata {
+        table.metadata.insert(m.name.clone(), m.metadata.clone());
+    }
+    for a in &scan.attachments {
+        table.attachments.push((a.name.clone(), a.data.to_vec()));
     }
     let mut types: HashMap<u16, Option<DecodedType>> = HashMap::new();
     let mut index: HashMap<String, usize> = HashMap::new();
     let mut rows: BTreeMap<u64, Vec<(usize, f64)>> = BTreeMap::new();
     let mut flat = Vec::new();
-    for msg in mcap::MessageStream::new(&bytes).map_err(mcap_err)? {
-        let msg = msg.map_err(mcap_err)?;
-        let ch = &msg.channel;
-        let Some(schema) = ch.schema.as_ref() else {
+    for msg in &scan.messages {
+        let Some(ch) = scan.channels.get(&msg.header.channel_id) else {
+            continue;
+        };
+        let Some(schema) = scan.schemas.get(&ch.schema_id) else {
             continue;
         };
         // foxglove.* messages (events, the 3-D view) are not series.
@@ -167,18 +171,18 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
             return Err(LogReadError::Decode {
                 file: file.clone(),
                 topic: ch.topic.clone(),
-                sequence: msg.sequence,
+                sequence: msg.header.sequence,
                 message: format!("schema {} not found in its descriptor set", schema.name),
             });
         };
         flat.clear();
-        flatten(t, &msg.data, &ch.topic, &mut flat).map_err(|message| LogReadError::Decode {
+        flatten(t, msg.data, &ch.topic, &mut flat).map_err(|message| LogReadError::Decode {
             file: file.clone(),
             topic: ch.topic.clone(),
-            sequence: msg.sequence,
+            sequence: msg.header.sequence,
             message,
         })?;
-        let row = rows.entry(msg.log_time).or_default();
+        let row = rows.entry(msg.header.log_time).or_default();
         for (name, v) in flat.drain(..) {
             let next = index.len();
             let i = *index.entry(name.clone()).or_insert_with(|| {
@@ -187,6 +191,14 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
             });
             row.push((i, v));
         }
+    }
+    if !scan.complete {
+        table.truncated = Some(Truncation {
+            recovered_bytes: scan.recovered_bytes,
+            file_bytes: scan.file_bytes,
+            messages: scan.messages.len(),
+            t_end_s: scan.time_span_ns().map_or(0.0, |(_, b)| b as f64 * 1e-9),
+        });
     }
     let n = table.columns.len();
     table.rows = rows

@@ -5,6 +5,7 @@ pub mod csv_export;
 pub mod log_schema;
 pub mod mcap_log;
 pub mod mcap_read;
+pub mod mcap_scan;
 pub mod output;
 pub mod protobuf;
 pub mod scenario_toml;

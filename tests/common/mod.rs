@@ -67,3 +67,70 @@ pub fn tmpdir(name: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// The reference scenario's text (scenarios/reference-hinge.toml).
+pub fn reference_text() -> String {
+    std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml"),
+    )
+    .unwrap()
+}
+
+/// The reference scenario with each `(old, new)` replaced once (`old` must occur).
+pub fn reference_with(edits: &[(&str, &str)]) -> String {
+    let mut text = reference_text();
+    for (old, new) in edits {
+        assert!(text.contains(old), "`{old}` not in the reference scenario");
+        text = text.replacen(old, new, 1);
+    }
+    text
+}
+
+/// The first line of a command's standard error.
+pub fn first_error_line(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr)
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_default()
+        .to_string()
+}
+
+/// Asserts a command failed with exit status 2, no panic, and an error whose first
+/// line holds every needle.
+pub fn assert_error(case: &str, out: &std::process::Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{case}: exit status {:?}\n{stderr}",
+        out.status
+    );
+    assert!(!stderr.contains("panicked"), "{case}: panic\n{stderr}");
+    let line = first_error_line(out);
+    for n in needles {
+        assert!(
+            line.contains(n),
+            "{case}: `{n}` missing from the first error line\n{stderr}"
+        );
+    }
+}
+
+/// Every file under `dir` (recursively) with its bytes, to show nothing changed.
+pub fn snapshot(dir: &std::path::Path) -> std::collections::BTreeMap<std::path::PathBuf, Vec<u8>> {
+    let mut out = std::collections::BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            let meta = std::fs::symlink_metadata(&p).unwrap();
+            if meta.is_dir() {
+                stack.push(p);
+            } else if meta.is_file() {
+                out.insert(p.clone(), std::fs::read(&p).unwrap());
+            } else {
+                out.insert(p.clone(), Vec::new());
+            }
+        }
+    }
+    out
+}

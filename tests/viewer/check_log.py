@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Would Foxglove and Rerun show an orbitlash log as plots?
 
-    python tests/viewer/check_log.py LOG.mcap [--allow-interrupted]
+    python tests/viewer/check_log.py LOG.mcap [--allow-interrupted] [--allow-recovered]
 
 Reads the file with the MCAP reader Foxglove publishes (protobuf decoded through the
 schemas stored in the file) and imports it with Rerun's own MCAP importer, then checks:
@@ -14,7 +14,8 @@ schemas stored in the file) and imports it with Rerun's own MCAP importer, then 
   message for Foxglove, and full, null-free, finite numeric columns in Rerun;
 - foxglove.Log channels arrive in Rerun as text logs, one row per message;
 - provenance: the metadata record and the attached scenario file are present, and the
-  run_end record says the run completed (or was interrupted, with --allow-interrupted).
+  run_end record says the run completed (or was interrupted, with --allow-interrupted,
+  or was recovered from a cut-off log by `orbitlash recover`, with --allow-recovered).
 Exit 0 = OK, 1 = a viewer would not get the data, 2 = the check could not run.
 """
 import argparse, math, sys
@@ -29,7 +30,7 @@ def fail(msg):
     problems.append(msg)
     print("FAIL:", msg)
 
-def foxglove_side(path, allow_interrupted):
+def foxglove_side(path, allowed_ends):
     from mcap.reader import make_reader
     from mcap_protobuf.decoder import DecoderFactory
     expected = {}            # topic -> [field]
@@ -48,7 +49,7 @@ def foxglove_side(path, allow_interrupted):
             if key not in prov:
                 fail(f"provenance metadata lacks {key}")
         end = meta.get("orbitlash.run_end", {}).get("status")
-        if end != "complete" and not (allow_interrupted and end == "interrupted"):
+        if end != "complete" and end not in allowed_ends:
             fail(f"run_end status is {end!r}")
         if not any(a.media_type == "application/toml" for a in s.attachment_indexes):
             fail("the scenario file is not attached")
@@ -145,14 +146,17 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("log")
     ap.add_argument("--allow-interrupted", action="store_true")
+    ap.add_argument("--allow-recovered", action="store_true")
     a = ap.parse_args()
+    allowed_ends = {e for e, ok in [("interrupted", a.allow_interrupted),
+                                    ("recovered", a.allow_recovered)] if ok}
     try:
         import mcap, mcap_protobuf, rerun  # noqa: F401
     except ImportError as e:
         print("cannot run the check:", e)
         return 2
     try:
-        expected, counts, logs = foxglove_side(a.log, a.allow_interrupted)
+        expected, counts, logs = foxglove_side(a.log, allowed_ends)
         if "/thermal/temperature" not in expected:
             fail("no /thermal/temperature channel")
         if not any(t.startswith("/gears/") for t in expected):

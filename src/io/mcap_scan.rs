@@ -1,0 +1,346 @@
+//! A linear scan of an MCAP file that tolerates a cut-off end: a log whose writer was
+//! killed (power loss, `kill -9`: only `<name>.partial` is left) or a file truncated in
+//! a copy. Records are read from the start; the scan stops at the first record that is
+//! not whole, and inside an uncompressed chunk (what `orbitlash` writes; the writer
+//! streams a chunk to the file behind a placeholder header and fixes the header when
+//! the chunk is done) it keeps every message that is whole. A complete file gives its
+//! data section, the same as a normal reader.
+//!
+//! [`recover`] writes the scanned records to a new, valid MCAP file.
+
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use mcap::records::{self, Record};
+
+const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+const OP_CHUNK: u8 = 0x06;
+
+/// A message found by the scan: its header, its bytes and where its record ends in
+/// the file (byte offset just past it).
+#[derive(Debug, Clone)]
+pub struct ScannedMessage<'a> {
+    pub header: records::MessageHeader,
+    pub data: &'a [u8],
+    pub end_offset: usize,
+}
+
+/// Everything a scan recovered.
+#[derive(Debug, Default)]
+pub struct Scan<'a> {
+    pub schemas: BTreeMap<u16, mcap::Schema<'a>>,
+    pub channels: BTreeMap<u16, records::Channel>,
+    pub messages: Vec<ScannedMessage<'a>>,
+    pub metadata: Vec<records::Metadata>,
+    pub attachments: Vec<mcap::Attachment<'a>>,
+    /// The data section ended properly (a DataEnd record or the footer was reached).
+    pub complete: bool,
+    /// Bytes up to the end of the last whole record or message kept.
+    pub recovered_bytes: usize,
+    pub file_bytes: usize,
+}
+
+impl Scan<'_> {
+    /// Log time span of the recovered messages, ns.
+    pub fn time_span_ns(&self) -> Option<(u64, u64)> {
+        let mut it = self.messages.iter().map(|m| m.header.log_time);
+        let first = it.next()?;
+        Some(it.fold((first, first), |(a, b), t| (a.min(t), b.max(t))))
+    }
+
+    /// The value of `key` in the metadata record `name`, if any.
+    pub fn metadata_value(&self, name: &str, key: &str) -> Option<&str> {
+        self.metadata
+            .iter()
+            .rev()
+            .find(|m| m.name == name)
+            .and_then(|m| m.metadata.get(key))
+            .map(String::as_str)
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ScanError {
+    #[error("not an MCAP file (its first bytes are not the MCAP magic)")]
+    NotMcap,
+    #[error("record at byte {offset} is malformed: {message}")]
+    Malformed { offset: usize, message: String },
+}
+
+fn u64_at(b: &[u8], at: usize) -> Option<u64> {
+    b.get(at..at + 8)
+        .map(|s| u64::from_le_bytes(s.try_into().expect("8 bytes")))
+}
+
+fn u32_at(b: &[u8], at: usize) -> Option<u32> {
+    b.get(at..at + 4)
+        .map(|s| u32::from_le_bytes(s.try_into().expect("4 bytes")))
+}
+
+/// Scans `bytes` (see the module docs).
+pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
+    if !bytes.starts_with(MAGIC) {
+        return Err(ScanError::NotMcap);
+    }
+    let mut s = Scan {
+        file_bytes: bytes.len(),
+        recovered_bytes: MAGIC.len(),
+        ..Scan::default()
+    };
+    let mut at = MAGIC.len();
+    // Ends where a record's opcode or length is cut off.
+    while let (Some(&op), Some(len)) = (bytes.get(at), u64_at(bytes, at + 1)) {
+        let body_start = at + 9;
+        let whole = usize::try_from(len)
+            .ok()
+            .and_then(|l| body_start.checked_add(l))
+            .filter(|&end| end <= bytes.len());
+        let Some(end) = whole else {
+            // A record cut off: only a chunk can still give whole messages.
+            if op == OP_CHUNK {
+                partial_chunk(bytes, body_start, &mut s)?;
+            }
+            break;
+        };
+        let body = &bytes[body_start..end];
+        let record = mcap::parse_record(op, body).map_err(|e| ScanError::Malformed {
+            offset: at,
+            message: e.to_string(),
+        })?;
+        match record {
+            Record::DataEnd(_) | Record::Footer(_) => {
+                s.complete = true;
+                s.recovered_bytes = end;
+                break;
+            }
+            Record::Chunk { header, data } => {
+                if !header.compression.is_empty() {
+                    return Err(ScanError::Malformed {
+                        offset: at,
+                        message: format!(
+                            "chunk compressed with {} (this reader takes uncompressed chunks, as orbitlash writes them)",
+                            header.compression
+                        ),
+                    });
+                }
+                let Cow::Borrowed(data) = data else {
+                    unreachable!("an uncompressed chunk borrows the file")
+                };
+                let offset = data.as_ptr() as usize - bytes.as_ptr() as usize;
+                inner_records(bytes, offset, offset + data.len(), &mut s)?;
+            }
+            other => keep(other, end, &mut s),
+        }
+        s.recovered_bytes = s.recovered_bytes.max(end);
+        at = end;
+    }
+    Ok(s)
+}
+
+/// A chunk whose record is cut off: its header (after the opcode and length) starts at
+/// `at`; whole inner records are kept.
+fn partial_chunk<'a>(bytes: &'a [u8], at: usize, s: &mut Scan<'a>) -> Result<(), ScanError> {
+    // start time, end time, uncompressed size, CRC, compression (u32 length + text),
+    // records length, records.
+    let Some(name_len) = u32_at(bytes, at + 28) else {
+        return Ok(());
+    };
+    let name_start = at + 32;
+    let Some(name) = bytes.get(name_start..name_start + name_len as usize) else {
+        return Ok(());
+    };
+    if !name.is_empty() {
+        return Ok(()); // a compressed stream cut off cannot be read
+    }
+    let records_start = name_start + name.len() + 8;
+    if records_start > bytes.len() {
+        return Ok(());
+    }
+    inner_records(bytes, records_start, bytes.len(), s)
+}
+
+/// The records inside a chunk, `bytes[from..to]`, up to the last whole one.
+fn inner_records<'a>(
+    bytes: &'a [u8],
+    from: usize,
+    to: usize,
+    s: &mut Scan<'a>,
+) -> Result<(), ScanError> {
+    let mut at = from;
+    while at + 9 <= to {
+        let (Some(&op), Some(len)) = (bytes.get(at), u64_at(bytes, at + 1)) else {
+            break;
+        };
+        let body_start = at + 9;
+        let Some(end) = usize::try_from(len)
+            .ok()
+            .and_then(|l| body_start.checked_add(l))
+            .filter(|&end| end <= to)
+        else {
+            break;
+        };
+        let record =
+            mcap::parse_record(op, &bytes[body_start..end]).map_err(|e| ScanError::Malformed {
+                offset: at,
+                message: e.to_string(),
+            })?;
+        keep(record, end, s);
+        s.recovered_bytes = s.recovered_bytes.max(end);
+        at = end;
+    }
+    Ok(())
+}
+
+fn keep<'a>(record: Record<'a>, end: usize, s: &mut Scan<'a>) {
+    match record {
+        Record::Schema { header, data } => {
+            s.schemas.insert(
+                header.id,
+                mcap::Schema {
+                    id: header.id,
+                    name: header.name,
+                    encoding: header.encoding,
+                    data,
+                },
+            );
+        }
+        Record::Channel(c) => {
+            s.channels.insert(c.id, c);
+        }
+        Record::Message { header, data } => {
+            let Cow::Borrowed(data) = data else {
+                unreachable!("a message record borrows the file")
+            };
+            s.messages.push(ScannedMessage {
+                header,
+                data,
+                end_offset: end,
+            });
+        }
+        Record::Metadata(m) => s.metadata.push(m),
+        Record::Attachment { header, data, .. } => s.attachments.push(mcap::Attachment {
+            log_time: header.log_time,
+            create_time: header.create_time,
+            name: header.name,
+            media_type: header.media_type,
+            data,
+        }),
+        _ => {}
+    }
+}
+
+/// What [`recover`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recovery {
+    pub messages: usize,
+    /// Log time of the last message kept, s.
+    pub t_end_s: f64,
+    pub recovered_bytes: usize,
+    pub file_bytes: usize,
+    /// The run_end status the original file had, if it got that far.
+    pub original_status: Option<String>,
+}
+
+/// Writes every record `scan` recovered into a new MCAP file at `out` (atomically, never
+/// over an input: `policy`), with a `orbitlash.run_end` record of status `recovered`
+/// when the original had none. Messages whose channel or schema was lost are skipped.
+pub fn recover(
+    scan: &Scan<'_>,
+    out: &Path,
+    policy: &super::output::OutputPolicy,
+) -> Result<Recovery, super::output::OutputError> {
+    use super::output::OutputError;
+    let err = |e: mcap::McapError| OutputError::other(out, e);
+    let file = super::atomic::AtomicFile::create(out, policy)?;
+    let mut w = mcap::WriteOptions::new()
+        .library(format!(
+            "orbitlash {} (recovered)",
+            env!("CARGO_PKG_VERSION")
+        ))
+        .profile("")
+        .compression(None)
+        .chunk_size(Some(1 << 16))
+        .calculate_chunk_crcs(false)
+        .create(file)
+        .map_err(err)?;
+    for sc in scan.schemas.values() {
+        w.add_schema_with_id(sc.id, &sc.name, &sc.encoding, &sc.data)
+            .map_err(err)?;
+    }
+    let mut usable = std::collections::BTreeSet::new();
+    for ch in scan.channels.values() {
+        if ch.schema_id != 0 && !scan.schemas.contains_key(&ch.schema_id) {
+            continue;
+        }
+        w.add_channel_with_id(
+            ch.id,
+            ch.schema_id,
+            &ch.topic,
+            &ch.message_encoding,
+            &ch.metadata,
+        )
+        .map_err(err)?;
+        usable.insert(ch.id);
+    }
+    for m in scan
+        .metadata
+        .iter()
+        .filter(|m| m.name != "orbitlash.run_end")
+    {
+        w.write_metadata(m).map_err(err)?;
+    }
+    for a in &scan.attachments {
+        w.attach(a).map_err(err)?;
+    }
+    let mut kept = 0usize;
+    let mut last_ns = 0u64;
+    for m in &scan.messages {
+        if !usable.contains(&m.header.channel_id) {
+            continue;
+        }
+        w.write_to_known_channel(&m.header, m.data).map_err(err)?;
+        kept += 1;
+        last_ns = last_ns.max(m.header.log_time);
+    }
+    let original_status = scan
+        .metadata_value("orbitlash.run_end", "status")
+        .map(str::to_string);
+    let t_end_s = last_ns as f64 * 1e-9;
+    let end: BTreeMap<String, String> = match scan
+        .metadata
+        .iter()
+        .rev()
+        .find(|m| m.name == "orbitlash.run_end")
+    {
+        Some(m) => m.metadata.clone(),
+        None => [
+            ("status", "recovered".to_string()),
+            ("t_end_s", format!("{t_end_s}")),
+            (
+                "detail",
+                format!(
+                    "recovered from a log cut off after {} of {} bytes: {kept} messages up to t = {t_end_s:.3} s",
+                    scan.recovered_bytes, scan.file_bytes
+                ),
+            ),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect(),
+    };
+    w.write_metadata(&records::Metadata {
+        name: "orbitlash.run_end".into(),
+        metadata: end,
+    })
+    .map_err(err)?;
+    w.finish().map_err(err)?;
+    w.into_inner().commit()?;
+    Ok(Recovery {
+        messages: kept,
+        t_end_s,
+        recovered_bytes: scan.recovered_bytes,
+        file_bytes: scan.file_bytes,
+        original_status,
+    })
+}

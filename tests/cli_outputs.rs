@@ -1,0 +1,236 @@
+//! Outputs never replace an input or a non-file, never escape `logs/` by default, and
+//! fail before anything is written (issue 8, items 1 and 2).
+
+use std::path::Path;
+use std::process::Output;
+
+mod common;
+use common::{assert_error, bin, reference_text, reference_with, snapshot, tmpdir};
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    bin().args(args).current_dir(dir).output().unwrap()
+}
+
+/// A folder with the reference scenario as `s.toml` and a finished log `l.mcap`.
+fn setup(name: &str) -> std::path::PathBuf {
+    let dir = tmpdir(name);
+    std::fs::write(dir.join("s.toml"), reference_text()).unwrap();
+    let out = run_in(
+        &dir,
+        &[
+            "run", "s.toml", "--orbits", "1", "--quiet", "--out", "l.mcap",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir
+}
+
+/// Runs `args` in a fresh copy of the setup and asserts: exit 2, the first error line
+/// names `needles`, and no file in the folder was created, changed or removed.
+fn refused(case: &str, args: &[&str], prepare: &dyn Fn(&Path), needles: &[&str]) {
+    let dir = setup(case);
+    prepare(&dir);
+    let before = snapshot(&dir);
+    let out = run_in(&dir, args);
+    assert_error(case, &out, needles);
+    assert_eq!(
+        snapshot(&dir),
+        before,
+        "{case}: files changed although the command was refused"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn nothing(_: &Path) {}
+
+#[test]
+fn the_log_never_replaces_the_scenario() {
+    refused(
+        "out-is-input",
+        &["run", "s.toml", "--out", "s.toml"],
+        &nothing,
+        &["s.toml", "input"],
+    );
+    // by another spelling of the same path, and through a hard link
+    refused(
+        "out-is-input-dot",
+        &["run", "s.toml", "--out", "./s.toml"],
+        &nothing,
+        &["./s.toml", "input"],
+    );
+    refused(
+        "out-is-hard-link",
+        &["run", "s.toml", "--out", "hard.mcap"],
+        &|d| std::fs::hard_link(d.join("s.toml"), d.join("hard.mcap")).unwrap(),
+        &["hard.mcap", "same file as s.toml"],
+    );
+}
+
+#[test]
+fn the_csv_never_replaces_the_scenario_or_the_log() {
+    refused(
+        "csv-is-input",
+        &["run", "s.toml", "--no-log", "--csv", "s.toml"],
+        &nothing,
+        &["s.toml", "input"],
+    );
+    refused(
+        "csv-is-log",
+        &["run", "s.toml", "--out", "x.mcap", "--csv", "./x.mcap"],
+        &nothing,
+        &["same file"],
+    );
+}
+
+#[test]
+fn export_never_replaces_its_log() {
+    refused(
+        "export-over-log",
+        &["export-csv", "l.mcap", "--out", "l.mcap"],
+        &nothing,
+        &["l.mcap", "input"],
+    );
+}
+
+#[test]
+fn devices_fifos_folders_and_links_are_refused() {
+    refused(
+        "dev-full",
+        &["run", "s.toml", "--out", "/dev/full"],
+        &nothing,
+        &["/dev/full", "device"],
+    );
+    refused(
+        "dev-null-csv",
+        &["run", "s.toml", "--no-log", "--csv", "/dev/null"],
+        &nothing,
+        &["/dev/null", "device"],
+    );
+    refused(
+        "fifo",
+        &["run", "s.toml", "--out", "pipe"],
+        &|d| {
+            let status = std::process::Command::new("mkfifo")
+                .arg(d.join("pipe"))
+                .status()
+                .unwrap();
+            assert!(status.success());
+        },
+        &["pipe", "FIFO"],
+    );
+    refused(
+        "folder",
+        &["run", "s.toml", "--out", "sub"],
+        &|d| std::fs::create_dir(d.join("sub")).unwrap(),
+        &["sub", "directory"],
+    );
+    // a link to a regular file that is not an input is refused too (documented: no
+    // writing through links), and the file it points to is untouched
+    refused(
+        "link-to-file",
+        &["run", "s.toml", "--out", "link.mcap"],
+        &|d| std::os::unix::fs::symlink(d.join("l.mcap"), d.join("link.mcap")).unwrap(),
+        &["link.mcap", "symbolic link"],
+    );
+    refused(
+        "link-to-input",
+        &["export-csv", "l.mcap", "--out", "link.csv"],
+        &|d| std::os::unix::fs::symlink(d.join("l.mcap"), d.join("link.csv")).unwrap(),
+        &["link.csv", "symbolic link"],
+    );
+}
+
+#[test]
+fn missing_folders_are_created_only_under_logs() {
+    refused(
+        "no-such-dir",
+        &["run", "s.toml", "--out", "missing/x.mcap"],
+        &nothing,
+        &["missing/x.mcap", "no such directory"],
+    );
+    refused(
+        "no-such-dir-csv",
+        &["run", "s.toml", "--no-log", "--csv", "missing/x.csv"],
+        &nothing,
+        &["no such directory"],
+    );
+    refused(
+        "parent-is-a-file",
+        &["run", "s.toml", "--out", "s.toml/x.mcap"],
+        &nothing,
+        &["s.toml/x.mcap"],
+    );
+    // the default log's folder is created
+    let dir = setup("default-logs");
+    let out = run_in(&dir, &["run", "s.toml", "--orbits", "1", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("logs/reference-hinge.mcap").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn scenario_names_cannot_leave_logs() {
+    for (case, name) in [
+        ("name-dotdot", "../../etc/evil"),
+        ("name-abs", "/abs/path"),
+        ("name-slash", "a/b"),
+        ("name-space", "a b"),
+        ("name-dot", ".hidden"),
+        ("name-empty", ""),
+    ] {
+        let dir = tmpdir(case);
+        let text = reference_with(&[("name = \"reference-hinge\"", &format!("name = \"{name}\""))]);
+        std::fs::write(dir.join("s.toml"), text).unwrap();
+        let before = snapshot(&dir);
+        let out = run_in(&dir, &["run", "s.toml", "--orbits", "1", "--quiet"]);
+        assert_error(case, &out, &["s.toml", "scenario.name"]);
+        assert_eq!(snapshot(&dir), before, "{case}: something was written");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    // node names are held to the same rule
+    let dir = tmpdir("node-name");
+    let text = reference_with(&[("name = \"motor\"", "name = \"mo/tor\"")]);
+    std::fs::write(dir.join("s.toml"), text).unwrap();
+    let out = run_in(&dir, &["check", "s.toml"]);
+    assert_error("node-name", &out, &["node[1].name", "mo/tor"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn recover_never_replaces_its_input() {
+    // recovering `x.mcap.partial` into `x.mcap` must not use `x.mcap.partial` as its
+    // temporary file
+    let dir = setup("recover-tmp");
+    let bytes = std::fs::read(dir.join("l.mcap")).unwrap();
+    std::fs::write(dir.join("x.mcap.partial"), &bytes[..bytes.len() / 2]).unwrap();
+    let out = run_in(&dir, &["recover", "x.mcap.partial", "--out", "x.mcap"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read(dir.join("x.mcap.partial")).unwrap(),
+        &bytes[..bytes.len() / 2],
+        "the input changed"
+    );
+    assert!(dir.join("x.mcap").is_file());
+    refused(
+        "recover-over-input",
+        &["recover", "y.mcap.partial", "--out", "y.mcap.partial"],
+        &|d| {
+            let b = std::fs::read(d.join("l.mcap")).unwrap();
+            std::fs::write(d.join("y.mcap.partial"), &b[..b.len() / 2]).unwrap();
+        },
+        &["y.mcap.partial", "input"],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1,0 +1,161 @@
+//! The verdict is in the exit status (0 pass, 1 margin violated or interference, 2
+//! error) and in the first lines of the summary; every error cause is printed once
+//! (issue 8, items 6 and 8).
+
+use std::path::Path;
+use std::process::Output;
+
+mod common;
+use common::{assert_error, bin, reference_with, tmpdir};
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    bin().args(args).current_dir(dir).output().unwrap()
+}
+
+fn with(dir: &Path, edits: &[(&str, &str)]) {
+    std::fs::write(dir.join("s.toml"), reference_with(edits)).unwrap();
+}
+
+#[test]
+fn run_passes_with_the_reference() {
+    let dir = tmpdir("verdict-pass");
+    with(&dir, &[]);
+    let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let second = stdout.lines().nth(1).unwrap();
+    assert!(
+        second.starts_with("PASS mesh: margin 19.39") && second.contains("orbit 6"),
+        "{stdout}"
+    );
+    // solver internals only with --verbose, and after the results
+    assert!(!stdout.contains("factorisations"), "{stdout}");
+    let verbose = run_in(&dir, &["run", "s.toml", "--no-log", "--verbose"]);
+    let v = String::from_utf8_lossy(&verbose.stdout);
+    assert!(v.find("factorisations").unwrap() > v.find("gear pair mesh").unwrap());
+    assert!(stdout.contains("last orbit min"), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn run_fails_with_exit_1_when_the_margin_is_violated() {
+    let dir = tmpdir("verdict-margin");
+    // 30 µm minimum: the backlash falls to 24.4 µm in eclipse
+    with(&dir, &[("min_backlash_um = 5.0", "min_backlash_um = 30.0")]);
+    let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout
+            .lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("FAIL mesh: margin -5.60"),
+        "{stdout}"
+    );
+    assert!(out.stderr.is_empty(), "a failed verdict is not an error");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn run_fails_with_exit_1_when_the_teeth_interfere() {
+    let dir = tmpdir("verdict-interference");
+    // 4 µm thinning: 3.6 µm nominal backlash, which the orbit closes
+    with(
+        &dir,
+        &[
+            ("tooth_thinning_um = 19.4745", "tooth_thinning_um = 4.0"),
+            ("tooth_thinning_um = 19.4745", "tooth_thinning_um = 4.0"),
+            ("min_backlash_um = 5.0", "min_backlash_um = 0.0"),
+        ],
+    );
+    let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout
+            .lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("FAIL mesh: interference"),
+        "{stdout}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn run_exits_2_on_a_broken_scenario() {
+    let dir = tmpdir("verdict-broken");
+    with(
+        &dir,
+        &[("capacitance_j_per_k = 120.0", "capacitance_j_per_k = -1")],
+    );
+    let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
+    assert_error("broken", &out, &["s.toml", "node[0].capacitance_j_per_k"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn backlash_has_the_same_exit_statuses() {
+    let dir = tmpdir("verdict-backlash");
+    with(&dir, &[]);
+    let pass = run_in(&dir, &["backlash", "s.toml"]);
+    assert_eq!(pass.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&pass.stdout).starts_with("PASS mesh"));
+    // uniform 100 °C closes the reference backlash to 15.8 µm; 30 µm required fails
+    with(&dir, &[("min_backlash_um = 5.0", "min_backlash_um = 30.0")]);
+    let fail = run_in(&dir, &["backlash", "s.toml", "--json"]);
+    assert_eq!(fail.status.code(), Some(1));
+    let json: serde_json::Value = serde_json::from_slice(&fail.stdout).unwrap();
+    assert_eq!(json["pass"], false);
+    assert_eq!(json["pairs"][0]["verdict"], "fail");
+    let broken = run_in(&dir, &["backlash", "missing.toml"]);
+    assert_error("backlash-missing", &broken, &["missing.toml"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn every_cause_is_printed_once() {
+    let dir = tmpdir("error-once");
+    for args in [
+        vec!["run", "missing.toml"],
+        vec!["check", "missing.toml"],
+        vec!["export-csv", "missing.mcap"],
+        vec!["recover", "missing.mcap"],
+    ] {
+        let out = run_in(&dir, &args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2));
+        assert_eq!(
+            stderr.matches("No such file or directory").count(),
+            1,
+            "{args:?}: {stderr}"
+        );
+        assert!(
+            stderr.lines().next().unwrap().contains("missing."),
+            "{stderr}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn help_documents_the_exit_statuses() {
+    let out = bin().arg("--help").output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("Exit status: 0")
+            && text.contains("1 when")
+            && text.contains("2 on any error")
+    );
+}
