@@ -24,10 +24,11 @@ fn full_log(dir: &Path) -> Vec<u8> {
     std::fs::read(dir.join("full.mcap")).unwrap()
 }
 
-/// Where each message record of an MCAP file ends, found by walking the file with the
-/// spec's layout directly (not with the scanner under test): top-level records, and
-/// inside each chunk its records.
-fn message_ends(b: &[u8]) -> Vec<usize> {
+/// Where each message record of an MCAP file ends, and where its data section ends
+/// (after the DataEnd record), found by walking the file with the spec's layout
+/// directly (not with the scanner under test): top-level records, and inside each chunk
+/// its records.
+fn message_ends(b: &[u8]) -> (Vec<usize>, usize) {
     let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap()) as usize;
     let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap()) as usize;
     let mut ends = Vec::new();
@@ -50,30 +51,32 @@ fn message_ends(b: &[u8]) -> Vec<usize> {
                     r += 9 + rlen;
                 }
             }
-            0x0F => break, // data end
+            0x0F => return (ends, body + len), // data end
             _ => {}
         }
         at = body + len;
     }
-    ends
+    panic!("no DataEnd record")
 }
 
 #[test]
 fn a_log_cut_anywhere_gives_back_every_whole_message() {
     let dir = tmpdir("recovery-cuts");
     let bytes = full_log(&dir);
-    let ends = message_ends(&bytes);
+    let (ends, data_end) = message_ends(&bytes);
     let full = scan(&bytes).unwrap();
     assert!(full.complete);
     assert_eq!(full.messages.len(), ends.len());
     // 50 offsets spread over the file, plus a few on and next to record boundaries
     let mut cuts: Vec<usize> = (1..=50).map(|k| k * bytes.len() / 51).collect();
     cuts.extend([ends[10], ends[10] - 1, ends[10] + 1, 9, 100]);
+    cuts.sort();
     let mut last = 0;
     for &cut in &cuts {
         let part = &bytes[..cut];
         let s = scan(part).unwrap_or_else(|e| panic!("cut at {cut}: {e}"));
-        assert!(!s.complete, "cut at {cut} read as complete");
+        // a cut in the summary section leaves the data section whole
+        assert_eq!(s.complete, cut >= data_end, "cut at {cut}");
         // every message whose record lies whole before the cut, and no other. (The first
         // chunk's header must be whole too; a chunk header is 49 bytes here.)
         let want = ends.iter().filter(|&&e| e <= cut).count();
