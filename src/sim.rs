@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::EnvState;
+use crate::thermal::iteration::LinearSolver;
 use crate::thermal::solver::{StepData, StepFailure, Stepper, W0, W1};
 use crate::thermal::{StepSwitches, ThermalModel};
 
@@ -23,6 +24,9 @@ pub struct SolverSettings {
     /// Adaptive step-size control; when false every step is `max_step_s` (except
     /// where it lands on an event).
     pub adaptive: bool,
+    /// Dense or sparse linear algebra in the implicit stages. Default `Auto`: dense up
+    /// to 60 nodes, sparse above (the crossover in `docs/performance.md`).
+    pub linear: LinearSolver,
 }
 
 impl Default for SolverSettings {
@@ -31,6 +35,7 @@ impl Default for SolverSettings {
             tolerance_k: 0.002,
             max_step_s: 300.0,
             adaptive: true,
+            linear: LinearSolver::Auto,
         }
     }
 }
@@ -236,6 +241,11 @@ pub struct RunStats {
     pub newton_iterations: u64,
     /// Factorisations of the iteration matrix (the rest reuse one).
     pub factorizations: u64,
+    /// How the linear systems were solved: "dense", "sparse" or "iterative".
+    pub linear_solver: &'static str,
+    /// Iterative solver only: linear solves and conjugate-gradient iterations.
+    pub linear_solves: u64,
+    pub krylov_iterations: u64,
     pub eclipse_time_s: f64,
     pub eclipse_entries: u64,
     pub heater_switches: u64,
@@ -380,7 +390,7 @@ pub fn simulate<O: Observer>(
     // t = 0) and toggled at every crossing the solver lands on.
     let mut sunlit = env.sunlit(next_shadow.map_or(0.0, |(ts, _)| 0.5 * ts.min(1.0)));
 
-    let mut stepper = Stepper::new(model, settings.tolerance_k);
+    let mut stepper = Stepper::new(model, settings.tolerance_k, settings.linear);
     let mut stats = RunStats {
         energy: EnergyBalance {
             to_boundary_j: vec![0.0; net.boundaries.len()],
@@ -620,6 +630,8 @@ pub fn simulate<O: Observer>(
     }
     stats.t_end_s = t;
     stats.factorizations = stepper.factorizations;
+    stats.linear_solver = stepper.linear_solver();
+    (stats.linear_solves, stats.krylov_iterations) = stepper.solve_counts();
     stats.energy.stored_j = net
         .nodes
         .iter()

@@ -11,6 +11,7 @@ use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
 use orbitlash::io::output::OutputPolicy;
 use orbitlash::sim::{MAX_STEPS, SolverSettings, estimate_run, simulate};
 use orbitlash::summary::{MeshStats, Samples, WindowStats};
+use orbitlash::thermal::iteration::LinearSolver;
 
 use super::{load, orbits_arg, print_out};
 
@@ -27,9 +28,190 @@ pub struct BenchArgs {
     /// Skip the accuracy comparison with a step-converged run (for profiling).
     #[arg(long)]
     no_accuracy: bool,
+    /// Instead: the cost per step of synthetic networks (chains, 3-D lattices, random
+    /// sparse graphs) of 10 … 10 000 nodes with the dense and the sparse linear solver.
+    #[arg(long)]
+    scaling: bool,
+    /// With --scaling: node counts to measure (default 10,100,1000,2000,10000).
+    #[arg(long, value_delimiter = ',', requires = "scaling")]
+    nodes: Vec<usize>,
+    /// With --scaling: shapes to measure (chain, lattice, random; default all).
+    #[arg(long, value_delimiter = ',', requires = "scaling")]
+    shapes: Vec<String>,
+    /// With --scaling: multiply every node-to-node conductance (100: a stiff network).
+    #[arg(long, default_value_t = 1.0, requires = "scaling")]
+    conductance_scale: f64,
+    /// Print a synthetic network as a scenario file (e.g. `lattice:2000`) and exit.
+    #[arg(long, value_name = "SHAPE:NODES", conflicts_with = "scaling")]
+    emit_network: Option<String>,
+    /// With --scaling: seconds of wall time per measurement at most (default 10).
+    #[arg(long, default_value_t = 10.0, requires = "scaling")]
+    budget_s: f64,
+}
+
+/// One measurement of the cost per step.
+struct PerStep {
+    ms: f64,
+    steps: u64,
+    factorizations: f64,
+    newton: f64,
+    cg_per_solve: f64,
+}
+
+/// Wall time per step of `model` with `linear`, over at most one orbit, 300 steps or
+/// `budget_s` of wall time.
+fn time_per_step(
+    model: &orbitlash::thermal::ThermalModel,
+    linear: LinearSolver,
+    budget_s: f64,
+) -> Result<PerStep> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    struct Budget<'a>(Instant, u64, f64, &'a AtomicBool);
+    impl orbitlash::sim::Observer for Budget<'_> {
+        fn on_step(&mut self, _: &orbitlash::sim::StepView<'_>) -> orbitlash::sim::ObserverResult {
+            self.1 += 1;
+            if self.1 >= 300 || self.0.elapsed().as_secs_f64() > self.2 {
+                self.3.store(true, Ordering::Relaxed);
+            }
+            Ok(())
+        }
+    }
+    let settings = SolverSettings {
+        linear,
+        ..SolverSettings::default()
+    };
+    let stop = AtomicBool::new(false);
+    let start = Instant::now();
+    let period = model.environment.orbit.period_s();
+    let stats = simulate(
+        model,
+        &[],
+        &settings,
+        period,
+        &mut Budget(start, 0, budget_s, &stop),
+        Some(&stop),
+    )?;
+    let wall = start.elapsed().as_secs_f64();
+    let steps = stats.steps.max(1) as f64;
+    Ok(PerStep {
+        ms: wall * 1e3 / steps,
+        steps: stats.steps,
+        factorizations: stats.factorizations as f64 / steps,
+        newton: stats.newton_iterations as f64 / steps,
+        cg_per_solve: stats.krylov_iterations as f64 / stats.linear_solves.max(1) as f64,
+    })
+}
+
+/// Above this many nodes the scaling table leaves out the dense and sparse direct
+/// solvers (n² memory and minutes per factorisation for dense; for sparse LU, the fill
+/// of a random graph's factors is that of a dense matrix).
+const DIRECT_MAX_NODES: usize = 3000;
+
+fn scaling(a: &BenchArgs) -> Result<()> {
+    use orbitlash::thermal::synthetic::network_scaled;
+    let sizes = if a.nodes.is_empty() {
+        vec![10, 100, 1000, 2000, 10000]
+    } else {
+        a.nodes.clone()
+    };
+    let names = if a.shapes.is_empty() {
+        vec!["chain".to_string(), "lattice".into(), "random".into()]
+    } else {
+        a.shapes.clone()
+    };
+    let shapes = names
+        .iter()
+        .map(|s| parse_shape(s))
+        .collect::<Result<Vec<_>>>()?;
+    let mut o = String::new();
+    outln!(
+        o,
+        "cost per step, ms (TR-BDF2, tolerance 0.002 K, one orbit or {} s of wall time; conductances ×{}):",
+        a.budget_s,
+        a.conductance_scale
+    );
+    outln!(
+        o,
+        "{:8} {:>6} {:>6} | {:>10} {:>10} {:>10} | {:>5} {:>7} {:>6} {:>6}",
+        "shape",
+        "nodes",
+        "links",
+        "dense",
+        "sparse LU",
+        "iterative",
+        "steps",
+        "fact/st",
+        "Newton",
+        "CG/sol"
+    );
+    print_out(&o)?;
+    for &shape in &shapes {
+        for &n in &sizes {
+            // 2000 is the 20 × 10 × 10 lattice; other shapes skip it unless asked
+            if n == 2000 && shape.name() != "lattice" && a.nodes.is_empty() {
+                continue;
+            }
+            let model = network_scaled(shape, n, a.conductance_scale);
+            let nodes = model.network.nodes.len();
+            let links = model.network.conductors.len() + model.network.radiators.len();
+            let direct = |linear| -> Result<String> {
+                Ok(if nodes <= DIRECT_MAX_NODES {
+                    format!("{:.4}", time_per_step(&model, linear, a.budget_s)?.ms)
+                } else {
+                    "–".to_string()
+                })
+            };
+            let dense = direct(LinearSolver::Dense)?;
+            let sparse = direct(LinearSolver::Sparse)?;
+            let it = time_per_step(&model, LinearSolver::Iterative, a.budget_s)?;
+            let mut o = String::new();
+            outln!(
+                o,
+                "{:8} {:>6} {:>6} | {:>10} {:>10} {:>10.4} | {:>5} {:>7.2} {:>6.2} {:>6.1}",
+                shape.name(),
+                nodes,
+                links,
+                dense,
+                sparse,
+                it.ms,
+                it.steps,
+                it.factorizations,
+                it.newton,
+                it.cg_per_solve
+            );
+            print_out(&o)?;
+        }
+    }
+    Ok(())
+}
+
+fn parse_shape(s: &str) -> Result<orbitlash::thermal::synthetic::Shape> {
+    use orbitlash::thermal::synthetic::Shape;
+    Ok(match s {
+        "chain" => Shape::Chain,
+        "lattice" => Shape::Lattice,
+        "random" => Shape::Random,
+        other => anyhow::bail!("unknown shape `{other}` (known: chain, lattice, random)"),
+    })
 }
 
 pub fn bench(a: BenchArgs) -> Result<()> {
+    if a.scaling {
+        return scaling(&a);
+    }
+    if let Some(spec) = &a.emit_network {
+        use orbitlash::thermal::synthetic::{network, to_toml};
+        let (shape, n) = spec.split_once(':').ok_or_else(|| {
+            anyhow::anyhow!("--emit-network {spec}: give SHAPE:NODES, e.g. lattice:2000")
+        })?;
+        let n: usize = n
+            .parse()
+            .ok()
+            .filter(|&n| (2..=1_000_000).contains(&n))
+            .ok_or_else(|| anyhow::anyhow!("--emit-network {spec}: NODES must be 2 … 1000000"))?;
+        let model = network(parse_shape(shape)?, n);
+        return print_out(&to_toml(&model, &format!("{shape}-{n}"), 1.0));
+    }
     let mut o = String::new();
     let loaded = load(a.scenario.as_deref())?;
     let sc = loaded

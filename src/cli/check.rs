@@ -106,11 +106,24 @@ pub fn check(a: CheckArgs) -> Result<()> {
         .max()
         .unwrap_or(4)
         .max(4);
-    outln!(
-        o,
-        "  time constants at the initial temperatures (C_i / sum of conductances):"
-    );
-    for (n, t) in net.nodes.iter().zip(&tc.node_s) {
+    // Every node of a small network; the fastest of a large one.
+    const LISTED: usize = 12;
+    let mut order: Vec<usize> = (0..net.nodes.len()).collect();
+    if order.len() > 2 * LISTED {
+        order.sort_by(|&a, &b| tc.node_s[a].total_cmp(&tc.node_s[b]));
+        order.truncate(LISTED);
+        outln!(
+            o,
+            "  time constants at the initial temperatures (C_i / sum of conductances), the {LISTED} fastest of {} nodes:",
+            net.nodes.len()
+        );
+    } else {
+        outln!(
+            o,
+            "  time constants at the initial temperatures (C_i / sum of conductances):"
+        );
+    }
+    for (n, t) in order.iter().map(|&i| (&net.nodes[i], tc.node_s[i])) {
         outln!(
             o,
             "    {:width$}  C = {:>9.3} J/K   tau = {:>10.2} s",
@@ -119,6 +132,13 @@ pub fn check(a: CheckArgs) -> Result<()> {
             t
         );
     }
+    outln!(
+        o,
+        "  linear systems: {} ({} nodes; solver.linear = \"{}\")",
+        sc.solver.linear.resolve(net.nodes.len()).name(),
+        net.nodes.len(),
+        sc.solver.linear.name()
+    );
     outln!(
         o,
         "  eigen time constants: slowest {:.1} s, fastest {:.4} s, stiffness ratio {:.3e}",

@@ -505,7 +505,26 @@ fn format_summary(
         "max °C",
         "mean °C"
     );
-    for s in window.nodes() {
+    // Every node of a mechanism; the extremes of a large network (all of them are in
+    // the log and the CSV).
+    let mut nodes = window.nodes();
+    if nodes.len() > 40 {
+        let total = nodes.len();
+        nodes.sort_by(|a, b| a.min_k.total_cmp(&b.min_k));
+        let mut shown: Vec<_> = nodes[..5].to_vec();
+        nodes.sort_by(|a, b| b.max_k.total_cmp(&a.max_k));
+        for s in nodes.iter().take(5) {
+            if !shown.iter().any(|x| x.name == s.name) {
+                shown.push(s.clone());
+            }
+        }
+        outln!(
+            o,
+            "  (the 5 coldest and the 5 hottest of {total} nodes; all of them: --csv or the log)"
+        );
+        nodes = shown;
+    }
+    for s in nodes {
         outln!(
             o,
             "  {:width$}  {:>9.2}  {:>9.2}  {:>9.2}",

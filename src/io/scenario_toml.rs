@@ -20,6 +20,7 @@ use crate::scenario::{
     SensorTarget,
 };
 use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K, SolverSettings};
+use crate::thermal::iteration::LinearSolver;
 use crate::thermal::{
     BoundaryNode, Conductor, DiffusionNode, Heater, Load, LoadKind, Mode, Network, NodeRef,
     Radiator, ThermalModel, When,
@@ -260,6 +261,7 @@ struct RawSolver {
     tolerance_k: Option<f64>,
     max_step_s: Option<f64>,
     adaptive: Option<bool>,
+    linear: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -763,6 +765,18 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             "s",
         )?,
         adaptive: raw.solver.adaptive.unwrap_or(defaults.adaptive),
+        linear: match raw.solver.linear.as_deref() {
+            None => defaults.linear,
+            Some(name) => LinearSolver::from_name(name).ok_or_else(|| {
+                cx.err(
+                    &sp.key("linear"),
+                    format!(
+                        "unknown linear solver `{name}` (known: {})",
+                        LinearSolver::NAMES.join(", ")
+                    ),
+                )
+            })?,
+        },
     };
 
     // Nodes.

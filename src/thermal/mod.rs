@@ -7,8 +7,10 @@
 //! no conductor links a node to itself, heater `on_k < off_k`.
 
 pub mod analysis;
+pub mod iteration;
 pub mod lu;
 pub mod solver;
+pub mod synthetic;
 
 use crate::constants::STEFAN_BOLTZMANN_W_PER_M2_K4;
 use crate::orbit::{EnvState, Environment, Incidence, Profile};

@@ -14,7 +14,7 @@
 // Index loops over nodes mirror the equations of the method; kept as they are.
 #![allow(clippy::needless_range_loop)]
 
-use super::lu::Lu;
+use super::iteration::{IterationMatrix, LinearSolver};
 use super::{Compiled, Flows, StepSwitches, ThermalModel};
 use crate::orbit::EnvState;
 
@@ -165,8 +165,8 @@ impl StepData {
 pub struct Stepper {
     pub compiled: Compiled,
     cap: Vec<f64>,
-    lu: Lu,
-    jac: Vec<f64>,
+    /// W = C − D h J and its factorisation (dense or sparse).
+    matrix: IterationMatrix,
     f0: Vec<f64>,
     f: Vec<f64>,
     fg: Vec<f64>,
@@ -192,15 +192,15 @@ pub struct Stepper {
 }
 
 impl Stepper {
-    /// A stepper for `model` whose steps aim at a local error of `tolerance_k`.
-    pub fn new(model: &ThermalModel, tolerance_k: f64) -> Stepper {
+    /// A stepper for `model` whose steps aim at a local error of `tolerance_k`, solving
+    /// its linear systems as `linear` says.
+    pub fn new(model: &ThermalModel, tolerance_k: f64, linear: LinearSolver) -> Stepper {
         let compiled = Compiled::new(&model.network);
         let n = compiled.n;
         Stepper {
             cap: compiled.capacitance_j_per_k.clone(),
+            matrix: IterationMatrix::new(&compiled, linear),
             compiled,
-            lu: Lu::new(n),
-            jac: vec![0.0; n * n],
             f0: vec![0.0; n],
             f: vec![0.0; n],
             fg: vec![0.0; n],
@@ -261,20 +261,13 @@ impl Stepper {
         // The iteration matrix is kept while the step size is unchanged and Newton
         // converges fast; the Jacobian only affects convergence, not the solution.
         if self.jac_stale {
-            self.compiled.jacobian(temps0_k, &mut self.jac);
+            self.matrix.set_jacobian(&self.compiled, temps0_k);
             self.jac_stale = false;
             self.lu_h = f64::NAN;
         }
         if self.lu_h != h_s {
-            let w = self.lu.matrix_mut();
-            for i in 0..n {
-                for j in 0..n {
-                    w[i * n + j] = -D * h_s * self.jac[i * n + j];
-                }
-                w[i * n + i] += self.cap[i];
-            }
             self.factorizations += 1;
-            if self.lu.factor().is_err() {
+            if self.matrix.factor(&self.cap, D * h_s).is_err() {
                 self.jac_stale = true;
                 return Err(StepFailure::Singular);
             }
@@ -341,12 +334,22 @@ impl Stepper {
             let raw = ERR_CONST * 2.0 * h_s * ((f1 - fg) / (1.0 - GAMMA) - (fg - f0) / GAMMA);
             self.data.error_k[i] = self.cap[i] * raw;
         }
-        self.lu.solve(&mut self.data.error_k);
+        self.matrix.solve(&mut self.data.error_k);
         Ok(())
     }
 }
 
 impl Stepper {
+    /// "dense", "sparse" or "iterative": how this stepper solves its linear systems.
+    pub fn linear_solver(&self) -> &'static str {
+        self.matrix.kind()
+    }
+
+    /// (linear solves, Krylov iterations) so far (iterative solver only).
+    pub fn solve_counts(&self) -> (u64, u64) {
+        self.matrix.solve_counts()
+    }
+
     /// Declares that the next step starts where the last successful one ended, with
     /// the same loads and switches, so its start values can be reused. The caller must
     /// not call this after a rejected step or an event.
@@ -379,7 +382,7 @@ impl Stepper {
             for i in 0..y.len() {
                 self.r[i] = self.k[i] - (self.cap[i] * y[i] - dh * self.f[i]);
             }
-            self.lu.solve(&mut self.r);
+            self.matrix.solve(&mut self.r);
             let mut dmax = 0.0f64;
             for i in 0..y.len() {
                 y[i] += self.r[i];
