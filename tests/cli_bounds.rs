@@ -276,3 +276,47 @@ fn bench_needs_at_least_one_repetition() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("--repeat"), "{stderr}");
 }
+
+#[test]
+fn values_beyond_physical_sense_are_refused_by_key() {
+    refused(
+        "conductance",
+        &[("conductance_w_per_k = 0.25", "conductance_w_per_k = 1e20")],
+        &["run", "--quiet", "--no-log"],
+        &["conductor[", "conductance_w_per_k", "at most 1e9 W/K"],
+    );
+    refused(
+        "capacitance",
+        &[("capacitance_j_per_k = 4.06", "capacitance_j_per_k = 1e-300")],
+        &["check"],
+        &["capacitance_j_per_k", "at least 0.000001 J/K"],
+    );
+    refused(
+        "area",
+        &[("emissivity_area_m2 = 0.030", "emissivity_area_m2 = 1e9")],
+        &["check"],
+        &["emissivity_area_m2", "at most 1e4 m²"],
+    );
+}
+
+#[test]
+fn a_strain_polynomial_with_a_wrong_scale_is_refused() {
+    let dir = tmpdir("strain-scale");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml"),
+    )
+    .unwrap()
+    .replacen("scale = 1e-5", "scale = 1e20", 1);
+    std::fs::write(dir.join("s.toml"), text).unwrap();
+    let out = run_in(&dir, &["check", "s.toml"]);
+    assert_error(
+        "strain-scale",
+        &out,
+        &[
+            "gear_pair[0].center_distance",
+            "thermal strain law",
+            "scale",
+        ],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -37,9 +37,13 @@ pub struct Cli {
     command: Command,
 }
 
+const VERDICT_HELP: &str = "Exit status: 0 when every gear pair kept its minimum backlash (PASS), \
+1 when a pair's margin was violated or its teeth interfere (FAIL), 2 on any error.";
+
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run a scenario (the embedded reference-hinge when none is given).
+    #[command(after_help = VERDICT_HELP)]
     Run(run::RunArgs),
     /// Validate a scenario and print derived quantities without running it.
     Check(check::CheckArgs),
@@ -47,6 +51,7 @@ enum Command {
     /// backlash evaluation and of logging.
     Bench(bench::BenchArgs),
     /// Static backlash calculator: every model variant at given temperatures.
+    #[command(after_help = VERDICT_HELP)]
     Backlash(backlash::BacklashArgs),
     /// Convert an MCAP log back to CSV (the layout of `run --csv`); a cut-off log is
     /// read up to its last whole message.

@@ -356,6 +356,9 @@ fn duration(s: f64) -> String {
 
 /// Where in the orbit `t` falls, for reports.
 fn orbit_phase(sc: &Scenario, t: f64) -> String {
+    if !t.is_finite() {
+        return "no time (no valid sample)".to_string();
+    }
     let env = &sc.thermal.environment;
     format!(
         "t = {t:.1} s, orbit {}, θ = {:.1}° from noon, {}",

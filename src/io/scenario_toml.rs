@@ -443,6 +443,22 @@ impl Cx<'_> {
         }
     }
 
+    /// A value > 0 and ≤ `hi` (a physically sensible upper bound, named in the error).
+    fn positive_up_to(
+        &self,
+        path: &KeyPath,
+        v: f64,
+        hi: f64,
+        unit: &str,
+    ) -> Result<f64, ScenarioError> {
+        self.positive(path, v)?;
+        if v <= hi {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be at most {hi:e} {unit} (got {v})")))
+        }
+    }
+
     /// A finite value ≥ `lo` (a physically sensible lower bound, named in the error).
     fn at_least(&self, path: &KeyPath, v: f64, lo: f64, unit: &str) -> Result<f64, ScenarioError> {
         self.finite(path, v)?;
@@ -557,10 +573,12 @@ impl Cx<'_> {
         a_max: f64,
     ) -> Result<f64, ScenarioError> {
         match (product.0, a.0, b.0) {
-            (Some(p), None, None) => self.positive(&path.key(product.1), p),
+            (Some(p), None, None) => {
+                self.positive_up_to(&path.key(product.1), p, MAX_AREA_M2, "m²")
+            }
             (None, Some(x), Some(y)) => {
                 let x = self.within(&path.key(a.1), x, 0.0, a_max, a.1)?;
-                let y = self.positive(&path.key(b.1), y)?;
+                let y = self.positive_up_to(&path.key(b.1), y, MAX_AREA_M2, "m²")?;
                 Ok(x * y)
             }
             _ => Err(self.err(
@@ -609,6 +627,15 @@ fn locate(text: &str, path: &KeyPath) -> Option<usize> {
 }
 
 // ---------------------------------------------------------------- validation
+
+/// Smallest node capacitance, J/K: a microgram of metal. Below it a node is numerically
+/// indistinguishable from an infinitely fast one and only costs conditioning.
+pub const MIN_CAPACITANCE_J_PER_K: f64 = 1e-6;
+/// Largest conductance, W/K (a square metre of bonded joint conducts ~1e4 W/K): beyond it
+/// two nodes are one, and the Newton systems lose their precision (tested to 1e12).
+pub const MAX_CONDUCTANCE_W_PER_K: f64 = 1e9;
+/// Largest area (or area product) of a face, a radiative link or a load, m².
+pub const MAX_AREA_M2: f64 = 1e4;
 
 /// Orbital periods the model accepts, s: 10 minutes … 30 days.
 pub const MIN_PERIOD_S: f64 = 600.0;
@@ -787,8 +814,11 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
         let p = np.at(i);
         check_name(cx, &p.key("name"), &n.name, &names)?;
         let node = DiffusionNode {
-            capacitance_j_per_k: cx
-                .positive(&p.key("capacitance_j_per_k"), n.capacitance_j_per_k)?,
+            capacitance_j_per_k: {
+                let k = p.key("capacitance_j_per_k");
+                let c = cx.positive(&k, n.capacitance_j_per_k)?;
+                cx.at_least(&k, c, MIN_CAPACITANCE_J_PER_K, "J/K")?
+            },
             initial_temperature_k: cx
                 .temperature(&p.key("initial_temperature_k"), n.initial_temperature_k)?,
             radius_m: match n.radius_mm {
@@ -881,8 +911,12 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
         conductors.push(Conductor {
             a,
             b,
-            conductance_w_per_k: cx
-                .positive(&p.key("conductance_w_per_k"), c.conductance_w_per_k)?,
+            conductance_w_per_k: cx.positive_up_to(
+                &p.key("conductance_w_per_k"),
+                c.conductance_w_per_k,
+                MAX_CONDUCTANCE_W_PER_K,
+                "W/K",
+            )?,
         });
     }
     let mut radiators = Vec::new();
@@ -1239,7 +1273,34 @@ struct StrainKeys {
     table: Option<RawStrainTable>,
 }
 
+/// Largest thermal strain a law may give between 20 K and 1000 K, relative to room
+/// temperature: ten times that of aluminium (1.5 %) between those temperatures.
+const MAX_THERMAL_STRAIN: f64 = 0.1;
+
+/// A strain law whose values stay within ±[`MAX_THERMAL_STRAIN`] of its value at
+/// 293.15 K over 20 … 1000 K (a polynomial with a wrong `scale` fails here).
 fn strain_law(cx: &Cx<'_>, p: &KeyPath, keys: StrainKeys) -> Result<StrainLaw, ScenarioError> {
+    let law = strain_law_unchecked(cx, p, keys)?;
+    let worst = (0..=98)
+        .map(|k| 20.0 + 10.0 * k as f64)
+        .map(|t| (t, law.strain(t, 293.15)))
+        .find(|(_, e)| !(e.abs() <= MAX_THERMAL_STRAIN));
+    if let Some((t, e)) = worst {
+        return Err(cx.err(
+            p,
+            format!(
+                "the thermal strain law gives {e:.3e} at {t} K relative to 293.15 K; a solid's thermal strain stays within ±{MAX_THERMAL_STRAIN} over 20 … 1000 K (check the coefficients and `scale`)"
+            ),
+        ));
+    }
+    Ok(law)
+}
+
+fn strain_law_unchecked(
+    cx: &Cx<'_>,
+    p: &KeyPath,
+    keys: StrainKeys,
+) -> Result<StrainLaw, ScenarioError> {
     let StrainKeys {
         alpha,
         dalpha,

@@ -53,6 +53,9 @@ impl Profile {
 pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
     debug_assert_eq!(xs.len(), ys.len());
     let n = xs.len();
+    if x.is_nan() {
+        return f64::NAN;
+    }
     if n == 1 || x <= xs[0] {
         return ys[0];
     }
