@@ -1284,7 +1284,7 @@ fn strain_law(cx: &Cx<'_>, p: &KeyPath, keys: StrainKeys) -> Result<StrainLaw, S
     let worst = (0..=98)
         .map(|k| 20.0 + 10.0 * k as f64)
         .map(|t| (t, law.strain(t, 293.15)))
-        .find(|(_, e)| !(e.abs() <= MAX_THERMAL_STRAIN));
+        .find(|(_, e)| e.is_nan() || e.abs() > MAX_THERMAL_STRAIN);
     if let Some((t, e)) = worst {
         return Err(cx.err(
             p,
