@@ -48,6 +48,9 @@ pub const DERIVED_QUANTITIES: [&str; 1] = ["backlash_um"];
 /// solver's shortest step (1e-7 s) in double precision.
 pub const MAX_DURATION_S: f64 = 1e9;
 
+/// Shortest run, s.
+pub const MIN_DURATION_S: f64 = 1.0;
+
 /// Shortest interval between CSV rows, s.
 pub const MIN_OUTPUT_INTERVAL_S: f64 = 1e-3;
 
@@ -72,7 +75,7 @@ pub fn check_name(name: &str) -> Result<(), String> {
         Err(format!("is longer than {MAX_NAME_LEN} characters"))
     } else if !(first_ok && rest_ok) {
         Err(format!(
-            "`{name}` is not a valid name: use letters, digits, `_`, `-` and `.`, beginning with a letter, digit or `_`"
+            "{name:?} is not a valid name: use letters, digits, `_`, `-` and `.`, beginning with a letter, digit or `_`"
         ))
     } else {
         Ok(())
@@ -149,8 +152,10 @@ impl Scenario {
                 w.push(Warning {
                     key: "solver.max_step_s".into(),
                     message: format!(
-                        "the fixed step of {} s (adaptive = false) exceeds the time constant of node {} ({t:.3e} s): its transients are not resolved; use adaptive = true or a step below {t:.3e} s",
-                        self.solver.max_step_s, net.nodes[i].name
+                        "the fixed step of {} s (adaptive = false) exceeds the time constant of node {} ({t:.3e} s): its transients are not resolved; {}",
+                        self.solver.max_step_s,
+                        net.nodes[i].name,
+                        crate::sim::fixed_step_advice(t)
                     ),
                 });
             }
@@ -173,6 +178,19 @@ impl Scenario {
                 n.initial_temperature_k,
                 &mut w,
             );
+        }
+        for b in net.boundaries.iter().skip(1) {
+            let (lo, _) = b.temperature_k.range();
+            if (5.0..60.0).contains(&lo) {
+                w.push(Warning {
+                    key: format!("boundary.{}.temperature_k", key_segment(&b.name)),
+                    message: format!(
+                        "{lo} K ({:.2} °C) looks like a Celsius value typed as kelvin (cryogenic shrouds aside); {lo} °C is {:.2} K",
+                        lo - 273.15,
+                        lo + 273.15
+                    ),
+                });
+            }
         }
         for h in &net.heaters {
             let k = format!("heater.{}", key_segment(&h.name));
@@ -197,9 +215,9 @@ impl Scenario {
     /// The same scenario run for `orbits` orbits; refused beyond [`MAX_DURATION_S`].
     pub fn with_orbits(mut self, orbits: f64) -> Result<Scenario, String> {
         let d = orbits * self.period_s();
-        if !(d.is_finite() && d > 0.0 && d <= MAX_DURATION_S) {
+        if !(d.is_finite() && (MIN_DURATION_S..=MAX_DURATION_S).contains(&d)) {
             return Err(format!(
-                "gives a run of {d:.3e} s; runs are limited to {MAX_DURATION_S:.0e} s (31.7 years)"
+                "gives a run of {d:.3e} s; runs last {MIN_DURATION_S} s … {MAX_DURATION_S:.0e} s (31.7 years)"
             ));
         }
         self.run.duration_s = d;

@@ -24,8 +24,8 @@ pub struct SolverSettings {
     /// Adaptive step-size control; when false every step is `max_step_s` (except
     /// where it lands on an event).
     pub adaptive: bool,
-    /// Dense or sparse linear algebra in the implicit stages. Default `Auto`: dense up
-    /// to 60 nodes, sparse above (the crossover in `docs/performance.md`).
+    /// How the implicit stages solve their linear systems. Default `Auto`: dense up to
+    /// 40 nodes, iterative above (the crossover in `docs/performance.md`).
     pub linear: LinearSolver,
 }
 
@@ -263,8 +263,12 @@ pub enum SimError {
         h_s: f64,
         cause: StepFailure,
     },
-    #[error("writing the outputs failed")]
-    Observer(#[source] Box<dyn std::error::Error + Send + Sync>),
+    #[error("writing the outputs failed at t = {t_s:.3} s")]
+    Observer {
+        t_s: f64,
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     #[error("invalid run length {0} s")]
     BadDuration(f64),
     #[error(
@@ -279,6 +283,17 @@ pub enum SimError {
     },
     #[error("the step at t = {t_s} s is below the time resolution of the run")]
     TimeResolution { t_s: f64 },
+}
+
+/// What to do about a fixed step longer than a node's time constant `tau_s`.
+pub fn fixed_step_advice(tau_s: f64) -> String {
+    if tau_s >= MIN_MAX_STEP_S {
+        format!("use solver.adaptive = true or a solver.max_step_s below {tau_s:.3e} s")
+    } else {
+        format!(
+            "use solver.adaptive = true (the time constant is below the shortest fixed step allowed, {MIN_MAX_STEP_S} s)"
+        )
+    }
 }
 
 /// Highest temperature a result may reach, K: above the vaporisation point of every
@@ -304,15 +319,28 @@ so the heat it receives has nowhere to go; link it (see `orbitlash check`)"
     if !adaptive && h_s > tau {
         return format!(
             "the fixed step of {h_s:.4} s is {:.0}× the node's time constant of {tau:.3e} s \
-(C over the sum of its conductances, see `orbitlash check`); use solver.adaptive = true or a \
-solver.max_step_s below {tau:.3e} s",
-            h_s / tau
+(C over the sum of its conductances, see `orbitlash check`); {}",
+            h_s / tau,
+            fixed_step_advice(tau)
         );
     }
     format!(
         "the step of {h_s:.4} s could not resolve it (node time constant {tau:.3e} s); check its \
 loads, capacitance and conductances, or tighten solver.tolerance_k"
     )
+}
+
+impl SimError {
+    /// Simulated time of the failure, when known.
+    pub fn t_s(&self) -> Option<f64> {
+        match self {
+            SimError::StepFailed { t_s, .. }
+            | SimError::NonPhysical { t_s, .. }
+            | SimError::TimeResolution { t_s }
+            | SimError::Observer { t_s, .. } => Some(*t_s),
+            _ => None,
+        }
+    }
 }
 
 /// The first node whose interpolant over the step falls to 0 K or below, rises above
@@ -409,7 +437,7 @@ pub fn simulate<O: Observer>(
             temps_k: &y,
             mesh: &mesh,
         })
-        .map_err(SimError::Observer)?;
+        .map_err(|source| SimError::Observer { t_s: 0.0, source })?;
     mesh_events(&mesh, &mut mesh_flags, 0.0, observer)?;
 
     let mut t = 0.0f64;
@@ -456,6 +484,14 @@ pub fn simulate<O: Observer>(
         };
         if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try) {
             if h_try * 0.25 < MIN_STEP_S {
+                if let StepFailure::NonPhysical { node } = e {
+                    return Err(SimError::NonPhysical {
+                        node: net.nodes[node].name.clone(),
+                        t_s: t + h_try,
+                        temperature_k: stepper.data.temps1_k[node],
+                        cause: likely_cause(model, &y, t, node, h_try, settings.adaptive),
+                    });
+                }
                 return Err(SimError::StepFailed {
                     t_s: t,
                     h_s: h_try,
@@ -538,7 +574,9 @@ pub fn simulate<O: Observer>(
             gears,
             mesh: &mesh,
         };
-        observer.on_step(&view).map_err(SimError::Observer)?;
+        observer
+            .on_step(&view)
+            .map_err(|source| SimError::Observer { t_s: t_new, source })?;
         mesh_events(&mesh, &mut mesh_flags, t_new, observer)?;
         t = t_new;
         y.copy_from_slice(&stepper.data.temps1_k);
@@ -640,14 +678,16 @@ pub fn simulate<O: Observer>(
         .sum();
     debug_assert_eq!(y.len(), n);
     stats.final_temperatures_k = y;
-    observer.on_finish(&stats).map_err(SimError::Observer)?;
+    observer
+        .on_finish(&stats)
+        .map_err(|source| SimError::Observer { t_s: t, source })?;
     Ok(stats)
 }
 
 fn emit<O: Observer>(observer: &mut O, t_s: f64, kind: EventKind) -> Result<(), SimError> {
     observer
         .on_event(&Event { t_s, kind })
-        .map_err(SimError::Observer)
+        .map_err(|source| SimError::Observer { t_s, source })
 }
 
 /// The heater whose thermostat switches first within the step, and where (fraction of
@@ -706,7 +746,7 @@ fn mesh_events<O: Observer>(
                     let kind = if now[i] { kinds[i].0 } else { kinds[i].1 };
                     observer
                         .on_event(&Event { t_s, kind })
-                        .map_err(SimError::Observer)?;
+                        .map_err(|source| SimError::Observer { t_s, source })?;
                 }
             }
         }
@@ -769,7 +809,7 @@ pub struct RunEstimate {
 
 /// Steps and wall time of a run to `t_end_s`, extrapolated from a pilot stretch from
 /// t = 0 (at most `pilot_end_s` of simulated time, 20 000 steps or 0.25 s of wall
-/// time) observed by `observer` (pass the run's own in-memory observers, so that their
+/// time, checked after every step: one step of a very large network can take longer) observed by `observer` (pass the run's own in-memory observers, so that their
 /// cost is counted), and never below `t_end_s / max_step_s`. The first orbit holds the
 /// start-up transient, so the estimate errs on the high side (17 % more steps than a
 /// 2000-orbit reference run takes). A pilot that fails is no estimate: the run itself
@@ -790,9 +830,7 @@ pub fn estimate_run<O: Observer>(
     impl Observer for Budget<'_> {
         fn on_step(&mut self, _: &StepView<'_>) -> ObserverResult {
             self.steps += 1;
-            if self.steps >= 20_000
-                || (self.steps.is_multiple_of(64) && self.start.elapsed().as_secs_f64() > 0.25)
-            {
+            if self.steps >= 20_000 || self.start.elapsed().as_secs_f64() > 0.25 {
                 self.stop.store(true, Ordering::Relaxed);
             }
             Ok(())

@@ -14,3 +14,33 @@ pub fn c_to_k(t_c: f64) -> f64 {
 
 /// Seconds in one day.
 pub const SECONDS_PER_DAY: f64 = 86_400.0;
+
+/// A number for an error message: plain when it reads well, in exponent form when it
+/// would take many digits (1e300, 1e-6).
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-3..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        // four significant digits, trailing zeros dropped: 1.856e10, 1e300
+        let s = format!("{v:.3e}");
+        let (mantissa, exponent) = s.split_once('e').expect("exponent form");
+        let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+        format!("{mantissa}e{exponent}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn numbers_for_messages() {
+        assert_eq!(num(1e300), "1e300");
+        assert_eq!(num(1.8564579906e10), "1.856e10");
+        assert_eq!(num(1e-6), "1e-6");
+        assert_eq!(num(0.001), "0.001");
+        assert_eq!(num(300.0), "300");
+        assert_eq!(num(-2.5e-7), "-2.5e-7");
+    }
+}

@@ -87,6 +87,71 @@ fn the_csv_never_replaces_the_scenario_or_the_log() {
 }
 
 #[test]
+fn outputs_cannot_take_a_temporary_name() {
+    // `a.mcap`'s temporary file would be `a.mcap.<pid>.partial`; names ending in
+    // `.partial` are reserved
+    refused(
+        "csv-partial",
+        &[
+            "run",
+            "s.toml",
+            "--out",
+            "a.mcap",
+            "--csv",
+            "a.mcap.partial",
+        ],
+        &nothing,
+        &["a.mcap.partial", "reserved"],
+    );
+    refused(
+        "log-partial",
+        &[
+            "run",
+            "s.toml",
+            "--out",
+            "b.mcap.partial",
+            "--csv",
+            "b.mcap",
+        ],
+        &nothing,
+        &["b.mcap.partial", "reserved"],
+    );
+}
+
+#[test]
+fn inputs_must_be_regular_files() {
+    // a FIFO would block the read forever, a device never end
+    let dir = setup("input-fifo");
+    let status = std::process::Command::new("mkfifo")
+        .arg(dir.join("f.toml"))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    for args in [
+        vec!["run", "f.toml", "--dry-run"],
+        vec!["check", "f.toml"],
+        vec!["recover", "f.toml"],
+        vec!["export-csv", "/dev/zero"],
+    ] {
+        let out = run_in(&dir, &args);
+        assert_error("input-fifo", &out, &["not a regular file"]);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_dry_run_writes_nothing() {
+    let dir = setup("dry-run");
+    let before = snapshot(&dir);
+    let out = run_in(&dir, &["run", "s.toml", "--dry-run", "--csv", "c.csv"]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("estimate: about"));
+    assert_eq!(snapshot(&dir), before);
+    assert!(!dir.join("logs").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn export_never_replaces_its_log() {
     refused(
         "export-over-log",
@@ -225,12 +290,12 @@ fn recover_never_replaces_its_input() {
     assert!(dir.join("x.mcap").is_file());
     refused(
         "recover-over-input",
-        &["recover", "y.mcap.partial", "--out", "y.mcap.partial"],
+        &["recover", "y.mcap", "--out", "y.mcap"],
         &|d| {
             let b = std::fs::read(d.join("l.mcap")).unwrap();
-            std::fs::write(d.join("y.mcap.partial"), &b[..b.len() / 2]).unwrap();
+            std::fs::write(d.join("y.mcap"), &b[..b.len() / 2]).unwrap();
         },
-        &["y.mcap.partial", "input"],
+        &["y.mcap", "input"],
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -23,7 +23,7 @@ fn run_passes_with_the_reference() {
     let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
     assert_eq!(out.status.code(), Some(0));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let second = stdout.lines().nth(1).unwrap();
+    let second = stdout.lines().next().unwrap();
     assert!(
         second.starts_with("PASS mesh: margin 19.39") && second.contains("orbit 6"),
         "{stdout}"
@@ -53,7 +53,7 @@ fn run_fails_with_exit_1_when_the_margin_is_violated() {
     assert!(
         stdout
             .lines()
-            .nth(1)
+            .next()
             .unwrap()
             .starts_with("FAIL mesh: margin -5.60"),
         "{stdout}"
@@ -85,7 +85,7 @@ fn run_fails_with_exit_1_when_the_teeth_interfere() {
     assert!(
         stdout
             .lines()
-            .nth(1)
+            .next()
             .unwrap()
             .starts_with("FAIL mesh: interference"),
         "{stdout}"
@@ -119,6 +119,13 @@ fn backlash_has_the_same_exit_statuses() {
     let json: serde_json::Value = serde_json::from_slice(&fail.stdout).unwrap();
     assert_eq!(json["pass"], false);
     assert_eq!(json["pairs"][0]["verdict"], "fail");
+    // a state with no valid mesh fails the verdict, as in `run`
+    let lost = run_in(
+        &dir,
+        &["backlash", "s.toml", "--pinion-c", "3000", "--wheel-c=-200"],
+    );
+    assert_eq!(lost.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&lost.stdout).starts_with("FAIL mesh"));
     let broken = run_in(&dir, &["backlash", "missing.toml"]);
     assert_error("backlash-missing", &broken, &["missing.toml"]);
     let _ = std::fs::remove_dir_all(&dir);

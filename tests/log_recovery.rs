@@ -75,8 +75,10 @@ fn a_log_cut_anywhere_gives_back_every_whole_message() {
     for &cut in &cuts {
         let part = &bytes[..cut];
         let s = scan(part).unwrap_or_else(|e| panic!("cut at {cut}: {e}"));
-        // a cut in the summary section leaves the data section whole
-        assert_eq!(s.complete, cut >= data_end, "cut at {cut}");
+        // a cut in the summary section leaves the data section whole, but the file
+        // is not complete (readers that need the summary fail on it)
+        assert_eq!(s.data_complete, cut >= data_end, "cut at {cut}");
+        assert!(!s.complete, "cut at {cut}");
         // every message whose record lies whole before the cut, and no other. (The first
         // chunk's header must be whole too; a chunk header is 49 bytes here.)
         let want = ends.iter().filter(|&&e| e <= cut).count();
@@ -187,5 +189,104 @@ fn a_complete_log_needs_no_recovery_and_garbage_is_refused() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not an MCAP file"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Runs `orbitlash` with `args` in `dir`.
+fn cli(dir: &Path, args: &[&str]) -> std::process::Output {
+    bin().args(args).current_dir(dir).output().unwrap()
+}
+
+#[test]
+fn a_log_cut_in_its_summary_is_rewritten_whole() {
+    let dir = tmpdir("recovery-summary");
+    let bytes = full_log(&dir);
+    let (ends, data_end) = message_ends(&bytes);
+    std::fs::write(dir.join("s.mcap"), &bytes[..(data_end + bytes.len()) / 2]).unwrap();
+    let out = cli(&dir, &["recover", "s.mcap", "--out", "r.mcap"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = std::fs::read(dir.join("r.mcap")).unwrap();
+    assert!(mcap::Summary::read(&r).unwrap().is_some());
+    let s = scan(&r).unwrap();
+    assert!(s.complete);
+    assert_eq!(s.messages.len(), ends.len(), "every message kept");
+    // the original run_end (complete) is kept
+    assert_eq!(
+        s.metadata_value("orbitlash.run_end", "status"),
+        Some("complete")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_zero_filled_tail_ends_the_data() {
+    // A power loss can leave the end of a file as zeros: the messages before them are
+    // recovered, the zeros (and a message cut by them) are not taken for data.
+    let dir = tmpdir("recovery-zeros");
+    let bytes = full_log(&dir);
+    let (ends, _) = message_ends(&bytes);
+    let cut = (ends[40] + ends[41]) / 2; // inside message 41
+    let mut z = bytes[..cut].to_vec();
+    z.extend(std::iter::repeat_n(0u8, 8192));
+    std::fs::write(dir.join("z.mcap"), &z).unwrap();
+    let out = cli(&dir, &["export-csv", "z.mcap"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(!csv.contains("NaN"), "a half row was exported:\n{csv}");
+    let out = cli(&dir, &["recover", "z.mcap", "--out", "r.mcap"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r = std::fs::read(dir.join("r.mcap")).unwrap();
+    let s = scan(&r).unwrap();
+    assert_eq!(s.messages.len(), 41);
+    let again = cli(&dir, &["export-csv", "r.mcap"]);
+    assert!(again.status.success());
+    assert!(String::from_utf8_lossy(&again.stdout).starts_with("time_s,"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_log_cut_before_its_first_message_is_a_clear_error() {
+    let dir = tmpdir("recovery-early");
+    let bytes = full_log(&dir);
+    let (ends, _) = message_ends(&bytes);
+    std::fs::write(dir.join("e.mcap"), &bytes[..ends[0] - 1]).unwrap();
+    std::fs::write(dir.join("empty.mcap"), &bytes[..5]).unwrap();
+    for (file, needle) in [
+        ("e.mcap", "before its first whole message"),
+        ("empty.mcap", "nothing was written"),
+    ] {
+        for cmd in ["recover", "export-csv"] {
+            let out = cli(&dir, &[cmd, file]);
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{cmd} {file}: {stderr}");
+            assert!(stderr.contains(needle), "{cmd} {file}: {stderr}");
+        }
+    }
+    assert!(!dir.join("logs").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_killed_runs_partial_log_survives_the_next_run() {
+    let dir = tmpdir("recovery-keep");
+    std::fs::create_dir(dir.join("logs")).unwrap();
+    let left = dir.join("logs/reference-hinge.mcap.4242.partial");
+    std::fs::write(&left, b"\x89MCAP0\r\n half a log").unwrap();
+    let out = cli(&dir, &["run", "--orbits", "1", "--quiet"]);
+    assert!(out.status.success());
+    assert_eq!(std::fs::read(&left).unwrap(), b"\x89MCAP0\r\n half a log");
+    assert!(dir.join("logs/reference-hinge.mcap").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -36,8 +36,10 @@ pub struct BacklashArgs {
 
 fn finite(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > -273.15 => Ok(v),
-        _ => Err(format!("`{s}` is not a temperature in °C above −273.15")),
+        Ok(v) if v.is_finite() && v > -273.15 && v < 9726.85 => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a temperature in °C within −273.15 … 9726.85 (0 … 10 000 K)"
+        )),
     }
 }
 
@@ -59,11 +61,22 @@ fn worst(states: &[(Case, MeshState)]) -> (&Case, &MeshState, bool) {
     let pass = states
         .iter()
         .all(|(_, m)| m.margin_m >= 0.0 && m.backlash_exact_m > 0.0);
+    // a case with no valid mesh is the worst of all
+    let (c, m) = states
+        .iter()
+        .find(|(_, m)| m.backlash_exact_m.is_nan())
+        .map_or((c, m), |(c, m)| (c, m));
     (c, m, pass)
 }
 
 fn verdict_line(pair: &GearPair, states: &[(Case, MeshState)]) -> String {
     let (c, m, pass) = worst(states);
+    if m.backlash_exact_m.is_nan() {
+        return format!(
+            "FAIL {}: no valid mesh (base circles overlap or contact ratio below 1) in case {} (pinion {:.2} °C, wheel {:.2} °C)",
+            pair.name, c.label, c.pinion_c, c.wheel_c
+        );
+    }
     format!(
         "{} {}: smallest margin {:.3} µm (backlash {:.3} µm, minimum {:.1} µm) in case {} (pinion {:.2} °C, wheel {:.2} °C)",
         if pass { "PASS" } else { "FAIL" },
@@ -115,13 +128,15 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
                 housing_c: housing,
             });
         }
+        // A state with no valid mesh is a failed verdict (NaN backlash), as in `run`.
         let states: Vec<(Case, MeshState)> = list
             .into_iter()
             .map(|c| {
                 let temps = temperatures(pair, n, &c);
-                pair.evaluate(&temps).map(|m| (c, m))
+                let m = orbitlash::sim::mesh_or_nan(pair, &temps);
+                (c, m)
             })
-            .collect::<Result<_, _>>()?;
+            .collect();
         cases.push((pair, states));
     }
     let pass = cases.iter().all(|(_, states)| worst(states).2);

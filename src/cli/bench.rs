@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::Args;
 
-use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance};
+use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::OutputPolicy;
 use orbitlash::sim::{MAX_STEPS, SolverSettings, estimate_run, simulate};
 use orbitlash::summary::{MeshStats, Samples, WindowStats};
@@ -22,30 +22,33 @@ pub struct BenchArgs {
     /// Orbits per timed run.
     #[arg(long, value_parser = orbits_arg, default_value = "6")]
     orbits: f64,
-    /// Timed repetitions (the median is reported), at least 1.
-    #[arg(long, default_value_t = 31, value_parser = clap::value_parser!(u32).range(1..))]
+    /// Timed repetitions (the median is reported), 1 … 10000.
+    #[arg(long, default_value_t = 31, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     repeat: u32,
     /// Skip the accuracy comparison with a step-converged run (for profiling).
     #[arg(long)]
     no_accuracy: bool,
     /// Instead: the cost per step of synthetic networks (chains, 3-D lattices, random
-    /// sparse graphs) of 10 … 10 000 nodes with the dense and the sparse linear solver.
+    /// sparse graphs) of 10 … 10 000 nodes with the dense, sparse LU and iterative
+    /// linear solvers.
     #[arg(long)]
     scaling: bool,
-    /// With --scaling: node counts to measure (default 10,100,1000,2000,10000).
-    #[arg(long, value_delimiter = ',', requires = "scaling")]
-    nodes: Vec<usize>,
+    /// With --scaling: node counts to measure, 2 … 1000000 (default 10,100,1000,2000,10000).
+    #[arg(long, value_delimiter = ',', requires = "scaling",
+          value_parser = clap::value_parser!(u64).range(2..=1_000_000))]
+    nodes: Vec<u64>,
     /// With --scaling: shapes to measure (chain, lattice, random; default all).
     #[arg(long, value_delimiter = ',', requires = "scaling")]
     shapes: Vec<String>,
-    /// With --scaling: multiply every node-to-node conductance (100: a stiff network).
-    #[arg(long, default_value_t = 1.0, requires = "scaling")]
+    /// With --scaling: multiply every node-to-node conductance (100: a stiff network),
+    /// 1e-3 … 1e6.
+    #[arg(long, default_value_t = 1.0, requires = "scaling", value_parser = scale_arg)]
     conductance_scale: f64,
     /// Print a synthetic network as a scenario file (e.g. `lattice:2000`) and exit.
     #[arg(long, value_name = "SHAPE:NODES", conflicts_with = "scaling")]
     emit_network: Option<String>,
-    /// With --scaling: seconds of wall time per measurement at most (default 10).
-    #[arg(long, default_value_t = 10.0, requires = "scaling")]
+    /// With --scaling: seconds of wall time per measurement at most, 0.01 … 3600.
+    #[arg(long, default_value_t = 10.0, requires = "scaling", value_parser = budget_arg)]
     budget_s: f64,
 }
 
@@ -105,14 +108,14 @@ fn time_per_step(
 /// Above this many nodes the scaling table leaves out the dense and sparse direct
 /// solvers (n² memory and minutes per factorisation for dense; for sparse LU, the fill
 /// of a random graph's factors is that of a dense matrix).
-const DIRECT_MAX_NODES: usize = 3000;
+const DIRECT_MAX_NODES: usize = orbitlash::thermal::iteration::DENSE_MAX_NODES;
 
 fn scaling(a: &BenchArgs) -> Result<()> {
     use orbitlash::thermal::synthetic::network_scaled;
-    let sizes = if a.nodes.is_empty() {
+    let sizes: Vec<usize> = if a.nodes.is_empty() {
         vec![10, 100, 1000, 2000, 10000]
     } else {
-        a.nodes.clone()
+        a.nodes.iter().map(|&n| n as usize).collect()
     };
     let names = if a.shapes.is_empty() {
         vec!["chain".to_string(), "lattice".into(), "random".into()]
@@ -185,6 +188,21 @@ fn scaling(a: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
+fn ranged(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a number within {lo} … {hi}")),
+    }
+}
+
+fn scale_arg(s: &str) -> Result<f64, String> {
+    ranged(s, 1e-3, 1e6)
+}
+
+fn budget_arg(s: &str) -> Result<f64, String> {
+    ranged(s, 0.01, 3600.0)
+}
+
 fn parse_shape(s: &str) -> Result<orbitlash::thermal::synthetic::Shape> {
     use orbitlash::thermal::synthetic::Shape;
     Ok(match s {
@@ -217,7 +235,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let sc = loaded
         .scenario
         .with_orbits(a.orbits)
-        .map_err(|m| anyhow::anyhow!("--orbits {}: {m}", a.orbits))?;
+        .map_err(|m| anyhow::anyhow!("--orbits {}: {m}", orbitlash::units::num(a.orbits)))?;
     let est = estimate_run(
         &sc.thermal,
         &sc.gears,
@@ -271,8 +289,17 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         median * 1e6 / steps as f64
     );
     // Logging every step: the full run (summaries and gear evaluation included) with
-    // and without the MCAP log.
-    {
+    // and without the MCAP log, unless that log would be large.
+    let log_bytes = (steps as f64 + 1.0) * estimated_bytes_per_sample(&sc.thermal, &sc.gears);
+    let tmp = std::env::temp_dir();
+    let free = orbitlash::io::output::available_bytes(&tmp.join("x")).unwrap_or(u64::MAX) as f64;
+    if log_bytes > 200e6 || log_bytes > 0.5 * free {
+        outln!(
+            o,
+            "logging every step: not measured (the log would take about {:.0} MB; use fewer --orbits)",
+            log_bytes / 1e6
+        );
+    } else {
         let dir = std::env::temp_dir().join(format!("orbitlash-bench-{}", std::process::id()));
         let path = dir.join("bench.mcap");
         let prov = || Provenance {
@@ -373,6 +400,14 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         );
     }
     if a.no_accuracy {
+        return print_out(&o);
+    }
+    if t_end / 0.5 > MAX_STEPS / 10.0 {
+        outln!(
+            o,
+            "accuracy: not measured (the step-converged run would take {:.1e} steps; use fewer --orbits)",
+            t_end / 0.5
+        );
         return print_out(&o);
     }
     // Accuracy against a step-converged run (fixed 0.5 s steps; TR-BDF2 is second order,

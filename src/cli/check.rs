@@ -209,11 +209,15 @@ pub fn check(a: CheckArgs) -> Result<()> {
     outln!(
         o,
         "  sensors: {}",
-        sc.sensors
-            .iter()
-            .map(|s| s.column.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
+        if sc.sensors.is_empty() {
+            "none".to_string()
+        } else {
+            sc.sensors
+                .iter()
+                .map(|s| s.column.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
     );
     print_out(&o)
 }

@@ -35,6 +35,11 @@ const GEAR_FIELDS: [&str; 5] = [
 ];
 
 pub fn export(a: ExportArgs) -> Result<()> {
+    // The output is checked and opened first: a bad path fails before the log is read.
+    let mut out = match &a.out {
+        Some(p) => Some(AtomicFile::create(p, &OutputPolicy::reading(&[&a.log]))?),
+        None => None,
+    };
     let table = read_log(&a.log)?;
     if let Some(t) = &table.truncated {
         eprintln!(
@@ -121,11 +126,12 @@ pub fn export(a: ExportArgs) -> Result<()> {
         }
         text.push('\n');
     }
-    match &a.out {
+    match out.take() {
         None => print_out(&text),
-        Some(p) => {
-            let mut f = AtomicFile::create(p, &OutputPolicy::reading(&[&a.log]))?;
-            f.write_all(text.as_bytes())?;
+        Some(mut f) => {
+            let p = f.path().to_path_buf();
+            f.write_all(text.as_bytes())
+                .map_err(|e| orbitlash::io::output::OutputError::io(&p, e))?;
             f.commit()?;
             Ok(())
         }

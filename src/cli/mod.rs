@@ -56,7 +56,7 @@ enum Command {
     /// Convert an MCAP log back to CSV (the layout of `run --csv`); a cut-off log is
     /// read up to its last whole message.
     ExportCsv(export::ExportArgs),
-    /// Make a killed run's log (`<name>.partial`) or a truncated copy into a valid MCAP
+    /// Make a killed run's log (`<name>.<pid>.partial`) or a truncated copy into a valid MCAP
     /// file holding everything up to its last whole message.
     Recover(recover::RecoverArgs),
 }

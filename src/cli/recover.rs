@@ -1,4 +1,4 @@
-//! `orbitlash recover`: a killed run's log (`<name>.partial`) or a truncated copy made
+//! `orbitlash recover`: a killed run's log (`<name>.<pid>.partial`) or a truncated copy made
 //! into a valid MCAP file holding everything up to its last whole message.
 
 use std::path::{Path, PathBuf};
@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 
+use orbitlash::io::mcap_read::keep_valid_messages;
 use orbitlash::io::mcap_scan::{recover as write_recovered, scan};
 use orbitlash::io::output::OutputPolicy;
 
@@ -13,33 +14,40 @@ use super::print_out;
 
 #[derive(Args, Debug)]
 pub struct RecoverArgs {
-    /// The cut-off log (e.g. logs/reference-hinge.mcap.partial).
+    /// The cut-off log (e.g. logs/reference-hinge.mcap.4242.partial).
     log: PathBuf,
     /// Where to write the recovered log. Default: logs/<name>.recovered.mcap.
     #[arg(long)]
     out: Option<PathBuf>,
 }
 
-/// `logs/<name>.recovered.mcap` for `<dir>/<name>.mcap[.partial]`.
+/// `logs/<name>.recovered.mcap` for `<dir>/<name>[.mcap][.<pid>[-<k>]][.partial]`.
 fn default_out(log: &Path) -> PathBuf {
     let name = log
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let stem = name
-        .strip_suffix(".partial")
-        .unwrap_or(&name)
-        .strip_suffix(".mcap")
-        .unwrap_or(&name)
-        .to_string();
-    let stem = stem.strip_suffix(".mcap").unwrap_or(&stem);
+    let mut stem = name.as_str();
+    if let Some(s) = stem.strip_suffix(".partial") {
+        stem = s;
+        // the writer's process id (and counter): `run.mcap.4242.partial`
+        if let Some((head, tail)) = stem.rsplit_once('.')
+            && !tail.is_empty()
+            && tail.chars().all(|c| c.is_ascii_digit() || c == '-')
+        {
+            stem = head;
+        }
+    }
+    let stem = stem.strip_suffix(".mcap").unwrap_or(stem);
     PathBuf::from("logs").join(format!("{stem}.recovered.mcap"))
 }
 
 pub fn recover(a: RecoverArgs) -> Result<()> {
-    let bytes =
-        std::fs::read(&a.log).with_context(|| format!("cannot read {}", a.log.display()))?;
-    let s = scan(&bytes).with_context(|| format!("{} cannot be recovered", a.log.display()))?;
+    let bytes = orbitlash::io::output::check_input(&a.log)
+        .and_then(|()| std::fs::read(&a.log))
+        .with_context(|| format!("cannot read {}", a.log.display()))?;
+    let mut s = scan(&bytes).with_context(|| format!("{} cannot be recovered", a.log.display()))?;
+    keep_valid_messages(&mut s);
     if s.complete {
         return print_out(&format!(
             "{} is a complete log (run_end: {}); nothing to recover\n",
@@ -47,6 +55,13 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             s.metadata_value("orbitlash.run_end", "status")
                 .unwrap_or("none")
         ));
+    }
+    if s.messages.is_empty() {
+        anyhow::bail!(
+            "{} cannot be recovered: it was cut off after {} bytes, before its first whole message",
+            a.log.display(),
+            s.recovered_bytes
+        );
     }
     let (out, policy) = match &a.out {
         Some(p) => (p.clone(), OutputPolicy::reading(&[&a.log])),
@@ -57,12 +72,16 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     };
     let r = write_recovered(&s, &out, &policy)?;
     print_out(&format!(
-        "recovered {} messages up to t = {:.3} s from {} ({} of {} bytes were whole; the rest was cut off)\nwrote {}\n",
+        "recovered {} messages up to t = {:.3} s from {} ({} of {} bytes were whole; the rest was cut off{})\nwrote {}\n",
         r.messages,
         r.t_end_s,
         a.log.display(),
         r.recovered_bytes,
         r.file_bytes,
+        match &r.original_status {
+            Some(s) => format!("; the run had ended: {s}"),
+            None => String::new(),
+        },
         out.display()
     ))
 }
@@ -75,6 +94,14 @@ mod tests {
     fn default_names_stay_in_logs() {
         assert_eq!(
             default_out(Path::new("logs/a.mcap.partial")),
+            PathBuf::from("logs/a.recovered.mcap")
+        );
+        assert_eq!(
+            default_out(Path::new("logs/a.mcap.4242.partial")),
+            PathBuf::from("logs/a.recovered.mcap")
+        );
+        assert_eq!(
+            default_out(Path::new("logs/a.mcap.4242-3.partial")),
             PathBuf::from("logs/a.recovered.mcap")
         );
         assert_eq!(

@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
-use orbitlash::io::output::{OutputPolicy, available_bytes, check_output, resolved};
+use orbitlash::io::output::{OutputError, OutputPolicy, available_bytes, check_output, resolved};
 use orbitlash::scenario::Scenario;
 use orbitlash::sim::{
     MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run, simulate,
@@ -82,7 +82,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(o) = a.orbits {
         sc = sc
             .with_orbits(o)
-            .map_err(|m| anyhow!("--orbits {o}: {m}"))?;
+            .map_err(|m| anyhow!("--orbits {}: {m}", orbitlash::units::num(o)))?;
     }
     let period_s = sc.period_s();
     let t_end_s = sc.run.duration_s;
@@ -116,7 +116,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(l) = &log_path {
         check_output(l, &log_policy)?;
     }
-    bounded(&a, &sc, log_path.as_deref())?;
+    bounded(&a, &sc, log_path.as_deref(), loaded.toml.len())?;
     if a.dry_run {
         return Ok(Outcome::Pass);
     }
@@ -190,18 +190,24 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         Err(e) => {
             // Close the log as the record of a failed run; other outputs are discarded.
             // The message: the cause first, then where the partial output is.
+            let t_fail = e.t_s().unwrap_or(f64::NAN);
             let cause = error_chain(&anyhow::Error::new(e));
-            let closed = log.as_mut().map(|l| l.close_failed(f64::NAN, &cause));
+            let closed = log.as_mut().map(|l| l.close_failed(t_fail, &cause));
             let mut msg = format!("running {}: {cause}", loaded.file);
             match closed {
                 Some(Ok(p)) => msg.push_str(&format!(
                     "\n  the log {} holds the run up to the failure",
                     p.display()
                 )),
-                Some(Err(e)) => msg.push_str(&format!(
-                    "\n  the log could not be closed: {}",
-                    error_chain(&e.into())
-                )),
+                Some(Err(OutputError::NotWritten { .. })) => msg.push_str("\n  no log was written"),
+                Some(Err(e)) => {
+                    let why = error_chain(&e.into());
+                    if cause.contains(&why) {
+                        msg.push_str("\n  no log was written");
+                    } else {
+                        msg.push_str(&format!("\n  no log was written: {why}"));
+                    }
+                }
                 None => {}
             }
             if a.csv.is_some() {
@@ -250,7 +256,12 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
 
 /// Refuses a run over the step limit (unless `--force`) or whose outputs would not fit
 /// on their file systems; says what a long or large run will take.
-fn bounded(a: &RunArgs, sc: &Scenario, log: Option<&std::path::Path>) -> Result<()> {
+fn bounded(
+    a: &RunArgs,
+    sc: &Scenario,
+    log: Option<&std::path::Path>,
+    toml_len: usize,
+) -> Result<()> {
     let t_end_s = sc.run.duration_s;
     // The pilot carries the run's summaries; the log adds about a third.
     let window = sc.period_s().min(t_end_s);
@@ -284,8 +295,13 @@ shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --forc
         );
     }
     let cadence = a.log_every.unwrap_or(LogCadence::Steps(1));
+    // Samples, plus what every log holds once: schemas, provenance, the scenario
+    // attached, the summary section.
     let log_bytes = log.map(|_| {
         cadence.samples(est.steps, t_end_s) * estimated_bytes_per_sample(&sc.thermal, &sc.gears)
+            + toml_len as f64
+            + 8e3
+            + 60.0 * sc.thermal.network.nodes.len() as f64
             + if a.scene {
                 (t_end_s / 300.0) * 25e3 * sc.gears.len() as f64
             } else {
@@ -301,9 +317,22 @@ shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --forc
         (log, log_bytes, "log"),
         (a.csv.as_deref(), csv_bytes, "CSV"),
     ];
+    // Outputs on the same file system need the sum of their sizes there.
+    let device = |p: &std::path::Path| {
+        use std::os::unix::fs::MetadataExt;
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => std::path::Path::new("."),
+        };
+        std::fs::metadata(dir).map(|m| m.dev()).ok()
+    };
     for (path, bytes) in outputs.iter().filter_map(|(p, b, _)| Some(((*p)?, (*b)?))) {
-        // Both outputs may share a file system: ask for their sum on each.
-        let need: f64 = outputs.iter().filter_map(|o| o.1).sum::<f64>().max(bytes);
+        let need: f64 = outputs
+            .iter()
+            .filter(|o| o.0.is_some_and(|q| device(q) == device(path)))
+            .filter_map(|o| o.1)
+            .sum::<f64>()
+            .max(bytes);
         if let Some(free) = available_bytes(path)
             && need > free as f64
         {
@@ -368,21 +397,9 @@ fn orbit_phase(sc: &Scenario, t: f64) -> String {
     )
 }
 
-/// The first lines of the summary: one PASS/FAIL line per gear pair.
+/// The first lines of the summary: one PASS/FAIL line per gear pair, then what ran.
 fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
     let mut o = String::new();
-    outln!(
-        o,
-        "{}: {:.2} orbits, {:.1} s simulated{}",
-        sc.name,
-        stats.t_end_s / sc.period_s(),
-        stats.t_end_s,
-        if stats.interrupted {
-            " (interrupted)"
-        } else {
-            ""
-        }
-    );
     if sc.gears.is_empty() {
         outln!(o, "no gear pair: no backlash verdict");
     }
@@ -420,6 +437,18 @@ fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
         };
         outln!(o, "{line}");
     }
+    outln!(
+        o,
+        "{}: {:.2} orbits, {:.1} s simulated{}",
+        sc.name,
+        stats.t_end_s / sc.period_s(),
+        stats.t_end_s,
+        if stats.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
+    );
     o
 }
 

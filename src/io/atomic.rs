@@ -6,7 +6,7 @@ use std::io::{BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 pub use super::output::{OutputError, OutputPolicy};
-use super::output::{check_output, temporary_path};
+use super::output::{create_temporary, prepare_output};
 
 pub struct AtomicFile {
     final_path: PathBuf,
@@ -18,30 +18,23 @@ pub struct AtomicFile {
 }
 
 impl AtomicFile {
-    /// Creates `<path>.partial` next to `path` after checking `path` against `policy`
+    /// Creates `<path>.<pid>.partial` next to `path` after checking `path` against `policy`
     /// (`io::output`: never an input, a device, a FIFO or a link; parent folders only
     /// for defaults under `logs/`); fails now if the location cannot be written.
     pub fn create(path: &Path, policy: &OutputPolicy) -> Result<AtomicFile, OutputError> {
-        let err = |source| OutputError::io(path, source);
-        check_output(path, policy)?;
-        let tmp_path = temporary_path(path, policy);
-        // A stale temporary file of an earlier, killed run (or whatever else sits under
-        // that name: a link is removed, not followed) makes way for a new one.
-        match std::fs::remove_file(&tmp_path) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(err(e)),
-            _ => {}
-        }
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp_path)
-            .map_err(err)?;
+        prepare_output(path, policy)?;
+        let (tmp_path, file) = create_temporary(path, policy)?;
         Ok(AtomicFile {
             final_path: path.to_path_buf(),
             tmp_path,
             writer: Some(BufWriter::with_capacity(1 << 16, file)),
             position: 0,
         })
+    }
+
+    /// The final path.
+    pub fn path(&self) -> &Path {
+        &self.final_path
     }
 
     pub fn writer(&mut self) -> &mut BufWriter<File> {

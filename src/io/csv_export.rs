@@ -69,30 +69,40 @@ impl CsvExport {
         })
     }
 
-    fn write_row(&mut self, t_s: f64) -> std::io::Result<()> {
-        let w = self.file.as_mut().expect("open").writer();
-        write!(w, "{t_s:.3}")?;
-        for v in &self.row {
-            write!(w, ",{v:.6}")?;
-        }
-        for v in &self.gear_values {
-            write!(w, ",{v:.6}")?;
-        }
-        writeln!(w)
+    fn write_row(&mut self, t_s: f64) -> Result<(), OutputError> {
+        let f = self.file.as_mut().expect("open");
+        let path = f.path().to_path_buf();
+        let w = f.writer();
+        (|| {
+            write!(w, "{t_s:.3}")?;
+            for v in &self.row {
+                write!(w, ",{v:.6}")?;
+            }
+            for v in &self.gear_values {
+                write!(w, ",{v:.6}")?;
+            }
+            writeln!(w)
+        })()
+        .map_err(|e| OutputError::io(&path, e))
     }
 }
 
 impl Observer for CsvExport {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
-        let w = self.file.as_mut().expect("open").writer();
-        write!(w, "time_s")?;
-        for n in &r.model.network.nodes {
-            write!(w, ",{}_k", n.name)?;
-        }
-        for c in gear_column_names(r.gears) {
-            write!(w, ",{c}")?;
-        }
-        writeln!(w)?;
+        let f = self.file.as_mut().expect("open");
+        let path = f.path().to_path_buf();
+        let w = f.writer();
+        (|| {
+            write!(w, "time_s")?;
+            for n in &r.model.network.nodes {
+                write!(w, ",{}_k", n.name)?;
+            }
+            for c in gear_column_names(r.gears) {
+                write!(w, ",{c}")?;
+            }
+            writeln!(w)
+        })()
+        .map_err(|e| OutputError::io(&path, e))?;
         self.row = r.temps_k.to_vec();
         self.gear_values = r.mesh.iter().flat_map(gear_values).collect();
         self.write_row(0.0)?;

@@ -90,7 +90,7 @@ impl LogCadence {
 
 /// Bytes one logged sample takes in the file (every topic, MCAP record and message
 /// index entries), from the encoding rules, without the 3-D view. Within a few per
-/// cent of the real size (tested in `tests/bounded_runs.rs`).
+/// cent of the real size (tested in `tests/cli_bounds.rs`).
 pub fn estimated_bytes_per_sample(model: &ThermalModel, gears: &[GearPair]) -> f64 {
     fn varint_len(v: u64) -> u64 {
         (64 - (v | 1).leading_zeros() as u64).div_ceil(7)
@@ -215,7 +215,8 @@ enum State {
     /// Created, before the run starts.
     Open(Box<mcap::Writer<AtomicFile>>),
     Running(WriterThread),
-    Closed,
+    /// Finished: the file is under its name (true) or was not written (false).
+    Closed(bool),
 }
 
 pub struct McapLog {
@@ -235,8 +236,8 @@ fn ns(t_s: f64) -> u64 {
     (t_s * 1e9).round().max(0.0) as u64
 }
 
-fn out_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
-    OutputError::other(path, e)
+fn out_err(path: &Path, e: mcap::McapError) -> OutputError {
+    OutputError::mcap(path, e)
 }
 
 impl LogWriter {
@@ -472,7 +473,16 @@ impl McapLog {
         }
         if let State::Running(t) = &self.state {
             if t.failed.load(std::sync::atomic::Ordering::Relaxed) {
-                return Err(format!("writing {} failed", self.path.display()).into());
+                // The writer stopped on an error: collect it, so the run reports the cause.
+                let State::Running(t) = std::mem::replace(&mut self.state, State::Closed(false))
+                else {
+                    unreachable!()
+                };
+                drop(t.tx);
+                return Err(match t.handle.join() {
+                    Ok(Err(e)) => Box::new(e),
+                    _ => format!("writing {} failed", self.path.display()).into(),
+                });
             }
             let next = Batch {
                 values: Vec::with_capacity(self.batch.values.capacity()),
@@ -508,9 +518,17 @@ impl McapLog {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
-        let _ = self.send_batch(); // a writer failure is collected below
-        match std::mem::replace(&mut self.state, State::Closed) {
-            State::Open(mut w) => {
+        if let Err(e) = self.send_batch()
+            && matches!(self.state, State::Closed(false))
+        {
+            // the writer thread stopped on this error
+            return Err(match e.downcast::<OutputError>() {
+                Ok(e) => *e,
+                Err(e) => OutputError::other(&path, e),
+            });
+        }
+        let result = match std::mem::replace(&mut self.state, State::Closed(false)) {
+            State::Open(mut w) => (|| {
                 w.write_metadata(&mcap::records::Metadata {
                     name: "orbitlash.run_end".into(),
                     metadata: end,
@@ -518,16 +536,22 @@ impl McapLog {
                 .map_err(|e| out_err(&path, e))?;
                 w.finish().map_err(|e| out_err(&path, e))?;
                 w.into_inner().commit()
-            }
+            })(),
             State::Running(t) => {
                 let _ = t.tx.send(ToWriter::Finish(end));
                 drop(t.tx);
                 t.handle
                     .join()
-                    .map_err(|_| out_err(&path, "the writer thread panicked"))?
+                    .map_err(|_| OutputError::other(&path, "the writer thread panicked"))
+                    .and_then(|r| r)
             }
-            State::Closed => Ok(path),
-        }
+            State::Closed(true) => Ok(path.clone()),
+            State::Closed(false) => Err(OutputError::NotWritten {
+                path: path.display().to_string(),
+            }),
+        };
+        self.state = State::Closed(result.is_ok());
+        result
     }
 }
 
@@ -580,8 +604,9 @@ fn spawn_writer(
             }
             // Dropped without finishing (the run failed elsewhere): the temporary file
             // is removed with the writer.
-            Err(error
-                .unwrap_or_else(|| out_err(&w.path, "the run ended before the log was closed")))
+            Err(error.unwrap_or_else(|| {
+                OutputError::other(&w.path, "the run ended before the log was closed")
+            }))
         })
         .expect("spawn the MCAP writer thread");
     WriterThread { tx, handle, failed }
@@ -838,7 +863,7 @@ fn open_log_writer(
 
 impl Observer for McapLog {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
-        let State::Open(writer) = std::mem::replace(&mut self.state, State::Closed) else {
+        let State::Open(writer) = std::mem::replace(&mut self.state, State::Closed(false)) else {
             return Err("the log was already started".into());
         };
         let (path, provenance, cadence, model, gears, t_end_s, scene_interval_s) = (

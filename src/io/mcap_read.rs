@@ -114,6 +114,49 @@ fn flatten(
     Ok(())
 }
 
+/// Drops the tail of a scan from the first message the writer may not have finished
+/// (beyond the last finished chunk) that does not decode with its schema or whose log
+/// time is not plausible: earlier than the message before it (logs are written in
+/// time order) or beyond the run's end (`t_end_s` of the provenance record).
+pub fn keep_valid_messages(scan: &mut super::mcap_scan::Scan<'_>) {
+    let t_end_ns = scan
+        .metadata_value("orbitlash.provenance", "t_end_s")
+        .and_then(|v| v.parse::<f64>().ok())
+        .map(|t| ((t + 1.0) * 1e9) as u64)
+        .unwrap_or(u64::MAX);
+    let schemas = scan.schemas.clone();
+    let channels = scan.channels.clone();
+    let mut types: HashMap<u16, Option<DecodedType>> = HashMap::new();
+    let mut last_ns = 0u64;
+    let mut flat = Vec::new();
+    scan.keep_valid(|m| {
+        let t = m.header.log_time;
+        let Some(ch) = channels.get(&m.header.channel_id) else {
+            return false;
+        };
+        let Some(schema) = schemas.get(&ch.schema_id) else {
+            return false;
+        };
+        if t < last_ns || t > t_end_ns {
+            return false;
+        }
+        let ok = if schema.name.starts_with("foxglove.") {
+            fields(m.data).is_ok()
+        } else {
+            let ty = types
+                .entry(ch.id)
+                .or_insert_with(|| decode_type(&schema.data, &schema.name));
+            flat.clear();
+            ty.as_ref()
+                .is_some_and(|ty| flatten(ty, m.data, &ch.topic, &mut flat).is_ok())
+        };
+        if ok {
+            last_ns = t;
+        }
+        ok
+    });
+}
+
 /// How much of a cut-off log was read (see `mcap_scan`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Truncation {
@@ -129,14 +172,26 @@ pub struct Truncation {
 /// last whole message; `LogTable::truncated` then says how much that was.
 pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| LogReadError::Io {
-        file: file.clone(),
-        source,
-    })?;
-    let scan = super::mcap_scan::scan(&bytes).map_err(|e| LogReadError::Mcap {
+    let bytes = super::output::check_input(path)
+        .and_then(|()| std::fs::read(path))
+        .map_err(|source| LogReadError::Io {
+            file: file.clone(),
+            source,
+        })?;
+    let mut scan = super::mcap_scan::scan(&bytes).map_err(|e| LogReadError::Mcap {
         file: file.clone(),
         message: e.to_string(),
     })?;
+    keep_valid_messages(&mut scan);
+    if scan.messages.is_empty() && !scan.data_complete {
+        return Err(LogReadError::Mcap {
+            file,
+            message: format!(
+                "it was cut off after {} bytes, before its first whole message: nothing to read",
+                scan.recovered_bytes
+            ),
+        });
+    }
     let mut table = LogTable::default();
     for ch in scan.channels.values() {
         table
@@ -192,7 +247,7 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
             row.push((i, v));
         }
     }
-    if !scan.complete {
+    if !scan.data_complete {
         table.truncated = Some(Truncation {
             recovered_bytes: scan.recovered_bytes,
             file_bytes: scan.file_bytes,
@@ -211,5 +266,14 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
             (t, r)
         })
         .collect();
+    {
+        // The last rows of a cut-off (or recovered) log may lack the topics written
+        // after the cut; every topic is written at every sample otherwise.
+        let filled = |r: &Vec<f64>| r.iter().filter(|v| !v.is_nan()).count();
+        let full = table.rows.iter().map(|(_, r)| filled(r)).max().unwrap_or(0);
+        while table.rows.last().is_some_and(|(_, r)| filled(r) < full) {
+            table.rows.pop();
+        }
+    }
     Ok(table)
 }

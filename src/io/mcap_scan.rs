@@ -24,6 +24,10 @@ pub struct ScannedMessage<'a> {
     pub header: records::MessageHeader,
     pub data: &'a [u8],
     pub end_offset: usize,
+    /// From a chunk the writer finished (its header says how long it is). Messages of
+    /// a chunk cut off are only as good as the bytes after the cut, which a power loss
+    /// may have left as zeros: check them before use ([`Scan::keep_valid`]).
+    pub verified: bool,
 }
 
 /// Everything a scan recovered.
@@ -34,14 +38,34 @@ pub struct Scan<'a> {
     pub messages: Vec<ScannedMessage<'a>>,
     pub metadata: Vec<records::Metadata>,
     pub attachments: Vec<mcap::Attachment<'a>>,
-    /// The data section ended properly (a DataEnd record or the footer was reached).
+    /// The data section ended properly (its DataEnd record was reached): no message
+    /// is missing.
+    pub data_complete: bool,
+    /// The whole file is there: data section, summary, footer and closing magic.
     pub complete: bool,
     /// Bytes up to the end of the last whole record or message kept.
     pub recovered_bytes: usize,
     pub file_bytes: usize,
+    /// Where the first record not in a finished chunk starts.
+    first_unverified_offset: usize,
 }
 
 impl Scan<'_> {
+    /// Keeps the messages up to the first unverified one that `valid` rejects (a
+    /// message that does not decode, or whose time is not plausible): the end of the
+    /// real data in a file whose tail is garbage.
+    pub fn keep_valid(&mut self, mut valid: impl FnMut(&ScannedMessage<'_>) -> bool) {
+        if let Some(k) = self.messages.iter().position(|m| !m.verified && !valid(m)) {
+            self.messages.truncate(k);
+            self.recovered_bytes = self.messages.last().map_or(
+                self.recovered_bytes.min(self.first_unverified_offset),
+                |m| m.end_offset,
+            );
+            self.data_complete = false;
+            self.complete = false;
+        }
+    }
+
     /// Log time span of the recovered messages, ns.
     pub fn time_span_ns(&self) -> Option<(u64, u64)> {
         let mut it = self.messages.iter().map(|m| m.header.log_time);
@@ -64,6 +88,8 @@ impl Scan<'_> {
 pub enum ScanError {
     #[error("not an MCAP file (its first bytes are not the MCAP magic)")]
     NotMcap,
+    #[error("the file ends within its first 8 bytes (the MCAP magic): nothing was written to it")]
+    Empty,
     #[error("record at byte {offset} is malformed: {message}")]
     Malformed { offset: usize, message: String },
 }
@@ -80,12 +106,16 @@ fn u32_at(b: &[u8], at: usize) -> Option<u32> {
 
 /// Scans `bytes` (see the module docs).
 pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
+    if bytes.len() < MAGIC.len() && MAGIC.starts_with(bytes) {
+        return Err(ScanError::Empty);
+    }
     if !bytes.starts_with(MAGIC) {
         return Err(ScanError::NotMcap);
     }
     let mut s = Scan {
         file_bytes: bytes.len(),
         recovered_bytes: MAGIC.len(),
+        first_unverified_offset: bytes.len(),
         ..Scan::default()
     };
     let mut at = MAGIC.len();
@@ -96,8 +126,12 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
             .ok()
             .and_then(|l| body_start.checked_add(l))
             .filter(|&end| end <= bytes.len());
+        if op == 0 {
+            break; // no record has opcode 0: the bytes from here are not MCAP (zeros)
+        }
         let Some(end) = whole else {
             // A record cut off: only a chunk can still give whole messages.
+            s.first_unverified_offset = at;
             if op == OP_CHUNK {
                 partial_chunk(bytes, body_start, &mut s)?;
             }
@@ -109,8 +143,10 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
             message: e.to_string(),
         })?;
         match record {
-            Record::DataEnd(_) | Record::Footer(_) => {
-                s.complete = true;
+            Record::DataEnd(_) => s.data_complete = true,
+            Record::Footer(_) => {
+                s.data_complete = true;
+                s.complete = bytes.len() == end + MAGIC.len() && bytes.ends_with(MAGIC);
                 s.recovered_bytes = end;
                 break;
             }
@@ -128,9 +164,9 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
                     unreachable!("an uncompressed chunk borrows the file")
                 };
                 let offset = data.as_ptr() as usize - bytes.as_ptr() as usize;
-                inner_records(bytes, offset, offset + data.len(), &mut s)?;
+                inner_records(bytes, offset, offset + data.len(), true, &mut s)?;
             }
-            other => keep(other, end, &mut s),
+            other => keep(other, end, true, &mut s),
         }
         s.recovered_bytes = s.recovered_bytes.max(end);
         at = end;
@@ -157,7 +193,7 @@ fn partial_chunk<'a>(bytes: &'a [u8], at: usize, s: &mut Scan<'a>) -> Result<(),
     if records_start > bytes.len() {
         return Ok(());
     }
-    inner_records(bytes, records_start, bytes.len(), s)
+    inner_records(bytes, records_start, bytes.len(), false, s)
 }
 
 /// The records inside a chunk, `bytes[from..to]`, up to the last whole one.
@@ -165,6 +201,7 @@ fn inner_records<'a>(
     bytes: &'a [u8],
     from: usize,
     to: usize,
+    verified: bool,
     s: &mut Scan<'a>,
 ) -> Result<(), ScanError> {
     let mut at = from;
@@ -172,6 +209,9 @@ fn inner_records<'a>(
         let (Some(&op), Some(len)) = (bytes.get(at), u64_at(bytes, at + 1)) else {
             break;
         };
+        if op == 0 {
+            break; // zeros: the writer never got here
+        }
         let body_start = at + 9;
         let Some(end) = usize::try_from(len)
             .ok()
@@ -180,19 +220,25 @@ fn inner_records<'a>(
         else {
             break;
         };
-        let record =
-            mcap::parse_record(op, &bytes[body_start..end]).map_err(|e| ScanError::Malformed {
-                offset: at,
-                message: e.to_string(),
-            })?;
-        keep(record, end, s);
+        let record = match mcap::parse_record(op, &bytes[body_start..end]) {
+            Ok(r) => r,
+            // in a chunk cut off, a record that does not parse is where the data ends
+            Err(_) if !verified => break,
+            Err(e) => {
+                return Err(ScanError::Malformed {
+                    offset: at,
+                    message: e.to_string(),
+                });
+            }
+        };
+        keep(record, end, verified, s);
         s.recovered_bytes = s.recovered_bytes.max(end);
         at = end;
     }
     Ok(())
 }
 
-fn keep<'a>(record: Record<'a>, end: usize, s: &mut Scan<'a>) {
+fn keep<'a>(record: Record<'a>, end: usize, verified: bool, s: &mut Scan<'a>) {
     match record {
         Record::Schema { header, data } => {
             s.schemas.insert(
@@ -216,6 +262,7 @@ fn keep<'a>(record: Record<'a>, end: usize, s: &mut Scan<'a>) {
                 header,
                 data,
                 end_offset: end,
+                verified,
             });
         }
         Record::Metadata(m) => s.metadata.push(m),

@@ -52,6 +52,9 @@ pub enum OutputError {
     },
     #[error("refusing to write {path}: {reason}")]
     Refused { path: String, reason: String },
+    /// An output that an earlier error stopped: nothing is under its name.
+    #[error("{path} was not written")]
+    NotWritten { path: String },
 }
 
 impl OutputError {
@@ -72,6 +75,15 @@ impl OutputError {
     /// Any other failure while writing `path`.
     pub fn other(path: &Path, message: impl std::fmt::Display) -> OutputError {
         OutputError::io(path, std::io::Error::other(message.to_string()))
+    }
+
+    /// A failure of the MCAP writer on `path`, keeping its I/O cause (a full disk says
+    /// "No space left on device").
+    pub fn mcap(path: &Path, e: mcap::McapError) -> OutputError {
+        match e {
+            mcap::McapError::Io(io) => OutputError::io(path, io),
+            other => OutputError::other(path, other),
+        }
     }
 }
 
@@ -103,6 +115,20 @@ pub fn resolved(path: &Path) -> PathBuf {
     }
 }
 
+/// Checks that an input is a regular file (through links) before it is read: a FIFO or
+/// a device would block or never end.
+pub fn check_input(path: &Path) -> std::io::Result<()> {
+    let meta = std::fs::metadata(path)?;
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(std::io::Error::other(format!(
+            "it is {}, not a regular file",
+            kind_of(&meta)
+        )))
+    }
+}
+
 fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
     let t = meta.file_type();
@@ -121,16 +147,27 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     }
 }
 
-/// Checks that `path` may be written under `policy` (see the module docs), creating
-/// its folder when the policy allows.
+/// Suffix of the temporary file an output is written to before it is renamed into
+/// place; output paths may not end with it.
+pub const PARTIAL_SUFFIX: &str = ".partial";
+
+/// Checks that `path` may be written under `policy` (see the module docs). Nothing is
+/// created: a missing default folder under `logs/` is created by [`prepare_output`].
 pub fn check_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputError> {
     if path.as_os_str().is_empty() {
         return Err(OutputError::refused(path, "the path is empty"));
     }
-    if path.file_name().is_none() {
+    let text = path.as_os_str().to_string_lossy();
+    if path.file_name().is_none() || text.ends_with('/') {
         return Err(OutputError::refused(
             path,
             "the path names a folder, not a file",
+        ));
+    }
+    if text.ends_with(PARTIAL_SUFFIX) {
+        return Err(OutputError::refused(
+            path,
+            format!("names ending in `{PARTIAL_SUFFIX}` are reserved for unfinished outputs"),
         ));
     }
     match std::fs::symlink_metadata(path) {
@@ -180,8 +217,13 @@ pub fn check_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputErro
             format!("{} is not a directory", parent.display()),
         )),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            if policy.create_parents {
-                std::fs::create_dir_all(parent).map_err(|e| OutputError::io(path, e))
+            if std::fs::symlink_metadata(parent).is_ok() {
+                Err(OutputError::refused(
+                    path,
+                    format!("{} is a broken symbolic link", parent.display()),
+                ))
+            } else if policy.create_parents {
+                Ok(())
             } else {
                 Err(OutputError::refused(
                     path,
@@ -193,30 +235,55 @@ pub fn check_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputErro
     }
 }
 
-/// The temporary sibling an output is written to before it is renamed into place:
-/// `<path>.partial`, or `<path>.<k>.partial` when that name is an input (recovering
-/// `run.mcap.partial` into `run.mcap`).
-pub fn temporary_path(path: &Path, policy: &OutputPolicy) -> PathBuf {
-    let with = |suffix: &str| {
-        let mut s = path.as_os_str().to_owned();
-        s.push(suffix);
-        PathBuf::from(s)
-    };
-    let first = with(".partial");
-    let is_input = |p: &Path| {
-        let r = resolved(p);
-        policy
-            .inputs
-            .iter()
-            .any(|i| same_file(p, i) || resolved(i) == r)
-    };
-    if !is_input(&first) {
-        return first;
+/// [`check_output`], then the default folder under `logs/` created when missing.
+pub fn prepare_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputError> {
+    check_output(path, policy)?;
+    match path.parent() {
+        Some(parent)
+            if policy.create_parents && !parent.as_os_str().is_empty() && !parent.exists() =>
+        {
+            std::fs::create_dir_all(parent).map_err(|e| OutputError::io(path, e))
+        }
+        _ => Ok(()),
     }
-    (1..)
-        .map(|k| with(&format!(".{k}.partial")))
-        .find(|p| !is_input(p))
-        .expect("a free temporary name")
+}
+
+/// Creates the temporary sibling an output is written to before it is renamed into
+/// place: `<path>.<pid>.partial`, or with a counter after the process id when that
+/// name is taken (by an input, another output of this process, a leftover). The file is
+/// created new (`O_EXCL`: never through a link, never over anything), so concurrent
+/// runs and a killed run's leftover `.partial` (kept for `orbitlash recover`) are
+/// never touched.
+pub fn create_temporary(
+    path: &Path,
+    policy: &OutputPolicy,
+) -> Result<(PathBuf, std::fs::File), OutputError> {
+    let pid = std::process::id();
+    for k in 0..1000u32 {
+        let mut s = path.as_os_str().to_owned();
+        if k == 0 {
+            s.push(format!(".{pid}{PARTIAL_SUFFIX}"));
+        } else {
+            s.push(format!(".{pid}-{k}{PARTIAL_SUFFIX}"));
+        }
+        let tmp = PathBuf::from(s);
+        if policy.inputs.iter().any(|i| same_file(&tmp, i)) {
+            continue;
+        }
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => return Ok((tmp, f)),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(OutputError::io(path, e)),
+        }
+    }
+    Err(OutputError::refused(
+        path,
+        "no free temporary name beside it",
+    ))
 }
 
 /// Bytes free for an unprivileged writer on the file system that holds `path`'s
@@ -279,22 +346,35 @@ mod tests {
         let e = check_output(&d.join("missing/new.mcap"), &policy).unwrap_err();
         assert!(e.to_string().contains("no such directory"), "{e}");
         assert!(!d.join("missing").exists());
+        // the default folder: checked without side effect, created when prepared
         let logs = OutputPolicy::default_in_logs(&[&input]);
         assert!(check_output(&d.join("logs/new.mcap"), &logs).is_ok());
+        assert!(!d.join("logs").exists());
+        assert!(prepare_output(&d.join("logs/new.mcap"), &logs).is_ok());
         assert!(d.join("logs").is_dir());
+        // temporary names are reserved, and a folder path is not a file
+        assert!(check_output(&d.join("x.mcap.partial"), &policy).is_err());
+        assert!(check_output(Path::new("somewhere/"), &policy).is_err());
         let _ = std::fs::remove_dir_all(&d);
     }
 
     #[test]
-    fn temporary_name_avoids_inputs() {
+    fn temporary_names_never_collide() {
         let d = dir("tmp");
-        let partial = d.join("run.mcap.partial");
-        std::fs::write(&partial, "x").unwrap();
-        let policy = OutputPolicy::reading(&[&partial]);
-        let t = temporary_path(&d.join("run.mcap"), &policy);
-        assert_eq!(t, d.join("run.mcap.1.partial"));
-        let t = temporary_path(&d.join("other.mcap"), &policy);
-        assert_eq!(t, d.join("other.mcap.partial"));
+        let out = d.join("run.mcap");
+        let policy = OutputPolicy::reading(&[]);
+        let (a, _fa) = create_temporary(&out, &policy).unwrap();
+        let (b, _fb) = create_temporary(&out, &policy).unwrap();
+        assert_ne!(a, b);
+        assert!(a.to_string_lossy().ends_with(".partial"));
+        // an input under the first free name is skipped, a link is not followed
+        let pid = std::process::id();
+        let input = d.join(format!("other.mcap.{pid}.partial"));
+        std::fs::write(&input, "x").unwrap();
+        let (c, _fc) =
+            create_temporary(&d.join("other.mcap"), &OutputPolicy::reading(&[&input])).unwrap();
+        assert_ne!(c, input);
+        assert_eq!(std::fs::read(&input).unwrap(), b"x");
         let _ = std::fs::remove_dir_all(&d);
     }
 }

@@ -118,6 +118,10 @@ pub fn fields(mut data: &[u8]) -> Result<Vec<(u32, Wire<'_>)>, Malformed> {
         let at = total - data.len();
         let key = varint(&mut data)?;
         let field = (key >> 3) as u32;
+        if field == 0 {
+            // no protobuf field has number 0 (zeros where a message should be)
+            return Err(Malformed(at));
+        }
         fn take<'a>(d: &mut &'a [u8], n: usize, at: usize) -> Result<&'a [u8], Malformed> {
             if d.len() < n {
                 return Err(Malformed(at));

@@ -16,16 +16,18 @@ use crate::gear::strain::StrainLaw;
 use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
 use crate::orbit::{Environment, Incidence, Orbit, Profile};
 use crate::scenario::{
-    DERIVED_QUANTITIES, MAX_DURATION_S, MIN_OUTPUT_INTERVAL_S, RunControl, Scenario, Sensor,
-    SensorTarget,
+    DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, RunControl,
+    Scenario, Sensor, SensorTarget,
 };
 use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K, SolverSettings};
-use crate::thermal::iteration::LinearSolver;
+use crate::thermal::iteration::{
+    DENSE_MAX_NODES, LinearSolver, SPARSE_MAX_FLOPS, direct_fill_estimate,
+};
 use crate::thermal::{
     BoundaryNode, Conductor, DiffusionNode, Heater, Load, LoadKind, Mode, Network, NodeRef,
     Radiator, ThermalModel, When,
 };
-use crate::units::SECONDS_PER_DAY;
+use crate::units::{SECONDS_PER_DAY, num};
 
 /// The reference scenario, embedded in the binary.
 pub const REFERENCE_HINGE_TOML: &str = include_str!("../../scenarios/reference-hinge.toml");
@@ -53,10 +55,12 @@ pub enum ScenarioError {
 /// Reads and validates a scenario file.
 pub fn load_file(path: &Path) -> Result<(Scenario, String), ScenarioError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
-        file: file.clone(),
-        source,
-    })?;
+    let text = super::output::check_input(path)
+        .and_then(|()| std::fs::read_to_string(path))
+        .map_err(|source| ScenarioError::Read {
+            file: file.clone(),
+            source,
+        })?;
     let scenario = parse(&text, &file)?;
     Ok((scenario, text))
 }
@@ -430,7 +434,7 @@ impl Cx<'_> {
         if v.is_finite() {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be a finite number (got {v})")))
+            Err(self.err(path, format!("must be a finite number (got {})", num(v))))
         }
     }
 
@@ -439,7 +443,7 @@ impl Cx<'_> {
         if v > 0.0 {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be > 0 (got {v})")))
+            Err(self.err(path, format!("must be > 0 (got {})", num(v))))
         }
     }
 
@@ -455,7 +459,10 @@ impl Cx<'_> {
         if v <= hi {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be at most {hi:e} {unit} (got {v})")))
+            Err(self.err(
+                path,
+                format!("must be at most {} {unit} (got {})", num(hi), num(v)),
+            ))
         }
     }
 
@@ -465,7 +472,10 @@ impl Cx<'_> {
         if v >= lo {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be at least {lo} {unit} (got {v})")))
+            Err(self.err(
+                path,
+                format!("must be at least {} {unit} (got {})", num(lo), num(v)),
+            ))
         }
     }
 
@@ -474,7 +484,7 @@ impl Cx<'_> {
         if v >= 0.0 {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be ≥ 0 (got {v})")))
+            Err(self.err(path, format!("must be ≥ 0 (got {})", num(v))))
         }
     }
 
@@ -490,7 +500,15 @@ impl Cx<'_> {
         if (lo..=hi).contains(&v) {
             Ok(v)
         } else {
-            Err(self.err(path, format!("{what} must be within {lo} … {hi} (got {v})")))
+            Err(self.err(
+                path,
+                format!(
+                    "{what} must be within {} … {} (got {})",
+                    num(lo),
+                    num(hi),
+                    num(v)
+                ),
+            ))
         }
     }
 
@@ -634,6 +652,8 @@ pub const MIN_CAPACITANCE_J_PER_K: f64 = 1e-6;
 /// Largest conductance, W/K (a square metre of bonded joint conducts ~1e4 W/K): beyond it
 /// two nodes are one, and the Newton systems lose their precision (tested to 1e12).
 pub const MAX_CONDUCTANCE_W_PER_K: f64 = 1e9;
+/// Largest dissipation or heater power, W.
+pub const MAX_POWER_W: f64 = 1e6;
 /// Largest area (or area product) of a face, a radiative link or a load, m².
 pub const MAX_AREA_M2: f64 = 1e4;
 
@@ -708,10 +728,16 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
         &ep.key("solar_flux_w_per_m2"),
         e.solar_flux_w_per_m2
             .unwrap_or(RawProfile::Constant(SOLAR_CONSTANT_W_PER_M2)),
-        &|p, v| cx.non_negative(p, v),
+        &|p, v| cx.within(p, v, 0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)"),
     )?;
     let space_sink_k = e.space_sink_k.unwrap_or(3.0);
-    cx.non_negative(&ep.key("space_sink_k"), space_sink_k)?;
+    cx.within(
+        &ep.key("space_sink_k"),
+        space_sink_k,
+        0.0,
+        5000.0,
+        "sink temperature (K)",
+    )?;
     let environment = Environment {
         orbit,
         beta_rad: beta_deg.map(f64::to_radians),
@@ -723,9 +749,12 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
             1.0,
             "albedo",
         )?,
-        earth_ir_w_per_m2: cx.non_negative(
+        earth_ir_w_per_m2: cx.within(
             &ep.key("earth_ir_w_per_m2"),
             e.earth_ir_w_per_m2.unwrap_or(237.0),
+            0.0,
+            1e4,
+            "planetary infrared flux (W/m²)",
         )?,
         space_sink_k,
     };
@@ -735,6 +764,15 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
     let rp = KeyPath::new("run");
     let duration = |key: &'static str, v: f64, unit_s: f64| {
         let d = cx.positive(&rp.key(key), v)? * unit_s;
+        if d < MIN_DURATION_S {
+            return Err(cx.err(
+                &rp.key(key),
+                format!(
+                    "gives a run of {} s; runs last at least {MIN_DURATION_S} s",
+                    num(d)
+                ),
+            ));
+        }
         if d > MAX_DURATION_S {
             return Err(cx.err(
                 &rp.key(key),
@@ -1101,7 +1139,7 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
         let p = KeyPath::new("dissipation").at(i);
         let node = diffusion(&p.key("node"), &s.node)?;
         let power = cx.profile(&p.key("power_w"), s.power_w, &|pp, v| {
-            cx.non_negative(pp, v)
+            cx.within(pp, v, 0.0, MAX_POWER_W, "power (W)")
         })?;
         let when = match s.when.as_deref() {
             None | Some("always") => When::Always,
@@ -1151,7 +1189,7 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
                 .unwrap_or_else(|| format!("heater.{}", h.node)),
             node,
             sensor_node,
-            power_w: cx.positive(&p.key("power_w"), h.power_w)?,
+            power_w: cx.positive_up_to(&p.key("power_w"), h.power_w, MAX_POWER_W, "W")?,
             on_k,
             off_k,
         });
@@ -1211,20 +1249,50 @@ fn build(raw: RawScenario, cx: &Cx<'_>) -> Result<Scenario, ScenarioError> {
         }
     }
 
+    let network = Network {
+        nodes,
+        boundaries,
+        conductors,
+        radiators,
+        loads,
+        heaters,
+    };
+    // An explicit direct solver must fit the network.
+    let n = network.nodes.len();
+    match solver.linear {
+        LinearSolver::Dense if n > DENSE_MAX_NODES => {
+            return Err(cx.err(
+                &sp.key("linear"),
+                format!(
+                    "\"dense\" takes 16 n² bytes ({:.1} GB) and O(n³) per factorisation for {n} nodes; it is limited to {DENSE_MAX_NODES} nodes: use \"iterative\" or \"auto\"",
+                    16.0 * (n * n) as f64 / 1e9
+                ),
+            ));
+        }
+        LinearSolver::Sparse => {
+            let (fill, flops) = direct_fill_estimate(&crate::thermal::Compiled::new(&network));
+            if flops > SPARSE_MAX_FLOPS {
+                return Err(cx.err(
+                    &sp.key("linear"),
+                    format!(
+                        "the sparse LU of this network would fill in to about {} entries and take about {} operations per factorisation (the limit is {}): use \"iterative\" or \"auto\"",
+                        num(fill as f64),
+                        num(flops),
+                        num(SPARSE_MAX_FLOPS)
+                    ),
+                ));
+            }
+        }
+        _ => {}
+    }
+
     Ok(Scenario {
         gears,
         name: raw.scenario.name,
         description: raw.scenario.description,
         thermal: ThermalModel {
             environment,
-            network: Network {
-                nodes,
-                boundaries,
-                conductors,
-                radiators,
-                loads,
-                heaters,
-            },
+            network,
             modes,
         },
         run,

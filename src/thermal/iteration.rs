@@ -84,8 +84,8 @@ impl LinearSolver {
     }
 }
 
-/// Above this many diffusion nodes `auto` solves sparse (the crossover measured with
-/// `orbitlash bench --scaling`, see `docs/performance.md`).
+/// Above this many diffusion nodes `auto` solves iteratively (the crossover measured
+/// with `orbitlash bench --scaling`, see `docs/performance.md`).
 pub const AUTO_SPARSE_ABOVE_NODES: usize = 40;
 
 /// Most conjugate-gradient iterations in one solve. A network that needs more (very
@@ -97,6 +97,75 @@ const KRYLOV_MAX_ITERATIONS: u32 = 400;
 /// side: far below what the Newton iterations resolve (1 % of the step tolerance), so
 /// that the solution does not depend on the linear solver.
 const KRYLOV_RELATIVE_TOLERANCE: f64 = 1e-10;
+
+/// Most diffusion nodes the dense solver takes: its W and explicit inverse take
+/// 16 n² bytes (144 MB here) and a factorisation 2 n³ operations (~2.5 s per step at
+/// 3000 nodes, minutes beyond).
+pub const DENSE_MAX_NODES: usize = 3000;
+
+/// Most floating-point operations a factorisation of the sparse LU may take (as
+/// estimated by [`direct_fill_estimate`]; the LU runs at ~1e8 of them per second): a
+/// few seconds. A random graph of 2000 nodes needs 1.4e8 (1.3 s per factorisation), of
+/// 10 000 nodes 1.9e10 (4 minutes), a 10 000-node lattice 3e9.
+pub const SPARSE_MAX_FLOPS: f64 = 3e8;
+
+/// The network's pattern: the diagonal and both entries of every node-to-node link,
+/// compressed by columns (row indices sorted). Structurally symmetric, so it is also
+/// the compressed-rows form.
+fn pattern(c: &Compiled) -> (Vec<usize>, Vec<usize>) {
+    let n = c.n;
+    let mut adj: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
+    for &(i, j, _) in c.lin_nn.iter().chain(&c.rad_nn) {
+        adj[i].push(j);
+        adj[j].push(i);
+    }
+    let mut ptr = Vec::with_capacity(n + 1);
+    let mut idx = Vec::new();
+    ptr.push(0);
+    for rows in &mut adj {
+        rows.sort_unstable();
+        rows.dedup();
+        idx.extend_from_slice(rows);
+        ptr.push(idx.len());
+    }
+    (ptr, idx)
+}
+
+/// (entries, floating-point operations) of the Cholesky factor of the network's
+/// pattern under a minimum-degree ordering: the fill and the work a sparse direct
+/// factorisation of W meets (the LU's are of the same order or worse). Cheap: a
+/// symbolic analysis, no numbers.
+pub fn direct_fill_estimate(c: &Compiled) -> (usize, f64) {
+    use faer::sparse::linalg::cholesky::{
+        CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
+    };
+    let (ptr, idx) = pattern(c);
+    let n = c.n;
+    let pattern = SymbolicSparseColMat::new_checked(n, n, ptr, None, idx);
+    factorize_symbolic_cholesky(
+        pattern.as_ref(),
+        faer::Side::Upper,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+            ..Default::default()
+        },
+    )
+    .map_or((usize::MAX, f64::INFINITY), |s| {
+        let flops = match s.raw() {
+            SymbolicCholeskyRaw::Simplicial(l) => l
+                .col_ptr()
+                .windows(2)
+                .map(|w| {
+                    let c = (w[1] - w[0]) as f64;
+                    c * c
+                })
+                .sum(),
+            SymbolicCholeskyRaw::Supernodal(_) => f64::INFINITY,
+        };
+        (s.len_val(), flops)
+    })
+}
 
 /// W = C − d·h·J, factorised (see the module docs).
 pub struct IterationMatrix {
@@ -110,7 +179,8 @@ enum Inner {
 }
 
 /// Conjugate gradients on the symmetric form of W (see [`Krylov::set_jacobian`]),
-/// preconditioned by its diagonal. CSR storage of the full pattern.
+/// preconditioned by an incomplete Cholesky factor IC(0) (by the diagonal should IC(0)
+/// break down). CSR storage of the full pattern.
 struct Krylov {
     n: usize,
     row_ptr: Vec<usize>,
@@ -128,6 +198,8 @@ struct Krylov {
     /// Where each entry of L sits in `w`.
     l_src: Vec<usize>,
     l_val: Vec<f64>,
+    /// IC(0) exists for the current W (else the diagonal preconditions).
+    ic_ok: bool,
     x: Vec<f64>,
     r: Vec<f64>,
     z: Vec<f64>,
@@ -180,7 +252,7 @@ impl IterationMatrix {
         IterationMatrix { inner }
     }
 
-    /// "dense" or "sparse".
+    /// "dense", "sparse" or "iterative".
     pub fn kind(&self) -> &'static str {
         match self.inner {
             Inner::Dense(_) => "dense",
@@ -209,10 +281,16 @@ impl IterationMatrix {
     /// Evaluates the Jacobian ∂f/∂T at `temps_k`. An iterative solver that struggled
     /// (see [`LinearSolver::Iterative`]) becomes a sparse direct one here.
     pub fn set_jacobian(&mut self, compiled: &Compiled, temps_k: &[f64]) {
-        if let Inner::Krylov(k) = &self.inner
+        if let Inner::Krylov(k) = &mut self.inner
             && k.struggled
         {
-            self.inner = Inner::Sparse(Box::new(Sparse::new(compiled)));
+            if direct_fill_estimate(compiled).1 <= SPARSE_MAX_FLOPS {
+                self.inner = Inner::Sparse(Box::new(Sparse::new(compiled)));
+            } else {
+                // a direct factorisation would cost more than iterating longer
+                k.struggled = false;
+                k.max_iterations = k.max_iterations.saturating_mul(10);
+            }
         }
         match &mut self.inner {
             Inner::Dense(d) => compiled.jacobian(temps_k, &mut d.jac),
@@ -253,21 +331,7 @@ impl IterationMatrix {
 impl Sparse {
     fn new(c: &Compiled) -> Sparse {
         let n = c.n;
-        // Columns: the diagonal plus every node-to-node neighbour, sorted.
-        let mut adj: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
-        for &(i, j, _) in c.lin_nn.iter().chain(&c.rad_nn) {
-            adj[i].push(j);
-            adj[j].push(i);
-        }
-        let mut col_ptr = Vec::with_capacity(n + 1);
-        let mut row_idx = Vec::new();
-        col_ptr.push(0);
-        for rows in &mut adj {
-            rows.sort_unstable();
-            rows.dedup();
-            row_idx.extend_from_slice(rows);
-            col_ptr.push(row_idx.len());
-        }
+        let (col_ptr, row_idx) = pattern(c);
         let slot = |row: usize, col: usize| {
             let (a, b) = (col_ptr[col], col_ptr[col + 1]);
             a + row_idx[a..b]
@@ -378,20 +442,7 @@ impl Sparse {
 impl Krylov {
     fn new(c: &Compiled) -> Krylov {
         let n = c.n;
-        let mut adj: Vec<Vec<usize>> = (0..n).map(|i| vec![i]).collect();
-        for &(i, j, _) in c.lin_nn.iter().chain(&c.rad_nn) {
-            adj[i].push(j);
-            adj[j].push(i);
-        }
-        let mut row_ptr = Vec::with_capacity(n + 1);
-        let mut col = Vec::new();
-        row_ptr.push(0);
-        for cols in &mut adj {
-            cols.sort_unstable();
-            cols.dedup();
-            col.extend_from_slice(cols);
-            row_ptr.push(col.len());
-        }
+        let (row_ptr, col) = pattern(c);
         let slot = |row: usize, c: usize| {
             let (a, b) = (row_ptr[row], row_ptr[row + 1]);
             a + col[a..b].binary_search(&c).expect("in the pattern")
@@ -422,6 +473,7 @@ impl Krylov {
             l_col,
             l_src,
             l_val,
+            ic_ok: false,
             n,
             row_ptr,
             col,
@@ -523,7 +575,7 @@ impl Krylov {
             let s: f64 = self.l_val[a..b - 1].iter().map(|x| x * x).sum();
             let d = self.l_val[b - 1] - s;
             if !(d > 0.0 && d.is_finite()) {
-                self.l_val.clear();
+                self.ic_ok = false;
                 return;
             }
             self.l_val[b - 1] = d.sqrt();
@@ -534,19 +586,19 @@ impl Krylov {
             let k = self.l_ptr[i + 1] - 1;
             self.l_val[k] = 1.0 / self.l_val[k];
         }
+        self.ic_ok = true;
     }
 
     /// z = M⁻¹ r: IC(0) when it exists, else the diagonal.
     fn precondition(
-        l_ptr: &[usize],
-        l_col: &[usize],
-        l_val: &[f64],
+        ic_ok: bool,
+        (l_ptr, l_col, l_val): (&[usize], &[usize], &[f64]),
         inv_diag: &[f64],
         r: &[f64],
         z: &mut [f64],
     ) {
         let n = r.len();
-        if l_val.is_empty() {
+        if !ic_ok {
             for i in 0..n {
                 z[i] = r[i] * inv_diag[i];
             }
@@ -593,9 +645,8 @@ impl Krylov {
         }
         // x0 = M⁻¹ b
         Self::precondition(
-            &self.l_ptr,
-            &self.l_col,
-            &self.l_val,
+            self.ic_ok,
+            (&self.l_ptr, &self.l_col, &self.l_val),
             &self.inv_diag,
             b,
             &mut self.x,
@@ -606,9 +657,8 @@ impl Krylov {
             self.r[i] = b[i] - q[i];
         }
         Self::precondition(
-            &self.l_ptr,
-            &self.l_col,
-            &self.l_val,
+            self.ic_ok,
+            (&self.l_ptr, &self.l_col, &self.l_val),
             &self.inv_diag,
             &self.r,
             &mut self.z,
@@ -629,9 +679,8 @@ impl Krylov {
                 self.r[i] -= alpha * q[i];
             }
             Self::precondition(
-                &self.l_ptr,
-                &self.l_col,
-                &self.l_val,
+                self.ic_ok,
+                (&self.l_ptr, &self.l_col, &self.l_val),
                 &self.inv_diag,
                 &self.r,
                 &mut self.z,

@@ -42,8 +42,8 @@ pub enum StepFailure {
     NewtonDiverged,
     #[error("iteration matrix is singular")]
     Singular,
-    #[error("temperatures became non-finite or non-positive")]
-    NonPhysical,
+    #[error("the temperature of node index {node} became non-finite or non-positive")]
+    NonPhysical { node: usize },
 }
 
 /// Stopping rule of the simplified Newton iterations (Hairer & Wanner, Solving
@@ -307,13 +307,13 @@ impl Stepper {
         if self.theta > JACOBIAN_REFRESH_THETA {
             self.jac_stale = true;
         }
-        if self
+        if let Some(node) = self
             .data
             .temps1_k
             .iter()
-            .any(|&t| !(t.is_finite() && t > 0.0))
+            .position(|&t| !(t.is_finite() && t > 0.0))
         {
-            return Err(StepFailure::NonPhysical);
+            return Err(StepFailure::NonPhysical { node });
         }
         self.compiled.heat_w(
             &self.data.temps1_k,
