@@ -67,9 +67,29 @@ pub fn load_file(path: &Path) -> Result<(Scenario, String), ScenarioError> {
 
 /// Parses and validates scenario text; `file` names it in errors.
 pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
-    let raw: RawScenario = toml::from_str(text).map_err(|e| ScenarioError::Syntax {
-        file: file.to_string(),
-        message: e.to_string().trim_end().to_string(),
+    let raw: RawScenario = toml::from_str(text).map_err(|e| {
+        let excerpt = e.to_string().trim_end().to_string();
+        // A schema error (unknown key, wrong type, missing key) names its key path on
+        // the first line, like every other error; a malformed file names the line.
+        match e
+            .span()
+            .and_then(|s| Some((s.start, key_path_at(text, s.start)?)))
+        {
+            Some((offset, key)) => {
+                let before = &text[..offset.min(text.len())];
+                ScenarioError::Invalid {
+                    file: file.to_string(),
+                    line: before.matches('\n').count() + 1,
+                    column: before.len() - before.rfind('\n').map_or(0, |p| p + 1) + 1,
+                    key,
+                    message: format!("{}\n{excerpt}", e.message().trim_end()),
+                }
+            }
+            None => ScenarioError::Syntax {
+                file: file.to_string(),
+                message: excerpt,
+            },
+        }
     })?;
     let cx = Cx { file, text };
     build(raw, &cx)
@@ -608,6 +628,75 @@ impl Cx<'_> {
             )),
         }
     }
+}
+
+/// The key path (`node[2].capacitance_j_per_k`) of the innermost key, value or table
+/// of `text` whose span holds `offset`; `None` when the text does not parse.
+fn key_path_at(text: &str, offset: usize) -> Option<String> {
+    use toml_edit::{Item, Table, Value};
+    type Best = Option<(usize, String)>;
+    fn consider(span: Option<std::ops::Range<usize>>, path: &str, offset: usize, best: &mut Best) {
+        if let Some(s) = span
+            && s.contains(&offset)
+            && !path.is_empty()
+            && best.as_ref().is_none_or(|(len, _)| s.len() <= *len)
+        {
+            *best = Some((s.len(), path.to_string()));
+        }
+    }
+    fn join(path: &str, key: &str) -> String {
+        if path.is_empty() {
+            key.to_string()
+        } else {
+            format!("{path}.{key}")
+        }
+    }
+    fn value(v: &Value, path: &str, offset: usize, best: &mut Best) {
+        consider(v.span(), path, offset, best);
+        match v {
+            Value::InlineTable(t) => {
+                for (k, x) in t.iter() {
+                    let p = join(path, k);
+                    if let Some((key, _)) = t.get_key_value(k) {
+                        consider(key.span(), &p, offset, best);
+                    }
+                    value(x, &p, offset, best);
+                }
+            }
+            Value::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    value(x, &format!("{path}[{i}]"), offset, best);
+                }
+            }
+            _ => {}
+        }
+    }
+    fn table(t: &Table, path: &str, offset: usize, best: &mut Best) {
+        consider(t.span(), path, offset, best);
+        for (k, x) in t.iter() {
+            let p = join(path, k);
+            if let Some((key, _)) = t.get_key_value(k) {
+                consider(key.span(), &p, offset, best);
+            }
+            item(x, &p, offset, best);
+        }
+    }
+    fn item(x: &Item, path: &str, offset: usize, best: &mut Best) {
+        match x {
+            Item::Table(t) => table(t, path, offset, best),
+            Item::ArrayOfTables(a) => {
+                for (i, t) in a.iter().enumerate() {
+                    table(t, &format!("{path}[{i}]"), offset, best);
+                }
+            }
+            Item::Value(v) => value(v, path, offset, best),
+            Item::None => {}
+        }
+    }
+    let doc = toml_edit::Document::parse(text).ok()?;
+    let mut best = None;
+    table(doc.as_table(), "", offset, &mut best);
+    best.map(|(_, p)| p)
 }
 
 /// Byte offset of the deepest key of `path` present in `text`.
