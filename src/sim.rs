@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::EnvState;
 use crate::thermal::iteration::LinearSolver;
-use crate::thermal::solver::{StepData, StepFailure, Stepper, W0, W1};
+use crate::thermal::solver::{StepData, StepFailure, Stepper, StepperMemory, W0, W1};
 use crate::thermal::{StepSwitches, ThermalModel};
 
 /// Integration settings. Defaults meet 0.05 K against a step-converged solution on
@@ -94,12 +94,17 @@ pub struct StepView<'a> {
     pub mesh: &'a [MeshState],
 }
 
-/// What an observer is told before the first step.
+/// What an observer is told before the first step: the start state.
 pub struct RunStart<'a> {
     pub model: &'a ThermalModel,
     pub gears: &'a [GearPair],
+    pub t_start_s: f64,
     pub t_end_s: f64,
     pub temps_k: &'a [f64],
+    pub heaters_on: &'a [bool],
+    pub modes_active: &'a [bool],
+    /// Sunlit until the first shadow crossing.
+    pub sunlit: bool,
     pub mesh: &'a [MeshState],
 }
 
@@ -135,6 +140,43 @@ impl StepView<'_> {
         for (i, o) in out_k.iter_mut().enumerate() {
             *o = self.temperature_at(i, t_s);
         }
+    }
+}
+
+/// Fixed-interval sampling of a run, shared by every observer that samples one (the
+/// CSV, the log's `--log-every 60s`, `summary::Samples`): the start of the run, then
+/// each multiple of `interval_s` after it, once, from the step that reaches it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grid {
+    interval_s: f64,
+    next: u64,
+}
+
+impl Grid {
+    pub fn new(interval_s: f64) -> Grid {
+        Grid {
+            interval_s,
+            next: 1,
+        }
+    }
+
+    pub fn interval_s(&self) -> f64 {
+        self.interval_s
+    }
+
+    /// A run starts at `t_start_s` (sampled by the caller): the next grid time is the
+    /// first multiple of the interval after it.
+    pub fn start(&mut self, t_start_s: f64) {
+        self.next = (t_start_s / self.interval_s).floor() as u64 + 1;
+    }
+
+    /// The next grid time at or before `t1_s` (a step's end), if any; each once.
+    pub fn next_due(&mut self, t1_s: f64) -> Option<f64> {
+        let t = self.next as f64 * self.interval_s;
+        (t <= t1_s * (1.0 + 1e-12)).then(|| {
+            self.next += 1;
+            t
+        })
     }
 }
 
@@ -235,6 +277,8 @@ impl EnergyBalance {
 
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RunStats {
+    /// The run covered t_start_s … t_end_s.
+    pub t_start_s: f64,
     pub t_end_s: f64,
     pub steps: u64,
     pub rejected_steps: u64,
@@ -253,6 +297,8 @@ pub struct RunStats {
     pub final_temperatures_k: Vec<f64>,
     /// The run stopped early on request; everything up to `t_end_s` is valid.
     pub interrupted: bool,
+    /// The run paused at `Stop::pause_after_s`; its end state resumes it.
+    pub paused: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -377,7 +423,534 @@ fn first_nonphysical(d: &StepData) -> Option<(usize, f64, f64)> {
     None
 }
 
-/// Integrates `model` from t = 0 to `t_end_s`.
+/// Everything that shapes a run from a time on: the physical state (time, temperatures,
+/// heater switches, sunlit or eclipsed) and the solver's memory (the step size in use,
+/// the restart steps remembered per kind of event, the next shadow crossing and load
+/// kink, the Jacobian and factorisation in use). The end state of a run is a valid
+/// start state of the next: a run split anywhere and resumed from its end state gives
+/// the unsplit run's numbers bit for bit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct State {
+    pub t_s: f64,
+    pub temperatures_k: Vec<f64>,
+    /// Per heater (as `Network::heaters`).
+    pub heaters_on: Vec<bool>,
+    /// Sunlit (or eclipsed) until the next shadow crossing.
+    pub sunlit: bool,
+    memory: Option<Memory>,
+}
+
+/// The solver's part of a [`State`].
+#[derive(Debug, Clone, PartialEq)]
+struct Memory {
+    step_s: f64,
+    restart_steps_s: [f64; 4],
+    event_class: Option<usize>,
+    t_kink_s: f64,
+    next_shadow: Option<(f64, bool)>,
+    shadow_horizon_s: f64,
+    modes_active: Vec<bool>,
+    mesh_flags: Vec<[bool; 3]>,
+    stepper: StepperMemory,
+    /// The setup and run that left it: that setup's stepper is still in this state.
+    made_by: (u64, u64),
+}
+
+impl State {
+    /// Whether the state carries a solver memory (it ended a run).
+    pub fn is_resumed(&self) -> bool {
+        self.memory.is_some()
+    }
+
+    /// The same physical state with the solver's memory forgotten: the next run starts
+    /// as a fresh one would (first step, Jacobian, restart steps).
+    pub fn forget_solver(&mut self) {
+        self.memory = None;
+    }
+}
+
+/// When a run stops early.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Stop<'c> {
+    /// Set from outside (Ctrl-C): the run stops after the current step.
+    pub cancel: Option<&'c AtomicBool>,
+    /// The run pauses at the end of the first step that reaches this time, without
+    /// landing on it: resuming its end state continues the same steps.
+    pub pause_after_s: Option<f64>,
+}
+
+/// Built once per model: the compiled network and the stepper's workspace, the
+/// breakpoints and load kinks. [`Setup::run`] advances a [`State`] to an end time
+/// under observers; any number of runs share one setup.
+pub struct Setup<'a> {
+    model: &'a ThermalModel,
+    gears: &'a [GearPair],
+    settings: SolverSettings,
+    /// Every table point and mode edge, sorted.
+    breakpoints: Vec<f64>,
+    kinks: Vec<f64>,
+    stepper: Stepper,
+    mesh: Vec<MeshState>,
+    id: u64,
+    runs: u64,
+}
+
+static SETUP_IDS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+impl<'a> Setup<'a> {
+    pub fn new(
+        model: &'a ThermalModel,
+        gears: &'a [GearPair],
+        settings: &SolverSettings,
+    ) -> Setup<'a> {
+        Setup {
+            model,
+            gears,
+            settings: settings.clone(),
+            breakpoints: model.breakpoints_s(),
+            kinks: model.load_kink_angles_rad(),
+            stepper: Stepper::new(model, settings.tolerance_k, settings.linear),
+            mesh: gears
+                .iter()
+                .map(|g| mesh_or_nan(g, &model.network.initial_temperatures_k()))
+                .collect(),
+            id: SETUP_IDS.fetch_add(1, Ordering::Relaxed),
+            runs: 0,
+        }
+    }
+
+    pub fn model(&self) -> &ThermalModel {
+        self.model
+    }
+
+    /// The scenario's start: t = 0 at its initial temperatures.
+    pub fn initial_state(&self) -> State {
+        self.state_at(0.0, self.model.network.initial_temperatures_k())
+    }
+
+    /// A fresh state at `t_s` with `temperatures_k`: heaters on where their sensor is at
+    /// or below the switch-on temperature (set `heaters_on` afterwards for a heater
+    /// inside its band that is on), sunlit as the environment is just after `t_s`.
+    pub fn state_at(&self, t_s: f64, temperatures_k: Vec<f64>) -> State {
+        let net = &self.model.network;
+        let env = &self.model.environment;
+        let heaters_on = net
+            .heaters
+            .iter()
+            .map(|h| temperatures_k[h.sensor_node] <= h.on_k)
+            .collect();
+        // Sunlit or eclipsed between shadow events: decided just after t (before the
+        // next crossing) and toggled at every crossing the solver lands on.
+        let probe = env.next_shadow_crossing(t_s, t_s + env.orbit.period_s());
+        let sunlit = env.sunlit(probe.map_or(t_s, |(ts, _)| t_s + 0.5 * (ts - t_s).min(1.0)));
+        State {
+            t_s,
+            temperatures_k,
+            heaters_on,
+            sunlit,
+            memory: None,
+        }
+    }
+
+    fn next_kink(&self, t: f64) -> f64 {
+        let orbit = &self.model.environment.orbit;
+        self.kinks
+            .iter()
+            .map(|&a| orbit.next_angle_mod_pi_s(t, a))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Advances `state` to `t_end_s` (landing on it), or until `stop` says. Observers
+    /// see every accepted step and event. The energy balance is measured from the start
+    /// state. `state` is left at the end, with the solver's memory.
+    pub fn run<O: Observer>(
+        &mut self,
+        state: &mut State,
+        t_end_s: f64,
+        observer: &mut O,
+        stop: Stop<'_>,
+    ) -> Result<RunStats, SimError> {
+        if !(t_end_s.is_finite() && t_end_s > state.t_s) {
+            return Err(SimError::BadDuration(t_end_s - state.t_s));
+        }
+        let model = self.model;
+        let gears = self.gears;
+        let settings = self.settings.clone();
+        let env = &model.environment;
+        let net = &model.network;
+        let t_start = state.t_s;
+        let y_start = state.temperatures_k.clone();
+        let mut y = std::mem::take(&mut state.temperatures_k);
+        let mut heaters_on = std::mem::take(&mut state.heaters_on);
+        let mut sunlit = state.sunlit;
+
+        // The solver's memory: carried over, or that of a fresh start.
+        let resumed = state.memory.take();
+        let fresh = resumed.is_none();
+        let Memory {
+            step_s: mut h,
+            restart_steps_s: mut h_after_event,
+            mut event_class,
+            t_kink_s: mut t_kink,
+            mut next_shadow,
+            shadow_horizon_s,
+            mut modes_active,
+            mut mesh_flags,
+            stepper: stepper_memory,
+            made_by,
+        } = match resumed {
+            Some(m) => m,
+            None => Memory {
+                step_s: settings.max_step_s.min(if settings.adaptive {
+                    1.0
+                } else {
+                    f64::INFINITY
+                }),
+                // One memory per kind of event: entering eclipse, leaving it, a heater
+                // switching, anything else (table point, mode edge, load kink).
+                restart_steps_s: [settings.max_step_s / 30.0; 4],
+                event_class: None,
+                t_kink_s: self.next_kink(t_start),
+                next_shadow: env.next_shadow_crossing(t_start, t_end_s),
+                shadow_horizon_s: t_end_s,
+                modes_active: model.modes.iter().map(|m| m.active(t_start)).collect(),
+                mesh_flags: vec![[false; 3]; gears.len()],
+                stepper: self.stepper.fresh_memory(),
+                made_by: (0, 0),
+            },
+        };
+        // The setup's stepper is in that state already when it ended that very run.
+        if made_by != (self.id, self.runs) {
+            self.stepper.restore(&stepper_memory);
+        }
+        if next_shadow.is_none() && shadow_horizon_s < t_end_s {
+            // the last search stopped at an earlier end
+            next_shadow = env.next_shadow_crossing(t_start, t_end_s);
+        }
+        let mut next_bp = self.breakpoints.partition_point(|&b| b <= t_start);
+        let factorizations_before = self.stepper.factorizations;
+        let solves_before = self.stepper.solve_counts();
+
+        let mut stats = RunStats {
+            t_start_s: t_start,
+            energy: EnergyBalance {
+                to_boundary_j: vec![0.0; net.boundaries.len()],
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        for (m, g) in self.mesh.iter_mut().zip(gears) {
+            *m = mesh_or_nan(g, &y);
+        }
+        observer
+            .on_start(&RunStart {
+                model,
+                gears,
+                t_start_s: t_start,
+                t_end_s,
+                temps_k: &y,
+                heaters_on: &heaters_on,
+                modes_active: &modes_active,
+                sunlit,
+                mesh: &self.mesh,
+            })
+            .map_err(|source| SimError::Observer {
+                t_s: t_start,
+                source,
+            })?;
+        if fresh {
+            mesh_events(&self.mesh, &mut mesh_flags, t_start, observer)?;
+        }
+
+        let stepper = &mut self.stepper;
+        let mesh = &mut self.mesh;
+        let breakpoints = &self.breakpoints;
+        let kinks = &self.kinks;
+        let next_kink = |t: f64| {
+            kinks
+                .iter()
+                .map(|&a| env.orbit.next_angle_mod_pi_s(t, a))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let mut t = t_start;
+        let tol = settings.tolerance_k;
+        let mut result: Result<(), SimError> = Ok(());
+        while t < t_end_s {
+            if stop.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                stats.interrupted = true;
+                break;
+            }
+            if stop.pause_after_s.is_some_and(|p| t >= p) {
+                stats.paused = true;
+                break;
+            }
+            // Next scheduled event.
+            let t_shadow = next_shadow.map_or(f64::INFINITY, |(ts, _)| ts);
+            let t_bp = breakpoints
+                .get(next_bp)
+                .copied()
+                .filter(|&b| b < t_end_s)
+                .unwrap_or(f64::INFINITY);
+            let t_event = t_shadow.min(t_bp).min(t_kink).min(t_end_s);
+            let dt_event = t_event - t;
+            let mut h_try = h.min(settings.max_step_s);
+            let mut lands = false;
+            if h_try >= dt_event || dt_event - h_try < 0.1 * h_try {
+                h_try = dt_event;
+                lands = true;
+            } else if dt_event < 2.0 * h_try {
+                h_try = 0.5 * dt_event;
+            }
+
+            let phase_time = t + 0.5 * h_try;
+            for (a, m) in modes_active.iter_mut().zip(&model.modes) {
+                *a = m.active(phase_time);
+            }
+            let env_at = |tt: f64| env.state_with(tt, sunlit);
+            let sw = StepSwitches {
+                heaters_on: &heaters_on,
+                modes_active: &modes_active,
+            };
+            if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try) {
+                if h_try * 0.25 < MIN_STEP_S {
+                    result = Err(if let StepFailure::NonPhysical { node } = e {
+                        SimError::NonPhysical {
+                            node: net.nodes[node].name.clone(),
+                            t_s: t + h_try,
+                            temperature_k: stepper.data.temps1_k[node],
+                            cause: likely_cause(model, &y, t, node, h_try, settings.adaptive),
+                        }
+                    } else {
+                        SimError::StepFailed {
+                            t_s: t,
+                            h_s: h_try,
+                            cause: e,
+                        }
+                    });
+                    break;
+                }
+                h = h_try * 0.25;
+                stats.rejected_steps += 1;
+                continue;
+            }
+            stats.newton_iterations += stepper.data.newton_iterations as u64;
+            let err = stepper.data.error_max_k() / tol;
+            if settings.adaptive && err > 1.0 && h_try > 1e3 * MIN_STEP_S {
+                h = h_try * (0.9 * err.powf(-1.0 / 3.0)).clamp(0.1, 0.9);
+                stats.rejected_steps += 1;
+                continue;
+            }
+
+            // Thermostats: land on the earliest switching time inside the step.
+            let switch = earliest_thermostat_switch(net, &heaters_on, &stepper.data);
+            let switched = switch.map(|(k, _)| k);
+            if let Some((_, s)) = switch
+                && s * h_try > MIN_STEP_S
+                && s < 1.0
+            {
+                h_try *= s;
+                lands = false;
+                if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try) {
+                    result = Err(SimError::StepFailed {
+                        t_s: t,
+                        h_s: h_try,
+                        cause: e,
+                    });
+                    break;
+                }
+                stats.newton_iterations += stepper.data.newton_iterations as u64;
+            }
+
+            // Every output (step ends, and the interpolant observers sample between
+            // them) must stay within 0 … 10 000 K. An adaptive run retries with a
+            // shorter step; a fixed-step run cannot, and ends with the node, the time
+            // and the likely cause.
+            if let Some((i, s, v)) = first_nonphysical(&stepper.data) {
+                let h_now = stepper.data.h_s;
+                // Below 0 K a shorter step can help; a run-away to 10 000 K cannot.
+                if v <= 0.0 && settings.adaptive && h_now * 0.5 > MIN_STEP_S {
+                    h = h_now * 0.5;
+                    stats.rejected_steps += 1;
+                    continue;
+                }
+                result = Err(SimError::NonPhysical {
+                    node: net.nodes[i].name.clone(),
+                    t_s: t + s * h_now,
+                    temperature_k: v,
+                    cause: likely_cause(model, &y, t, i, h_now, settings.adaptive),
+                });
+                break;
+            }
+
+            // Accept.
+            let t_new = if lands { t_event } else { t + h_try };
+            if t_new <= t {
+                result = Err(SimError::TimeResolution { t_s: t });
+                break;
+            }
+            stepper.data.h_s = t_new - t;
+            accumulate_energy(&mut stats.energy, &stepper.data);
+            stats.steps += 1;
+            if !sunlit {
+                stats.eclipse_time_s += t_new - t;
+            }
+            for (m, g) in mesh.iter_mut().zip(gears) {
+                *m = mesh_or_nan(g, &stepper.data.temps1_k);
+            }
+            // The stepper's loads are those of the step's end (its last stage), which is
+            // what observers see.
+            let view = StepView {
+                index: stats.steps,
+                data: &stepper.data,
+                env1: env_at(t_new),
+                heaters_on: &heaters_on,
+                modes_active: &modes_active,
+                load_w: &stepper.compiled.each_load_w,
+                gears,
+                mesh,
+            };
+            if let Err(source) = observer.on_step(&view) {
+                result = Err(SimError::Observer { t_s: t_new, source });
+                break;
+            }
+            if let Err(e) = mesh_events(mesh, &mut mesh_flags, t_new, observer) {
+                result = Err(e);
+                break;
+            }
+            t = t_new;
+            y.copy_from_slice(&stepper.data.temps1_k);
+
+            let class_before_step = event_class.take();
+            let mark = |class: usize, slot: &mut Option<usize>| {
+                // the class whose restart step is shortest wins when events coincide
+                if slot.is_none_or(|c| h_after_event[class] < h_after_event[c]) {
+                    *slot = Some(class);
+                }
+            };
+
+            // Events at the new time.
+            let mut events = Ok(());
+            if lands && t_event == t_shadow {
+                let (_, entering) = next_shadow.expect("shadow event");
+                sunlit = !entering;
+                let kind = if entering {
+                    stats.eclipse_entries += 1;
+                    EventKind::EclipseEntry
+                } else {
+                    EventKind::EclipseExit
+                };
+                events = events.and(emit(observer, t, kind));
+                next_shadow = env.next_shadow_crossing(t, t_end_s);
+                mark(if entering { 0 } else { 1 }, &mut event_class);
+            }
+            if t >= t_kink {
+                t_kink = next_kink(t);
+                mark(3, &mut event_class);
+            }
+            while breakpoints.get(next_bp).is_some_and(|&b| b <= t) {
+                next_bp += 1;
+                mark(3, &mut event_class);
+            }
+            for (k, m) in model.modes.iter().enumerate() {
+                let now = m.active(t + 1e-9 * (1.0 + t));
+                if now != modes_active[k] {
+                    let kind = if now {
+                        EventKind::ModeStart(k)
+                    } else {
+                        EventKind::ModeEnd(k)
+                    };
+                    events = events.and(emit(observer, t, kind));
+                }
+            }
+            if let Some(k) = switched {
+                heaters_on[k] = !heaters_on[k];
+                stats.heater_switches += 1;
+                mark(2, &mut event_class);
+                let kind = if heaters_on[k] {
+                    EventKind::HeaterOn(k)
+                } else {
+                    EventKind::HeaterOff(k)
+                };
+                events = events.and(emit(observer, t, kind));
+            }
+
+            if event_class.is_none() {
+                stepper.continue_from_last_end();
+            }
+
+            // Next step size. A step cut short by an event says little about the next
+            // one, so it never shrinks the controller's step.
+            h = if settings.adaptive {
+                let fac = if err > 0.0 {
+                    0.9 * err.powf(-1.0 / 3.0)
+                } else {
+                    5.0
+                };
+                // Hold the step when it would grow by less than 20 %: the solver then
+                // reuses its factorised iteration matrix.
+                let fac = if (1.0..1.2).contains(&fac) { 1.0 } else { fac };
+                let proposed = h_try * fac.clamp(0.2, 3.0);
+                if let Some(c) = class_before_step {
+                    h_after_event[c] = proposed;
+                }
+                let next = if lands || switched.is_some() {
+                    proposed.max(h)
+                } else {
+                    proposed
+                };
+                match event_class {
+                    Some(c) => next.min(h_after_event[c]),
+                    None => next,
+                }
+            } else {
+                settings.max_step_s
+            };
+            if let Err(e) = events {
+                result = Err(e);
+                break;
+            }
+        }
+        stats.t_end_s = t;
+        stats.factorizations = self.stepper.factorizations - factorizations_before;
+        stats.linear_solver = self.stepper.linear_solver();
+        let solves = self.stepper.solve_counts();
+        stats.linear_solves = solves.0 - solves_before.0;
+        stats.krylov_iterations = solves.1 - solves_before.1;
+        stats.energy.stored_j = net
+            .nodes
+            .iter()
+            .zip(y.iter().zip(&y_start))
+            .map(|(nd, (&yt, &y0))| nd.capacitance_j_per_k * (yt - y0))
+            .sum();
+        stats.final_temperatures_k = y.clone();
+        // The state at the end, with the solver's memory: a valid start of the next run.
+        self.runs += 1;
+        state.t_s = t;
+        state.temperatures_k = y;
+        state.heaters_on = heaters_on;
+        state.sunlit = sunlit;
+        state.memory = Some(Memory {
+            step_s: h,
+            restart_steps_s: h_after_event,
+            event_class,
+            t_kink_s: t_kink,
+            next_shadow,
+            shadow_horizon_s: shadow_horizon_s.max(t_end_s),
+            modes_active,
+            mesh_flags,
+            stepper: self.stepper.memory(),
+            made_by: (self.id, self.runs),
+        });
+        result?;
+        observer
+            .on_finish(&stats)
+            .map_err(|source| SimError::Observer { t_s: t, source })?;
+        Ok(stats)
+    }
+}
+
+/// Integrates `model` from t = 0 at its initial temperatures to `t_end_s`: a setup and
+/// one run.
 pub fn simulate<O: Observer>(
     model: &ThermalModel,
     gears: &[GearPair],
@@ -386,302 +959,17 @@ pub fn simulate<O: Observer>(
     observer: &mut O,
     cancel: Option<&AtomicBool>,
 ) -> Result<RunStats, SimError> {
-    if !(t_end_s.is_finite() && t_end_s > 0.0) {
-        return Err(SimError::BadDuration(t_end_s));
-    }
-    let env = &model.environment;
-    let net = &model.network;
-    let n = net.nodes.len();
-    let mut y = net.initial_temperatures_k();
-    let mut heaters_on: Vec<bool> = net
-        .heaters
-        .iter()
-        .map(|h| y[h.sensor_node] <= h.on_k)
-        .collect();
-    let mut modes_active: Vec<bool> = model.modes.iter().map(|m| m.active(0.0)).collect();
-    let breakpoints: Vec<f64> = model
-        .breakpoints_s()
-        .into_iter()
-        .filter(|&b| b > 0.0 && b < t_end_s)
-        .collect();
-    let mut next_bp = 0usize;
-    let kinks = model.load_kink_angles_rad();
-    let next_kink = |t: f64| {
-        kinks
-            .iter()
-            .map(|&a| env.orbit.next_angle_mod_pi_s(t, a))
-            .fold(f64::INFINITY, f64::min)
-    };
-    let mut t_kink = next_kink(0.0);
-    let mut next_shadow = env.next_shadow_crossing(0.0, t_end_s);
-    // Sunlit or eclipsed between shadow events: decided once at the start (just after
-    // t = 0) and toggled at every crossing the solver lands on.
-    let mut sunlit = env.sunlit(next_shadow.map_or(0.0, |(ts, _)| 0.5 * ts.min(1.0)));
-
-    let mut stepper = Stepper::new(model, settings.tolerance_k, settings.linear);
-    let mut stats = RunStats {
-        energy: EnergyBalance {
-            to_boundary_j: vec![0.0; net.boundaries.len()],
-            ..Default::default()
+    let mut setup = Setup::new(model, gears, settings);
+    let mut state = setup.initial_state();
+    setup.run(
+        &mut state,
+        t_end_s,
+        observer,
+        Stop {
+            cancel,
+            pause_after_s: None,
         },
-        ..Default::default()
-    };
-    let mut mesh: Vec<MeshState> = gears.iter().map(|g| mesh_or_nan(g, &y)).collect();
-    // Per pair: (margin low, interfering, invalid) as last reported.
-    let mut mesh_flags: Vec<[bool; 3]> = vec![[false; 3]; gears.len()];
-    observer
-        .on_start(&RunStart {
-            model,
-            gears,
-            t_end_s,
-            temps_k: &y,
-            mesh: &mesh,
-        })
-        .map_err(|source| SimError::Observer { t_s: 0.0, source })?;
-    mesh_events(&mesh, &mut mesh_flags, 0.0, observer)?;
-
-    let mut t = 0.0f64;
-    let mut h = (settings.max_step_s).min(if settings.adaptive {
-        1.0
-    } else {
-        f64::INFINITY
-    });
-    let tol = settings.tolerance_k;
-    // A load that switches (eclipse, breakpoint, heater) breaks the smoothness the
-    // controller relies on; the first step after one starts from the size that worked
-    // after the previous one.
-    // One memory per kind of event: entering eclipse, leaving it, a heater switching,
-    // anything else (table point, mode edge, load kink) disturb the solution differently.
-    let mut h_after_event = [settings.max_step_s / 30.0; 4];
-    let mut event_class: Option<usize> = None;
-    while t < t_end_s {
-        if cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-            stats.interrupted = true;
-            break;
-        }
-        // Next scheduled event.
-        let t_shadow = next_shadow.map_or(f64::INFINITY, |(ts, _)| ts);
-        let t_bp = breakpoints.get(next_bp).copied().unwrap_or(f64::INFINITY);
-        let t_event = t_shadow.min(t_bp).min(t_kink).min(t_end_s);
-        let dt_event = t_event - t;
-        let mut h_try = h.min(settings.max_step_s);
-        let mut lands = false;
-        if h_try >= dt_event || dt_event - h_try < 0.1 * h_try {
-            h_try = dt_event;
-            lands = true;
-        } else if dt_event < 2.0 * h_try {
-            h_try = 0.5 * dt_event;
-        }
-
-        let phase_time = t + 0.5 * h_try;
-        for (a, m) in modes_active.iter_mut().zip(&model.modes) {
-            *a = m.active(phase_time);
-        }
-        let env_at = |tt: f64| env.state_with(tt, sunlit);
-        let sw = StepSwitches {
-            heaters_on: &heaters_on,
-            modes_active: &modes_active,
-        };
-        if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try) {
-            if h_try * 0.25 < MIN_STEP_S {
-                if let StepFailure::NonPhysical { node } = e {
-                    return Err(SimError::NonPhysical {
-                        node: net.nodes[node].name.clone(),
-                        t_s: t + h_try,
-                        temperature_k: stepper.data.temps1_k[node],
-                        cause: likely_cause(model, &y, t, node, h_try, settings.adaptive),
-                    });
-                }
-                return Err(SimError::StepFailed {
-                    t_s: t,
-                    h_s: h_try,
-                    cause: e,
-                });
-            }
-            h = h_try * 0.25;
-            stats.rejected_steps += 1;
-            continue;
-        }
-        stats.newton_iterations += stepper.data.newton_iterations as u64;
-        let err = stepper.data.error_max_k() / tol;
-        if settings.adaptive && err > 1.0 && h_try > 1e3 * MIN_STEP_S {
-            h = h_try * (0.9 * err.powf(-1.0 / 3.0)).clamp(0.1, 0.9);
-            stats.rejected_steps += 1;
-            continue;
-        }
-
-        // Thermostats: land on the earliest switching time inside the step.
-        let switch = earliest_thermostat_switch(net, &heaters_on, &stepper.data);
-        let switched = switch.map(|(k, _)| k);
-        if let Some((_, s)) = switch
-            && s * h_try > MIN_STEP_S
-            && s < 1.0
-        {
-            h_try *= s;
-            lands = false;
-            stepper
-                .step(model, &env_at, sw, t, &y, h_try)
-                .map_err(|e| SimError::StepFailed {
-                    t_s: t,
-                    h_s: h_try,
-                    cause: e,
-                })?;
-            stats.newton_iterations += stepper.data.newton_iterations as u64;
-        }
-
-        // Every output (step ends, and the interpolant observers sample between them)
-        // must stay above 0 K. An adaptive run retries with a shorter step; a fixed-step
-        // run cannot, and ends with the node, the time and the likely cause.
-        if let Some((i, s, v)) = first_nonphysical(&stepper.data) {
-            let h_now = stepper.data.h_s;
-            // Below 0 K a shorter step can help; a run-away to 10 000 K cannot.
-            if v <= 0.0 && settings.adaptive && h_now * 0.5 > MIN_STEP_S {
-                h = h_now * 0.5;
-                stats.rejected_steps += 1;
-                continue;
-            }
-            return Err(SimError::NonPhysical {
-                node: net.nodes[i].name.clone(),
-                t_s: t + s * h_now,
-                temperature_k: v,
-                cause: likely_cause(model, &y, t, i, h_now, settings.adaptive),
-            });
-        }
-
-        // Accept.
-        let t_new = if lands { t_event } else { t + h_try };
-        if t_new <= t {
-            return Err(SimError::TimeResolution { t_s: t });
-        }
-        stepper.data.h_s = t_new - t;
-        accumulate_energy(&mut stats.energy, &stepper.data);
-        stats.steps += 1;
-        if !sunlit {
-            stats.eclipse_time_s += t_new - t;
-        }
-        for (m, g) in mesh.iter_mut().zip(gears) {
-            *m = mesh_or_nan(g, &stepper.data.temps1_k);
-        }
-        // The stepper's loads are those of the step's end (its last stage), which is
-        // what observers see.
-        let view = StepView {
-            index: stats.steps,
-            data: &stepper.data,
-            env1: env_at(t_new),
-            heaters_on: &heaters_on,
-            modes_active: &modes_active,
-            load_w: &stepper.compiled.each_load_w,
-            gears,
-            mesh: &mesh,
-        };
-        observer
-            .on_step(&view)
-            .map_err(|source| SimError::Observer { t_s: t_new, source })?;
-        mesh_events(&mesh, &mut mesh_flags, t_new, observer)?;
-        t = t_new;
-        y.copy_from_slice(&stepper.data.temps1_k);
-
-        let class_before_step = event_class.take();
-        let mark = |class: usize, slot: &mut Option<usize>| {
-            // the class whose restart step is shortest wins when events coincide
-            if slot.is_none_or(|c| h_after_event[class] < h_after_event[c]) {
-                *slot = Some(class);
-            }
-        };
-
-        // Events at the new time.
-        if lands && t_event == t_shadow {
-            let (_, entering) = next_shadow.expect("shadow event");
-            sunlit = !entering;
-            let kind = if entering {
-                stats.eclipse_entries += 1;
-                EventKind::EclipseEntry
-            } else {
-                EventKind::EclipseExit
-            };
-            emit(observer, t, kind)?;
-            next_shadow = env.next_shadow_crossing(t, t_end_s);
-            mark(if entering { 0 } else { 1 }, &mut event_class);
-        }
-        if t >= t_kink {
-            t_kink = next_kink(t);
-            mark(3, &mut event_class);
-        }
-        while breakpoints.get(next_bp).is_some_and(|&b| b <= t) {
-            next_bp += 1;
-            mark(3, &mut event_class);
-        }
-        for (k, m) in model.modes.iter().enumerate() {
-            let now = m.active(t + 1e-9 * (1.0 + t));
-            if now != modes_active[k] {
-                let kind = if now {
-                    EventKind::ModeStart(k)
-                } else {
-                    EventKind::ModeEnd(k)
-                };
-                emit(observer, t, kind)?;
-            }
-        }
-        if let Some(k) = switched {
-            heaters_on[k] = !heaters_on[k];
-            stats.heater_switches += 1;
-            mark(2, &mut event_class);
-            let kind = if heaters_on[k] {
-                EventKind::HeaterOn(k)
-            } else {
-                EventKind::HeaterOff(k)
-            };
-            emit(observer, t, kind)?;
-        }
-
-        if event_class.is_none() {
-            stepper.continue_from_last_end();
-        }
-
-        // Next step size. A step cut short by an event says little about the next
-        // one, so it never shrinks the controller's step.
-        h = if settings.adaptive {
-            let fac = if err > 0.0 {
-                0.9 * err.powf(-1.0 / 3.0)
-            } else {
-                5.0
-            };
-            // Hold the step when it would grow by less than 20 %: the solver then
-            // reuses its factorised iteration matrix.
-            let fac = if (1.0..1.2).contains(&fac) { 1.0 } else { fac };
-            let proposed = h_try * fac.clamp(0.2, 3.0);
-            if let Some(c) = class_before_step {
-                h_after_event[c] = proposed;
-            }
-            let next = if lands || switched.is_some() {
-                proposed.max(h)
-            } else {
-                proposed
-            };
-            match event_class {
-                Some(c) => next.min(h_after_event[c]),
-                None => next,
-            }
-        } else {
-            settings.max_step_s
-        };
-    }
-    stats.t_end_s = t;
-    stats.factorizations = stepper.factorizations;
-    stats.linear_solver = stepper.linear_solver();
-    (stats.linear_solves, stats.krylov_iterations) = stepper.solve_counts();
-    stats.energy.stored_j = net
-        .nodes
-        .iter()
-        .zip(&y)
-        .map(|(nd, &yt)| nd.capacitance_j_per_k * (yt - nd.initial_temperature_k))
-        .sum();
-    debug_assert_eq!(y.len(), n);
-    stats.final_temperatures_k = y;
-    observer
-        .on_finish(&stats)
-        .map_err(|source| SimError::Observer { t_s: t, source })?;
-    Ok(stats)
+    )
 }
 
 fn emit<O: Observer>(observer: &mut O, t_s: f64, kind: EventKind) -> Result<(), SimError> {

@@ -3,7 +3,9 @@
 //! extremes between steps are not missed.
 
 use crate::gear::MeshState;
-use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView, mesh_or_nan};
+use crate::sim::{
+    Event, EventKind, Grid, Observer, ObserverResult, RunStart, StepView, mesh_or_nan,
+};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeStats {
@@ -66,12 +68,12 @@ impl Observer for WindowStats {
             .iter()
             .map(|n| n.name.clone())
             .collect();
-        self.start_s = (r.t_end_s - self.window_s).max(0.0);
+        self.start_s = (r.t_end_s - self.window_s).max(r.t_start_s);
         self.min_k = vec![f64::INFINITY; n];
         self.max_k = vec![f64::NEG_INFINITY; n];
         self.integral_ks = vec![0.0; n];
         self.covered_s = 0.0;
-        if self.start_s == 0.0 {
+        if self.start_s == r.t_start_s {
             for (i, &t) in temps_k.iter().enumerate() {
                 self.see(i, t);
             }
@@ -112,19 +114,22 @@ impl Observer for WindowStats {
 
 /// Records every node's temperature at fixed times k·`interval_s` (k = 0, 1, …),
 /// from the solver's cubic interpolant. For comparisons between runs.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Samples {
     pub interval_s: f64,
     pub times_s: Vec<f64>,
     /// One row per time, one column per node, K.
     pub temps_k: Vec<Vec<f64>>,
+    grid: Grid,
 }
 
 impl Samples {
     pub fn every(interval_s: f64) -> Samples {
         Samples {
             interval_s,
-            ..Default::default()
+            times_s: vec![],
+            temps_k: vec![],
+            grid: Grid::new(interval_s),
         }
     }
 
@@ -140,17 +145,15 @@ impl Samples {
 
 impl Observer for Samples {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
-        self.times_s = vec![0.0];
+        self.grid = Grid::new(self.interval_s);
+        self.grid.start(r.t_start_s);
+        self.times_s = vec![r.t_start_s];
         self.temps_k = vec![r.temps_k.to_vec()];
         Ok(())
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        loop {
-            let t = self.times_s.len() as f64 * self.interval_s;
-            if t > step.t1_s() * (1.0 + 1e-12) {
-                break;
-            }
+        while let Some(t) = self.grid.next_due(step.t1_s()) {
             let mut row = vec![0.0; step.temps1_k().len()];
             step.temperatures_at(t, &mut row);
             self.times_s.push(t);
@@ -295,13 +298,13 @@ impl MeshStats {
 
 impl Observer for MeshStats {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
-        self.start_s = (r.t_end_s - self.window_s).max(0.0);
+        self.start_s = (r.t_end_s - self.window_s).max(r.t_start_s);
         self.pairs = r.gears.iter().map(|g| PairStats::new(&g.name)).collect();
         self.run_pairs = self.pairs.clone();
         self.temps = vec![0.0; r.temps_k.len()];
         self.last_m = r.mesh.iter().map(|m| m.backlash_exact_m).collect();
         for k in 0..self.pairs.len() {
-            self.see(k, 0.0, &r.mesh[k]);
+            self.see(k, r.t_start_s, &r.mesh[k]);
         }
         Ok(())
     }

@@ -9,12 +9,11 @@ use std::path::Path;
 
 use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use crate::gear::GearPair;
-use crate::sim::{Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan};
+use crate::sim::{Grid, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan};
 
 pub struct CsvExport {
     file: Option<AtomicFile>,
-    interval_s: f64,
-    next_row: u64,
+    grid: Grid,
     row: Vec<f64>,
     gear_values: Vec<f64>,
 }
@@ -62,8 +61,7 @@ impl CsvExport {
     ) -> Result<CsvExport, OutputError> {
         Ok(CsvExport {
             file: Some(AtomicFile::create(path, policy)?),
-            interval_s,
-            next_row: 0,
+            grid: Grid::new(interval_s),
             row: vec![],
             gear_values: vec![],
         })
@@ -105,17 +103,13 @@ impl Observer for CsvExport {
         .map_err(|e| OutputError::io(&path, e))?;
         self.row = r.temps_k.to_vec();
         self.gear_values = r.mesh.iter().flat_map(gear_values).collect();
-        self.write_row(0.0)?;
-        self.next_row = 1;
+        self.write_row(r.t_start_s)?;
+        self.grid.start(r.t_start_s);
         Ok(())
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        loop {
-            let t = self.next_row as f64 * self.interval_s;
-            if t > step.t1_s() * (1.0 + 1e-12) {
-                break;
-            }
+        while let Some(t) = self.grid.next_due(step.t1_s()) {
             let mut row = std::mem::take(&mut self.row);
             step.temperatures_at(t, &mut row);
             self.gear_values.clear();
@@ -124,7 +118,6 @@ impl Observer for CsvExport {
             }
             self.row = row;
             self.write_row(t)?;
-            self.next_row += 1;
         }
         Ok(())
     }

@@ -37,7 +37,7 @@ use super::protobuf::Encoder;
 use super::scene;
 use crate::gear::{GearPair, MeshState};
 use crate::sim::{
-    Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan,
+    Event, EventKind, Grid, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan,
 };
 use crate::thermal::{Compiled, Flows, StepSwitches, ThermalModel};
 
@@ -226,7 +226,7 @@ pub struct McapLog {
     provenance: Provenance,
     layout: Layout,
     batch: Batch,
-    next_sample: u64,
+    grid: Grid,
     temps: Vec<f64>,
     names: Names,
     scene_interval_s: Option<f64>,
@@ -425,7 +425,7 @@ impl McapLog {
             provenance,
             layout: Layout::default(),
             batch: Batch::default(),
-            next_sample: 0,
+            grid: Grid::new(1.0),
             temps: vec![],
             names: Names::default(),
             scene_interval_s: None,
@@ -889,20 +889,17 @@ impl Observer for McapLog {
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.
         self.temps = r.temps_k.to_vec();
-        let heaters_on: Vec<bool> = net
-            .heaters
-            .iter()
-            .map(|h| r.temps_k[h.sensor_node] <= h.on_k)
-            .collect();
-        let modes_active: Vec<bool> = r.model.modes.iter().map(|m| m.active(0.0)).collect();
         self.push_sample(
-            0.0,
-            r.model.environment.sunlit(0.0),
-            &heaters_on,
-            &modes_active,
+            r.t_start_s,
+            r.sunlit,
+            r.heaters_on,
+            r.modes_active,
             Some(r.mesh),
         )?;
-        self.next_sample = 1;
+        if let LogCadence::Interval(dt) = self.cadence {
+            self.grid = Grid::new(dt);
+            self.grid.start(r.t_start_s);
+        }
         let setup = move || {
             open_log_writer(
                 &path,
@@ -933,23 +930,20 @@ impl Observer for McapLog {
                     )?;
                 }
             }
-            LogCadence::Interval(dt) => loop {
-                let t = self.next_sample as f64 * dt;
-                if t > step.t1_s() * (1.0 + 1e-12) {
-                    break;
+            LogCadence::Interval(_) => {
+                while let Some(t) = self.grid.next_due(step.t1_s()) {
+                    let mut temps = std::mem::take(&mut self.temps);
+                    step.temperatures_at(t, &mut temps);
+                    self.temps = temps;
+                    self.push_sample(
+                        t,
+                        step.env1.sunlit,
+                        step.heaters_on,
+                        step.modes_active,
+                        None,
+                    )?;
                 }
-                let mut temps = std::mem::take(&mut self.temps);
-                step.temperatures_at(t, &mut temps);
-                self.temps = temps;
-                self.push_sample(
-                    t,
-                    step.env1.sunlit,
-                    step.heaters_on,
-                    step.modes_active,
-                    None,
-                )?;
-                self.next_sample += 1;
-            },
+            }
         }
         Ok(())
     }

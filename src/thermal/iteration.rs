@@ -278,6 +278,11 @@ impl IterationMatrix {
         }
     }
 
+    /// Switches an iterative solver to the sparse LU (as its fallback does).
+    pub fn turn_sparse(&mut self, compiled: &Compiled) {
+        self.inner = Inner::Sparse(Box::new(Sparse::new(compiled)));
+    }
+
     /// Evaluates the Jacobian ∂f/∂T at `temps_k`. An iterative solver that struggled
     /// (see [`LinearSolver::Iterative`]) becomes a sparse direct one here.
     pub fn set_jacobian(&mut self, compiled: &Compiled, temps_k: &[f64]) {

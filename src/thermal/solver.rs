@@ -33,6 +33,8 @@ const ERR_CONST: f64 = (-3.0 * GAMMA * GAMMA + 4.0 * GAMMA - 2.0) / (12.0 * (2.0
 /// tolerance (and never below 1e-9 K).
 const NEWTON_TOL_FRACTION: f64 = 1e-2;
 const NEWTON_MAX_ITER: usize = 12;
+/// Newton's contraction rate assumed before the first iteration.
+const INITIAL_THETA: f64 = 0.5;
 /// Re-evaluate the Jacobian when Newton contracts slower than this.
 const JACOBIAN_REFRESH_THETA: f64 = 0.02;
 
@@ -184,10 +186,15 @@ pub struct Stepper {
     start_is_last_end: bool,
     /// Step size the current factorisation was made for (NaN: none).
     lu_h: f64,
+    /// Temperatures the current Jacobian was evaluated at.
+    jac_temps_k: Vec<f64>,
     /// The Jacobian must be re-evaluated before the next step.
     jac_stale: bool,
     /// Factorisations made (for statistics).
     pub factorizations: u64,
+    /// The linear solver asked for, and the kind it gave at the start.
+    linear_choice: LinearSolver,
+    initial_linear: &'static str,
     pub data: StepData,
 }
 
@@ -197,9 +204,12 @@ impl Stepper {
     pub fn new(model: &ThermalModel, tolerance_k: f64, linear: LinearSolver) -> Stepper {
         let compiled = Compiled::new(&model.network);
         let n = compiled.n;
+        let matrix = IterationMatrix::new(&compiled, linear);
         Stepper {
             cap: compiled.capacitance_j_per_k.clone(),
-            matrix: IterationMatrix::new(&compiled, linear),
+            linear_choice: linear,
+            initial_linear: matrix.kind(),
+            matrix,
             compiled,
             f0: vec![0.0; n],
             f: vec![0.0; n],
@@ -207,11 +217,12 @@ impl Stepper {
             yg: vec![0.0; n],
             r: vec![0.0; n],
             k: vec![0.0; n],
-            theta: 0.5,
+            theta: INITIAL_THETA,
             newton_tol_k: (NEWTON_TOL_FRACTION * tolerance_k).max(1e-9),
             interpolant_tol_k: tolerance_k,
             start_is_last_end: false,
             lu_h: f64::NAN,
+            jac_temps_k: vec![0.0; n],
             jac_stale: true,
             factorizations: 0,
             data: StepData {
@@ -262,6 +273,7 @@ impl Stepper {
         // converges fast; the Jacobian only affects convergence, not the solution.
         if self.jac_stale {
             self.matrix.set_jacobian(&self.compiled, temps0_k);
+            self.jac_temps_k.copy_from_slice(temps0_k);
             self.jac_stale = false;
             self.lu_h = f64::NAN;
         }
@@ -355,6 +367,87 @@ impl Stepper {
     /// not call this after a rejected step or an event.
     pub fn continue_from_last_end(&mut self) {
         self.start_is_last_end = true;
+    }
+}
+
+/// What the stepper carries from one step to the next besides the temperatures: where
+/// its Jacobian was taken, the step its iteration matrix was factorised for, Newton's
+/// last contraction rate and, when the next step starts where the last ended, the heat
+/// flows there. A run that ends hands this on in its state, so that a run resumed from
+/// that state takes bit for bit the steps the unsplit run would have taken.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepperMemory {
+    jacobian_at_k: Option<Vec<f64>>,
+    factored_step_s: f64,
+    theta: f64,
+    last_end: Option<(Vec<f64>, Flows)>,
+    /// The linear solver in use ("dense", "sparse", "iterative"): an iterative solver
+    /// may have turned to the sparse LU.
+    linear: &'static str,
+}
+
+impl StepperMemory {
+    fn fresh(linear: &'static str) -> StepperMemory {
+        StepperMemory {
+            jacobian_at_k: None,
+            factored_step_s: f64::NAN,
+            theta: INITIAL_THETA,
+            last_end: None,
+            linear,
+        }
+    }
+}
+
+impl Stepper {
+    /// The memory of a stepper just built: what a fresh run starts from.
+    pub fn fresh_memory(&self) -> StepperMemory {
+        StepperMemory::fresh(self.initial_linear)
+    }
+
+    /// The memory to resume from (see [`StepperMemory`]).
+    pub fn memory(&self) -> StepperMemory {
+        StepperMemory {
+            jacobian_at_k: (!self.jac_stale).then(|| self.jac_temps_k.clone()),
+            factored_step_s: if self.jac_stale { f64::NAN } else { self.lu_h },
+            theta: self.theta,
+            last_end: self
+                .start_is_last_end
+                .then(|| (self.f.clone(), self.data.flows[2].clone())),
+            linear: self.matrix.kind(),
+        }
+    }
+
+    /// Puts the stepper in the state `m` describes: the Jacobian evaluated again at the
+    /// same temperatures and factorised for the same step, which gives the same bits.
+    pub fn restore(&mut self, m: &StepperMemory) {
+        if m.linear != self.matrix.kind() {
+            if m.linear == "sparse" {
+                self.matrix.turn_sparse(&self.compiled);
+            } else {
+                self.matrix = IterationMatrix::new(&self.compiled, self.linear_choice);
+            }
+        }
+        self.theta = m.theta;
+        self.lu_h = f64::NAN;
+        self.jac_stale = true;
+        if let Some(temps) = &m.jacobian_at_k {
+            self.matrix.set_jacobian(&self.compiled, temps);
+            self.jac_temps_k.copy_from_slice(temps);
+            self.jac_stale = false;
+            if m.factored_step_s.is_finite() {
+                if self.matrix.factor(&self.cap, D * m.factored_step_s).is_ok() {
+                    self.lu_h = m.factored_step_s;
+                } else {
+                    self.jac_stale = true;
+                }
+            }
+        }
+        self.start_is_last_end = false;
+        if let Some((f, flows)) = &m.last_end {
+            self.f.copy_from_slice(f);
+            self.data.flows[2].clone_from(flows);
+            self.start_is_last_end = true;
+        }
     }
 }
 

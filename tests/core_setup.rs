@@ -1,0 +1,241 @@
+//! The core as a library for many runs (issue 9): a setup built once, runs from an
+//! explicit state. A run split at any step and resumed from its end state gives the
+//! unsplit run's numbers bit for bit (on the same setup or a new one); a heater inside
+//! its hysteresis band can start on; the stepping loop does not allocate.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+
+use orbitlash::io::scenario_toml;
+use orbitlash::scenario::Scenario;
+use orbitlash::sim::{
+    Event, EventKind, Observer, ObserverResult, RunStats, Setup, State, StepView, Stop,
+};
+
+/// Counts the allocations of the current thread (tests run on several), to show the
+/// stepping loop makes none.
+struct Counting;
+thread_local! {
+    static ALLOCATIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+fn allocations() -> u64 {
+    ALLOCATIONS.with(|c| c.get())
+}
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        // (a thread-local without destructor: safe to touch while allocating)
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+}
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Every accepted step's end time and temperatures, bit for bit.
+#[derive(Default)]
+struct Record(Vec<(f64, Vec<f64>)>);
+
+impl Observer for Record {
+    fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
+        self.0.push((s.t1_s(), s.temps1_k().to_vec()));
+        Ok(())
+    }
+}
+
+fn scenario(file: &str) -> Scenario {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(file);
+    scenario_toml::load_file(&path).unwrap().0
+}
+
+fn unsplit(sc: &Scenario, t_end: f64) -> (Record, State) {
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut state = setup.initial_state();
+    let mut rec = Record::default();
+    setup
+        .run(&mut state, t_end, &mut rec, Stop::default())
+        .unwrap();
+    (rec, state)
+}
+
+/// Runs to the end of step `k` of the unsplit run, then resumes (on the same setup, or
+/// on a new one) to the end; the steps must be the unsplit run's, bit for bit.
+fn split_at(sc: &Scenario, t_end: f64, whole: &Record, k: usize, new_setup: bool) {
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut state = setup.initial_state();
+    let mut first = Record::default();
+    let stop = Stop {
+        pause_after_s: Some(whole.0[k].0),
+        ..Stop::default()
+    };
+    let stats = setup.run(&mut state, t_end, &mut first, stop).unwrap();
+    assert!(stats.paused);
+    assert_eq!(first.0.len(), k + 1);
+    let mut second = Record::default();
+    if new_setup {
+        let mut other = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+        other
+            .run(&mut state, t_end, &mut second, Stop::default())
+            .unwrap();
+    } else {
+        setup
+            .run(&mut state, t_end, &mut second, Stop::default())
+            .unwrap();
+    }
+    let joined: Vec<_> = first.0.into_iter().chain(second.0).collect();
+    assert_eq!(joined.len(), whole.0.len(), "split at step {k}: step count");
+    for (i, (a, b)) in joined.iter().zip(&whole.0).enumerate() {
+        assert!(
+            a.0.to_bits() == b.0.to_bits() && a.1 == b.1,
+            "split at step {k} (new setup: {new_setup}): step {i} differs: t {} vs {}",
+            a.0,
+            b.0
+        );
+    }
+}
+
+#[test]
+fn core_split_runs_are_bit_identical() {
+    // the reference (eclipses, load kinks) and the 90-day profile (heater, modes,
+    // profile tables, albedo and IR), over stretches with every kind of event
+    for (file, t_end) in [
+        ("reference-hinge.toml", 3.0 * 5676.978),
+        ("hinge-90-day-drift.toml", 3.0 * 86400.0),
+    ] {
+        let sc = scenario(file);
+        let (whole, end) = unsplit(&sc, t_end);
+        let n = whole.0.len();
+        for k in [0, 1, 7, n / 3, n / 2, n - 2] {
+            split_at(&sc, t_end, &whole, k, false);
+            split_at(&sc, t_end, &whole, k, true);
+        }
+        // the end state resumes the same way as one run further
+        let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+        let mut a = end.clone();
+        let mut b = end;
+        b.forget_solver();
+        let sa = setup
+            .run(&mut a, t_end + 4000.0, &mut (), Stop::default())
+            .unwrap();
+        let sb = setup
+            .run(&mut b, t_end + 4000.0, &mut (), Stop::default())
+            .unwrap();
+        assert!(sa.steps > 0 && sb.steps > 0);
+        // a resumed state and a fresh one at the same temperatures agree to the
+        // tolerance (not bits: the solver's memory differs)
+        for (x, y) in a.temperatures_k.iter().zip(&b.temperatures_k) {
+            assert!((x - y).abs() < 0.01, "{file}: {x} vs {y}");
+        }
+    }
+}
+
+#[test]
+fn core_energy_balance_is_measured_from_the_start_state() {
+    let sc = scenario("hinge-90-day-drift.toml");
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut state = setup.initial_state();
+    let first: RunStats = setup
+        .run(&mut state, 86400.0, &mut (), Stop::default())
+        .unwrap();
+    let second = setup
+        .run(&mut state, 2.0 * 86400.0, &mut (), Stop::default())
+        .unwrap();
+    for s in [&first, &second] {
+        assert!(s.energy.relative_error() < 1e-5, "{:?}", s.energy);
+    }
+    assert_eq!(second.t_start_s, 86400.0);
+    assert!(second.energy.stored_j.abs() < 0.1 * second.energy.absorbed_j);
+}
+
+#[test]
+fn core_a_heater_inside_its_band_can_start_on() {
+    // The 90-day profile's housing heater switches on at −10 °C and off at −5 °C. Start
+    // the housing inside the band: derived from the temperature the heater is off; set
+    // on, it heats from t = 0 until the housing reaches −5 °C, and the energy balance
+    // shows exactly its power times that time more dissipated (the motor's schedule
+    // does not depend on temperatures).
+    let sc = scenario("hinge-90-day-drift.toml");
+    let net = &sc.thermal.network;
+    let heater = &net.heaters[0];
+    let mut temps = net.initial_temperatures_k();
+    temps[heater.sensor_node] = 0.5 * (heater.on_k + heater.off_k);
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let derived = setup.state_at(0.0, temps.clone());
+    assert!(!derived.heaters_on[0], "inside the band, off by default");
+    let t_end = 600.0;
+    #[derive(Default)]
+    struct HeaterEvents(Vec<(f64, EventKind)>);
+    impl Observer for HeaterEvents {
+        fn on_event(&mut self, e: &Event) -> ObserverResult {
+            if matches!(e.kind, EventKind::HeaterOn(_) | EventKind::HeaterOff(_)) {
+                self.0.push((e.t_s, e.kind));
+            }
+            Ok(())
+        }
+    }
+    let run = |on: bool, setup: &mut Setup<'_>| {
+        let mut s = setup.state_at(0.0, temps.clone());
+        s.heaters_on[0] = on;
+        let mut ev = HeaterEvents::default();
+        let stats = setup.run(&mut s, t_end, &mut ev, Stop::default()).unwrap();
+        (stats.energy.dissipated_j, ev.0)
+    };
+    let (off, events_off) = run(false, &mut setup);
+    let (on, events_on) = run(true, &mut setup);
+    assert!(events_off.is_empty(), "{events_off:?}");
+    let (t_off, kind) = events_on[0];
+    assert_eq!(kind, EventKind::HeaterOff(0));
+    assert!(t_off > 0.0);
+    assert!(
+        (on - off - heater.power_w * t_off).abs() < 1e-6 * on,
+        "heater on until {t_off} s: {on} J vs {off} J dissipated"
+    );
+    // and a run split while it is on and inside the band resumes identically
+    let mut s = setup.state_at(0.0, temps.clone());
+    s.heaters_on[0] = true;
+    let mut whole = Record::default();
+    let mut a = s.clone();
+    setup
+        .run(&mut a, t_end, &mut whole, Stop::default())
+        .unwrap();
+    let mut first = Record::default();
+    let mut b = s;
+    let stop = Stop {
+        pause_after_s: Some(whole.0[3].0),
+        ..Stop::default()
+    };
+    setup.run(&mut b, t_end, &mut first, stop).unwrap();
+    assert!(b.heaters_on[0]);
+    let mut second = Record::default();
+    setup
+        .run(&mut b, t_end, &mut second, Stop::default())
+        .unwrap();
+    let joined: Vec<_> = first.0.into_iter().chain(second.0).collect();
+    assert_eq!(joined, whole.0);
+}
+
+#[test]
+fn core_the_stepping_loop_does_not_allocate() {
+    let sc = scenario("hinge-90-day-drift.toml");
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let count = |setup: &mut Setup<'_>, days: f64| {
+        let mut state = setup.initial_state();
+        let before = allocations();
+        let stats = setup
+            .run(&mut state, days * 86400.0, &mut (), Stop::default())
+            .unwrap();
+        (allocations() - before, stats.steps)
+    };
+    count(&mut setup, 1.0); // the first run sizes the workspace's buffers
+    let (short, short_steps) = count(&mut setup, 1.0);
+    let (long, long_steps) = count(&mut setup, 5.0);
+    assert!(long_steps > 4 * short_steps);
+    // a run allocates its start and end (the state, the statistics), never per step
+    assert_eq!(
+        long, short,
+        "{short} allocations for {short_steps} steps, {long} for {long_steps}"
+    );
+}
