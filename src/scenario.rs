@@ -209,7 +209,8 @@ impl Scenario {
 
     /// Orbital period, s.
     pub fn period_s(&self) -> f64 {
-        self.thermal.environment.orbit.period_s()
+        use crate::orbit::EnvironmentModel;
+        self.thermal.environment.mean_period_s()
     }
 
     /// The same scenario run for `orbits` orbits; refused beyond [`MAX_DURATION_S`].

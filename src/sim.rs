@@ -8,7 +8,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::gear::{GearPair, MeshState};
-use crate::orbit::EnvState;
+use crate::orbit::{EnvState, EnvironmentModel, LoadKink};
 use crate::thermal::iteration::LinearSolver;
 use crate::thermal::solver::{StepData, StepFailure, Stepper, StepperMemory, W0, W1};
 use crate::thermal::{StepSwitches, ThermalModel};
@@ -488,7 +488,7 @@ pub struct Setup<'a> {
     settings: SolverSettings,
     /// Every table point and mode edge, sorted.
     breakpoints: Vec<f64>,
-    kinks: Vec<f64>,
+    kinks: Vec<LoadKink>,
     stepper: Stepper,
     mesh: Vec<MeshState>,
     id: u64,
@@ -508,7 +508,7 @@ impl<'a> Setup<'a> {
             gears,
             settings: settings.clone(),
             breakpoints: model.breakpoints_s(),
-            kinks: model.load_kink_angles_rad(),
+            kinks: model.load_kinks(),
             stepper: Stepper::new(model, settings.tolerance_k, settings.linear),
             mesh: gears
                 .iter()
@@ -541,7 +541,7 @@ impl<'a> Setup<'a> {
             .collect();
         // Sunlit or eclipsed between shadow events: decided just after t (before the
         // next crossing) and toggled at every crossing the solver lands on.
-        let probe = env.next_shadow_crossing(t_s, t_s + env.orbit.period_s());
+        let probe = env.next_shadow_crossing(t_s, t_s + env.mean_period_s());
         let sunlit = env.sunlit(probe.map_or(t_s, |(ts, _)| t_s + 0.5 * (ts - t_s).min(1.0)));
         State {
             t_s,
@@ -553,11 +553,7 @@ impl<'a> Setup<'a> {
     }
 
     fn next_kink(&self, t: f64) -> f64 {
-        let orbit = &self.model.environment.orbit;
-        self.kinks
-            .iter()
-            .map(|&a| orbit.next_angle_mod_pi_s(t, a))
-            .fold(f64::INFINITY, f64::min)
+        self.model.environment.next_load_kink(t, &self.kinks)
     }
 
     /// Advances `state` to `t_end_s` (landing on it), or until `stop` says. Observers
@@ -666,12 +662,7 @@ impl<'a> Setup<'a> {
         let mesh = &mut self.mesh;
         let breakpoints = &self.breakpoints;
         let kinks = &self.kinks;
-        let next_kink = |t: f64| {
-            kinks
-                .iter()
-                .map(|&a| env.orbit.next_angle_mod_pi_s(t, a))
-                .fold(f64::INFINITY, f64::min)
-        };
+        let next_kink = |t: f64| env.next_load_kink(t, kinks);
         let mut t = t_start;
         let tol = settings.tolerance_k;
         let mut result: Result<(), SimError> = Ok(());

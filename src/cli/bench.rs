@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::Args;
+use orbitlash::orbit::EnvironmentModel;
 
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::OutputPolicy;
@@ -85,7 +86,7 @@ fn time_per_step(
     };
     let stop = AtomicBool::new(false);
     let start = Instant::now();
-    let period = model.environment.orbit.period_s();
+    let period = model.environment.mean_period_s();
     let stats = simulate(
         model,
         &[],

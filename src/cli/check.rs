@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
+use orbitlash::orbit::EnvironmentModel;
 use orbitlash::thermal::analysis::time_constants;
 
 use super::{load, print_out};
@@ -20,7 +21,6 @@ pub fn check(a: CheckArgs) -> Result<()> {
     let loaded = load(Some(&a.scenario))?;
     let sc = &loaded.scenario;
     let env = &sc.thermal.environment;
-    let orbit = &env.orbit;
     let net = &sc.thermal.network;
     let warnings = sc.warnings();
     outln!(
@@ -39,46 +39,11 @@ pub fn check(a: CheckArgs) -> Result<()> {
     if !sc.description.is_empty() {
         outln!(o, "  {}", sc.description);
     }
-    let period = orbit.period_s();
+    let period = env.mean_period_s();
     outln!(o, "\norbit");
-    outln!(
-        o,
-        "  altitude                {:.1} km",
-        orbit.altitude_m / 1e3
-    );
-    outln!(
-        o,
-        "  period                  {period:.3} s ({:.2} min)",
-        period / 60.0
-    );
-    outln!(
-        o,
-        "  earth view factor       {:.6}",
-        orbit.earth_view_factor()
-    );
-    outln!(
-        o,
-        "  eclipses stop at |beta| {:.3}°",
-        orbit.critical_beta_rad().to_degrees()
-    );
-    let (b_lo, b_hi) = env.beta_rad.range();
-    let mut betas = vec![b_lo];
-    if b_hi != b_lo {
-        betas.push(b_hi);
+    for line in env.report() {
+        outln!(o, "{line}");
     }
-    for b in betas {
-        let f = orbit.eclipse_fraction(b);
-        outln!(
-            o,
-            "  beta {:7.3}°: eclipse half-angle {:.3}°, fraction {:.5}, duration {:.1} s",
-            b.to_degrees(),
-            orbit.eclipse_half_angle_rad(b).to_degrees(),
-            f,
-            f * period
-        );
-    }
-    let (s_lo, s_hi) = env.solar_flux_w_per_m2.range();
-    outln!(o, "  solar flux              {s_lo} … {s_hi} W/m²");
 
     outln!(o, "\nnetwork");
     outln!(

@@ -12,6 +12,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::{OutputError, OutputPolicy, available_bytes, check_output, resolved};
+use orbitlash::orbit::EnvironmentModel;
 use orbitlash::scenario::Scenario;
 use orbitlash::sim::{
     MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run, simulate,
@@ -391,8 +392,8 @@ fn orbit_phase(sc: &Scenario, t: f64) -> String {
     let env = &sc.thermal.environment;
     format!(
         "t = {t:.1} s, orbit {}, θ = {:.1}° from noon, {}",
-        env.orbit.orbit_number(t),
-        env.orbit.orbit_angle_rad(t).to_degrees().rem_euclid(360.0),
+        env.orbit_number(t),
+        env.orbit_phase_deg(t),
         if env.sunlit(t) { "sunlit" } else { "eclipse" }
     )
 }
@@ -494,7 +495,7 @@ fn format_summary(
 ) -> String {
     let mut o = String::new();
     let env = &model.environment;
-    let (b_lo, b_hi) = env.beta_rad.range();
+    let (b_lo, b_hi) = env.beta_range_rad();
     outln!(
         o,
         "orbit: period {period_s:.3} s, beta {}, eclipse fraction {:.5} (predicted at t = 0), {:.5} (over the run)",
@@ -503,10 +504,11 @@ fn format_summary(
         } else {
             format!("{:.2}° … {:.2}°", b_lo.to_degrees(), b_hi.to_degrees())
         },
-        env.orbit.eclipse_fraction(env.beta_rad.at(0.0)),
-        stats.eclipse_time_s / stats.t_end_s
+        env.eclipse_fraction_at(stats.t_start_s),
+        stats.eclipse_time_s / (stats.t_end_s - stats.t_start_s)
     );
-    let last_orbit = (window.window_start_s() / period_s).round() as u64 + 1;
+    // the orbit the window covers (its start rounds to an orbit boundary)
+    let last_orbit = env.orbit_number(window.window_start_s() + 0.5 * period_s);
     if window.window_start_s() == 0.0 && stats.t_end_s > 1.5 * period_s {
         outln!(
             o,

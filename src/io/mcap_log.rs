@@ -36,6 +36,7 @@ use super::log_schema::{
 use super::protobuf::Encoder;
 use super::scene;
 use crate::gear::{GearPair, MeshState};
+use crate::orbit::EnvironmentModel;
 use crate::sim::{
     Event, EventKind, Grid, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan,
 };
@@ -326,14 +327,14 @@ impl LogWriter {
         self.write_encoded(self.ch.heat, t_s)?;
 
         // Orbit.
-        let orbit = &self.model.environment.orbit;
         self.enc.clear();
         self.enc
-            .double(1, env.orbit_angle_rad.to_degrees().rem_euclid(360.0));
+            .double(1, self.model.environment.orbit_phase_deg(t_s));
         self.enc.double(2, env.beta_rad.to_degrees());
         self.enc.double(3, env.solar_flux_w_per_m2);
         self.enc.double(4, if sunlit { 1.0 } else { 0.0 });
-        self.enc.double(5, orbit.orbit_number(t_s) as f64);
+        self.enc
+            .double(5, self.model.environment.orbit_number(t_s) as f64);
         self.write_encoded(self.ch.orbit, t_s)?;
 
         // Gear pairs.

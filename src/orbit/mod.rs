@@ -172,68 +172,100 @@ pub struct EnvState {
     pub sunlit: bool,
 }
 
-impl Environment {
-    /// The environment at `t_s`. `sunlit` is decided by the caller's `phase_time_s`
-    /// (the midpoint of a step that the solver made land on eclipse boundaries), so
-    /// that round-off at a boundary cannot flip it inside a step.
-    pub fn state(&self, t_s: f64, phase_time_s: f64) -> EnvState {
-        self.state_with(t_s, self.sunlit(phase_time_s))
-    }
+/// Where a load's slope jumps as the spacecraft goes round: the solver lands its steps
+/// there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LoadKink {
+    /// The terminator (orbit angle θ = 90° or 270°): where albedo, and Sun on zenith or
+    /// nadir faces, start or stop.
+    Terminator,
+    /// Orbit noon and midnight (θ = 0° or 180°): where Sun on ram or wake faces starts
+    /// or stops.
+    NoonMidnight,
+}
 
-    /// The environment at `t_s` with the sunlit flag already decided.
-    pub fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
-        EnvState {
-            t_s,
-            orbit_angle_rad: self.orbit.orbit_angle_rad(t_s),
-            beta_rad: self.beta_rad.at(t_s),
-            solar_flux_w_per_m2: self.solar_flux_w_per_m2.at(t_s),
-            sunlit,
-        }
-    }
-
+/// What the thermal model needs from where the spacecraft is, at any time: the sunlit
+/// state, the Sun and Earth geometry of the loads, the next shadow crossing and load
+/// kink, the orbit count and phase. The stepping loop, the summaries and the logs use
+/// only this; the circular orbit ([`Environment`]) is one implementation, real orbits
+/// (TLE/SGP4) will be another, so nothing outside `orbit/` may assume a uniform orbit
+/// rate or a constant period.
+pub trait EnvironmentModel {
+    /// The environment at `t_s` with the sunlit flag decided by the caller (the solver
+    /// decides it for a whole step, between shadow crossings it lands on).
+    fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState;
     /// Whether the spacecraft is in sunlight at `t_s`.
-    pub fn sunlit(&self, t_s: f64) -> bool {
-        self.shadow(t_s) >= 0.0
-    }
+    fn sunlit(&self, t_s: f64) -> bool;
+    /// The first eclipse entry or exit strictly after `t_s` and before `until_s`:
+    /// `(time, entering_eclipse)`.
+    fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)>;
+    /// The first time strictly after `t_s` at which a load of one of `kinks` changes
+    /// its slope (∞ when none).
+    fn next_load_kink(&self, t_s: f64, kinks: &[LoadKink]) -> f64;
+    /// Orbit number (1-based) at `t_s`.
+    fn orbit_number(&self, t_s: f64) -> u64;
+    /// Orbit angle from orbit noon at `t_s`, degrees in [0, 360).
+    fn orbit_phase_deg(&self, t_s: f64) -> f64;
+    /// Mean orbital period, s: the length of "an orbit" in reports and `--orbits`.
+    fn mean_period_s(&self) -> f64;
+    /// Heat absorbed from direct Sun, W, by an area `absorptivity_area_m2` (α·A).
+    fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64;
+    /// Earth albedo on a nadir face, W.
+    fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64;
+    /// Earth infrared on a nadir face, W.
+    fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64;
+}
 
+impl Environment {
     fn shadow(&self, t_s: f64) -> f64 {
         self.orbit
             .shadow_function(self.orbit.orbit_angle_rad(t_s), self.beta_rad.at(t_s))
     }
 
-    /// The first eclipse entry or exit strictly after `t_s` and before `until_s`,
-    /// found by scanning the shadow function in 1° steps of orbit angle and refining
-    /// by bisection to round-off. Returns `(time, entering_eclipse)`.
-    pub fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
-        if let Profile::Constant(beta) = self.beta_rad {
-            return self.next_shadow_crossing_constant_beta(beta, t_s, until_s);
+    /// The orbit and its eclipses as `orbitlash check` reports them.
+    pub fn report(&self) -> Vec<String> {
+        let orbit = &self.orbit;
+        let period = orbit.period_s();
+        let mut o = vec![
+            format!("  altitude                {:.1} km", orbit.altitude_m / 1e3),
+            format!(
+                "  period                  {period:.3} s ({:.2} min)",
+                period / 60.0
+            ),
+            format!("  earth view factor       {:.6}", orbit.earth_view_factor()),
+            format!(
+                "  eclipses stop at |beta| {:.3}°",
+                orbit.critical_beta_rad().to_degrees()
+            ),
+        ];
+        let (b_lo, b_hi) = self.beta_rad.range();
+        let mut betas = vec![b_lo];
+        if b_hi != b_lo {
+            betas.push(b_hi);
         }
-        let dt = self.orbit.period_s() / 360.0;
-        let mut a = t_s + 1e-9 * dt;
-        let mut ga = self.shadow(a);
-        while a < until_s {
-            let b = (a + dt).min(until_s);
-            let gb = self.shadow(b);
-            if (ga >= 0.0) != (gb >= 0.0) {
-                let entering = ga >= 0.0;
-                let (mut lo, mut hi) = (a, b);
-                for _ in 0..200 {
-                    let mid = 0.5 * (lo + hi);
-                    if mid <= lo || mid >= hi {
-                        break;
-                    }
-                    if (self.shadow(mid) >= 0.0) == entering {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                return Some((hi, entering));
-            }
-            a = b;
-            ga = gb;
+        for b in betas {
+            let f = orbit.eclipse_fraction(b);
+            o.push(format!(
+                "  beta {:7.3}°: eclipse half-angle {:.3}°, fraction {:.5}, duration {:.1} s",
+                b.to_degrees(),
+                orbit.eclipse_half_angle_rad(b).to_degrees(),
+                f,
+                f * period
+            ));
         }
-        None
+        let (s_lo, s_hi) = self.solar_flux_w_per_m2.range();
+        o.push(format!("  solar flux              {s_lo} … {s_hi} W/m²"));
+        o
+    }
+
+    /// The fraction of the orbit in eclipse at `t_s` (the β of that time), for reports.
+    pub fn eclipse_fraction_at(&self, t_s: f64) -> f64 {
+        self.orbit.eclipse_fraction(self.beta_rad.at(t_s))
+    }
+
+    /// The β range over the mission, rad.
+    pub fn beta_range_rad(&self) -> (f64, f64) {
+        self.beta_rad.range()
     }
 
     /// Closed form for constant β: entry at θ = π − φ, exit at θ = π + φ (mod 2π).
@@ -265,9 +297,88 @@ impl Environment {
         }
         None
     }
+}
 
-    /// Heat absorbed from direct Sun, W, by an area `absorptivity_area_m2` (α·A).
-    pub fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
+/// The circular orbit about a spherical Earth, with β and solar flux along a mission
+/// profile.
+impl EnvironmentModel for Environment {
+    fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
+        EnvState {
+            t_s,
+            orbit_angle_rad: self.orbit.orbit_angle_rad(t_s),
+            beta_rad: self.beta_rad.at(t_s),
+            solar_flux_w_per_m2: self.solar_flux_w_per_m2.at(t_s),
+            sunlit,
+        }
+    }
+
+    fn sunlit(&self, t_s: f64) -> bool {
+        self.shadow(t_s) >= 0.0
+    }
+
+    /// Found by the closed form when β is constant, else by scanning the shadow
+    /// function in 1° steps of orbit angle and refining by bisection to round-off.
+    fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
+        if let Profile::Constant(beta) = self.beta_rad {
+            return self.next_shadow_crossing_constant_beta(beta, t_s, until_s);
+        }
+        let dt = self.orbit.period_s() / 360.0;
+        let mut a = t_s + 1e-9 * dt;
+        let mut ga = self.shadow(a);
+        while a < until_s {
+            let b = (a + dt).min(until_s);
+            let gb = self.shadow(b);
+            if (ga >= 0.0) != (gb >= 0.0) {
+                let entering = ga >= 0.0;
+                let (mut lo, mut hi) = (a, b);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        break;
+                    }
+                    if (self.shadow(mid) >= 0.0) == entering {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                return Some((hi, entering));
+            }
+            a = b;
+            ga = gb;
+        }
+        None
+    }
+
+    fn next_load_kink(&self, t_s: f64, kinks: &[LoadKink]) -> f64 {
+        kinks
+            .iter()
+            .map(|k| {
+                let angle = match k {
+                    LoadKink::Terminator => std::f64::consts::FRAC_PI_2,
+                    LoadKink::NoonMidnight => 0.0,
+                };
+                self.orbit.next_angle_mod_pi_s(t_s, angle)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn orbit_number(&self, t_s: f64) -> u64 {
+        self.orbit.orbit_number(t_s)
+    }
+
+    fn orbit_phase_deg(&self, t_s: f64) -> f64 {
+        self.orbit
+            .orbit_angle_rad(t_s)
+            .to_degrees()
+            .rem_euclid(360.0)
+    }
+
+    fn mean_period_s(&self) -> f64 {
+        self.orbit.period_s()
+    }
+
+    fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
         if !s.sunlit {
             return 0.0;
         }
@@ -278,11 +389,10 @@ impl Environment {
         absorptivity_area_m2 * s.solar_flux_w_per_m2 * factor
     }
 
-    /// Earth albedo on a nadir face, W: α·A · S · a · F · max(0, cos θ cos β).
-    /// Not inlined, so that its trigonometry is not hoisted into load loops that
-    /// have no albedo load.
+    /// α·A · S · a · F · max(0, cos θ cos β). Not inlined, so that its trigonometry is
+    /// not hoisted into load loops that have no albedo load.
     #[inline(never)]
-    pub fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64 {
+    fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64 {
         absorptivity_area_m2
             * s.solar_flux_w_per_m2
             * self.albedo
@@ -290,8 +400,8 @@ impl Environment {
             * (s.orbit_angle_rad.cos() * s.beta_rad.cos()).max(0.0)
     }
 
-    /// Earth infrared on a nadir face, W: ε·A · q_IR · F.
-    pub fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64 {
+    /// ε·A · q_IR · F.
+    fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64 {
         emissivity_area_m2 * self.earth_ir_w_per_m2 * view_factor
     }
 }
@@ -300,6 +410,7 @@ impl Environment {
 mod tests {
     use super::*;
     use crate::constants::*;
+    use crate::orbit::EnvironmentModel;
     use std::f64::consts::FRAC_PI_2;
 
     fn reference() -> Environment {

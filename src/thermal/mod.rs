@@ -13,7 +13,7 @@ pub mod solver;
 pub mod synthetic;
 
 use crate::constants::STEFAN_BOLTZMANN_W_PER_M2_K4;
-use crate::orbit::{EnvState, Environment, Incidence, Profile};
+use crate::orbit::{EnvState, Environment, EnvironmentModel, Incidence, LoadKink, Profile};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct DiffusionNode {
@@ -143,10 +143,10 @@ impl Network {
 }
 
 impl ThermalModel {
-    /// Orbit angles (mod π) where a load's slope jumps: the terminator (θ = π/2 mod π)
-    /// for albedo and for Sun on zenith or nadir faces, θ = 0 mod π for ram and wake
-    /// faces. The solver lands steps on them.
-    pub fn load_kink_angles_rad(&self) -> Vec<f64> {
+    /// Where a load's slope jumps: the terminator for albedo and for Sun on zenith or
+    /// nadir faces, orbit noon and midnight for ram and wake faces. The solver lands
+    /// steps on them.
+    pub fn load_kinks(&self) -> Vec<LoadKink> {
         let mut v = Vec::new();
         for l in &self.network.loads {
             let a = match &l.kind {
@@ -154,11 +154,11 @@ impl ThermalModel {
                 | LoadKind::Sun {
                     incidence: Incidence::Zenith | Incidence::Nadir,
                     ..
-                } => std::f64::consts::FRAC_PI_2,
+                } => LoadKink::Terminator,
                 LoadKind::Sun {
                     incidence: Incidence::Ram | Incidence::Wake,
                     ..
-                } => 0.0,
+                } => LoadKink::NoonMidnight,
                 _ => continue,
             };
             if !v.contains(&a) {
