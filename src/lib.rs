@@ -21,6 +21,7 @@ pub mod io;
 pub mod orbit;
 pub mod scenario;
 pub mod sim;
+pub mod spec;
 pub mod summary;
 pub mod thermal;
 pub mod units;

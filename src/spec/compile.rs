@@ -1,0 +1,1404 @@
+//! Spec → validated numeric model. Every check of a scenario lives here (and in the
+//! constructors it calls), so that a scenario built from TOML, from `--set` or from a
+//! program meets the same invariants with the same error text.
+
+use std::collections::HashMap;
+use std::fmt;
+
+use super::*;
+use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
+use crate::gear::disc::{BoreFit, DiscMaterial};
+use crate::gear::involute::{inv, shifted_tooth_thickness};
+use crate::gear::strain::StrainLaw;
+use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
+use crate::orbit::{Environment, Incidence, Orbit, Profile};
+use crate::scenario::{
+    DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, RunControl,
+    Scenario, Sensor, SensorTarget,
+};
+use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K, SolverSettings};
+use crate::thermal::iteration::{
+    DENSE_MAX_NODES, LinearSolver, SPARSE_MAX_FLOPS, direct_fill_estimate,
+};
+use crate::thermal::{
+    BoundaryNode, Conductor, DiffusionNode, Heater, Load, LoadKind, Mode, Network, NodeRef,
+    Radiator, ThermalModel, When,
+};
+use crate::units::{SECONDS_PER_DAY, num};
+
+/// A spec that does not make a valid model: the key path and what is wrong.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("`{key}`: {message}")]
+pub struct SpecError {
+    pub key: KeyPath,
+    pub message: String,
+}
+
+/// One step of a key path: a key, or an index into an array.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Seg {
+    K(&'static str),
+    I(usize),
+}
+
+/// A key path into a scenario, e.g. `node[2].capacitance_j_per_k`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyPath(pub Vec<Seg>);
+
+impl KeyPath {
+    pub fn new(k: &'static str) -> KeyPath {
+        KeyPath(vec![Seg::K(k)])
+    }
+    pub fn at(&self, i: usize) -> KeyPath {
+        let mut p = self.clone();
+        p.0.push(Seg::I(i));
+        p
+    }
+    pub fn key(&self, k: &'static str) -> KeyPath {
+        let mut p = self.clone();
+        p.0.push(Seg::K(k));
+        p
+    }
+}
+
+impl fmt::Display for KeyPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (n, s) in self.0.iter().enumerate() {
+            match s {
+                Seg::K(k) if n == 0 => write!(f, "{k}")?,
+                Seg::K(k) => write!(f, ".{k}")?,
+                Seg::I(i) => write!(f, "[{i}]")?,
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The checks, each naming the key path it checks.
+struct Cx;
+
+impl Cx {
+    /// An error at `path`.
+    fn err(&self, path: &KeyPath, message: impl Into<String>) -> SpecError {
+        SpecError {
+            key: path.clone(),
+            message: message.into(),
+        }
+    }
+
+    fn finite(&self, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be a finite number (got {})", num(v))))
+        }
+    }
+
+    fn positive(&self, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        self.finite(path, v)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be > 0 (got {})", num(v))))
+        }
+    }
+
+    /// A value > 0 and ≤ `hi` (a physically sensible upper bound, named in the error).
+    fn positive_up_to(
+        &self,
+        path: &KeyPath,
+        v: f64,
+        hi: f64,
+        unit: &str,
+    ) -> Result<f64, SpecError> {
+        self.positive(path, v)?;
+        if v <= hi {
+            Ok(v)
+        } else {
+            Err(self.err(
+                path,
+                format!("must be at most {} {unit} (got {})", num(hi), num(v)),
+            ))
+        }
+    }
+
+    /// A finite value ≥ `lo` (a physically sensible lower bound, named in the error).
+    fn at_least(&self, path: &KeyPath, v: f64, lo: f64, unit: &str) -> Result<f64, SpecError> {
+        self.finite(path, v)?;
+        if v >= lo {
+            Ok(v)
+        } else {
+            Err(self.err(
+                path,
+                format!("must be at least {} {unit} (got {})", num(lo), num(v)),
+            ))
+        }
+    }
+
+    fn non_negative(&self, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        self.finite(path, v)?;
+        if v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.err(path, format!("must be ≥ 0 (got {})", num(v))))
+        }
+    }
+
+    fn within(
+        &self,
+        path: &KeyPath,
+        v: f64,
+        lo: f64,
+        hi: f64,
+        what: &str,
+    ) -> Result<f64, SpecError> {
+        self.finite(path, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(v)
+        } else {
+            Err(self.err(
+                path,
+                format!(
+                    "{what} must be within {} … {} (got {})",
+                    num(lo),
+                    num(hi),
+                    num(v)
+                ),
+            ))
+        }
+    }
+
+    fn temperature(&self, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        self.finite(path, v)?;
+        if v > 0.0 && v < 5000.0 {
+            Ok(v)
+        } else {
+            Err(self.err(
+                path,
+                format!("is a temperature in kelvin and must be within 0 … 5000 K (got {v}; °C values need + 273.15)"),
+            ))
+        }
+    }
+
+    fn profile(
+        &self,
+        path: &KeyPath,
+        raw: ProfileSpec,
+        check: &dyn Fn(&KeyPath, f64) -> Result<f64, SpecError>,
+    ) -> Result<Profile, SpecError> {
+        match raw {
+            ProfileSpec::Constant(v) => Ok(Profile::Constant(check(path, v)?)),
+            ProfileSpec::Table(t) => {
+                let (time_s, tkey) = match (t.time_s, t.time_days) {
+                    (Some(s), None) => (s, "time_s"),
+                    (None, Some(d)) => (
+                        d.into_iter().map(|x| x * SECONDS_PER_DAY).collect(),
+                        "time_days",
+                    ),
+                    _ => {
+                        return Err(
+                            self.err(path, "a table needs exactly one of `time_s` or `time_days`")
+                        );
+                    }
+                };
+                let tpath = path.key(tkey);
+                if time_s.is_empty() {
+                    return Err(self.err(&tpath, "must not be empty"));
+                }
+                if time_s.len() != t.value.len() {
+                    return Err(self.err(
+                        &path.key("value"),
+                        format!(
+                            "has {} entries but `{tkey}` has {}",
+                            t.value.len(),
+                            time_s.len()
+                        ),
+                    ));
+                }
+                for (i, w) in time_s.windows(2).enumerate() {
+                    self.finite(&tpath.at(i + 1), w[1])?;
+                    if w[1] <= w[0] {
+                        return Err(self.err(
+                            &tpath.at(i + 1),
+                            format!(
+                                "times must increase strictly (entry {} is not after entry {i})",
+                                i + 1
+                            ),
+                        ));
+                    }
+                }
+                self.finite(&tpath.at(0), time_s[0])?;
+                let mut value = Vec::with_capacity(t.value.len());
+                for (i, v) in t.value.into_iter().enumerate() {
+                    value.push(check(&path.key("value").at(i), v)?);
+                }
+                Ok(Profile::Table { time_s, value })
+            }
+        }
+    }
+
+    /// `product` or both `a` and `b` (their product), never both forms.
+    fn product(
+        &self,
+        path: &KeyPath,
+        product: (Option<f64>, &'static str),
+        a: (Option<f64>, &'static str),
+        b: (Option<f64>, &'static str),
+        a_max: f64,
+    ) -> Result<f64, SpecError> {
+        match (product.0, a.0, b.0) {
+            (Some(p), None, None) => {
+                self.positive_up_to(&path.key(product.1), p, MAX_AREA_M2, "m²")
+            }
+            (None, Some(x), Some(y)) => {
+                let x = self.within(&path.key(a.1), x, 0.0, a_max, a.1)?;
+                let y = self.positive_up_to(&path.key(b.1), y, MAX_AREA_M2, "m²")?;
+                Ok(x * y)
+            }
+            _ => Err(self.err(
+                path,
+                format!(
+                    "give either `{}` or both `{}` and `{}`",
+                    product.1, a.1, b.1
+                ),
+            )),
+        }
+    }
+}
+
+// ---------------------------------------------------------------- validation
+
+/// Smallest node capacitance, J/K: a microgram of metal. Below it a node is numerically
+/// indistinguishable from an infinitely fast one and only costs conditioning.
+pub const MIN_CAPACITANCE_J_PER_K: f64 = 1e-6;
+/// Largest conductance, W/K (a square metre of bonded joint conducts ~1e4 W/K): beyond it
+/// two nodes are one, and the Newton systems lose their precision (tested to 1e12).
+pub const MAX_CONDUCTANCE_W_PER_K: f64 = 1e9;
+/// Largest dissipation or heater power, W.
+pub const MAX_POWER_W: f64 = 1e6;
+/// Largest area (or area product) of a face, a radiative link or a load, m².
+pub const MAX_AREA_M2: f64 = 1e4;
+
+/// Orbital periods the model accepts, s: 10 minutes … 30 days.
+pub const MIN_PERIOD_S: f64 = 600.0;
+pub const MAX_PERIOD_S: f64 = 30.0 * SECONDS_PER_DAY;
+
+const SPACE: &str = "space";
+
+/// Validates `raw` into the numeric model.
+pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
+    let cx = &Cx;
+    let meta_p = KeyPath::new("scenario");
+    valid_name(cx, &meta_p.key("name"), &raw.scenario.name)?;
+
+    // Orbit.
+    let op = KeyPath::new("orbit");
+    let earth_radius_m = cx.within(
+        &op.key("earth_radius_m"),
+        raw.orbit.earth_radius_m.unwrap_or(EARTH_RADIUS_M),
+        1e5,
+        1e8,
+        "the central body's radius (m)",
+    )?;
+    let altitude_m = cx.finite(&op.key("altitude_m"), raw.orbit.altitude_m)?;
+    if !(100e3..=100_000e3).contains(&altitude_m) {
+        return Err(cx.err(
+            &op.key("altitude_m"),
+            format!("must be within 100 km … 100 000 km, in metres (got {altitude_m} m)"),
+        ));
+    }
+    let orbit = Orbit {
+        altitude_m,
+        earth_radius_m,
+        mu_m3_per_s2: cx.within(
+            &op.key("mu_m3_per_s2"),
+            raw.orbit.mu_m3_per_s2.unwrap_or(EARTH_MU_M3_PER_S2),
+            1e9,
+            1e17,
+            "gravitational parameter (m³/s²; Earth 3.986e14)",
+        )?,
+        // Reduced modulo 360° exactly (fmod is exact) before the conversion, so that a
+        // large angle keeps its fraction of a turn.
+        orbit_angle_at_start_rad: cx
+            .finite(
+                &op.key("orbit_angle_at_start_deg"),
+                raw.orbit.orbit_angle_at_start_deg.unwrap_or(0.0),
+            )?
+            .rem_euclid(360.0)
+            .to_radians(),
+    };
+    let period_s = orbit.period_s();
+    if !(MIN_PERIOD_S..=MAX_PERIOD_S).contains(&period_s) {
+        let which = if raw.orbit.mu_m3_per_s2.is_some() {
+            "mu_m3_per_s2"
+        } else {
+            "altitude_m"
+        };
+        return Err(cx.err(
+            &op.key(which),
+            format!(
+                "gives an orbital period of {period_s:.3e} s; it must be within {MIN_PERIOD_S} … {MAX_PERIOD_S:.0} s (10 min … 30 days)"
+            ),
+        ));
+    }
+
+    // Environment and mission profile.
+    let ep = KeyPath::new("environment");
+    let e = raw.environment;
+    let beta_deg = cx.profile(&ep.key("beta_deg"), e.beta_deg, &|p, v| {
+        cx.within(p, v, -90.0, 90.0, "beta angle (deg)")
+    })?;
+    let solar_flux = cx.profile(
+        &ep.key("solar_flux_w_per_m2"),
+        e.solar_flux_w_per_m2
+            .unwrap_or(ProfileSpec::Constant(SOLAR_CONSTANT_W_PER_M2)),
+        &|p, v| cx.within(p, v, 0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)"),
+    )?;
+    let space_sink_k = e.space_sink_k.unwrap_or(3.0);
+    cx.within(
+        &ep.key("space_sink_k"),
+        space_sink_k,
+        0.0,
+        5000.0,
+        "sink temperature (K)",
+    )?;
+    let environment = Environment {
+        orbit,
+        beta_rad: beta_deg.map(f64::to_radians),
+        solar_flux_w_per_m2: solar_flux,
+        albedo: cx.within(
+            &ep.key("albedo"),
+            e.albedo.unwrap_or(0.30),
+            0.0,
+            1.0,
+            "albedo",
+        )?,
+        earth_ir_w_per_m2: cx.within(
+            &ep.key("earth_ir_w_per_m2"),
+            e.earth_ir_w_per_m2.unwrap_or(237.0),
+            0.0,
+            1e4,
+            "planetary infrared flux (W/m²)",
+        )?,
+        space_sink_k,
+    };
+    let view_factor_default = environment.orbit.earth_view_factor();
+
+    // Run control.
+    let rp = KeyPath::new("run");
+    let duration = |key: &'static str, v: f64, unit_s: f64| {
+        let d = cx.positive(&rp.key(key), v)? * unit_s;
+        if d < MIN_DURATION_S {
+            return Err(cx.err(
+                &rp.key(key),
+                format!(
+                    "gives a run of {} s; runs last at least {MIN_DURATION_S} s",
+                    num(d)
+                ),
+            ));
+        }
+        if d > MAX_DURATION_S {
+            return Err(cx.err(
+                &rp.key(key),
+                format!(
+                    "gives a run of {d:.3e} s; runs are limited to {MAX_DURATION_S:.0e} s (31.7 years), where time still resolves the shortest step"
+                ),
+            ));
+        }
+        Ok(d)
+    };
+    let duration_s = match (raw.run.orbits, raw.run.duration_s, raw.run.duration_days) {
+        (Some(o), None, None) => duration("orbits", o, period_s)?,
+        (None, Some(s), None) => duration("duration_s", s, 1.0)?,
+        (None, None, Some(d)) => duration("duration_days", d, SECONDS_PER_DAY)?,
+        _ => {
+            return Err(cx.err(
+                &rp,
+                "give exactly one of `orbits`, `duration_s` or `duration_days`",
+            ));
+        }
+    };
+    let run = RunControl {
+        duration_s,
+        output_interval_s: cx.at_least(
+            &rp.key("output_interval_s"),
+            raw.run.output_interval_s.unwrap_or(30.0),
+            MIN_OUTPUT_INTERVAL_S,
+            "s",
+        )?,
+    };
+
+    // Solver.
+    let sp = KeyPath::new("solver");
+    if let Some(m) = &raw.solver.method
+        && m != "tr-bdf2"
+    {
+        return Err(cx.err(
+            &sp.key("method"),
+            format!("unknown method `{m}` (known: tr-bdf2)"),
+        ));
+    }
+    let defaults = SolverSettings::default();
+    let solver = SolverSettings {
+        tolerance_k: cx.within(
+            &sp.key("tolerance_k"),
+            raw.solver.tolerance_k.unwrap_or(defaults.tolerance_k),
+            MIN_TOLERANCE_K,
+            MAX_TOLERANCE_K,
+            "the local error per step (K)",
+        )?,
+        max_step_s: cx.at_least(
+            &sp.key("max_step_s"),
+            raw.solver.max_step_s.unwrap_or(defaults.max_step_s),
+            MIN_MAX_STEP_S,
+            "s",
+        )?,
+        adaptive: raw.solver.adaptive.unwrap_or(defaults.adaptive),
+        linear: match raw.solver.linear.as_deref() {
+            None => defaults.linear,
+            Some(name) => LinearSolver::from_name(name).ok_or_else(|| {
+                cx.err(
+                    &sp.key("linear"),
+                    format!(
+                        "unknown linear solver `{name}` (known: {})",
+                        LinearSolver::NAMES.join(", ")
+                    ),
+                )
+            })?,
+        },
+    };
+
+    // Nodes.
+    let mut names: HashMap<String, NodeRef> = HashMap::new();
+    let np = KeyPath::new("node");
+    let mut nodes = Vec::new();
+    for (i, n) in raw.node.into_iter().enumerate() {
+        let p = np.at(i);
+        check_name(cx, &p.key("name"), &n.name, &names)?;
+        let node = DiffusionNode {
+            capacitance_j_per_k: {
+                let k = p.key("capacitance_j_per_k");
+                let c = cx.positive(&k, n.capacitance_j_per_k)?;
+                cx.at_least(&k, c, MIN_CAPACITANCE_J_PER_K, "J/K")?
+            },
+            initial_temperature_k: cx
+                .temperature(&p.key("initial_temperature_k"), n.initial_temperature_k)?,
+            radius_m: match n.radius_mm {
+                Some(r) => Some(cx.positive(&p.key("radius_mm"), r)? * 1e-3),
+                None => None,
+            },
+            name: n.name,
+        };
+        names.insert(node.name.clone(), NodeRef::Diffusion(i));
+        nodes.push(node);
+    }
+    if nodes.is_empty() {
+        return Err(cx.err(
+            &np,
+            "the network needs at least one diffusion node ([[node]])",
+        ));
+    }
+    let bp = KeyPath::new("boundary");
+    let mut boundaries = vec![BoundaryNode {
+        name: SPACE.to_string(),
+        temperature_k: Profile::Constant(space_sink_k),
+    }];
+    names.insert(SPACE.to_string(), NodeRef::Boundary(0));
+    for (i, b) in raw.boundary.into_iter().enumerate() {
+        let p = bp.at(i);
+        if b.name == SPACE {
+            return Err(cx.err(
+                &p.key("name"),
+                "`space` is built in; set its temperature with environment.space_sink_k",
+            ));
+        }
+        check_name(cx, &p.key("name"), &b.name, &names)?;
+        let t = cx.profile(&p.key("temperature_k"), b.temperature_k, &|pp, v| {
+            cx.temperature(pp, v)
+        })?;
+        names.insert(b.name.clone(), NodeRef::Boundary(boundaries.len()));
+        boundaries.push(BoundaryNode {
+            name: b.name,
+            temperature_k: t,
+        });
+    }
+    let lookup = |p: &KeyPath, name: &str| -> Result<NodeRef, SpecError> {
+        names.get(name).copied().ok_or_else(|| {
+            let mut known: Vec<&str> = names.keys().map(String::as_str).collect();
+            known.sort();
+            cx.err(
+                p,
+                format!("unknown node `{name}` (known: {})", known.join(", ")),
+            )
+        })
+    };
+    let diffusion = |p: &KeyPath, name: &str| -> Result<usize, SpecError> {
+        match lookup(p, name)? {
+            NodeRef::Diffusion(i) => Ok(i),
+            NodeRef::Boundary(_) => Err(cx.err(
+                p,
+                format!("`{name}` is a boundary node; this needs a diffusion node"),
+            )),
+        }
+    };
+    let pair = |p: &KeyPath, between: &[String]| -> Result<(NodeRef, NodeRef), SpecError> {
+        let bp = p.key("between");
+        if between.len() != 2 {
+            return Err(cx.err(
+                &bp,
+                format!(
+                    "lists {} node(s); a link joins exactly two: between = [\"a\", \"b\"]",
+                    between.len()
+                ),
+            ));
+        }
+        let a = lookup(&bp.at(0), &between[0])?;
+        let b = lookup(&bp.at(1), &between[1])?;
+        if a == b {
+            return Err(cx.err(&bp, format!("links `{}` to itself", between[0])));
+        }
+        if matches!((a, b), (NodeRef::Boundary(_), NodeRef::Boundary(_))) {
+            return Err(cx.err(
+                &bp,
+                "links two boundary nodes; it would carry no heat the model tracks",
+            ));
+        }
+        Ok((a, b))
+    };
+
+    let mut conductors = Vec::new();
+    for (i, c) in raw.conductor.iter().enumerate() {
+        let p = KeyPath::new("conductor").at(i);
+        let (a, b) = pair(&p, &c.between)?;
+        conductors.push(Conductor {
+            a,
+            b,
+            conductance_w_per_k: cx.positive_up_to(
+                &p.key("conductance_w_per_k"),
+                c.conductance_w_per_k,
+                MAX_CONDUCTANCE_W_PER_K,
+                "W/K",
+            )?,
+        });
+    }
+    let mut radiators = Vec::new();
+    for (i, r) in raw.radiation.iter().enumerate() {
+        let p = KeyPath::new("radiation").at(i);
+        let (a, b) = pair(&p, &r.between)?;
+        let ea = cx.product(
+            &p,
+            (r.emissivity_area_m2, "emissivity_area_m2"),
+            (r.emissivity, "emissivity"),
+            (r.area_m2, "area_m2"),
+            1.0,
+        )?;
+        radiators.push(Radiator {
+            a,
+            b,
+            emissivity_area_m2: ea,
+        });
+    }
+
+    // Modes (before loads, which may refer to them).
+    let mut modes = Vec::new();
+    for (i, m) in raw.mode.into_iter().enumerate() {
+        let p = KeyPath::new("mode").at(i);
+        valid_name(cx, &p.key("name"), &m.name)?;
+        if ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
+            return Err(cx.err(&p.key("name"), format!("`{}` cannot name a mode", m.name)));
+        }
+        if modes.iter().any(|x: &Mode| x.name == m.name) {
+            return Err(cx.err(
+                &p.key("name"),
+                format!("mode `{}` is defined twice", m.name),
+            ));
+        }
+        let (windows, wkey, scale) = match (m.windows_s, m.windows_days) {
+            (Some(w), None) => (w, "windows_s", 1.0),
+            (None, Some(w)) => (w, "windows_days", SECONDS_PER_DAY),
+            _ => return Err(cx.err(&p, "give exactly one of `windows_s` or `windows_days`")),
+        };
+        let mut windows_s = Vec::new();
+        let mut last_end = f64::NEG_INFINITY;
+        for (k, w) in windows.into_iter().enumerate() {
+            let wp = p.key(wkey).at(k);
+            let [a, b] = w[..] else {
+                return Err(cx.err(
+                    &wp,
+                    format!("a window is [start, end] (got {} numbers)", w.len()),
+                ));
+            };
+            cx.finite(&wp, a)?;
+            cx.finite(&wp, b)?;
+            if b <= a || a < last_end {
+                return Err(cx.err(
+                    &wp,
+                    "windows are [start, end] with end > start, in increasing order, not overlapping",
+                ));
+            }
+            last_end = b;
+            windows_s.push((a * scale, b * scale));
+        }
+        modes.push(Mode {
+            name: m.name,
+            windows_s,
+        });
+    }
+
+    // Loads.
+    let mut loads = Vec::new();
+    let load_name = |given: Option<String>, kind: &str, node: &str, i: usize| {
+        given.unwrap_or_else(|| {
+            format!(
+                "{kind}{}.{node}",
+                if i == 0 {
+                    String::new()
+                } else {
+                    format!("{i}")
+                }
+            )
+        })
+    };
+    for (i, s) in raw.sun.into_iter().enumerate() {
+        let p = KeyPath::new("sun").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let aa = cx.product(
+            &p,
+            (s.absorptivity_area_m2, "absorptivity_area_m2"),
+            (s.absorptivity, "absorptivity"),
+            (s.area_m2, "area_m2"),
+            1.0,
+        )?;
+        let incidence = match s.incidence.as_deref() {
+            None => Incidence::Tracking,
+            Some(name) => Incidence::from_name(name).ok_or_else(|| {
+                cx.err(
+                    &p.key("incidence"),
+                    format!(
+                        "unknown incidence `{name}` (known: {})",
+                        Incidence::NAMES.join(", ")
+                    ),
+                )
+            })?,
+        };
+        loads.push(Load {
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "sun",
+                &s.node,
+                i,
+            ),
+            node,
+            kind: LoadKind::Sun {
+                absorptivity_area_m2: aa,
+                incidence,
+            },
+        });
+    }
+    // Earth-facing loads: an area product and a view factor, (R/(R+h))² by default.
+    let earth_face = |p: &KeyPath,
+                      product: (Option<f64>, &'static str),
+                      a: (Option<f64>, &'static str),
+                      area: Option<f64>,
+                      vf: Option<f64>| {
+        let aa = cx.product(p, product, a, (area, "area_m2"), 1.0)?;
+        let vf = cx.within(
+            &p.key("view_factor"),
+            vf.unwrap_or(view_factor_default),
+            0.0,
+            1.0,
+            "view factor",
+        )?;
+        Ok::<_, SpecError>((aa, vf))
+    };
+    for (i, s) in raw.albedo.into_iter().enumerate() {
+        let p = KeyPath::new("albedo").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let (aa, vf) = earth_face(
+            &p,
+            (s.absorptivity_area_m2, "absorptivity_area_m2"),
+            (s.absorptivity, "absorptivity"),
+            s.area_m2,
+            s.view_factor,
+        )?;
+        loads.push(Load {
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "albedo",
+                &s.node,
+                i,
+            ),
+            node,
+            kind: LoadKind::Albedo {
+                absorptivity_area_m2: aa,
+                view_factor: vf,
+            },
+        });
+    }
+    for (i, s) in raw.earth_ir.into_iter().enumerate() {
+        let p = KeyPath::new("earth_ir").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let (ea, vf) = earth_face(
+            &p,
+            (s.emissivity_area_m2, "emissivity_area_m2"),
+            (s.emissivity, "emissivity"),
+            s.area_m2,
+            s.view_factor,
+        )?;
+        loads.push(Load {
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "earth_ir",
+                &s.node,
+                i,
+            ),
+            node,
+            kind: LoadKind::EarthIr {
+                emissivity_area_m2: ea,
+                view_factor: vf,
+            },
+        });
+    }
+    for (i, s) in raw.dissipation.into_iter().enumerate() {
+        let p = KeyPath::new("dissipation").at(i);
+        let node = diffusion(&p.key("node"), &s.node)?;
+        let power = cx.profile(&p.key("power_w"), s.power_w, &|pp, v| {
+            cx.within(pp, v, 0.0, MAX_POWER_W, "power (W)")
+        })?;
+        let when = match s.when.as_deref() {
+            None | Some("always") => When::Always,
+            Some("sunlit") => When::Sunlit,
+            Some("eclipse") => When::Eclipse,
+            Some(m) => When::Mode(modes.iter().position(|x| x.name == m).ok_or_else(|| {
+                cx.err(
+                    &p.key("when"),
+                    format!(
+                        "`{m}` is neither always, sunlit, eclipse nor a mode defined with [[mode]]"
+                    ),
+                )
+            })?),
+        };
+        loads.push(Load {
+            name: load_name(
+                optional_name(cx, &p.key("name"), s.name)?,
+                "dissipation",
+                &s.node,
+                i,
+            ),
+            node,
+            kind: LoadKind::Dissipation {
+                power_w: power,
+                when,
+            },
+        });
+    }
+    let mut heaters = Vec::new();
+    for (i, h) in raw.heater.into_iter().enumerate() {
+        let p = KeyPath::new("heater").at(i);
+        let node = diffusion(&p.key("node"), &h.node)?;
+        let sensor_node = match &h.sensor_node {
+            Some(s) => diffusion(&p.key("sensor_node"), s)?,
+            None => node,
+        };
+        let on_k = cx.temperature(&p.key("on_k"), h.on_k)?;
+        let off_k = cx.temperature(&p.key("off_k"), h.off_k)?;
+        if on_k >= off_k {
+            return Err(cx.err(
+                &p.key("off_k"),
+                format!("must be above on_k ({on_k} K): the heater switches on when the sensor falls to on_k and off when it rises to off_k"),
+            ));
+        }
+        heaters.push(Heater {
+            name: optional_name(cx, &p.key("name"), h.name)?
+                .unwrap_or_else(|| format!("heater.{}", h.node)),
+            node,
+            sensor_node,
+            power_w: cx.positive_up_to(&p.key("power_w"), h.power_w, MAX_POWER_W, "W")?,
+            on_k,
+            off_k,
+        });
+    }
+
+    // Sensors.
+    let mut sensors: Vec<Sensor> = Vec::new();
+    for (i, s) in raw.sensor.into_iter().enumerate() {
+        let p = KeyPath::new("sensor").at(i);
+        if sensors.iter().any(|x| x.column == s.column) {
+            return Err(cx.err(
+                &p.key("column"),
+                format!("column `{}` is defined twice", s.column),
+            ));
+        }
+        let target = match (s.node, s.quantity) {
+            (Some(n), None) => SensorTarget::Node(diffusion(&p.key("node"), &n)?),
+            (None, Some(q)) => {
+                if !DERIVED_QUANTITIES.contains(&q.as_str()) {
+                    return Err(cx.err(
+                        &p.key("quantity"),
+                        format!(
+                            "unknown quantity `{q}` (known: {})",
+                            DERIVED_QUANTITIES.join(", ")
+                        ),
+                    ));
+                }
+                SensorTarget::Derived(q)
+            }
+            _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
+        };
+        sensors.push(Sensor {
+            column: s.column,
+            target,
+        });
+    }
+
+    // Gear pairs.
+    let mut gears = Vec::new();
+    for (i, g) in raw.gear_pair.into_iter().enumerate() {
+        let p = KeyPath::new("gear_pair").at(i);
+        let pair = gear_pair(cx, &p, g, i, &nodes, &diffusion)?;
+        if gears.iter().any(|x: &GearPair| x.name == pair.name) {
+            return Err(cx.err(
+                &p.key("name"),
+                format!("gear pair `{}` is defined twice", pair.name),
+            ));
+        }
+        gears.push(pair);
+    }
+    for (i, s) in sensors.iter().enumerate() {
+        if matches!(s.target, SensorTarget::Derived(_)) && gears.is_empty() {
+            return Err(cx.err(
+                &KeyPath::new("sensor").at(i).key("quantity"),
+                "needs a [[gear_pair]] in the scenario",
+            ));
+        }
+    }
+
+    let network = Network {
+        nodes,
+        boundaries,
+        conductors,
+        radiators,
+        loads,
+        heaters,
+    };
+    // An explicit direct solver must fit the network.
+    let n = network.nodes.len();
+    match solver.linear {
+        LinearSolver::Dense if n > DENSE_MAX_NODES => {
+            return Err(cx.err(
+                &sp.key("linear"),
+                format!(
+                    "\"dense\" takes 16 n² bytes ({:.1} GB) and O(n³) per factorisation for {n} nodes; it is limited to {DENSE_MAX_NODES} nodes: use \"iterative\" or \"auto\"",
+                    16.0 * (n * n) as f64 / 1e9
+                ),
+            ));
+        }
+        LinearSolver::Sparse => {
+            let (fill, flops) = direct_fill_estimate(&crate::thermal::Compiled::new(&network));
+            if flops > SPARSE_MAX_FLOPS {
+                return Err(cx.err(
+                    &sp.key("linear"),
+                    format!(
+                        "the sparse LU of this network would fill in to about {} entries and take about {} operations per factorisation (the limit is {}): use \"iterative\" or \"auto\"",
+                        num(fill as f64),
+                        num(flops),
+                        num(SPARSE_MAX_FLOPS)
+                    ),
+                ));
+            }
+        }
+        _ => {}
+    }
+
+    Ok(Scenario {
+        gears,
+        name: raw.scenario.name,
+        description: raw.scenario.description,
+        thermal: ThermalModel {
+            environment,
+            network,
+            modes,
+        },
+        run,
+        solver,
+        sensors,
+    })
+}
+
+/// A name that may become a file name, a log field and a key path
+/// ([`crate::scenario::check_name`]).
+fn valid_name(cx: &Cx, p: &KeyPath, name: &str) -> Result<(), SpecError> {
+    crate::scenario::check_name(name).map_err(|m| cx.err(p, m))
+}
+
+/// An optional user-given name, checked like node names.
+fn optional_name(cx: &Cx, p: &KeyPath, name: Option<String>) -> Result<Option<String>, SpecError> {
+    if let Some(n) = &name {
+        valid_name(cx, p, n)?;
+    }
+    Ok(name)
+}
+
+fn check_name(
+    cx: &Cx,
+    p: &KeyPath,
+    name: &str,
+    names: &HashMap<String, NodeRef>,
+) -> Result<(), SpecError> {
+    valid_name(cx, p, name)?;
+    if names.contains_key(name) {
+        return Err(cx.err(p, format!("node `{name}` is defined twice")));
+    }
+    Ok(())
+}
+
+/// The keys that give a thermal strain law (exactly one form).
+struct StrainKeys {
+    alpha: Option<f64>,
+    dalpha: Option<f64>,
+    poly: Option<PolynomialSpec>,
+    alpha_poly: Option<Vec<f64>>,
+    table: Option<StrainTableSpec>,
+}
+
+/// Largest thermal strain a law may give between 20 K and 1000 K, relative to room
+/// temperature: ten times that of aluminium (1.5 %) between those temperatures.
+const MAX_THERMAL_STRAIN: f64 = 0.1;
+
+/// A strain law whose values stay within ±[`MAX_THERMAL_STRAIN`] of its value at
+/// 293.15 K over 20 … 1000 K (a polynomial with a wrong `scale` fails here).
+fn strain_law(cx: &Cx, p: &KeyPath, keys: StrainKeys) -> Result<StrainLaw, SpecError> {
+    let law = strain_law_unchecked(cx, p, keys)?;
+    let worst = (0..=98)
+        .map(|k| 20.0 + 10.0 * k as f64)
+        .map(|t| (t, law.strain(t, 293.15)))
+        .find(|(_, e)| e.is_nan() || e.abs() > MAX_THERMAL_STRAIN);
+    if let Some((t, e)) = worst {
+        return Err(cx.err(
+            p,
+            format!(
+                "the thermal strain law gives {e:.3e} at {t} K relative to 293.15 K; a solid's thermal strain stays within ±{MAX_THERMAL_STRAIN} over 20 … 1000 K (check the coefficients and `scale`)"
+            ),
+        ));
+    }
+    Ok(law)
+}
+
+fn strain_law_unchecked(cx: &Cx, p: &KeyPath, keys: StrainKeys) -> Result<StrainLaw, SpecError> {
+    let StrainKeys {
+        alpha,
+        dalpha,
+        poly,
+        alpha_poly,
+        table,
+    } = keys;
+    if let Some(coefficients) = alpha_poly {
+        if alpha.is_some() || dalpha.is_some() || poly.is_some() || table.is_some() {
+            return Err(cx.err(p, "give only one thermal strain law"));
+        }
+        let ap = p.key("alpha_polynomial");
+        if coefficients.is_empty() {
+            return Err(cx.err(&ap, "must not be empty"));
+        }
+        for (k, c) in coefficients.iter().enumerate() {
+            cx.finite(&ap.at(k), *c)?;
+        }
+        return Ok(StrainLaw::AlphaPolynomial { coefficients });
+    }
+    let alpha_ok = |v: f64, key: &'static str| {
+        cx.within(&p.key(key), v, -1e-3, 1e-3, "expansion coefficient (1/K)")
+    };
+    match (alpha, dalpha, poly, table) {
+        (Some(a), None, None, None) => Ok(StrainLaw::Linear { alpha_per_k: alpha_ok(a, "alpha_per_k")? }),
+        (Some(a), Some(d), None, None) => Ok(StrainLaw::Quadratic {
+            alpha_per_k: alpha_ok(a, "alpha_per_k")?,
+            dalpha_dt_per_k2: cx.within(&p.key("dalpha_dt_per_k2"), d, -1e-5, 1e-5, "dα/dT (1/K²)")?,
+        }),
+        (None, None, Some(poly), None) => {
+            let pp = p.key("strain_polynomial");
+            if poly.coefficients.is_empty() {
+                return Err(cx.err(&pp.key("coefficients"), "must not be empty"));
+            }
+            for (k, c) in poly.coefficients.iter().enumerate() {
+                cx.finite(&pp.key("coefficients").at(k), *c)?;
+            }
+            cx.finite(&pp.key("scale"), poly.scale)?;
+            Ok(StrainLaw::Polynomial { coefficients: poly.coefficients, scale: poly.scale })
+        }
+        (None, None, None, Some(t)) => {
+            let tp = p.key("strain_table");
+            if t.temperature_k.len() < 2 || t.temperature_k.len() != t.strain.len() {
+                return Err(cx.err(&tp, "needs at least two points and as many `strain` as `temperature_k` entries"));
+            }
+            for (k, w) in t.temperature_k.windows(2).enumerate() {
+                if w[1] <= w[0] || w[1].is_nan() || w[0].is_nan() {
+                    return Err(cx.err(&tp.key("temperature_k").at(k + 1), "temperatures must increase strictly"));
+                }
+            }
+            for (k, v) in t.strain.iter().enumerate() {
+                cx.finite(&tp.key("strain").at(k), *v)?;
+            }
+            Ok(StrainLaw::Table { temperature_k: t.temperature_k, strain: t.strain })
+        }
+        _ => Err(cx.err(
+            p,
+            "give the thermal strain as `alpha_per_k` (optionally with `dalpha_dt_per_k2`), or `alpha_polynomial`, or `strain_polynomial`, or `strain_table`",
+        )),
+    }
+}
+
+fn disc_material(cx: &Cx, p: &KeyPath, m: MaterialSpec) -> Result<DiscMaterial, SpecError> {
+    let youngs = cx.positive(&p.key("youngs_modulus_pa"), m.youngs_modulus_pa)?;
+    if youngs < 1e8 {
+        return Err(cx.err(
+            &p.key("youngs_modulus_pa"),
+            format!("is in pascal: {youngs} Pa is not a metal (steel is 2e11)"),
+        ));
+    }
+    let poisson = m.poisson;
+    cx.finite(&p.key("poisson"), poisson)?;
+    if !(poisson > -1.0 && poisson < 0.5) {
+        return Err(cx.err(
+            &p.key("poisson"),
+            format!("must be within −1 … 0.5 (got {poisson})"),
+        ));
+    }
+    Ok(DiscMaterial {
+        strain: strain_law(
+            cx,
+            p,
+            StrainKeys {
+                alpha: m.alpha_per_k,
+                dalpha: m.dalpha_dt_per_k2,
+                poly: m.strain_polynomial,
+                alpha_poly: m.alpha_polynomial,
+                table: m.strain_table,
+            },
+        )?,
+        youngs_modulus_pa: youngs,
+        poisson,
+    })
+}
+
+/// Relative tolerance for node radii that must sit on the bore and the base circle.
+const RADIUS_TOLERANCE: f64 = 1e-5;
+
+fn gear_pair(
+    cx: &Cx,
+    p: &KeyPath,
+    g: GearPairSpec,
+    index: usize,
+    nodes: &[DiffusionNode],
+    diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
+) -> Result<GearPair, SpecError> {
+    let module_m = cx.positive(&p.key("module_mm"), g.module_mm)? * 1e-3;
+    let alpha0_deg = cx.finite(&p.key("pressure_angle_deg"), g.pressure_angle_deg)?;
+    if !(10.0..=35.0).contains(&alpha0_deg) {
+        return Err(cx.err(
+            &p.key("pressure_angle_deg"),
+            format!("must be within 10° … 35° (got {alpha0_deg}°)"),
+        ));
+    }
+    let alpha0 = alpha0_deg.to_radians();
+    let t_ref = cx.temperature(&p.key("reference_temperature_k"), g.reference_temperature_k)?;
+    let cp = p.key("coating");
+    let coating = Coating {
+        thickness_m: cx.non_negative(&cp.key("thickness_um"), g.coating.thickness_um)? * 1e-6,
+        alpha_per_k: cx.within(
+            &cp.key("alpha_per_k"),
+            g.coating.alpha_per_k,
+            -1e-3,
+            1e-3,
+            "expansion coefficient (1/K)",
+        )?,
+        poisson: {
+            let v = cx.finite(&cp.key("poisson"), g.coating.poisson)?;
+            if !(v > -1.0 && v < 0.5) {
+                return Err(cx.err(
+                    &cp.key("poisson"),
+                    format!("must be within −1 … 0.5 (got {v})"),
+                ));
+            }
+            v
+        },
+    };
+    let mut built = Vec::new();
+    for (key, raw) in [("pinion", g.pinion), ("wheel", g.wheel)] {
+        let gp = p.key(key);
+        let teeth = raw.teeth;
+        if !(5..=10_000).contains(&teeth) {
+            return Err(cx.err(
+                &gp.key("teeth"),
+                format!("must be within 5 … 10000 (got {teeth})"),
+            ));
+        }
+        let teeth = teeth as u32;
+        let shift = cx.within(
+            &gp.key("profile_shift"),
+            raw.profile_shift,
+            -2.0,
+            2.0,
+            "profile shift",
+        )?;
+        let r_ref = module_m * teeth as f64 / 2.0;
+        let r_b = r_ref * alpha0.cos();
+        let tip = cx.positive(&gp.key("tip_radius_mm"), raw.tip_radius_mm)? * 1e-3;
+        let root = cx.positive(&gp.key("root_radius_mm"), raw.root_radius_mm)? * 1e-3;
+        let bore = cx.positive(&gp.key("bore_radius_mm"), raw.bore_radius_mm)? * 1e-3;
+        let mm = |x: f64| format!("{:.6} mm", x * 1e3);
+        if bore >= r_b {
+            return Err(cx.err(
+                &gp.key("bore_radius_mm"),
+                format!(
+                    "bore radius {} must be below the base radius r_b = m z cos α₀ / 2 = {}",
+                    mm(bore),
+                    mm(r_b)
+                ),
+            ));
+        }
+        if bore >= root {
+            return Err(cx.err(
+                &gp.key("bore_radius_mm"),
+                format!(
+                    "bore radius {} must be below the root radius {}",
+                    mm(bore),
+                    mm(root)
+                ),
+            ));
+        }
+        if tip <= r_b || tip <= root {
+            return Err(cx.err(
+                &gp.key("tip_radius_mm"),
+                format!(
+                    "tip radius {} must exceed the base radius {} and the root radius {}",
+                    mm(tip),
+                    mm(r_b),
+                    mm(root)
+                ),
+            ));
+        }
+        let (thickness, tkey) = match (raw.tooth_thickness_mm, raw.tooth_thinning_um) {
+            (Some(s), None) => (
+                cx.positive(&gp.key("tooth_thickness_mm"), s)? * 1e-3,
+                "tooth_thickness_mm",
+            ),
+            (None, Some(t)) => {
+                let t = cx.finite(&gp.key("tooth_thinning_um"), t)?;
+                (
+                    shifted_tooth_thickness(module_m, shift, alpha0) - t * 1e-6,
+                    "tooth_thinning_um",
+                )
+            }
+            _ => {
+                return Err(cx.err(
+                    &gp,
+                    "give exactly one of `tooth_thickness_mm` or `tooth_thinning_um`",
+                ));
+            }
+        };
+        // The tooth must exist and fit: 0 < s < π m on the reference circle, and not
+        // come to a point below the tip (s_a > 0 on the tip circle).
+        let pitch = std::f64::consts::PI * module_m;
+        if !(thickness > 0.0 && thickness < pitch) {
+            return Err(cx.err(
+                &gp.key(tkey),
+                format!(
+                    "gives a tooth thickness of {} on the reference circle; it must be within 0 … {} (the circular pitch π m)",
+                    mm(thickness),
+                    mm(pitch)
+                ),
+            ));
+        }
+        let alpha_tip = (r_b / tip).acos();
+        let tip_thickness = tip * (thickness / r_ref + 2.0 * inv(alpha0) - 2.0 * inv(alpha_tip));
+        if tip_thickness <= 0.0 {
+            return Err(cx.err(
+                &gp.key(tkey),
+                format!(
+                    "gives a tooth thickness of {} on the reference circle, which comes to a point below the tip radius {} (thickness at the tip {})",
+                    mm(thickness),
+                    mm(tip),
+                    mm(tip_thickness)
+                ),
+            ));
+        }
+        let np = gp.key("nodes");
+        if raw.nodes.len() < 2 || raw.nodes.len() > MAX_GEAR_NODES {
+            return Err(cx.err(
+                &np,
+                format!("list 2 … {MAX_GEAR_NODES} nodes from the bore to the base circle"),
+            ));
+        }
+        let mut node_ids = Vec::new();
+        let mut radii = Vec::new();
+        for (k, name) in raw.nodes.iter().enumerate() {
+            let id = diffusion(&np.at(k), name)?;
+            let r = nodes[id].radius_m.ok_or_else(|| {
+                cx.err(
+                    &np.at(k),
+                    format!("node `{name}` needs `radius_mm` to be part of a gear profile"),
+                )
+            })?;
+            if radii.last().is_some_and(|&prev| r <= prev) {
+                return Err(cx.err(
+                    &np.at(k),
+                    "node radii must increase from the bore to the base circle",
+                ));
+            }
+            node_ids.push(id);
+            radii.push(r);
+        }
+        if (radii[0] - bore).abs() > RADIUS_TOLERANCE * bore {
+            return Err(cx.err(
+                &np.at(0),
+                format!(
+                    "the first node sits at {} but the bore radius is {}",
+                    mm(radii[0]),
+                    mm(bore)
+                ),
+            ));
+        }
+        let last = *radii.last().expect("two nodes");
+        if (last - r_b).abs() > RADIUS_TOLERANCE * r_b {
+            return Err(cx.err(
+                &np.at(radii.len() - 1),
+                format!(
+                    "the last node sits at {} but the base radius is {}",
+                    mm(last),
+                    mm(r_b)
+                ),
+            ));
+        }
+        let material = disc_material(cx, &gp.key("material"), raw.material)?;
+        let shaft_node = match &raw.shaft_node {
+            Some(n) => Some(diffusion(&gp.key("shaft_node"), n)?),
+            None => None,
+        };
+        let fit = match raw.bore_fit.as_deref() {
+            None | Some("free") => BoreFit::Free,
+            Some("rigid") => BoreFit::Rigid,
+            Some("elastic") => {
+                let shaft = raw
+                    .shaft_material
+                    .ok_or_else(|| cx.err(&gp, "an elastic bore fit needs `shaft_material`"))?;
+                if shaft_node.is_none() {
+                    return Err(cx.err(
+                        &gp,
+                        "an elastic bore fit needs `shaft_node` (the shaft's temperature)",
+                    ));
+                }
+                let sm = disc_material(cx, &gp.key("shaft_material"), shaft)?;
+                BoreFit::Elastic {
+                    interference_m: cx.finite(
+                        &gp.key("interference_um"),
+                        raw.interference_um.unwrap_or(0.0),
+                    )? * 1e-6,
+                    shaft_youngs_modulus_pa: sm.youngs_modulus_pa,
+                    shaft_poisson: sm.poisson,
+                    shaft_strain: sm.strain,
+                }
+            }
+            Some(other) => {
+                return Err(cx.err(
+                    &gp.key("bore_fit"),
+                    format!("unknown bore fit `{other}` (known: free, rigid, elastic)"),
+                ));
+            }
+        };
+        built.push(Gear {
+            name: key.to_string(),
+            teeth,
+            profile_shift: shift,
+            tip_radius_m: tip,
+            root_radius_m: root,
+            bore_radius_m: bore,
+            tooth_thickness_m: thickness,
+            material,
+            fit,
+            nodes: node_ids,
+            node_radii_m: radii,
+            shaft_node,
+        });
+    }
+    let center = match g.center_distance {
+        None => CenterDistance::Fixed,
+        Some(c) => {
+            let cp = p.key("center_distance");
+            match c.follows.as_str() {
+                "fixed" => CenterDistance::Fixed,
+                "housing" => {
+                    let node_name = c
+                        .node
+                        .as_deref()
+                        .ok_or_else(|| cx.err(&cp, "needs `node`: the housing node"))?;
+                    CenterDistance::Housing {
+                        node: diffusion(&cp.key("node"), node_name)?,
+                        strain: strain_law(
+                            cx,
+                            &cp,
+                            StrainKeys {
+                                alpha: c.alpha_per_k,
+                                dalpha: c.dalpha_dt_per_k2,
+                                poly: c.strain_polynomial,
+                                alpha_poly: c.alpha_polynomial,
+                                table: c.strain_table,
+                            },
+                        )?,
+                    }
+                }
+                other => {
+                    return Err(cx.err(
+                        &cp.key("follows"),
+                        format!("unknown `{other}` (known: fixed, housing)"),
+                    ));
+                }
+            }
+        }
+    };
+    let [pinion, wheel]: [Gear; 2] = built.try_into().map_err(|_| cx.err(p, "two gears"))?;
+    let pair = GearPair {
+        name: optional_name(cx, &p.key("name"), g.name)?.unwrap_or_else(|| {
+            if index == 0 {
+                "mesh".into()
+            } else {
+                format!("mesh{index}")
+            }
+        }),
+        module_m,
+        pressure_angle_rad: alpha0,
+        face_width_m: cx.positive(&p.key("face_width_mm"), g.face_width_mm)? * 1e-3,
+        center_distance_m: cx.positive(&p.key("center_distance_mm"), g.center_distance_mm)? * 1e-3,
+        center,
+        reference_temperature_k: t_ref,
+        coating,
+        min_backlash_m: cx.non_negative(&p.key("min_backlash_um"), g.min_backlash_um)? * 1e-6,
+        gears: [pinion, wheel],
+        paper_offset_m: Default::default(),
+    };
+    // The assembled pair must mesh with positive backlash.
+    let nominal = pair.nominal_backlash_m();
+    let rb_sum = pair
+        .gears
+        .iter()
+        .map(|g| g.base_radius_m(module_m, alpha0))
+        .sum::<f64>();
+    if rb_sum >= pair.center_distance_m {
+        return Err(cx.err(
+            &p.key("center_distance_mm"),
+            "is shorter than the sum of the base radii",
+        ));
+    }
+    if nominal.is_nan() {
+        return Err(cx.err(
+            &p.key("center_distance_mm"),
+            "the gears do not mesh at this centre distance (contact ratio below 1)",
+        ));
+    }
+    if nominal <= 0.0 {
+        return Err(cx.err(
+            &p.key("center_distance_mm"),
+            format!("the pair has negative backlash at assembly ({:.3} µm): the teeth are too thick for this centre distance", nominal * 1e6),
+        ));
+    }
+    Ok(pair)
+}
