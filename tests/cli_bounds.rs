@@ -179,7 +179,7 @@ fn between_takes_exactly_two_nodes() {
             "between = [\"housing\", \"motor\", \"shaft1\"]",
         )],
         &["check"],
-        &["conductor[", "between", "3 node(s)"],
+        &["conductor.housing-motor-shaft1.between", "3 node(s)"],
     );
 }
 
@@ -205,7 +205,7 @@ fn tooth_thinning_larger_than_the_tooth() {
         "thinning",
         &[("tooth_thinning_um = 19.4745", "tooth_thinning_um = 2000")],
         &["check"],
-        &["gear_pair[0].pinion.tooth_thinning_um", "tooth thickness"],
+        &["gear_pair.mesh.pinion.tooth_thinning_um", "tooth thickness"],
     );
     // a 20-tooth pinion whose tip circle is raised to 12.5 mm: its teeth end in a
     // point at 12.0 mm
@@ -214,7 +214,7 @@ fn tooth_thinning_larger_than_the_tooth() {
         &[("tip_radius_mm = 11.0", "tip_radius_mm = 12.5")],
         &["check"],
         &[
-            "gear_pair[0].pinion.tooth_thinning_um",
+            "gear_pair.mesh.pinion.tooth_thinning_um",
             "point below the tip radius",
         ],
     );
@@ -283,7 +283,10 @@ fn values_beyond_physical_sense_are_refused_by_key() {
         "conductance",
         &[("conductance_w_per_k = 0.25", "conductance_w_per_k = 1e20")],
         &["run", "--quiet", "--no-log"],
-        &["conductor[", "conductance_w_per_k", "at most 1e9 W/K"],
+        &[
+            "conductor.motor-shaft1.conductance_w_per_k",
+            "at most 1e9 W/K",
+        ],
     );
     refused(
         "capacitance",
@@ -313,7 +316,7 @@ fn a_strain_polynomial_with_a_wrong_scale_is_refused() {
         "strain-scale",
         &out,
         &[
-            "gear_pair[0].center_distance",
+            "gear_pair.mesh.center_distance",
             "thermal strain law",
             "scale",
         ],

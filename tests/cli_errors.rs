@@ -94,7 +94,7 @@ fn negative_capacitance() {
         "neg-cap",
         "capacitance_j_per_k = 4.06",
         "capacitance_j_per_k = -4.06",
-        &["node[2].capacitance_j_per_k", ":{line}:", "must be > 0"],
+        &["node.shaft1.capacitance_j_per_k", ":{line}:", "must be > 0"],
     );
 }
 
@@ -104,7 +104,7 @@ fn emissivity_above_one() {
         "emissivity",
         "emissivity_area_m2 = 0.030",
         "emissivity = 1.2\narea_m2 = 0.03",
-        &["radiation[3].emissivity", "0 … 1"],
+        &["radiation.housing-space.emissivity", "0 … 1"],
     );
 }
 
@@ -114,7 +114,7 @@ fn absorptivity_above_one() {
         "absorptivity",
         "absorptivity = 0.7",
         "absorptivity = 1.7",
-        &["sun[0].absorptivity", "0 … 1"],
+        &["sun.\"sun.housing\".absorptivity", "0 … 1"],
     );
 }
 
@@ -125,7 +125,7 @@ fn unknown_node_reference() {
         "between = [\"housing\", \"motor\"]",
         "between = [\"housing\", \"mottor\"]",
         &[
-            "conductor[1].between[1]",
+            "conductor.housing-mottor.between[1]",
             "unknown node `mottor`",
             ":{line}:",
         ],
@@ -148,7 +148,7 @@ fn temperature_in_celsius_by_mistake() {
         "celsius",
         "initial_temperature_k = 293.15",
         "initial_temperature_k = -20.0",
-        &["node[0].initial_temperature_k", "kelvin"],
+        &["node.housing.initial_temperature_k", "kelvin"],
     );
 }
 
@@ -178,7 +178,7 @@ fn heater_set_points_inverted() {
         "heater",
         "[[sun]]",
         "[[heater]]\nnode = \"housing\"\npower_w = 4.0\non_k = 270.0\noff_k = 265.0\n\n[[sun]]",
-        &["heater[0].off_k", "above on_k"],
+        &["heater.housing.off_k", "above on_k"],
     );
 }
 
@@ -208,7 +208,7 @@ fn self_link() {
         "self-link",
         "between = [\"housing\", \"motor\"]",
         "between = [\"housing\", \"housing\"]",
-        &["conductor[1].between", "itself"],
+        &["conductor.housing-housing.between", "itself"],
     );
 }
 
@@ -274,7 +274,7 @@ fn gear_bore_not_below_base_radius() {
         "bore_radius_mm = 3.0",
         "bore_radius_mm = 9.5",
         &[
-            "gear_pair[0].pinion.bore_radius_mm",
+            "gear_pair.mesh.pinion.bore_radius_mm",
             "base radius",
             ":{line}:",
         ],
@@ -287,7 +287,7 @@ fn gear_too_few_teeth() {
         "teeth",
         "teeth = 20",
         "teeth = 4",
-        &["gear_pair[0].pinion.teeth", "5 … 10000"],
+        &["gear_pair.mesh.pinion.teeth", "5 … 10000"],
     );
 }
 
@@ -298,7 +298,7 @@ fn gear_negative_backlash_at_assembly() {
         "tooth_thinning_um = 19.4745         # s",
         "tooth_thinning_um = -30.0           # s",
         &[
-            "gear_pair[0].center_distance_mm",
+            "gear_pair.mesh.center_distance_mm",
             "negative backlash at assembly",
         ],
     );
@@ -310,7 +310,7 @@ fn gear_pressure_angle_out_of_range() {
         "alpha0",
         "pressure_angle_deg = 20.0",
         "pressure_angle_deg = 45.0",
-        &["gear_pair[0].pressure_angle_deg", "10° … 35°"],
+        &["gear_pair.mesh.pressure_angle_deg", "10° … 35°"],
     );
 }
 
@@ -320,7 +320,7 @@ fn gear_node_not_on_the_base_circle() {
         "node-radius",
         "radius_mm = 9.396926",
         "radius_mm = 9.5",
-        &["gear_pair[0].pinion.nodes[2]", "base radius"],
+        &["gear_pair.mesh.pinion.nodes[2]", "base radius"],
     );
 }
 
@@ -330,7 +330,7 @@ fn gear_unknown_bore_fit() {
         "fit",
         "bore_fit = \"free\"",
         "bore_fit = \"glued\"",
-        &["gear_pair[0].pinion.bore_fit", "free, rigid, elastic"],
+        &["gear_pair.mesh.pinion.bore_fit", "free, rigid, elastic"],
     );
 }
 
@@ -340,13 +340,13 @@ fn not_a_number_is_rejected() {
         "nan",
         "capacitance_j_per_k = 4.06",
         "capacitance_j_per_k = nan",
-        &["node[2].capacitance_j_per_k", "finite", ":{line}:"],
+        &["node.shaft1.capacitance_j_per_k", "finite", ":{line}:"],
     );
     assert_rejected(
         "inf",
         "conductance_w_per_k = 0.30",
         "conductance_w_per_k = inf",
-        &["conductor[1].conductance_w_per_k", "finite"],
+        &["conductor.housing-motor.conductance_w_per_k", "finite"],
     );
 }
 

@@ -101,7 +101,11 @@ fn run_exits_2_on_a_broken_scenario() {
         &[("capacitance_j_per_k = 120.0", "capacitance_j_per_k = -1")],
     );
     let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
-    assert_error("broken", &out, &["s.toml", "node[0].capacitance_j_per_k"]);
+    assert_error(
+        "broken",
+        &out,
+        &["s.toml", "node.housing.capacitance_j_per_k"],
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

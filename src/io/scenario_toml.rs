@@ -185,7 +185,7 @@ fn locate(text: &str, path: &KeyPath) -> Option<usize> {
                 }
                 next
             }
-            Seg::I(i) => {
+            Seg::I(i) | Seg::E(i, _) => {
                 let next = item.get(*i);
                 if let Some(nx) = next {
                     best = nx.span().map(|r| r.start).or(best);

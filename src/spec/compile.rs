@@ -3,8 +3,8 @@
 //! program meets the same invariants with the same error text.
 
 use std::collections::HashMap;
-use std::fmt;
 
+use super::keys::{KeyPath, element_keys};
 use super::*;
 use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
 use crate::gear::disc::{BoreFit, DiscMaterial};
@@ -32,46 +32,6 @@ use crate::units::{SECONDS_PER_DAY, num};
 pub struct SpecError {
     pub key: KeyPath,
     pub message: String,
-}
-
-/// One step of a key path: a key, or an index into an array.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Seg {
-    K(&'static str),
-    I(usize),
-}
-
-/// A key path into a scenario, e.g. `node[2].capacitance_j_per_k`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct KeyPath(pub Vec<Seg>);
-
-impl KeyPath {
-    pub fn new(k: &'static str) -> KeyPath {
-        KeyPath(vec![Seg::K(k)])
-    }
-    pub fn at(&self, i: usize) -> KeyPath {
-        let mut p = self.clone();
-        p.0.push(Seg::I(i));
-        p
-    }
-    pub fn key(&self, k: &'static str) -> KeyPath {
-        let mut p = self.clone();
-        p.0.push(Seg::K(k));
-        p
-    }
-}
-
-impl fmt::Display for KeyPath {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (n, s) in self.0.iter().enumerate() {
-            match s {
-                Seg::K(k) if n == 0 => write!(f, "{k}")?,
-                Seg::K(k) => write!(f, ".{k}")?,
-                Seg::I(i) => write!(f, "[{i}]")?,
-            }
-        }
-        Ok(())
-    }
 }
 
 /// The checks, each naming the key path it checks.
@@ -288,6 +248,7 @@ const SPACE: &str = "space";
 /// Validates `raw` into the numeric model.
 pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let cx = &Cx;
+    let keys = element_keys(&raw);
     let meta_p = KeyPath::new("scenario");
     valid_name(cx, &meta_p.key("name"), &raw.scenario.name)?;
 
@@ -473,8 +434,8 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let np = KeyPath::new("node");
     let mut nodes = Vec::new();
     for (i, n) in raw.node.into_iter().enumerate() {
-        let p = np.at(i);
-        check_name(cx, &p.key("name"), &n.name, &names)?;
+        let p = np.elem(i, &keys.node[i]);
+        check_name(cx, &np.at(i).key("name"), &n.name, &names)?;
         let node = DiffusionNode {
             capacitance_j_per_k: {
                 let k = p.key("capacitance_j_per_k");
@@ -505,14 +466,14 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     }];
     names.insert(SPACE.to_string(), NodeRef::Boundary(0));
     for (i, b) in raw.boundary.into_iter().enumerate() {
-        let p = bp.at(i);
+        let p = bp.elem(i, &keys.boundary[i]);
         if b.name == SPACE {
             return Err(cx.err(
-                &p.key("name"),
+                &bp.at(i).key("name"),
                 "`space` is built in; set its temperature with environment.space_sink_k",
             ));
         }
-        check_name(cx, &p.key("name"), &b.name, &names)?;
+        check_name(cx, &bp.at(i).key("name"), &b.name, &names)?;
         let t = cx.profile(&p.key("temperature_k"), b.temperature_k, &|pp, v| {
             cx.temperature(pp, v)
         })?;
@@ -568,7 +529,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
 
     let mut conductors = Vec::new();
     for (i, c) in raw.conductor.iter().enumerate() {
-        let p = KeyPath::new("conductor").at(i);
+        let p = KeyPath::new("conductor").elem(i, &keys.conductor[i]);
         let (a, b) = pair(&p, &c.between)?;
         conductors.push(Conductor {
             a,
@@ -583,7 +544,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     }
     let mut radiators = Vec::new();
     for (i, r) in raw.radiation.iter().enumerate() {
-        let p = KeyPath::new("radiation").at(i);
+        let p = KeyPath::new("radiation").elem(i, &keys.radiation[i]);
         let (a, b) = pair(&p, &r.between)?;
         let ea = cx.product(
             &p,
@@ -602,14 +563,17 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     // Modes (before loads, which may refer to them).
     let mut modes = Vec::new();
     for (i, m) in raw.mode.into_iter().enumerate() {
-        let p = KeyPath::new("mode").at(i);
-        valid_name(cx, &p.key("name"), &m.name)?;
+        let p = KeyPath::new("mode").elem(i, &keys.mode[i]);
+        valid_name(cx, &KeyPath::new("mode").at(i).key("name"), &m.name)?;
         if ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
-            return Err(cx.err(&p.key("name"), format!("`{}` cannot name a mode", m.name)));
+            return Err(cx.err(
+                &KeyPath::new("mode").at(i).key("name"),
+                format!("`{}` cannot name a mode", m.name),
+            ));
         }
         if modes.iter().any(|x: &Mode| x.name == m.name) {
             return Err(cx.err(
-                &p.key("name"),
+                &KeyPath::new("mode").at(i).key("name"),
                 format!("mode `{}` is defined twice", m.name),
             ));
         }
@@ -660,7 +624,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         })
     };
     for (i, s) in raw.sun.into_iter().enumerate() {
-        let p = KeyPath::new("sun").at(i);
+        let p = KeyPath::new("sun").elem(i, &keys.sun[i]);
         let node = diffusion(&p.key("node"), &s.node)?;
         let aa = cx.product(
             &p,
@@ -683,7 +647,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         };
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &p.key("name"), s.name)?,
+                optional_name(cx, &KeyPath::new("sun").at(i).key("name"), s.name)?,
                 "sun",
                 &s.node,
                 i,
@@ -712,7 +676,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         Ok::<_, SpecError>((aa, vf))
     };
     for (i, s) in raw.albedo.into_iter().enumerate() {
-        let p = KeyPath::new("albedo").at(i);
+        let p = KeyPath::new("albedo").elem(i, &keys.albedo[i]);
         let node = diffusion(&p.key("node"), &s.node)?;
         let (aa, vf) = earth_face(
             &p,
@@ -723,7 +687,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         )?;
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &p.key("name"), s.name)?,
+                optional_name(cx, &KeyPath::new("albedo").at(i).key("name"), s.name)?,
                 "albedo",
                 &s.node,
                 i,
@@ -736,7 +700,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         });
     }
     for (i, s) in raw.earth_ir.into_iter().enumerate() {
-        let p = KeyPath::new("earth_ir").at(i);
+        let p = KeyPath::new("earth_ir").elem(i, &keys.earth_ir[i]);
         let node = diffusion(&p.key("node"), &s.node)?;
         let (ea, vf) = earth_face(
             &p,
@@ -747,7 +711,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         )?;
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &p.key("name"), s.name)?,
+                optional_name(cx, &KeyPath::new("earth_ir").at(i).key("name"), s.name)?,
                 "earth_ir",
                 &s.node,
                 i,
@@ -760,7 +724,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         });
     }
     for (i, s) in raw.dissipation.into_iter().enumerate() {
-        let p = KeyPath::new("dissipation").at(i);
+        let p = KeyPath::new("dissipation").elem(i, &keys.dissipation[i]);
         let node = diffusion(&p.key("node"), &s.node)?;
         let power = cx.profile(&p.key("power_w"), s.power_w, &|pp, v| {
             cx.within(pp, v, 0.0, MAX_POWER_W, "power (W)")
@@ -780,7 +744,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         };
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &p.key("name"), s.name)?,
+                optional_name(cx, &KeyPath::new("dissipation").at(i).key("name"), s.name)?,
                 "dissipation",
                 &s.node,
                 i,
@@ -794,7 +758,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     }
     let mut heaters = Vec::new();
     for (i, h) in raw.heater.into_iter().enumerate() {
-        let p = KeyPath::new("heater").at(i);
+        let p = KeyPath::new("heater").elem(i, &keys.heater[i]);
         let node = diffusion(&p.key("node"), &h.node)?;
         let sensor_node = match &h.sensor_node {
             Some(s) => diffusion(&p.key("sensor_node"), s)?,
@@ -809,7 +773,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             ));
         }
         heaters.push(Heater {
-            name: optional_name(cx, &p.key("name"), h.name)?
+            name: optional_name(cx, &KeyPath::new("heater").at(i).key("name"), h.name)?
                 .unwrap_or_else(|| format!("heater.{}", h.node)),
             node,
             sensor_node,
@@ -822,7 +786,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     // Sensors.
     let mut sensors: Vec<Sensor> = Vec::new();
     for (i, s) in raw.sensor.into_iter().enumerate() {
-        let p = KeyPath::new("sensor").at(i);
+        let p = KeyPath::new("sensor").elem(i, &keys.sensor[i]);
         if sensors.iter().any(|x| x.column == s.column) {
             return Err(cx.err(
                 &p.key("column"),
@@ -854,11 +818,11 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     // Gear pairs.
     let mut gears = Vec::new();
     for (i, g) in raw.gear_pair.into_iter().enumerate() {
-        let p = KeyPath::new("gear_pair").at(i);
+        let p = KeyPath::new("gear_pair").elem(i, &keys.gear_pair[i]);
         let pair = gear_pair(cx, &p, g, i, &nodes, &diffusion)?;
         if gears.iter().any(|x: &GearPair| x.name == pair.name) {
             return Err(cx.err(
-                &p.key("name"),
+                &KeyPath::new("gear_pair").at(i).key("name"),
                 format!("gear pair `{}` is defined twice", pair.name),
             ));
         }
@@ -867,7 +831,9 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     for (i, s) in sensors.iter().enumerate() {
         if matches!(s.target, SensorTarget::Derived(_)) && gears.is_empty() {
             return Err(cx.err(
-                &KeyPath::new("sensor").at(i).key("quantity"),
+                &KeyPath::new("sensor")
+                    .elem(i, &keys.sensor[i])
+                    .key("quantity"),
                 "needs a [[gear_pair]] in the scenario",
             ));
         }
@@ -1357,13 +1323,14 @@ fn gear_pair(
     };
     let [pinion, wheel]: [Gear; 2] = built.try_into().map_err(|_| cx.err(p, "two gears"))?;
     let pair = GearPair {
-        name: optional_name(cx, &p.key("name"), g.name)?.unwrap_or_else(|| {
-            if index == 0 {
-                "mesh".into()
-            } else {
-                format!("mesh{index}")
-            }
-        }),
+        name: optional_name(cx, &KeyPath::new("gear_pair").at(index).key("name"), g.name)?
+            .unwrap_or_else(|| {
+                if index == 0 {
+                    "mesh".into()
+                } else {
+                    format!("mesh{index}")
+                }
+            }),
         module_m,
         pressure_angle_rad: alpha0,
         face_width_m: cx.positive(&p.key("face_width_mm"), g.face_width_mm)? * 1e-3,

@@ -8,8 +8,10 @@
 //! Every key is documented in `scenarios/README.md`; keep the two in step.
 
 mod compile;
+pub mod keys;
 
-pub use compile::{KeyPath, Seg, SpecError, compile};
+pub use compile::{SpecError, compile};
+pub use keys::{KeyPath, Seg};
 
 use serde::{Deserialize, Serialize};
 

@@ -1,0 +1,279 @@
+//! Key paths: how a value of a scenario is named, in errors, in `orbitlash params` and
+//! in `--set`.
+//!
+//! A path follows the TOML keys, with the elements of arrays of tables named by their
+//! key rather than their position: `node.housing.capacitance_j_per_k`,
+//! `environment.beta_deg`, `gear_pair.mesh.pinion.tooth_thinning_um`,
+//! `conductor.housing-bus.conductance_w_per_k`. A key holding anything but letters,
+//! digits, `_` and `-` is quoted as in TOML: `node."gear1.r2".capacitance_j_per_k`.
+//! Arrays of numbers take an index: `environment.beta_deg.value[1]`.
+//!
+//! Element keys ([`element_keys`]): nodes, boundaries, modes by their name; gear pairs by
+//! their name (default `mesh`, `mesh1`, …); conductors and radiative links by their
+//! `name`, else `<a>-<b>` from the nodes they join; loads (`sun`, `albedo`, `earth_ir`,
+//! `dissipation`) and heaters by their `name`, else their node; a key that repeats
+//! within its array gets `-2`, `-3`, … in order.
+
+use std::fmt;
+
+use super::ScenarioSpec;
+
+/// One step of a key path.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Seg {
+    /// A key of a table.
+    K(&'static str),
+    /// An index into an array of numbers (or of tables whose element has no key).
+    I(usize),
+    /// An element of an array of tables: its position and its key.
+    E(usize, String),
+}
+
+/// A key path into a scenario, e.g. `node.motor.capacitance_j_per_k`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyPath(pub Vec<Seg>);
+
+impl KeyPath {
+    pub fn new(k: &'static str) -> KeyPath {
+        KeyPath(vec![Seg::K(k)])
+    }
+    pub fn at(&self, i: usize) -> KeyPath {
+        let mut p = self.clone();
+        p.0.push(Seg::I(i));
+        p
+    }
+    /// The element at position `i` with key `key`.
+    pub fn elem(&self, i: usize, key: &str) -> KeyPath {
+        let mut p = self.clone();
+        p.0.push(Seg::E(i, key.to_string()));
+        p
+    }
+    pub fn key(&self, k: &'static str) -> KeyPath {
+        let mut p = self.clone();
+        p.0.push(Seg::K(k));
+        p
+    }
+}
+
+/// A key as it is written in a path: bare when it is letters, digits, `_` and `-`,
+/// quoted otherwise.
+pub fn quote_key(key: &str) -> String {
+    let bare = !key.is_empty()
+        && key
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+    if bare {
+        key.to_string()
+    } else {
+        format!("\"{}\"", key.replace('\\', "\\\\").replace('"', "\\\""))
+    }
+}
+
+impl fmt::Display for KeyPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (n, s) in self.0.iter().enumerate() {
+            match s {
+                Seg::K(k) if n == 0 => write!(f, "{k}")?,
+                Seg::K(k) => write!(f, ".{k}")?,
+                Seg::I(i) => write!(f, "[{i}]")?,
+                Seg::E(_, key) => write!(f, ".{}", quote_key(key))?,
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A key path as a user typed it: keys (bare or quoted) and indices.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Part {
+    Key(String),
+    Index(usize),
+}
+
+/// Splits `node."gear1.r2".capacitance_j_per_k` or `environment.beta_deg.value[1]` into
+/// its parts.
+pub fn parse_path(text: &str) -> Result<Vec<Part>, String> {
+    let mut parts = Vec::new();
+    let mut chars = text.chars().peekable();
+    let mut expect_key = true;
+    while let Some(&c) = chars.peek() {
+        match c {
+            '.' if !expect_key => {
+                chars.next();
+                expect_key = true;
+            }
+            '[' => {
+                chars.next();
+                let mut digits = String::new();
+                for d in chars.by_ref() {
+                    if d == ']' {
+                        break;
+                    }
+                    digits.push(d);
+                }
+                let i = digits
+                    .trim()
+                    .parse()
+                    .map_err(|_| format!("`[{digits}]` is not an index"))?;
+                parts.push(Part::Index(i));
+                expect_key = false;
+            }
+            '"' if expect_key => {
+                chars.next();
+                let mut key = String::new();
+                let mut closed = false;
+                while let Some(d) = chars.next() {
+                    match d {
+                        '\\' => {
+                            if let Some(e) = chars.next() {
+                                key.push(e);
+                            }
+                        }
+                        '"' => {
+                            closed = true;
+                            break;
+                        }
+                        _ => key.push(d),
+                    }
+                }
+                if !closed {
+                    return Err("a quoted key is not closed".into());
+                }
+                parts.push(Part::Key(key));
+                expect_key = false;
+            }
+            _ if expect_key => {
+                let mut key = String::new();
+                while let Some(&d) = chars.peek() {
+                    if d == '.' || d == '[' {
+                        break;
+                    }
+                    key.push(d);
+                    chars.next();
+                }
+                if key.is_empty() {
+                    return Err("an empty key".into());
+                }
+                parts.push(Part::Key(key.trim().to_string()));
+                expect_key = false;
+            }
+            _ => return Err(format!("unexpected `{c}`")),
+        }
+    }
+    if parts.is_empty() || expect_key {
+        return Err("the path is empty or ends with `.`".into());
+    }
+    Ok(parts)
+}
+
+/// The keys of every element of every array of tables, in the order of the spec.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ElementKeys {
+    pub node: Vec<String>,
+    pub boundary: Vec<String>,
+    pub conductor: Vec<String>,
+    pub radiation: Vec<String>,
+    pub sun: Vec<String>,
+    pub albedo: Vec<String>,
+    pub earth_ir: Vec<String>,
+    pub dissipation: Vec<String>,
+    pub heater: Vec<String>,
+    pub mode: Vec<String>,
+    pub sensor: Vec<String>,
+    pub gear_pair: Vec<String>,
+}
+
+/// Makes keys unique within their array: the second `a` becomes `a-2`, and so on.
+fn unique(keys: impl Iterator<Item = String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for k in keys {
+        let mut key = k.clone();
+        let mut n = 2;
+        while out.contains(&key) {
+            key = format!("{k}-{n}");
+            n += 1;
+        }
+        out.push(key);
+    }
+    out
+}
+
+/// The element keys of `spec` (see the module docs).
+pub fn element_keys(spec: &ScenarioSpec) -> ElementKeys {
+    let link = |name: &Option<String>, between: &[String]| {
+        name.clone().unwrap_or_else(|| between.join("-"))
+    };
+    ElementKeys {
+        node: unique(spec.node.iter().map(|n| n.name.clone())),
+        boundary: unique(spec.boundary.iter().map(|b| b.name.clone())),
+        conductor: unique(spec.conductor.iter().map(|c| link(&c.name, &c.between))),
+        radiation: unique(spec.radiation.iter().map(|r| link(&r.name, &r.between))),
+        sun: unique(
+            spec.sun
+                .iter()
+                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        ),
+        albedo: unique(
+            spec.albedo
+                .iter()
+                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        ),
+        earth_ir: unique(
+            spec.earth_ir
+                .iter()
+                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        ),
+        dissipation: unique(
+            spec.dissipation
+                .iter()
+                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        ),
+        heater: unique(
+            spec.heater
+                .iter()
+                .map(|h| h.name.clone().unwrap_or(h.node.clone())),
+        ),
+        mode: unique(spec.mode.iter().map(|m| m.name.clone())),
+        sensor: unique(spec.sensor.iter().map(|s| s.column.clone())),
+        gear_pair: unique(spec.gear_pair.iter().enumerate().map(|(i, g)| {
+            g.name.clone().unwrap_or_else(|| {
+                if i == 0 {
+                    "mesh".to_string()
+                } else {
+                    format!("mesh{i}")
+                }
+            })
+        })),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paths_parse_and_print() {
+        let p = parse_path("node.\"gear1.r2\".capacitance_j_per_k").unwrap();
+        assert_eq!(
+            p,
+            vec![
+                Part::Key("node".into()),
+                Part::Key("gear1.r2".into()),
+                Part::Key("capacitance_j_per_k".into())
+            ]
+        );
+        let p = parse_path("environment.beta_deg.value[1]").unwrap();
+        assert_eq!(p[2], Part::Key("value".into()));
+        assert_eq!(p[3], Part::Index(1));
+        assert!(parse_path("node.").is_err());
+        assert!(parse_path("node.\"x").is_err());
+        let k = KeyPath::new("node")
+            .elem(3, "gear1.r2")
+            .key("capacitance_j_per_k");
+        assert_eq!(k.to_string(), "node.\"gear1.r2\".capacitance_j_per_k");
+        let k = KeyPath::new("conductor")
+            .elem(0, "housing-bus")
+            .key("conductance_w_per_k");
+        assert_eq!(k.to_string(), "conductor.housing-bus.conductance_w_per_k");
+    }
+}
