@@ -18,6 +18,7 @@
 pub mod constants;
 pub mod gear;
 pub mod io;
+pub mod model;
 pub mod orbit;
 pub mod scenario;
 pub mod sim;

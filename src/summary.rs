@@ -375,3 +375,193 @@ impl Observer for MeshStats {
         Ok(())
     }
 }
+
+/// The summary of a run for scripts (`orbitlash run --json`): stable keys, SI units in
+/// their names. Documented in the README.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RunSummary {
+    pub scenario: String,
+    /// "pass" when every gear pair kept its minimum backlash, else "fail".
+    pub verdict: &'static str,
+    pub t_start_s: f64,
+    pub t_end_s: f64,
+    pub orbits: f64,
+    pub interrupted: bool,
+    /// The window the node statistics cover: the last orbit, or the whole run when it
+    /// stopped before its last orbit.
+    pub window: Window,
+    pub nodes: Vec<NodeSummary>,
+    pub gear_pairs: Vec<PairSummary>,
+    pub events: EventCounts,
+    pub energy: EnergySummary,
+    pub solver: SolverSummary,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Window {
+    pub start_s: f64,
+    pub end_s: f64,
+    pub last_orbit: bool,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct NodeSummary {
+    pub name: String,
+    pub min_k: f64,
+    pub max_k: f64,
+    pub mean_k: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PairSummary {
+    pub name: String,
+    /// "pass", "margin_violated", "interference" or "no_valid_mesh".
+    pub verdict: &'static str,
+    pub min_backlash_allowed_um: f64,
+    /// Over the whole run.
+    pub min_backlash_um: f64,
+    pub t_min_backlash_s: f64,
+    pub max_backlash_um: f64,
+    pub t_max_backlash_s: f64,
+    pub min_margin_um: f64,
+    pub min_backlash_closed_form_um: f64,
+    pub max_backlash_closed_form_um: f64,
+    pub min_backlash_paper_um: f64,
+    pub max_backlash_paper_um: f64,
+    /// Over the window.
+    pub window_min_backlash_um: f64,
+    pub window_max_backlash_um: f64,
+    pub interference_events: u64,
+    pub margin_events: u64,
+    pub invalid_samples: u64,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct EventCounts {
+    pub eclipse_entries: u64,
+    pub heater_switches: u64,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct EnergySummary {
+    pub absorbed_j: f64,
+    pub dissipated_j: f64,
+    pub to_boundary_j: std::collections::BTreeMap<String, f64>,
+    pub stored_j: f64,
+    pub error_j: f64,
+    pub relative_error: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SolverSummary {
+    pub method: &'static str,
+    pub linear_solver: &'static str,
+    pub steps: u64,
+    pub rejected_steps: u64,
+    pub factorizations: u64,
+    pub newton_iterations: u64,
+    pub wall_time_s: f64,
+}
+
+fn verdict_name(v: PairVerdict) -> &'static str {
+    match v {
+        PairVerdict::Pass => "pass",
+        PairVerdict::MarginViolated => "margin_violated",
+        PairVerdict::Interference => "interference",
+        PairVerdict::NoValidMesh => "no_valid_mesh",
+    }
+}
+
+impl RunSummary {
+    /// The summary of a run of `scenario` from its statistics and observers.
+    pub fn new(
+        scenario: &crate::scenario::Scenario,
+        stats: &crate::sim::RunStats,
+        window: &WindowStats,
+        mesh: &MeshStats,
+        wall_time_s: f64,
+    ) -> RunSummary {
+        let um = |m: f64| m * 1e6;
+        let pairs: Vec<PairSummary> = scenario
+            .gears
+            .iter()
+            .zip(mesh.run_pairs.iter().zip(&mesh.pairs))
+            .map(|(g, (r, w))| PairSummary {
+                name: g.name.clone(),
+                verdict: verdict_name(r.verdict()),
+                min_backlash_allowed_um: um(g.min_backlash_m),
+                min_backlash_um: um(r.min_exact_m),
+                t_min_backlash_s: r.t_min_s,
+                max_backlash_um: um(r.max_exact_m),
+                t_max_backlash_s: r.t_max_s,
+                min_margin_um: um(r.min_margin_m),
+                min_backlash_closed_form_um: um(r.min_closed_form_m),
+                max_backlash_closed_form_um: um(r.max_closed_form_m),
+                min_backlash_paper_um: um(r.min_paper_m),
+                max_backlash_paper_um: um(r.max_paper_m),
+                window_min_backlash_um: um(w.min_exact_m),
+                window_max_backlash_um: um(w.max_exact_m),
+                interference_events: r.interference_events,
+                margin_events: r.margin_events,
+                invalid_samples: r.invalid_samples,
+            })
+            .collect();
+        let e = &stats.energy;
+        let net = &scenario.thermal.network;
+        RunSummary {
+            scenario: scenario.name.clone(),
+            verdict: if pairs.iter().all(|p| p.verdict == "pass") {
+                "pass"
+            } else {
+                "fail"
+            },
+            t_start_s: stats.t_start_s,
+            t_end_s: stats.t_end_s,
+            orbits: (stats.t_end_s - stats.t_start_s) / scenario.period_s(),
+            interrupted: stats.interrupted,
+            window: Window {
+                start_s: window.window_start_s(),
+                end_s: stats.t_end_s,
+                last_orbit: window.window_start_s() > stats.t_start_s
+                    || stats.t_end_s - stats.t_start_s <= scenario.period_s() * 1.000001,
+            },
+            nodes: window
+                .nodes()
+                .into_iter()
+                .map(|n| NodeSummary {
+                    name: n.name,
+                    min_k: n.min_k,
+                    max_k: n.max_k,
+                    mean_k: n.mean_k,
+                })
+                .collect(),
+            gear_pairs: pairs,
+            events: EventCounts {
+                eclipse_entries: stats.eclipse_entries,
+                heater_switches: stats.heater_switches,
+            },
+            energy: EnergySummary {
+                absorbed_j: e.absorbed_j,
+                dissipated_j: e.dissipated_j,
+                to_boundary_j: net
+                    .boundaries
+                    .iter()
+                    .zip(&e.to_boundary_j)
+                    .map(|(b, q)| (b.name.clone(), *q))
+                    .collect(),
+                stored_j: e.stored_j,
+                error_j: e.error_j(),
+                relative_error: e.relative_error(),
+            },
+            solver: SolverSummary {
+                method: "tr-bdf2",
+                linear_solver: stats.linear_solver,
+                steps: stats.steps,
+                rejected_steps: stats.rejected_steps,
+                factorizations: stats.factorizations,
+                newton_iterations: stats.newton_iterations,
+                wall_time_s,
+            },
+        }
+    }
+}

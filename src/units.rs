@@ -30,9 +30,28 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// A number with every digit it has (round-trips), compact: plain between 1e-4 and
+/// 1e7, in exponent form otherwise (6378137, 3.986004418e14).
+pub fn exact(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::num;
+    use super::{exact, num};
+
+    #[test]
+    fn exact_numbers() {
+        assert_eq!(exact(6378137.0), "6378137");
+        assert_eq!(exact(3.986004418e14), "3.986004418e14");
+        assert_eq!(exact(0.002), "0.002");
+        assert_eq!(exact(1.5e-5), "1.5e-5");
+    }
 
     #[test]
     fn numbers_for_messages() {

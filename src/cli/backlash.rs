@@ -11,7 +11,7 @@ use serde_json::json;
 use orbitlash::gear::{CenterDistance, GearPair, MeshState};
 use orbitlash::units::{c_to_k, k_to_c};
 
-use super::{Outcome, load, print_out};
+use super::{Outcome, print_out};
 
 #[derive(Args, Debug)]
 pub struct BacklashArgs {
@@ -32,6 +32,9 @@ pub struct BacklashArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     json: bool,
+    /// Change a number of the scenario by its key path (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
 }
 
 fn finite(s: &str) -> Result<f64, String> {
@@ -91,7 +94,7 @@ fn verdict_line(pair: &GearPair, states: &[(Case, MeshState)]) -> String {
 }
 
 pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
-    let loaded = load(a.scenario.as_deref())?;
+    let loaded = super::load_with(a.scenario.as_deref(), &a.sets)?;
     let sc = &loaded.scenario;
     if sc.gears.is_empty() {
         bail!("{} has no [[gear_pair]]", loaded.file);

@@ -309,6 +309,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             scenario_toml: String::new(),
             solver: String::new(),
             seed: None,
+            sets: vec![],
         };
         let run = |log: bool| -> Result<(f64, u64)> {
             // the observers `run` uses besides the outputs

@@ -8,17 +8,20 @@ use clap::Args;
 use orbitlash::orbit::EnvironmentModel;
 use orbitlash::thermal::analysis::time_constants;
 
-use super::{load, print_out};
+use super::{load_with, print_out};
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
     /// Scenario file (TOML).
     scenario: PathBuf,
+    /// Change a number of the scenario by its key path (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
 }
 
 pub fn check(a: CheckArgs) -> Result<()> {
     let mut o = String::new();
-    let loaded = load(Some(&a.scenario))?;
+    let loaded = load_with(Some(&a.scenario), &a.sets)?;
     let sc = &loaded.scenario;
     let env = &sc.thermal.environment;
     let net = &sc.thermal.network;

@@ -12,6 +12,7 @@ mod backlash;
 mod bench;
 mod check;
 mod export;
+mod params;
 mod recover;
 mod run;
 
@@ -21,7 +22,9 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 use orbitlash::io::scenario_toml::{self, REFERENCE_HINGE_NAME, REFERENCE_HINGE_TOML};
+use orbitlash::model::{Model, ModelError};
 use orbitlash::scenario::Scenario;
+use orbitlash::spec::params::parse_assignment;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -50,6 +53,9 @@ enum Command {
     /// Measure the cost of the thermal solver (per step, per orbit, accuracy), of the
     /// backlash evaluation and of logging.
     Bench(bench::BenchArgs),
+    /// Every number of a scenario by key path (what `--set KEY=VALUE` changes), with its
+    /// value, unit and valid range.
+    Params(params::ParamsArgs),
     /// Static backlash calculator: every model variant at given temperatures.
     #[command(after_help = VERDICT_HELP)]
     Backlash(backlash::BacklashArgs),
@@ -81,6 +87,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Run(a) => run::run(a),
         Command::Check(a) => done(check::check(a)),
+        Command::Params(a) => done(params::params(a)),
         Command::Bench(a) => done(bench::bench(a)),
         Command::Backlash(a) => backlash::backlash(a),
         Command::ExportCsv(a) => done(export::export(a)),
@@ -105,6 +112,10 @@ pub fn error_chain(e: &anyhow::Error) -> String {
 /// A scenario as loaded: the model, its TOML text and where it came from.
 pub struct Loaded {
     pub scenario: Scenario,
+    /// The spec and model the scenario was compiled from (with the `--set` changes).
+    pub model: Model,
+    /// The `--set` changes applied, in order.
+    pub sets: Vec<(String, f64)>,
     pub toml: String,
     pub file: String,
     /// The scenario file, when it came from one (an input outputs must not replace).
@@ -120,23 +131,52 @@ impl Loaded {
 
 /// Loads `path`, or the embedded reference scenario when `None`.
 pub fn load(path: Option<&Path>) -> Result<Loaded> {
-    match path {
+    load_with(path, &[])
+}
+
+/// Loads `path` (or the embedded reference) and applies `--set KEY=VALUE` changes: the
+/// same compiler checks them, with the same error text as in the file.
+pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
+    let (spec, toml, file) = match path {
         Some(p) => {
-            let (scenario, toml) = scenario_toml::load_file(p)?;
-            Ok(Loaded {
-                scenario,
-                toml,
-                file: p.display().to_string(),
-                path: Some(p.to_path_buf()),
-            })
+            let (spec, toml) = scenario_toml::read_spec_file(p)?;
+            (spec, toml, p.display().to_string())
         }
-        None => Ok(Loaded {
-            scenario: scenario_toml::reference(),
-            toml: REFERENCE_HINGE_TOML.to_string(),
-            file: format!("<embedded {REFERENCE_HINGE_NAME}.toml>"),
-            path: None,
-        }),
+        None => (
+            scenario_toml::parse_spec(REFERENCE_HINGE_TOML, "<embedded>")?,
+            REFERENCE_HINGE_TOML.to_string(),
+            format!("<embedded {REFERENCE_HINGE_NAME}.toml>"),
+        ),
+    };
+    let mut model = Model::new(spec).map_err(|e| scenario_toml::located(&toml, &file, e))?;
+    let mut changes = Vec::new();
+    for s in sets {
+        let (key, value) = parse_assignment(s).map_err(|e| anyhow::anyhow!("--set {s}: {e}"))?;
+        changes.push((key, value));
     }
+    if !changes.is_empty() {
+        model.set_many(&changes).map_err(|e| match e {
+            ModelError::Param(p) => {
+                let s = sets
+                    .iter()
+                    .find(|s| s.starts_with(&p.key))
+                    .cloned()
+                    .unwrap_or_default();
+                anyhow::anyhow!("--set {s}: {p}")
+            }
+            ModelError::Invalid(v) => {
+                anyhow::anyhow!("{file} with --set {}: {v}", sets.join(" --set "))
+            }
+        })?;
+    }
+    Ok(Loaded {
+        scenario: model.scenario().clone(),
+        model,
+        toml,
+        file,
+        path: path.map(Path::to_path_buf),
+        sets: changes,
+    })
 }
 
 /// Validates a user-given orbit count.

@@ -1,6 +1,6 @@
 //! `orbitlash run`: simulate, observe, summarise.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -9,6 +9,7 @@ use anyhow::{Result, anyhow};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use orbitlash::io::atomic::AtomicFile;
 use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::{OutputError, OutputPolicy, available_bytes, check_output, resolved};
@@ -17,11 +18,11 @@ use orbitlash::scenario::Scenario;
 use orbitlash::sim::{
     MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run, simulate,
 };
-use orbitlash::summary::{MeshStats, PairStats, PairVerdict, WindowStats};
+use orbitlash::summary::{MeshStats, PairStats, PairVerdict, RunSummary, WindowStats};
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
 
-use super::{Outcome, default_log_path, error_chain, load, orbits_arg, print_out};
+use super::{Outcome, default_log_path, error_chain, load_with, orbits_arg, print_out};
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
@@ -48,6 +49,13 @@ pub struct RunArgs {
     /// 60s). Default: every step.
     #[arg(long, value_name = "N|SECONDSs")]
     log_every: Option<LogCadence>,
+    /// Change a number of the scenario by its key path (repeatable), e.g.
+    /// `--set node.housing.capacitance_j_per_k=130`; `orbitlash params` lists them.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+    /// Also write the run summary as JSON (stable keys, see the README).
+    #[arg(long, value_name = "FILE.json")]
+    json: Option<PathBuf>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -78,7 +86,7 @@ impl Observer for Progress {
 }
 
 pub fn run(a: RunArgs) -> Result<Outcome> {
-    let loaded = load(a.scenario.as_deref())?;
+    let loaded = load_with(a.scenario.as_deref(), &a.sets)?;
     let mut sc = loaded.scenario.clone();
     if let Some(o) = a.orbits {
         sc = sc
@@ -114,6 +122,20 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(c) = &a.csv {
         check_output(c, &OutputPolicy::reading(&inputs))?;
     }
+    // The JSON summary is written after the run, but its path is checked now.
+    let json_out = a.json.clone();
+    if let Some(j) = &json_out {
+        check_output(j, &OutputPolicy::reading(&inputs))?;
+        for other in [log_path.as_ref(), a.csv.as_ref()].into_iter().flatten() {
+            if resolved(other) == resolved(j) {
+                anyhow::bail!(
+                    "--json {} and {} are the same file",
+                    j.display(),
+                    other.display()
+                );
+            }
+        }
+    }
     if let Some(l) = &log_path {
         check_output(l, &log_policy)?;
     }
@@ -134,6 +156,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
                     sc.solver.tolerance_k, sc.solver.max_step_s, sc.solver.adaptive
                 ),
                 seed: None,
+                sets: loaded.sets.clone(),
             },
             a.log_every.unwrap_or(LogCadence::Steps(1)),
             &log_policy,
@@ -230,6 +253,15 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     o.push_str(&format_mesh(&sc, &mesh));
     if a.verbose {
         o.push_str(&format_solver(&stats, wall_s, t_end_s / period_s));
+    }
+    if let Some(p) = &json_out {
+        let summary = RunSummary::new(&sc, &stats, window, &mesh, wall_s);
+        let mut f = AtomicFile::create(p, &OutputPolicy::reading(&inputs))?;
+        let text = serde_json::to_string_pretty(&summary)? + "\n";
+        f.write_all(text.as_bytes())
+            .map_err(|e| OutputError::io(p, e))?;
+        f.commit()?;
+        outln!(o, "json: {}", p.display());
     }
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());

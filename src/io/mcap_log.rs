@@ -126,6 +126,8 @@ pub struct Provenance {
     pub scenario_toml: String,
     pub solver: String,
     pub seed: Option<u64>,
+    /// `--set` changes applied to the attached scenario, in order.
+    pub sets: Vec<(String, f64)>,
 }
 
 #[derive(Default)]
@@ -807,6 +809,14 @@ fn open_log_writer(
         ("scenario_sha256", sha),
         ("solver", p.solver.clone()),
         ("seed", p.seed.map_or("none".into(), |s| s.to_string())),
+        (
+            "set",
+            p.sets
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+        ),
         ("t_end_s", format!("{}", t_end_s)),
         ("log_cadence", cadence),
     ]

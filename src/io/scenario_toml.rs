@@ -31,6 +31,19 @@ pub enum ScenarioError {
     },
 }
 
+/// Reads a scenario file into its spec, without validating it beyond the schema:
+/// (spec, text).
+pub fn read_spec_file(path: &Path) -> Result<(ScenarioSpec, String), ScenarioError> {
+    let file = path.display().to_string();
+    let text = super::output::check_input(path)
+        .and_then(|()| std::fs::read_to_string(path))
+        .map_err(|source| ScenarioError::Read {
+            file: file.clone(),
+            source,
+        })?;
+    Ok((parse_spec(&text, &file)?, text))
+}
+
 /// Reads and validates a scenario file.
 pub fn load_file(path: &Path) -> Result<(Scenario, String), ScenarioError> {
     let file = path.display().to_string();

@@ -9,6 +9,7 @@
 
 mod compile;
 pub mod keys;
+pub mod params;
 
 pub use compile::{SpecError, compile};
 pub use keys::{KeyPath, Seg};

@@ -1,0 +1,254 @@
+//! Parameters by key path (issue 9): every number of a scenario is listed, read and
+//! written by its path; `--set` gives the output of the same edit made in the file;
+//! a bad value gives the error the file would.
+
+use std::path::Path;
+
+mod common;
+use common::{bin, reference_text, tmpdir};
+use orbitlash::io::scenario_toml;
+use orbitlash::model::Model;
+
+fn spec_of(file: &str) -> orbitlash::spec::ScenarioSpec {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(file);
+    scenario_toml::read_spec_file(&path).unwrap().0
+}
+
+#[test]
+fn cli_every_key_path_round_trips() {
+    for file in ["reference-hinge.toml", "hinge-90-day-drift.toml"] {
+        let mut model = Model::new(spec_of(file)).unwrap();
+        let params = model.params();
+        assert!(params.len() > 60, "{file}: {} parameters", params.len());
+        for p in &params {
+            let v = model.get(&p.path).unwrap_or_else(|e| panic!("{file}: {e}"));
+            assert_eq!(v.to_bits(), p.value.to_bits(), "{}", p.path);
+            model
+                .set(&p.path, v)
+                .unwrap_or_else(|e| panic!("{file}: set {} = {v}: {e}", p.path));
+            assert_eq!(model.get(&p.path).unwrap().to_bits(), v.to_bits());
+        }
+        // the forms the issue names
+        for path in [
+            "node.housing.capacitance_j_per_k",
+            "environment.beta_deg",
+            "gear_pair.mesh.pinion.tooth_thinning_um",
+            "node.\"gear1.r2\".capacitance_j_per_k",
+            "conductor.housing-bus.conductance_w_per_k",
+        ] {
+            if file == "reference-hinge.toml" || !path.starts_with("environment") {
+                let v = model.get(path).unwrap_or_else(|e| panic!("{file}: {e}"));
+                model.set(path, v * 1.01).unwrap();
+                assert_eq!(model.get(path).unwrap(), v * 1.01);
+            }
+        }
+    }
+}
+
+#[test]
+fn cli_a_change_follows_into_what_depends_on_it() {
+    let mut model = Model::new(spec_of("reference-hinge.toml")).unwrap();
+    let before = model.scenario().run.duration_s;
+    // the run is in orbits: a higher orbit lasts longer
+    model.set("orbit.altitude_m", 800e3).unwrap();
+    assert!(model.scenario().run.duration_s > before);
+    // α and A are kept apart: the product follows the absorptivity
+    let load = |m: &Model| match &m.scenario().thermal.network.loads[0].kind {
+        orbitlash::thermal::LoadKind::Sun {
+            absorptivity_area_m2,
+            ..
+        } => *absorptivity_area_m2,
+        _ => unreachable!(),
+    };
+    let a0 = load(&model);
+    let alpha = model.get("sun.\"sun.housing\".absorptivity").unwrap();
+    model
+        .set("sun.\"sun.housing\".absorptivity", alpha / 2.0)
+        .unwrap();
+    assert!((load(&model) - a0 / 2.0).abs() < 1e-15);
+    // a refused change leaves the model as it was
+    let good = model.scenario().clone();
+    assert!(model.set("node.housing.capacitance_j_per_k", -1.0).is_err());
+    assert_eq!(model.scenario(), &good);
+}
+
+/// (`run --set`'s CSV, the CSV of the file with the same edit).
+fn both(set: &str, old: &str, new: &str) -> (Vec<u8>, Vec<u8>) {
+    let dir = tmpdir(&format!("set-{}", set.len()));
+    std::fs::write(dir.join("s.toml"), reference_text()).unwrap();
+    let text = reference_text();
+    assert!(text.contains(old), "{old}");
+    std::fs::write(dir.join("e.toml"), text.replacen(old, new, 1)).unwrap();
+    let run = |args: &[&str], csv: &str| {
+        let out = bin()
+            .args(["run", "--orbits", "2", "--quiet", "--no-log", "--csv", csv])
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.code() != Some(2),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read(dir.join(csv)).unwrap()
+    };
+    let a = run(&["s.toml", "--set", set], "a.csv");
+    let b = run(&["e.toml"], "b.csv");
+    let _ = std::fs::remove_dir_all(&dir);
+    (a, b)
+}
+
+#[test]
+fn cli_set_equals_the_same_edit_in_the_file() {
+    for (set, old, new) in [
+        (
+            "node.motor.capacitance_j_per_k=80",
+            "capacitance_j_per_k = 75.0",
+            "capacitance_j_per_k = 80",
+        ),
+        (
+            "environment.beta_deg=35",
+            "beta_deg = 20.0",
+            "beta_deg = 35",
+        ),
+        (
+            "gear_pair.mesh.pinion.tooth_thinning_um=25",
+            "tooth_thinning_um = 19.4745",
+            "tooth_thinning_um = 25",
+        ),
+    ] {
+        let (a, b) = both(set, old, new);
+        assert!(
+            a == b,
+            "--set {set} and the edited file give different CSVs"
+        );
+        // and the change did something
+        let (c, _) = both("node.motor.capacitance_j_per_k=75", "x", "x");
+        assert!(a != c || set.starts_with("node.motor"));
+    }
+}
+
+#[test]
+fn cli_a_bad_value_gives_the_files_error() {
+    let dir = tmpdir("set-bad");
+    std::fs::write(dir.join("s.toml"), reference_text()).unwrap();
+    let text =
+        reference_text().replacen("capacitance_j_per_k = 75.0", "capacitance_j_per_k = -3", 1);
+    std::fs::write(dir.join("e.toml"), text).unwrap();
+    let err = |args: &[&str]| {
+        let out = bin().args(args).current_dir(&dir).output().unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        // what follows the location (file:line:column, or the --set)
+        stderr
+            .split_once(": `")
+            .map(|(_, rest)| rest.to_string())
+            .unwrap_or(stderr)
+    };
+    let a = err(&[
+        "check",
+        "s.toml",
+        "--set",
+        "node.motor.capacitance_j_per_k=-3",
+    ]);
+    let b = err(&["check", "e.toml"]);
+    assert_eq!(a, b);
+    assert!(
+        a.starts_with("node.motor.capacitance_j_per_k`: must be > 0"),
+        "{a}"
+    );
+    // unknown paths and non-numbers name the key
+    let c = err(&["run", "s.toml", "--set", "node.rotor.capacitance_j_per_k=3"]);
+    assert!(
+        c.contains("no such number") && c.contains("housing, motor"),
+        "{c}"
+    );
+    let d = err(&["run", "s.toml", "--set", "environment.beta_deg=twenty"]);
+    assert!(
+        d.contains("environment.beta_deg") && d.contains("not a number"),
+        "{d}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn cli_params_lists_every_number_with_unit_and_range() {
+    let out = bin().arg("params").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("node.housing.capacitance_j_per_k = 120 J/K  (≥ 1e-6)"),
+        "{text}"
+    );
+    assert!(text.contains("orbit.earth_radius_m = 6378137 m"), "{text}");
+    assert!(text.contains("environment.albedo = 0.3  (0 … 1)"), "{text}");
+    assert!(
+        text.contains("gear_pair.mesh.pinion.teeth = 20  (5 … 10000)"),
+        "{text}"
+    );
+    // a value the file leaves out is listed with its default
+    let dir = tmpdir("params-default");
+    let short = reference_text().replacen("albedo = 0.30", "", 1);
+    std::fs::write(dir.join("s.toml"), short).unwrap();
+    let out = bin()
+        .args(["params", "s.toml"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        listed.contains("environment.albedo = 0.3  (0 … 1)  [default]"),
+        "{listed}"
+    );
+    let given = bin()
+        .args(["params", "s.toml", "--given"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(!String::from_utf8_lossy(&given.stdout).contains("environment.albedo"));
+    let _ = std::fs::remove_dir_all(&dir);
+    // every listed path can be set
+    for line in text.lines() {
+        let (path, rest) = line.split_once(" = ").unwrap();
+        let value = rest.split_whitespace().next().unwrap();
+        let out = bin()
+            .args(["check", "scenarios/reference-hinge.toml", "--set"])
+            .arg(format!("{path}={value}"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{path}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
+#[test]
+fn cli_run_json_has_the_documented_keys() {
+    let dir = tmpdir("json");
+    let out = bin()
+        .args(["run", "--no-log", "--quiet", "--json", "r.json"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("r.json")).unwrap()).unwrap();
+    assert_eq!(j["verdict"], "pass");
+    assert_eq!(j["nodes"].as_array().unwrap().len(), 10);
+    let pair = &j["gear_pairs"][0];
+    assert_eq!(pair["name"], "mesh");
+    assert!((pair["min_backlash_um"].as_f64().unwrap() - 24.398).abs() < 0.01);
+    assert!((pair["min_margin_um"].as_f64().unwrap() - 19.398).abs() < 0.01);
+    for key in ["energy", "solver", "events", "window"] {
+        assert!(j[key].is_object(), "{key}");
+    }
+    assert!(j["energy"]["relative_error"].as_f64().unwrap() < 1e-5);
+    assert!(j["solver"]["steps"].as_u64().unwrap() > 400);
+    let _ = std::fs::remove_dir_all(&dir);
+}
