@@ -9,8 +9,8 @@ use crate::scenario::Scenario;
 use crate::spec::keys::{ElementKeys, element_keys};
 use crate::spec::params::{self, Param, ParamError};
 use crate::spec::{
-    AlbedoSpec, DissipationSpec, EarthIrSpec, HeaterSpec, ScenarioSpec, SensorSpec, SpecError,
-    SunSpec, compile,
+    AlbedoSpec, DissipationSpec, EarthIrSpec, HeaterSpec, KeyPath, ProfileSpec, ScenarioSpec,
+    SensorSpec, SpecError, SunSpec, compile,
 };
 
 /// Why a change to a model was refused; the model is left as it was.
@@ -119,4 +119,416 @@ impl Model {
         self.scenario = scenario;
         Ok(())
     }
+}
+
+/// A parameter resolved once ([`Model::param`]) and written many times
+/// ([`Model::set_param`]): the values Monte Carlo samples disperse. The common ones
+/// (capacitances, initial temperatures, conductances, radiative and load areas and
+/// optical properties, heater settings, albedo, Earth IR, sink, β and solar flux when
+/// constant) are written straight into the spec and the compiled model after the
+/// compiler's own check of the value; a gear-pair value recompiles that pair; any
+/// other recompiles the scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamId {
+    path: String,
+    canonical: Vec<String>,
+    /// Its position in its section or element (see `spec::params::position`).
+    position: Option<usize>,
+    key: KeyPath,
+    target: Target,
+}
+
+impl ParamId {
+    pub fn path(&self) -> &str {
+        &self.path
+    }
+}
+
+/// Which part of an area product.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Part3 {
+    Product,
+    Fraction,
+    Area,
+}
+
+/// The kinds of load addressed by path, in the order the compiler lists loads.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum LoadSection {
+    Sun,
+    Albedo,
+    EarthIr,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Target {
+    NodeCapacitance(usize),
+    NodeInitial(usize),
+    Conductance(usize),
+    Radiation(usize, Part3),
+    Load(LoadSection, usize, Part3),
+    ViewFactor(LoadSection, usize),
+    HeaterPower(usize),
+    HeaterOn(usize),
+    HeaterOff(usize),
+    Albedo,
+    EarthIr,
+    Sink,
+    BetaConstant,
+    FluxConstant,
+    GearPair(usize),
+    Other,
+}
+
+impl Model {
+    /// Resolves `path` for [`Model::set_param`].
+    pub fn param(&self, path: &str) -> Result<ParamId, ParamError> {
+        self.get(path)?; // it exists
+        let parts = crate::spec::keys::parse_path(path).map_err(|message| ParamError {
+            key: path.to_string(),
+            message,
+        })?;
+        use crate::spec::keys::Part::Key;
+        let k: Vec<&str> = parts
+            .iter()
+            .map(|p| match p {
+                Key(s) => s.as_str(),
+                _ => "[]",
+            })
+            .collect();
+        let find = |list: &[String], key: &str| list.iter().position(|x| x == key);
+        let keys = &self.keys;
+        let elem_path = |section: &'static str, i: usize, key: &str, field: &'static str| {
+            KeyPath::new(section).elem(i, key).key(field)
+        };
+        let part3 = |f: &str| match f {
+            "emissivity_area_m2" | "absorptivity_area_m2" => Some(Part3::Product),
+            "emissivity" | "absorptivity" => Some(Part3::Fraction),
+            "area_m2" => Some(Part3::Area),
+            _ => None,
+        };
+        let env = |field: &'static str| KeyPath::new("environment").key(field);
+        let (target, key) = match k.as_slice() {
+            [
+                "node",
+                n,
+                f @ ("capacitance_j_per_k" | "initial_temperature_k"),
+            ] => {
+                let i = find(&keys.node, n).expect("exists");
+                let field = if *f == "capacitance_j_per_k" {
+                    "capacitance_j_per_k"
+                } else {
+                    "initial_temperature_k"
+                };
+                (
+                    if field == "capacitance_j_per_k" {
+                        Target::NodeCapacitance(i)
+                    } else {
+                        Target::NodeInitial(i)
+                    },
+                    elem_path("node", i, n, field),
+                )
+            }
+            ["conductor", c, "conductance_w_per_k"] => {
+                let i = find(&keys.conductor, c).expect("exists");
+                (
+                    Target::Conductance(i),
+                    elem_path("conductor", i, c, "conductance_w_per_k"),
+                )
+            }
+            ["radiation", r, f] if part3(f).is_some() => {
+                let i = find(&keys.radiation, r).expect("exists");
+                (
+                    Target::Radiation(i, part3(f).expect("some")),
+                    KeyPath::new("radiation").elem(i, r).key(static_field(f)),
+                )
+            }
+            [s @ ("sun" | "albedo" | "earth_ir"), l, f]
+                if part3(f).is_some() || *f == "view_factor" =>
+            {
+                let (section, list, name) = match *s {
+                    "sun" => (LoadSection::Sun, &keys.sun, "sun"),
+                    "albedo" => (LoadSection::Albedo, &keys.albedo, "albedo"),
+                    _ => (LoadSection::EarthIr, &keys.earth_ir, "earth_ir"),
+                };
+                let i = find(list, l).expect("exists");
+                let target = match part3(f) {
+                    Some(p) => Target::Load(section, i, p),
+                    None => Target::ViewFactor(section, i),
+                };
+                (target, KeyPath::new(name).elem(i, l).key(static_field(f)))
+            }
+            ["heater", h, f @ ("power_w" | "on_k" | "off_k")] => {
+                let i = find(&keys.heater, h).expect("exists");
+                let target = match *f {
+                    "power_w" => Target::HeaterPower(i),
+                    "on_k" => Target::HeaterOn(i),
+                    _ => Target::HeaterOff(i),
+                };
+                (
+                    target,
+                    KeyPath::new("heater").elem(i, h).key(static_field(f)),
+                )
+            }
+            ["environment", "albedo"] => (Target::Albedo, env("albedo")),
+            ["environment", "earth_ir_w_per_m2"] => (Target::EarthIr, env("earth_ir_w_per_m2")),
+            ["environment", "space_sink_k"] => (Target::Sink, env("space_sink_k")),
+            ["environment", "beta_deg"] => (Target::BetaConstant, env("beta_deg")),
+            ["environment", "solar_flux_w_per_m2"] => {
+                (Target::FluxConstant, env("solar_flux_w_per_m2"))
+            }
+            ["gear_pair", g, ..] => {
+                let i = find(&keys.gear_pair, g).expect("exists");
+                (Target::GearPair(i), KeyPath::new("gear_pair"))
+            }
+            _ => (Target::Other, KeyPath::new("scenario")),
+        };
+        let canonical = params::canonical_path(path)?;
+        Ok(ParamId {
+            path: path.to_string(),
+            position: params::position(&self.spec, &self.keys, &canonical),
+            canonical,
+            key,
+            target,
+        })
+    }
+
+    /// Writes the value of a resolved parameter (see [`ParamId`]); on an error the
+    /// model is unchanged.
+    pub fn set_param(&mut self, id: &ParamId, value: f64) -> Result<(), ModelError> {
+        use crate::spec::check;
+        use crate::thermal::LoadKind;
+        let path = &id.key;
+        let sc = &mut self.scenario;
+        let net = &mut sc.thermal.network;
+        match &id.target {
+            Target::NodeCapacitance(i) => {
+                let c = check::capacitance(path, value)?;
+                self.spec.node[*i].capacitance_j_per_k = value;
+                net.nodes[*i].capacitance_j_per_k = c;
+            }
+            Target::NodeInitial(i) => {
+                let t = check::temperature(path, value)?;
+                self.spec.node[*i].initial_temperature_k = value;
+                net.nodes[*i].initial_temperature_k = t;
+            }
+            Target::Conductance(i) => {
+                let g = check::conductance(path, value)?;
+                self.spec.conductor[*i].conductance_w_per_k = value;
+                net.conductors[*i].conductance_w_per_k = g;
+            }
+            Target::Radiation(i, part) => {
+                let r = &mut self.spec.radiation[*i];
+                let product = area_product(
+                    path,
+                    *part,
+                    value,
+                    (&mut r.emissivity_area_m2, &mut r.emissivity, &mut r.area_m2),
+                    "emissivity",
+                )?;
+                net.radiators[*i].emissivity_area_m2 = product;
+            }
+            Target::Load(section, i, part) => {
+                let (fields, what, at) = match section {
+                    LoadSection::Sun => {
+                        let l = &mut self.spec.sun[*i];
+                        (
+                            (
+                                &mut l.absorptivity_area_m2,
+                                &mut l.absorptivity,
+                                &mut l.area_m2,
+                            ),
+                            "absorptivity",
+                            *i,
+                        )
+                    }
+                    LoadSection::Albedo => {
+                        let l = &mut self.spec.albedo[*i];
+                        (
+                            (
+                                &mut l.absorptivity_area_m2,
+                                &mut l.absorptivity,
+                                &mut l.area_m2,
+                            ),
+                            "absorptivity",
+                            self.spec.sun.len() + *i,
+                        )
+                    }
+                    LoadSection::EarthIr => {
+                        let l = &mut self.spec.earth_ir[*i];
+                        (
+                            (&mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2),
+                            "emissivity",
+                            self.spec.sun.len() + self.spec.albedo.len() + *i,
+                        )
+                    }
+                };
+                let product = area_product(path, *part, value, fields, what)?;
+                match &mut net.loads[at].kind {
+                    LoadKind::Sun {
+                        absorptivity_area_m2,
+                        ..
+                    }
+                    | LoadKind::Albedo {
+                        absorptivity_area_m2,
+                        ..
+                    } => *absorptivity_area_m2 = product,
+                    LoadKind::EarthIr {
+                        emissivity_area_m2, ..
+                    } => *emissivity_area_m2 = product,
+                    LoadKind::Dissipation { .. } => unreachable!("not an area load"),
+                }
+            }
+            Target::ViewFactor(section, i) => {
+                let f = check::view_factor(path, value)?;
+                let at = match section {
+                    LoadSection::Albedo => {
+                        self.spec.albedo[*i].view_factor = Some(value);
+                        self.spec.sun.len() + *i
+                    }
+                    _ => {
+                        self.spec.earth_ir[*i].view_factor = Some(value);
+                        self.spec.sun.len() + self.spec.albedo.len() + *i
+                    }
+                };
+                match &mut net.loads[at].kind {
+                    LoadKind::Albedo { view_factor, .. }
+                    | LoadKind::EarthIr { view_factor, .. } => *view_factor = f,
+                    _ => unreachable!("a load with a view factor"),
+                }
+            }
+            Target::HeaterPower(i) => {
+                let p = check::heater_power(path, value)?;
+                self.spec.heater[*i].power_w = value;
+                net.heaters[*i].power_w = p;
+            }
+            Target::HeaterOn(i) | Target::HeaterOff(i) => {
+                let t = check::temperature(path, value)?;
+                let on = matches!(id.target, Target::HeaterOn(_));
+                let h = &self.spec.heater[*i];
+                let (on_k, off_k) = if on { (t, h.off_k) } else { (h.on_k, t) };
+                let off_path = KeyPath::new("heater")
+                    .elem(*i, &self.keys.heater[*i])
+                    .key("off_k");
+                check::heater_band(&off_path, on_k, off_k)?;
+                let (hs, hm) = (&mut self.spec.heater[*i], &mut net.heaters[*i]);
+                if on {
+                    hs.on_k = value;
+                    hm.on_k = t;
+                } else {
+                    hs.off_k = value;
+                    hm.off_k = t;
+                }
+            }
+            Target::Albedo => {
+                let a = check::albedo(path, value)?;
+                self.spec.environment.albedo = Some(value);
+                sc.thermal.environment.albedo = a;
+            }
+            Target::EarthIr => {
+                let q = check::earth_ir(path, value)?;
+                self.spec.environment.earth_ir_w_per_m2 = Some(value);
+                sc.thermal.environment.earth_ir_w_per_m2 = q;
+            }
+            Target::Sink => {
+                let t = check::sink(path, value)?;
+                self.spec.environment.space_sink_k = Some(value);
+                sc.thermal.environment.space_sink_k = t;
+                // the built-in boundary `space` sits at the sink temperature
+                net.boundaries[0].temperature_k = crate::orbit::Profile::Constant(t);
+            }
+            Target::BetaConstant
+                if matches!(self.spec.environment.beta_deg, ProfileSpec::Constant(_)) =>
+            {
+                let b = check::beta_deg(path, value)?;
+                self.spec.environment.beta_deg = ProfileSpec::Constant(value);
+                sc.thermal.environment.beta_rad = crate::orbit::Profile::Constant(b.to_radians());
+            }
+            Target::FluxConstant
+                if !matches!(
+                    self.spec.environment.solar_flux_w_per_m2,
+                    Some(ProfileSpec::Table(_))
+                ) =>
+            {
+                let s = check::solar_flux(path, value)?;
+                self.spec.environment.solar_flux_w_per_m2 = Some(ProfileSpec::Constant(value));
+                sc.thermal.environment.solar_flux_w_per_m2 = crate::orbit::Profile::Constant(s);
+            }
+            Target::GearPair(g) => {
+                let old = self.spec.gear_pair[*g].clone();
+                let direct = id.position.is_some_and(|k| {
+                    params::set_at(&mut self.spec, &self.keys, &id.canonical, k, value)
+                });
+                if !direct {
+                    params::set_canonical(
+                        &mut self.spec,
+                        &self.keys,
+                        &id.path,
+                        &id.canonical,
+                        value,
+                    )?;
+                }
+                match crate::spec::check::gear_pair_again(
+                    &self.spec,
+                    *g,
+                    &self.keys.gear_pair[*g],
+                    &self.scenario.thermal.network,
+                ) {
+                    Ok(pair) => self.scenario.gears[*g] = pair,
+                    Err(e) => {
+                        self.spec.gear_pair[*g] = old;
+                        return Err(e.into());
+                    }
+                }
+            }
+            _ => return self.set(&id.path, value),
+        }
+        Ok(())
+    }
+}
+
+/// The field name of a load or link key as a `'static str`.
+fn static_field(f: &str) -> &'static str {
+    match f {
+        "emissivity_area_m2" => "emissivity_area_m2",
+        "absorptivity_area_m2" => "absorptivity_area_m2",
+        "emissivity" => "emissivity",
+        "absorptivity" => "absorptivity",
+        "area_m2" => "area_m2",
+        "view_factor" => "view_factor",
+        "power_w" => "power_w",
+        "on_k" => "on_k",
+        _ => "off_k",
+    }
+}
+
+/// Writes one part of an area product (the product itself, the fraction or the area)
+/// after the compiler's check, and returns the product the model uses.
+fn area_product(
+    path: &KeyPath,
+    part: Part3,
+    value: f64,
+    (product, fraction, area): (&mut Option<f64>, &mut Option<f64>, &mut Option<f64>),
+    what: &str,
+) -> Result<f64, ModelError> {
+    use crate::spec::check;
+    let (p, x, a) = match part {
+        Part3::Product => (check::area(path, value)?, None, None),
+        Part3::Fraction => (0.0, Some(check::fraction(path, value, what)?), *area),
+        Part3::Area => (0.0, *fraction, Some(check::area(path, value)?)),
+    };
+    Ok(match part {
+        Part3::Product => {
+            *product = Some(value);
+            p
+        }
+        Part3::Fraction => {
+            *fraction = Some(value);
+            x.expect("checked") * a.expect("the area is given with the fraction")
+        }
+        Part3::Area => {
+            *area = Some(value);
+            x.expect("the fraction is given with the area") * a.expect("checked")
+        }
+    })
 }

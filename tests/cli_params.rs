@@ -252,3 +252,44 @@ fn cli_run_json_has_the_documented_keys() {
     assert!(j["solver"]["steps"].as_u64().unwrap() > 400);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn cli_resolved_parameters_write_what_a_full_compile_gives() {
+    for file in ["reference-hinge.toml", "hinge-90-day-drift.toml"] {
+        let base = Model::new(spec_of(file)).unwrap();
+        for p in base.params() {
+            // a nearby valid value (integers stay integers)
+            let v = if p.path.ends_with("teeth") {
+                p.value
+            } else if p.value == 0.0 {
+                0.0
+            } else {
+                p.value * (1.0 + 1e-4)
+            };
+            let mut fast = base.clone();
+            let mut full = base.clone();
+            let id = fast.param(&p.path).unwrap();
+            let a = fast.set_param(&id, v);
+            let b = full.set(&p.path, v);
+            assert_eq!(a.is_ok(), b.is_ok(), "{file} {}: {a:?} vs {b:?}", p.path);
+            assert!(
+                fast.scenario() == full.scenario() && fast.spec() == full.spec(),
+                "{file} {}: the resolved write differs from a full compile",
+                p.path
+            );
+            // a bad value: the same error, and the model unchanged
+            let bad = if p.path.ends_with("teeth") {
+                3.0
+            } else {
+                -1e30
+            };
+            let (mut f2, mut g2) = (base.clone(), base.clone());
+            let ea = f2.set_param(&id, bad).err().map(|e| e.to_string());
+            let eb = g2.set(&p.path, bad).err().map(|e| e.to_string());
+            assert_eq!(ea, eb, "{file} {}", p.path);
+            if ea.is_some() {
+                assert!(f2.scenario() == base.scenario() && f2.spec() == base.spec());
+            }
+        }
+    }
+}

@@ -369,6 +369,46 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         );
         let _ = std::fs::remove_dir_all(&dir);
     }
+    // Parameters: ten changes to a built model by resolved key path, then a run set up
+    // and its start state made (what a Monte Carlo sample does before it steps).
+    {
+        let mut model = loaded.model.clone();
+        let wanted = [
+            "node.housing.capacitance_j_per_k",
+            "node.motor.capacitance_j_per_k",
+            "node.shaft1.capacitance_j_per_k",
+            "conductor.housing-bus.conductance_w_per_k",
+            "conductor.housing-motor.conductance_w_per_k",
+            "sun.\"sun.housing\".absorptivity",
+            "radiation.housing-space.emissivity_area_m2",
+            "environment.albedo",
+            "gear_pair.mesh.pinion.tooth_thinning_um",
+            "gear_pair.mesh.pinion.material.alpha_per_k",
+        ];
+        let ids: Vec<_> = wanted.iter().filter_map(|p| model.param(p).ok()).collect();
+        if ids.len() == wanted.len() {
+            let base: Vec<f64> = ids.iter().map(|id| model.get(id.path()).unwrap()).collect();
+            let rounds = 2000;
+            let mut times = Vec::with_capacity(rounds);
+            for r in 0..rounds {
+                let start = Instant::now();
+                for (id, b) in ids.iter().zip(&base) {
+                    let v = b * (1.0 + 1e-3 * ((r % 7) as f64 - 3.0));
+                    model.set_param(id, v)?;
+                }
+                let sc = model.scenario();
+                let setup = orbitlash::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+                std::hint::black_box(setup.initial_state());
+                times.push(start.elapsed().as_secs_f64());
+            }
+            times.sort_by(f64::total_cmp);
+            outln!(
+                o,
+                "parameters: {:.2} µs to apply 10 changes by key path and start a run (median of {rounds})",
+                times[rounds / 2] * 1e6
+            );
+        }
+    }
     // Backlash: every pair evaluated at the node temperatures of the end of a run.
     if !sc.gears.is_empty() {
         let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut (), None)?;

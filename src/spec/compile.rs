@@ -437,11 +437,10 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         let p = np.elem(i, &keys.node[i]);
         check_name(cx, &np.at(i).key("name"), &n.name, &names)?;
         let node = DiffusionNode {
-            capacitance_j_per_k: {
-                let k = p.key("capacitance_j_per_k");
-                let c = cx.positive(&k, n.capacitance_j_per_k)?;
-                cx.at_least(&k, c, MIN_CAPACITANCE_J_PER_K, "J/K")?
-            },
+            capacitance_j_per_k: check::capacitance(
+                &p.key("capacitance_j_per_k"),
+                n.capacitance_j_per_k,
+            )?,
             initial_temperature_k: cx
                 .temperature(&p.key("initial_temperature_k"), n.initial_temperature_k)?,
             radius_m: match n.radius_mm {
@@ -534,11 +533,9 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         conductors.push(Conductor {
             a,
             b,
-            conductance_w_per_k: cx.positive_up_to(
+            conductance_w_per_k: check::conductance(
                 &p.key("conductance_w_per_k"),
                 c.conductance_w_per_k,
-                MAX_CONDUCTANCE_W_PER_K,
-                "W/K",
             )?,
         });
     }
@@ -766,12 +763,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         };
         let on_k = cx.temperature(&p.key("on_k"), h.on_k)?;
         let off_k = cx.temperature(&p.key("off_k"), h.off_k)?;
-        if on_k >= off_k {
-            return Err(cx.err(
-                &p.key("off_k"),
-                format!("must be above on_k ({on_k} K): the heater switches on when the sensor falls to on_k and off when it rises to off_k"),
-            ));
-        }
+        check::heater_band(&p.key("off_k"), on_k, off_k)?;
         heaters.push(Heater {
             name: optional_name(cx, &KeyPath::new("heater").at(i).key("name"), h.name)?
                 .unwrap_or_else(|| format!("heater.{}", h.node)),
@@ -935,8 +927,9 @@ const MAX_THERMAL_STRAIN: f64 = 0.1;
 /// 293.15 K over 20 … 1000 K (a polynomial with a wrong `scale` fails here).
 fn strain_law(cx: &Cx, p: &KeyPath, keys: StrainKeys) -> Result<StrainLaw, SpecError> {
     let law = strain_law_unchecked(cx, p, keys)?;
-    let worst = (0..=98)
-        .map(|k| 20.0 + 10.0 * k as f64)
+    // every 35 K from 20 K to 1000 K (a wrong scale or coefficient shows everywhere)
+    let worst = (0..=28)
+        .map(|k| 20.0 + 35.0 * k as f64)
         .map(|t| (t, law.strain(t, 293.15)))
         .find(|(_, e)| e.is_nan() || e.abs() > MAX_THERMAL_STRAIN);
     if let Some((t, e)) = worst {
@@ -1368,4 +1361,99 @@ fn gear_pair(
         ));
     }
     Ok(pair)
+}
+
+/// The checks of single values, shared with the fast parameter writes of
+/// `model::Model` so that a value written by path meets the compiler's checks with its
+/// error text.
+pub(crate) mod check {
+    use super::*;
+
+    pub fn capacitance(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        let c = Cx.positive(path, v)?;
+        Cx.at_least(path, c, MIN_CAPACITANCE_J_PER_K, "J/K")
+    }
+
+    pub fn temperature(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.temperature(path, v)
+    }
+
+    pub fn conductance(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.positive_up_to(path, v, MAX_CONDUCTANCE_W_PER_K, "W/K")
+    }
+
+    /// An area or an area product, m².
+    pub fn area(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.positive_up_to(path, v, MAX_AREA_M2, "m²")
+    }
+
+    /// An absorptivity or emissivity named `what`.
+    pub fn fraction(path: &KeyPath, v: f64, what: &str) -> Result<f64, SpecError> {
+        Cx.within(path, v, 0.0, 1.0, what)
+    }
+
+    pub fn view_factor(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(path, v, 0.0, 1.0, "view factor")
+    }
+
+    pub fn heater_power(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.positive_up_to(path, v, MAX_POWER_W, "W")
+    }
+
+    /// A heater's band: `on_k < off_k` (the error is at `off_k`).
+    pub fn heater_band(off_path: &KeyPath, on_k: f64, off_k: f64) -> Result<(), SpecError> {
+        if on_k >= off_k {
+            return Err(Cx.err(
+                off_path,
+                format!("must be above on_k ({on_k} K): the heater switches on when the sensor falls to on_k and off when it rises to off_k"),
+            ));
+        }
+        Ok(())
+    }
+
+    pub fn albedo(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(path, v, 0.0, 1.0, "albedo")
+    }
+
+    pub fn earth_ir(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(path, v, 0.0, 1e4, "planetary infrared flux (W/m²)")
+    }
+
+    pub fn sink(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(path, v, 0.0, 5000.0, "sink temperature (K)")
+    }
+
+    pub fn beta_deg(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(path, v, -90.0, 90.0, "beta angle (deg)")
+    }
+
+    pub fn solar_flux(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(path, v, 0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)")
+    }
+
+    /// Gear pair `index` of `spec` compiled again against the nodes of `network` (its
+    /// other parts unchanged).
+    pub fn gear_pair_again(
+        spec: &ScenarioSpec,
+        index: usize,
+        key: &str,
+        network: &Network,
+    ) -> Result<GearPair, SpecError> {
+        let diffusion = |p: &KeyPath, name: &str| -> Result<usize, SpecError> {
+            network
+                .nodes
+                .iter()
+                .position(|n| n.name == name)
+                .ok_or_else(|| Cx.err(p, format!("unknown node `{name}`")))
+        };
+        let p = KeyPath::new("gear_pair").elem(index, key);
+        gear_pair(
+            &Cx,
+            &p,
+            spec.gear_pair[index].clone(),
+            index,
+            &network.nodes,
+            &diffusion,
+        )
+    }
 }

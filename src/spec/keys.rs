@@ -26,7 +26,7 @@ pub enum Seg {
     /// An index into an array of numbers (or of tables whose element has no key).
     I(usize),
     /// An element of an array of tables: its position and its key.
-    E(usize, String),
+    E(usize, std::sync::Arc<str>),
 }
 
 /// A key path into a scenario, e.g. `node.motor.capacitance_j_per_k`.
@@ -37,21 +37,22 @@ impl KeyPath {
     pub fn new(k: &'static str) -> KeyPath {
         KeyPath(vec![Seg::K(k)])
     }
+    /// This path and one more step, in one allocation.
+    fn with(&self, seg: Seg) -> KeyPath {
+        let mut v = Vec::with_capacity(self.0.len() + 1);
+        v.extend_from_slice(&self.0);
+        v.push(seg);
+        KeyPath(v)
+    }
     pub fn at(&self, i: usize) -> KeyPath {
-        let mut p = self.clone();
-        p.0.push(Seg::I(i));
-        p
+        self.with(Seg::I(i))
     }
     /// The element at position `i` with key `key`.
     pub fn elem(&self, i: usize, key: &str) -> KeyPath {
-        let mut p = self.clone();
-        p.0.push(Seg::E(i, key.to_string()));
-        p
+        self.with(Seg::E(i, key.into()))
     }
     pub fn key(&self, k: &'static str) -> KeyPath {
-        let mut p = self.clone();
-        p.0.push(Seg::K(k));
-        p
+        self.with(Seg::K(k))
     }
 }
 

@@ -11,6 +11,7 @@ mod compile;
 pub mod keys;
 pub mod params;
 
+pub(crate) use compile::check;
 pub use compile::{SpecError, compile};
 pub use keys::{KeyPath, Seg};
 
@@ -77,7 +78,7 @@ pub struct CenterDistanceSpec {
     pub node: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha_per_k: Option<f64>,
-    dalpha_dt_per_k2: Option<f64>,
+    pub dalpha_dt_per_k2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub strain_polynomial: Option<PolynomialSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -127,7 +128,7 @@ pub struct MaterialSpec {
     pub name: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha_per_k: Option<f64>,
-    dalpha_dt_per_k2: Option<f64>,
+    pub dalpha_dt_per_k2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub strain_polynomial: Option<PolynomialSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -166,7 +167,7 @@ pub struct OrbitSpec {
     pub altitude_m: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub earth_radius_m: Option<f64>,
-    mu_m3_per_s2: Option<f64>,
+    pub mu_m3_per_s2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub orbit_angle_at_start_deg: Option<f64>,
 }
@@ -175,12 +176,12 @@ pub struct OrbitSpec {
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentSpec {
     pub beta_deg: ProfileSpec,
-    solar_flux_w_per_m2: Option<ProfileSpec>,
+    pub solar_flux_w_per_m2: Option<ProfileSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub space_sink_k: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub albedo: Option<f64>,
-    earth_ir_w_per_m2: Option<f64>,
+    pub earth_ir_w_per_m2: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -263,10 +264,10 @@ pub struct RadiationSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     pub between: Vec<String>,
-    emissivity_area_m2: Option<f64>,
+    pub emissivity_area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emissivity: Option<f64>,
-    area_m2: Option<f64>,
+    pub area_m2: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -275,10 +276,10 @@ pub struct SunSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     pub node: String,
-    absorptivity_area_m2: Option<f64>,
+    pub absorptivity_area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub absorptivity: Option<f64>,
-    area_m2: Option<f64>,
+    pub area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub incidence: Option<String>,
 }
@@ -289,10 +290,10 @@ pub struct AlbedoSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     pub node: String,
-    absorptivity_area_m2: Option<f64>,
+    pub absorptivity_area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub absorptivity: Option<f64>,
-    area_m2: Option<f64>,
+    pub area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub view_factor: Option<f64>,
 }
@@ -303,10 +304,10 @@ pub struct EarthIrSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     pub node: String,
-    emissivity_area_m2: Option<f64>,
+    pub emissivity_area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub emissivity: Option<f64>,
-    area_m2: Option<f64>,
+    pub area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub view_factor: Option<f64>,
 }

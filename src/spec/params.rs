@@ -717,9 +717,78 @@ pub fn set_with_keys(
         key: path.to_string(),
         message,
     })?;
+    set_canonical(spec, keys, path, &wanted, value)
+}
+
+/// The path in the form [`set_canonical`] takes (parsed once, written many times).
+pub fn canonical_path(path: &str) -> Result<Vec<String>, ParamError> {
+    canonical(path).map_err(|message| ParamError {
+        key: path.to_string(),
+        message,
+    })
+}
+
+/// The position of `wanted` among the numbers of its section or element, in the order
+/// [`set_at`] counts them: a path resolved once is then written without comparing
+/// strings.
+pub fn position(spec: &ScenarioSpec, keys: &ElementKeys, wanted: &[String]) -> Option<usize> {
+    let mut copy = spec.clone();
+    let (mut k, mut found) = (0usize, None);
+    walk(&mut copy, keys, Some(wanted), &mut |p, _, _| {
+        if found.is_none() && same_path(p, wanted) {
+            found = Some(k);
+        }
+        k += 1;
+    });
+    found
+}
+
+/// Writes `value` to the number at `position` (from [`position`]) of the section or
+/// element `wanted` is in. The spec's structure (which keys are given) must not have
+/// changed since.
+pub fn set_at(
+    spec: &mut ScenarioSpec,
+    keys: &ElementKeys,
+    wanted: &[String],
+    position: usize,
+    value: f64,
+) -> bool {
+    let (mut k, mut done) = (0usize, false);
+    walk(spec, keys, Some(wanted), &mut |_, slot, _| {
+        if k == position {
+            done = match slot {
+                Slot::Value(v) => {
+                    *v = value;
+                    true
+                }
+                // not an integer: the full write says why
+                Slot::Integer(v) if value.fract() == 0.0 && value.abs() < 1e15 => {
+                    *v = value as i64;
+                    true
+                }
+                Slot::Integer(_) => false,
+                Slot::Optional(v, _) => {
+                    *v = Some(value);
+                    true
+                }
+            };
+        }
+        k += 1;
+    });
+    done
+}
+
+/// [`set_with_keys`] with the path already parsed by [`canonical_path`].
+pub fn set_canonical(
+    spec: &mut ScenarioSpec,
+    keys: &ElementKeys,
+    path: &str,
+    wanted: &[String],
+    value: f64,
+) -> Result<(), ParamError> {
     let mut done: Option<Result<(), String>> = None;
-    walk(spec, keys, Some(&wanted), &mut |p, slot, _| {
-        if done.is_none() && same_path(p, &wanted) {
+    walk(spec, keys, Some(wanted), &mut |p, slot, _| {
+        if done.is_none() && same_path(p, wanted) {
             done = Some(match slot {
                 Slot::Value(v) => {
                     *v = value;
