@@ -15,3 +15,18 @@ pub const SOLAR_CONSTANT_W_PER_M2: f64 = 1361.0;
 
 /// 0 °C in kelvin (SI definition).
 pub const ZERO_CELSIUS_K: f64 = 273.15;
+
+/// Effective temperature of deep space as a radiative sink, K: the cosmic microwave
+/// background is 2.725 K (Fixsen 2009, ApJ 707, 916); 3 K is the value spacecraft
+/// thermal analyses use (Gilmore, Spacecraft Thermal Control Handbook, 2nd ed., 2002,
+/// §2). Default of `environment.space_sink_k`.
+pub const SPACE_SINK_K: f64 = 3.0;
+
+/// Earth's mean albedo for orbital thermal analysis: 0.30 (Gilmore 2002, Table 2.3, the
+/// orbit-average design value). Default of `environment.albedo`.
+pub const EARTH_ALBEDO: f64 = 0.30;
+
+/// Earth's mean outgoing long-wave radiation at the top of the atmosphere, W/m²: 237
+/// (Gilmore 2002, Table 2.3; the CERES-era global annual mean is 240 ± 3). Default of
+/// `environment.earth_ir_w_per_m2`.
+pub const EARTH_IR_W_PER_M2: f64 = 237.0;

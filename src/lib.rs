@@ -26,3 +26,4 @@ pub mod spec;
 pub mod summary;
 pub mod thermal;
 pub mod units;
+pub mod validate;

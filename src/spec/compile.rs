@@ -6,7 +6,10 @@ use std::collections::HashMap;
 
 use super::keys::{KeyPath, element_keys};
 use super::*;
-use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
+use crate::constants::{
+    EARTH_ALBEDO, EARTH_IR_W_PER_M2, EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2,
+    SPACE_SINK_K,
+};
 use crate::gear::disc::{BoreFit, DiscMaterial};
 use crate::gear::involute::{inv, shifted_tooth_thickness};
 use crate::gear::strain::StrainLaw;
@@ -315,7 +318,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             .unwrap_or(ProfileSpec::Constant(SOLAR_CONSTANT_W_PER_M2)),
         &|p, v| cx.within(p, v, 0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)"),
     )?;
-    let space_sink_k = e.space_sink_k.unwrap_or(3.0);
+    let space_sink_k = e.space_sink_k.unwrap_or(SPACE_SINK_K);
     cx.within(
         &ep.key("space_sink_k"),
         space_sink_k,
@@ -329,14 +332,14 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         solar_flux_w_per_m2: solar_flux,
         albedo: cx.within(
             &ep.key("albedo"),
-            e.albedo.unwrap_or(0.30),
+            e.albedo.unwrap_or(EARTH_ALBEDO),
             0.0,
             1.0,
             "albedo",
         )?,
         earth_ir_w_per_m2: cx.within(
             &ep.key("earth_ir_w_per_m2"),
-            e.earth_ir_w_per_m2.unwrap_or(237.0),
+            e.earth_ir_w_per_m2.unwrap_or(EARTH_IR_W_PER_M2),
             0.0,
             1e4,
             "planetary infrared flux (W/m²)",

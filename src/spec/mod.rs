@@ -7,7 +7,7 @@
 //!
 //! Every key is documented in `scenarios/README.md`; keep the two in step.
 
-mod compile;
+pub(crate) mod compile;
 pub mod keys;
 pub mod params;
 

@@ -8,7 +8,10 @@ use std::borrow::Cow;
 
 use super::keys::{ElementKeys, Part, element_keys, parse_path, quote_key};
 use super::*;
-use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
+use crate::constants::{
+    EARTH_ALBEDO, EARTH_IR_W_PER_M2, EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2,
+    SPACE_SINK_K,
+};
 
 /// How a number is stored in the spec.
 pub enum Slot<'a> {
@@ -107,9 +110,9 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
                     }
                 }
             }
-            at!("space_sink_k".into(); f(&path, Slot::Optional(&mut e.space_sink_k, Default::Value(3.0)), m("K", "0 … 5000")));
-            at!("albedo".into(); f(&path, Slot::Optional(&mut e.albedo, Default::Value(0.30)), m("", "0 … 1")));
-            at!("earth_ir_w_per_m2".into(); f(&path, Slot::Optional(&mut e.earth_ir_w_per_m2, Default::Value(237.0)), m("W/m²", "0 … 1e4")));
+            at!("space_sink_k".into(); f(&path, Slot::Optional(&mut e.space_sink_k, Default::Value(SPACE_SINK_K)), m("K", "0 … 5000")));
+            at!("albedo".into(); f(&path, Slot::Optional(&mut e.albedo, Default::Value(EARTH_ALBEDO)), m("", "0 … 1")));
+            at!("earth_ir_w_per_m2".into(); f(&path, Slot::Optional(&mut e.earth_ir_w_per_m2, Default::Value(EARTH_IR_W_PER_M2)), m("W/m²", "0 … 1e4")));
         });
     }
     let r = &mut spec.run;

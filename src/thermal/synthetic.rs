@@ -11,7 +11,10 @@ use super::{
     BoundaryNode, Conductor, DiffusionNode, Load, LoadKind, Network, NodeRef, Radiator,
     ThermalModel,
 };
-use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2};
+use crate::constants::{
+    EARTH_ALBEDO, EARTH_IR_W_PER_M2, EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2,
+    SPACE_SINK_K,
+};
 use crate::orbit::{Environment, Incidence, Orbit, Profile};
 
 /// The shape of a synthetic network.
@@ -186,15 +189,15 @@ pub fn network_scaled(shape: Shape, n: usize, g_scale: f64) -> ThermalModel {
             },
             beta_rad: Profile::Constant(20f64.to_radians()),
             solar_flux_w_per_m2: Profile::Constant(SOLAR_CONSTANT_W_PER_M2),
-            albedo: 0.30,
-            earth_ir_w_per_m2: 237.0,
-            space_sink_k: 3.0,
+            albedo: EARTH_ALBEDO,
+            earth_ir_w_per_m2: EARTH_IR_W_PER_M2,
+            space_sink_k: SPACE_SINK_K,
         },
         network: Network {
             nodes,
             boundaries: vec![BoundaryNode {
                 name: "space".into(),
-                temperature_k: Profile::Constant(3.0),
+                temperature_k: Profile::Constant(SPACE_SINK_K),
             }],
             conductors,
             radiators,
