@@ -310,7 +310,7 @@ fn gear_pair(k: usize, p: &GearPair, n: usize) -> Result<(), Invalid> {
         return Err(bad(&w, "the minimum backlash must be finite and ≥ 0"));
     }
     let nominal = p.nominal_backlash_m();
-    if !(nominal > 0.0) {
+    if nominal.is_nan() || nominal <= 0.0 {
         return Err(bad(
             &w,
             format!("no positive backlash at assembly ({nominal} m)"),
