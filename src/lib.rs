@@ -20,6 +20,7 @@ pub mod gear;
 pub mod io;
 pub mod model;
 pub mod orbit;
+pub mod sample;
 pub mod scenario;
 pub mod sim;
 pub mod spec;

@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::{EnvState, EnvironmentModel, LoadKink};
+use crate::sample::{Probe, ProbeWork};
 use crate::thermal::iteration::LinearSolver;
 use crate::thermal::solver::{StepData, StepFailure, Stepper, StepperMemory, W0, W1};
 use crate::thermal::{StepSwitches, ThermalModel};
@@ -88,10 +89,11 @@ pub struct StepView<'a> {
     pub modes_active: &'a [bool],
     /// Each load's heat at the end of the step, W (as `Network::loads`).
     pub load_w: &'a [f64],
-    /// The gear pairs and their state at the end of the step (NaN backlash where the
-    /// mesh is invalid).
-    pub gears: &'a [GearPair],
+    /// The gear pairs' state at the end of the step (NaN backlash where the mesh is
+    /// invalid).
     pub mesh: &'a [MeshState],
+    /// Evaluates samples within the step (see [`crate::sample`]).
+    pub probe: Probe<'a>,
 }
 
 /// What an observer is told before the first step: the start state.
@@ -106,6 +108,7 @@ pub struct RunStart<'a> {
     /// Sunlit until the first shadow crossing.
     pub sunlit: bool,
     pub mesh: &'a [MeshState],
+    pub probe: Probe<'a>,
 }
 
 /// The pair's state, or a state with NaN backlash when there is no valid mesh.
@@ -140,43 +143,6 @@ impl StepView<'_> {
         for (i, o) in out_k.iter_mut().enumerate() {
             *o = self.temperature_at(i, t_s);
         }
-    }
-}
-
-/// Fixed-interval sampling of a run, shared by every observer that samples one (the
-/// CSV, the log's `--log-every 60s`, `summary::Samples`): the start of the run, then
-/// each multiple of `interval_s` after it, once, from the step that reaches it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Grid {
-    interval_s: f64,
-    next: u64,
-}
-
-impl Grid {
-    pub fn new(interval_s: f64) -> Grid {
-        Grid {
-            interval_s,
-            next: 1,
-        }
-    }
-
-    pub fn interval_s(&self) -> f64 {
-        self.interval_s
-    }
-
-    /// A run starts at `t_start_s` (sampled by the caller): the next grid time is the
-    /// first multiple of the interval after it.
-    pub fn start(&mut self, t_start_s: f64) {
-        self.next = (t_start_s / self.interval_s).floor() as u64 + 1;
-    }
-
-    /// The next grid time at or before `t1_s` (a step's end), if any; each once.
-    pub fn next_due(&mut self, t1_s: f64) -> Option<f64> {
-        let t = self.next as f64 * self.interval_s;
-        (t <= t1_s * (1.0 + 1e-12)).then(|| {
-            self.next += 1;
-            t
-        })
     }
 }
 
@@ -491,6 +457,7 @@ pub struct Setup<'a> {
     kinks: Vec<LoadKink>,
     stepper: Stepper,
     mesh: Vec<MeshState>,
+    probe_work: std::cell::RefCell<ProbeWork>,
     id: u64,
     runs: u64,
 }
@@ -514,6 +481,7 @@ impl<'a> Setup<'a> {
                 .iter()
                 .map(|g| mesh_or_nan(g, &model.network.initial_temperatures_k()))
                 .collect(),
+            probe_work: Default::default(),
             id: SETUP_IDS.fetch_add(1, Ordering::Relaxed),
             runs: 0,
         }
@@ -649,6 +617,11 @@ impl<'a> Setup<'a> {
                 modes_active: &modes_active,
                 sunlit,
                 mesh: &self.mesh,
+                probe: Probe {
+                    model,
+                    gears,
+                    work: &self.probe_work,
+                },
             })
             .map_err(|source| SimError::Observer {
                 t_s: t_start,
@@ -660,6 +633,7 @@ impl<'a> Setup<'a> {
 
         let stepper = &mut self.stepper;
         let mesh = &mut self.mesh;
+        let probe_work = &self.probe_work;
         let breakpoints = &self.breakpoints;
         let kinks = &self.kinks;
         let next_kink = |t: f64| env.next_load_kink(t, kinks);
@@ -797,8 +771,12 @@ impl<'a> Setup<'a> {
                 heaters_on: &heaters_on,
                 modes_active: &modes_active,
                 load_w: &stepper.compiled.each_load_w,
-                gears,
                 mesh,
+                probe: Probe {
+                    model,
+                    gears,
+                    work: probe_work,
+                },
             };
             if let Err(source) = observer.on_step(&view) {
                 result = Err(SimError::Observer { t_s: t_new, source });

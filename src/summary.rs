@@ -3,9 +3,8 @@
 //! extremes between steps are not missed.
 
 use crate::gear::MeshState;
-use crate::sim::{
-    Event, EventKind, Grid, Observer, ObserverResult, RunStart, StepView, mesh_or_nan,
-};
+use crate::sample::{Cadence, Sampler, Want};
+use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeStats {
@@ -120,7 +119,7 @@ pub struct Samples {
     pub times_s: Vec<f64>,
     /// One row per time, one column per node, K.
     pub temps_k: Vec<Vec<f64>>,
-    grid: Grid,
+    sampler: Sampler,
 }
 
 impl Samples {
@@ -129,7 +128,7 @@ impl Samples {
             interval_s,
             times_s: vec![],
             temps_k: vec![],
-            grid: Grid::new(interval_s),
+            sampler: Sampler::new(Cadence::Interval(interval_s), Want::TEMPERATURES),
         }
     }
 
@@ -145,21 +144,23 @@ impl Samples {
 
 impl Observer for Samples {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
-        self.grid = Grid::new(self.interval_s);
-        self.grid.start(r.t_start_s);
-        self.times_s = vec![r.t_start_s];
-        self.temps_k = vec![r.temps_k.to_vec()];
+        self.sampler = Sampler::new(Cadence::Interval(self.interval_s), Want::TEMPERATURES);
+        self.times_s.clear();
+        self.temps_k.clear();
+        if let Some(s) = self.sampler.start(r) {
+            self.times_s.push(s.t_s);
+            self.temps_k.push(s.temperatures_k.clone());
+        }
         Ok(())
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        while let Some(t) = self.grid.next_due(step.t1_s()) {
-            let mut row = vec![0.0; step.temps1_k().len()];
-            step.temperatures_at(t, &mut row);
-            self.times_s.push(t);
-            self.temps_k.push(row);
-        }
-        Ok(())
+        let (times, temps) = (&mut self.times_s, &mut self.temps_k);
+        self.sampler.each(step, |s| {
+            times.push(s.t_s);
+            temps.push(s.temperatures_k.clone());
+            Ok(())
+        })
     }
 }
 
@@ -271,7 +272,6 @@ pub struct MeshStats {
     start_s: f64,
     pub pairs: Vec<PairStats>,
     pub run_pairs: Vec<PairStats>,
-    temps: Vec<f64>,
     /// Exact backlash at the end of the previous step, per pair.
     last_m: Vec<f64>,
 }
@@ -301,7 +301,6 @@ impl Observer for MeshStats {
         self.start_s = (r.t_end_s - self.window_s).max(r.t_start_s);
         self.pairs = r.gears.iter().map(|g| PairStats::new(&g.name)).collect();
         self.run_pairs = self.pairs.clone();
-        self.temps = vec![0.0; r.temps_k.len()];
         self.last_m = r.mesh.iter().map(|m| m.backlash_exact_m).collect();
         for k in 0..self.pairs.len() {
             self.see(k, r.t_start_s, &r.mesh[k]);
@@ -311,16 +310,9 @@ impl Observer for MeshStats {
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
         let (t0, t1) = (step.t0_s(), step.t1_s());
-        if step.gears.is_empty() {
-            return Ok(());
-        }
         let h = t1 - t0;
-        let mut temps = std::mem::take(&mut self.temps);
-        for (k, pair) in step.gears.iter().enumerate() {
-            let mut at = |t: f64| {
-                step.temperatures_at(t, &mut temps);
-                mesh_or_nan(pair, &temps)
-            };
+        for k in 0..step.mesh.len() {
+            let at = |t: f64| step.probe.mesh_at(step, k, t);
             // The window's first instant, when this step straddles it.
             if t0 < self.start_s && self.start_s < t1 {
                 let m = at(self.start_s);
@@ -355,7 +347,6 @@ impl Observer for MeshStats {
                 }
             }
         }
-        self.temps = temps;
         Ok(())
     }
 

@@ -6,9 +6,10 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 
 use orbitlash::io::scenario_toml;
+use orbitlash::sample::{Cadence, Sampler, Want};
 use orbitlash::scenario::Scenario;
 use orbitlash::sim::{
-    Event, EventKind, Observer, ObserverResult, RunStats, Setup, State, StepView, Stop,
+    Event, EventKind, Observer, ObserverResult, RunStart, RunStats, Setup, State, StepView, Stop,
 };
 
 /// Counts the allocations of the current thread (tests run on several), to show the
@@ -238,4 +239,52 @@ fn core_the_stepping_loop_does_not_allocate() {
         long, short,
         "{short} allocations for {short_steps} steps, {long} for {long_steps}"
     );
+}
+
+/// Sums what it samples (so that the samples are used).
+struct Sampled(Sampler, f64, u64);
+
+impl Observer for Sampled {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        if let Some(s) = self.0.start(r) {
+            self.1 += s.temperatures_k[0];
+            self.2 += 1;
+        }
+        Ok(())
+    }
+    fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
+        let (sum, n) = (&mut self.1, &mut self.2);
+        self.0.each(step, |s| {
+            *sum += s.temperatures_k[0] + s.flows.absorbed_w + s.mesh[0].backlash_exact_m;
+            *n += 1;
+            Ok::<_, std::convert::Infallible>(())
+        })?;
+        Ok(())
+    }
+}
+
+#[test]
+fn core_sampling_does_not_allocate_per_sample() {
+    let sc = scenario("hinge-90-day-drift.toml");
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    for cadence in [Cadence::Steps(1), Cadence::Interval(7.0)] {
+        let mut obs = Sampled(Sampler::new(cadence.clone(), Want::ALL), 0.0, 0);
+        let mut count = |days: f64| {
+            let mut state = setup.initial_state();
+            obs.2 = 0;
+            let before = allocations();
+            setup
+                .run(&mut state, days * 86400.0, &mut obs, Stop::default())
+                .unwrap();
+            (allocations() - before, obs.2)
+        };
+        count(1.0); // sizes the sample's buffers
+        let (short, short_samples) = count(1.0);
+        let (long, long_samples) = count(5.0);
+        assert!(long_samples > 4 * short_samples && obs.1.is_finite());
+        assert_eq!(
+            long, short,
+            "{cadence:?}: {short} allocations for {short_samples} samples, {long} for {long_samples}"
+        );
+    }
 }

@@ -48,7 +48,7 @@ impl Observer for Channels {
             }
             let mut temps = std::mem::take(&mut self.temps);
             s.temperatures_at(t, &mut temps);
-            let row = self.row(&temps, s.gears);
+            let row = self.row(&temps, s.probe.gears());
             self.rows.push(row);
             self.temps = temps;
         }

@@ -281,7 +281,11 @@ fn val_cases_null_backlash_matches_independent_implementation() {
                 s.temperatures_at(t, &mut temps);
                 self.0.push((
                     t,
-                    s.gears[0].evaluate(&temps).unwrap().backlash_exact_m * 1e6,
+                    s.probe.gears()[0]
+                        .evaluate(&temps)
+                        .unwrap()
+                        .backlash_exact_m
+                        * 1e6,
                 ));
             }
             Ok(())

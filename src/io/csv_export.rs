@@ -9,13 +9,12 @@ use std::path::Path;
 
 use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use crate::gear::GearPair;
-use crate::sim::{Grid, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan};
+use crate::sample::{Cadence, Sample, Sampler, Want};
+use crate::sim::{Observer, ObserverResult, RunStart, RunStats, StepView};
 
 pub struct CsvExport {
     file: Option<AtomicFile>,
-    grid: Grid,
-    row: Vec<f64>,
-    gear_values: Vec<f64>,
+    sampler: Sampler,
 }
 
 /// Gear columns, per pair.
@@ -61,28 +60,29 @@ impl CsvExport {
     ) -> Result<CsvExport, OutputError> {
         Ok(CsvExport {
             file: Some(AtomicFile::create(path, policy)?),
-            grid: Grid::new(interval_s),
-            row: vec![],
-            gear_values: vec![],
+            sampler: Sampler::new(Cadence::Interval(interval_s), Want::MESH),
         })
     }
+}
 
-    fn write_row(&mut self, t_s: f64) -> Result<(), OutputError> {
-        let f = self.file.as_mut().expect("open");
-        let path = f.path().to_path_buf();
-        let w = f.writer();
-        (|| {
-            write!(w, "{t_s:.3}")?;
-            for v in &self.row {
+/// Writes one row.
+fn write_row(file: &mut Option<AtomicFile>, s: &Sample) -> Result<(), OutputError> {
+    let f = file.as_mut().expect("open");
+    let path = f.path().to_path_buf();
+    let w = f.writer();
+    (|| {
+        write!(w, "{:.3}", s.t_s)?;
+        for v in &s.temperatures_k {
+            write!(w, ",{v:.6}")?;
+        }
+        for m in &s.mesh {
+            for v in gear_values(m) {
                 write!(w, ",{v:.6}")?;
             }
-            for v in &self.gear_values {
-                write!(w, ",{v:.6}")?;
-            }
-            writeln!(w)
-        })()
-        .map_err(|e| OutputError::io(&path, e))
-    }
+        }
+        writeln!(w)
+    })()
+    .map_err(|e| OutputError::io(&path, e))
 }
 
 impl Observer for CsvExport {
@@ -101,24 +101,15 @@ impl Observer for CsvExport {
             writeln!(w)
         })()
         .map_err(|e| OutputError::io(&path, e))?;
-        self.row = r.temps_k.to_vec();
-        self.gear_values = r.mesh.iter().flat_map(gear_values).collect();
-        self.write_row(r.t_start_s)?;
-        self.grid.start(r.t_start_s);
+        if let Some(s) = self.sampler.start(r) {
+            write_row(&mut self.file, s)?;
+        }
         Ok(())
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        while let Some(t) = self.grid.next_due(step.t1_s()) {
-            let mut row = std::mem::take(&mut self.row);
-            step.temperatures_at(t, &mut row);
-            self.gear_values.clear();
-            for g in step.gears {
-                self.gear_values.extend(gear_values(&mesh_or_nan(g, &row)));
-            }
-            self.row = row;
-            self.write_row(t)?;
-        }
+        let file = &mut self.file;
+        self.sampler.each(step, |s| write_row(file, s))?;
         Ok(())
     }
 

@@ -36,11 +36,9 @@ use super::log_schema::{
 use super::protobuf::Encoder;
 use super::scene;
 use crate::gear::{GearPair, MeshState};
-use crate::orbit::EnvironmentModel;
-use crate::sim::{
-    Event, EventKind, Grid, Observer, ObserverResult, RunStart, RunStats, StepView, mesh_or_nan,
-};
-use crate::thermal::{Compiled, Flows, StepSwitches, ThermalModel};
+use crate::sample::{Cadence, Sample, Sampler, Want};
+use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView};
+use crate::thermal::ThermalModel;
 
 /// How often the log records the state.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -80,6 +78,14 @@ impl std::str::FromStr for LogCadence {
 }
 
 impl LogCadence {
+    /// The sampling cadence of the log.
+    pub fn cadence(&self) -> Cadence {
+        match *self {
+            LogCadence::Steps(n) => Cadence::Steps(n),
+            LogCadence::Interval(dt) => Cadence::Interval(dt),
+        }
+    }
+
     /// Samples a run of `steps` accepted steps over `t_end_s` logs.
     pub fn samples(&self, steps: f64, t_end_s: f64) -> f64 {
         1.0 + match *self {
@@ -145,47 +151,69 @@ struct SceneState {
     interval_s: f64,
     next_s: f64,
     outlines: Vec<[scene::PlacedOutline; 2]>,
+    /// Scene entity identifiers, per pair.
+    names: Vec<String>,
 }
 
-/// Owns the MCAP writer and everything needed to turn a sample (time, temperatures,
-/// switch states) into messages. It runs on its own thread once the run has started,
-/// so the simulation only copies a few numbers per step; records arrive in order, so
-/// the file is the same as if written inline.
+/// Owns the MCAP writer and turns samples (values the run evaluated: temperatures,
+/// switch states, heat flows, environment, mesh states) into messages. It runs on its
+/// own thread once the run has started, so the simulation only copies numbers per
+/// sample; records arrive in order, so the file is the same as if written inline.
 struct LogWriter {
     path: PathBuf,
     writer: mcap::Writer<AtomicFile>,
     ch: Channels,
     enc: Encoder,
     seq: u32,
-    model: ThermalModel,
-    gears: Vec<GearPair>,
-    compiled: Compiled,
-    flows: Flows,
-    scratch: Vec<f64>,
-    heater_power_w: Vec<f64>,
-    heaters_on: Vec<bool>,
-    modes_active: Vec<bool>,
+    pairs: Vec<PairLayout>,
     scene: Option<SceneState>,
 }
 
-/// Layout of one sample in a batch: t, sunlit, temperatures, heater states, mode states.
+/// What the writer needs to know of a gear pair: fixed geometry, not a model.
+#[derive(Debug, Clone)]
+struct PairLayout {
+    /// Per gear (pinion, wheel): its nodes, inner to rim, and their radii, mm.
+    nodes: [Vec<usize>; 2],
+    radii_mm: [Vec<f64>; 2],
+}
+
+/// Names and fixed geometry the log's schemas and messages are made from, taken from the
+/// model when the run starts.
+struct LogDescription {
+    nodes: Vec<String>,
+    boundaries: Vec<String>,
+    loads: Vec<String>,
+    heaters: Vec<String>,
+    pair_names: Vec<String>,
+    pairs: Vec<PairLayout>,
+    outlines: Vec<[scene::PlacedOutline; 2]>,
+}
+
+/// Layout of one sample in a batch: t, sunlit, temperatures, heater states, mode
+/// states, heat flows (absorbed, dissipated, to each boundary, each load, each
+/// heater), orbit (angle, β, solar flux, orbit number).
 #[derive(Debug, Clone, Copy, Default)]
 struct Layout {
     nodes: usize,
     heaters: usize,
     modes: usize,
+    boundaries: usize,
+    loads: usize,
 }
 
 impl Layout {
+    fn flows(&self) -> usize {
+        2 + self.boundaries + self.loads + self.heaters
+    }
     fn stride(&self) -> usize {
-        2 + self.nodes + self.heaters + self.modes
+        2 + self.nodes + self.heaters + self.modes + self.flows() + 4
     }
 }
 
 enum Item {
-    /// A sample at this offset of `Batch::values`, with the gear states already
-    /// computed for it from this index of `Batch::meshes` (step ends), if any.
-    Sample(usize, Option<usize>),
+    /// A sample at this offset of `Batch::values`, its gear states from this index of
+    /// `Batch::meshes`.
+    Sample(usize, usize),
     Event {
         t_s: f64,
         level: i64,
@@ -229,8 +257,7 @@ pub struct McapLog {
     provenance: Provenance,
     layout: Layout,
     batch: Batch,
-    grid: Grid,
-    temps: Vec<f64>,
+    sampler: Sampler,
     names: Names,
     scene_interval_s: Option<f64>,
 }
@@ -277,21 +304,13 @@ impl LogWriter {
         &mut self,
         layout: Layout,
         v: &[f64],
-        meshes: Option<&[MeshState]>,
+        meshes: &[MeshState],
     ) -> Result<(), OutputError> {
         let t_s = v[0];
-        let sunlit = v[1] != 0.0;
         let temps = &v[2..2 + layout.nodes];
-        for (h, &x) in self.heaters_on.iter_mut().zip(&v[2 + layout.nodes..]) {
-            *h = x != 0.0;
-        }
-        for (m, &x) in self
-            .modes_active
-            .iter_mut()
-            .zip(&v[2 + layout.nodes + layout.heaters..])
-        {
-            *m = x != 0.0;
-        }
+        let flows_at = 2 + layout.nodes + layout.heaters + layout.modes;
+        let flows = &v[flows_at..flows_at + layout.flows()];
+        let orbit = &v[flows_at + layout.flows()..];
         // Temperatures.
         self.enc.clear();
         self.enc.double(1, t_s);
@@ -299,54 +318,25 @@ impl LogWriter {
             self.enc.double(i as u32 + 2, t);
         }
         self.write_encoded(self.ch.temperature, t_s)?;
-
-        // Heat flows at t.
-        let env = self.model.environment.state_with(t_s, sunlit);
-        let sw = StepSwitches {
-            heaters_on: &self.heaters_on,
-            modes_active: &self.modes_active,
-        };
-        self.compiled.set_time(&self.model, &env, sw);
-        self.compiled
-            .heat_w(temps, &mut self.scratch, Some(&mut self.flows));
+        // Heat flows: absorbed, dissipated, each boundary, load and heater, in order.
         self.enc.clear();
-        self.enc.double(1, self.flows.absorbed_w);
-        self.enc.double(2, self.flows.dissipated_w);
-        let mut f = 3;
-        for &q in self
-            .flows
-            .to_boundary_w
-            .iter()
-            .chain(&self.compiled.each_load_w)
-        {
-            self.enc.double(f, q);
-            f += 1;
-        }
-        for (&on, &p) in self.heaters_on.iter().zip(&self.heater_power_w) {
-            self.enc.double(f, if on { p } else { 0.0 });
-            f += 1;
+        for (f, &q) in flows.iter().enumerate() {
+            self.enc.double(f as u32 + 1, q);
         }
         self.write_encoded(self.ch.heat, t_s)?;
-
-        // Orbit.
+        // Orbit: angle, β, solar flux, sunlit, orbit number.
         self.enc.clear();
-        self.enc
-            .double(1, self.model.environment.orbit_phase_deg(t_s));
-        self.enc.double(2, env.beta_rad.to_degrees());
-        self.enc.double(3, env.solar_flux_w_per_m2);
-        self.enc.double(4, if sunlit { 1.0 } else { 0.0 });
-        self.enc
-            .double(5, self.model.environment.orbit_number(t_s) as f64);
+        self.enc.double(1, orbit[0]);
+        self.enc.double(2, orbit[1]);
+        self.enc.double(3, orbit[2]);
+        self.enc.double(4, v[1]);
+        self.enc.double(5, orbit[3]);
         self.write_encoded(self.ch.orbit, t_s)?;
 
         // Gear pairs.
-        for k in 0..self.gears.len() {
-            let m = match meshes {
-                Some(ms) => ms[k],
-                None => mesh_or_nan(&self.gears[k], temps),
-            };
+        for (k, m) in meshes.iter().enumerate() {
             self.enc.clear();
-            encode_mesh(&mut self.enc, &self.gears[k], &m, temps);
+            encode_mesh(&mut self.enc, &self.pairs[k], m, temps);
             self.write_encoded(self.ch.gears[k], t_s)?;
         }
         // The 3-D view, at its own interval.
@@ -359,14 +349,14 @@ impl LogWriter {
             }
             _ => false,
         };
-        for k in 0..if due { self.gears.len() } else { 0 } {
-            let pair = &self.gears[k];
-            let rim = |g: usize| temps[*pair.gears[g].nodes.last().expect("nodes")];
+        for k in 0..if due { self.pairs.len() } else { 0 } {
+            let pair = &self.pairs[k];
+            let rim = |g: usize| temps[*pair.nodes[g].last().expect("nodes")];
             let outlines = &self.scene.as_ref().expect("due").outlines[k];
             self.enc.clear();
             scene::encode_scene(
                 &mut self.enc,
-                &identifier(&pair.name),
+                &self.scene.as_ref().expect("due").names[k],
                 outlines,
                 [rim(0), rim(1)],
                 t_s,
@@ -381,7 +371,7 @@ impl LogWriter {
         for item in &b.items {
             match item {
                 Item::Sample(at, mesh) => {
-                    let meshes = mesh.map(|m| &b.meshes[m..m + self.gears.len()]);
+                    let meshes = &b.meshes[*mesh..*mesh + self.pairs.len()];
                     self.sample(layout, &b.values[*at..*at + layout.stride()], meshes)?
                 }
                 Item::Event { t_s, level, text } => self.event(*t_s, *level, text)?,
@@ -428,8 +418,7 @@ impl McapLog {
             provenance,
             layout: Layout::default(),
             batch: Batch::default(),
-            grid: Grid::new(1.0),
-            temps: vec![],
+            sampler: Sampler::new(cadence.cadence(), Want::ALL),
             names: Names::default(),
             scene_interval_s: None,
         })
@@ -442,61 +431,8 @@ impl McapLog {
         self
     }
 
-    /// Queues a sample: time, sunlit flag, `self.temps`, switch states.
-    fn push_sample(
-        &mut self,
-        t_s: f64,
-        sunlit: bool,
-        heaters_on: &[bool],
-        modes_active: &[bool],
-        mesh: Option<&[MeshState]>,
-    ) -> ObserverResult {
-        let v = &mut self.batch.values;
-        let at = v.len();
-        v.push(t_s);
-        v.push(if sunlit { 1.0 } else { 0.0 });
-        v.extend_from_slice(&self.temps);
-        v.extend(heaters_on.iter().map(|&b| if b { 1.0 } else { 0.0 }));
-        v.extend(modes_active.iter().map(|&b| if b { 1.0 } else { 0.0 }));
-        let mesh = mesh.map(|ms| {
-            let at = self.batch.meshes.len();
-            self.batch.meshes.extend_from_slice(ms);
-            at
-        });
-        self.batch.items.push(Item::Sample(at, mesh));
-        if self.batch.items.len() >= BATCH_SAMPLES {
-            self.send_batch()?;
-        }
-        Ok(())
-    }
-
     fn send_batch(&mut self) -> ObserverResult {
-        if self.batch.items.is_empty() {
-            return Ok(());
-        }
-        if let State::Running(t) = &self.state {
-            if t.failed.load(std::sync::atomic::Ordering::Relaxed) {
-                // The writer stopped on an error: collect it, so the run reports the cause.
-                let State::Running(t) = std::mem::replace(&mut self.state, State::Closed(false))
-                else {
-                    unreachable!()
-                };
-                drop(t.tx);
-                return Err(match t.handle.join() {
-                    Ok(Err(e)) => Box::new(e),
-                    _ => format!("writing {} failed", self.path.display()).into(),
-                });
-            }
-            let next = Batch {
-                values: Vec::with_capacity(self.batch.values.capacity()),
-                meshes: Vec::with_capacity(self.batch.meshes.capacity()),
-                items: Vec::with_capacity(BATCH_SAMPLES + 8),
-            };
-            let batch = std::mem::replace(&mut self.batch, next);
-            t.tx.send(ToWriter::Batch(batch))
-                .map_err(|_| format!("the writer of {} stopped", self.path.display()))?;
-        }
-        Ok(())
+        send_batch(&mut self.state, &mut self.batch, &self.path)
     }
 
     /// Closes the log after a failed run: the data so far, an error event and a
@@ -558,6 +494,61 @@ impl McapLog {
     }
 }
 
+/// Hands the batch to the writer thread (when it runs), or reports why it stopped.
+fn send_batch(state: &mut State, batch: &mut Batch, path: &Path) -> ObserverResult {
+    if batch.items.is_empty() {
+        return Ok(());
+    }
+    if let State::Running(t) = state {
+        if t.failed.load(std::sync::atomic::Ordering::Relaxed) {
+            // The writer stopped on an error: collect it, so the run reports the cause.
+            let State::Running(t) = std::mem::replace(state, State::Closed(false)) else {
+                unreachable!()
+            };
+            drop(t.tx);
+            return Err(match t.handle.join() {
+                Ok(Err(e)) => Box::new(e),
+                _ => format!("writing {} failed", path.display()).into(),
+            });
+        }
+        let next = Batch {
+            values: Vec::with_capacity(batch.values.capacity()),
+            meshes: Vec::with_capacity(batch.meshes.capacity()),
+            items: Vec::with_capacity(BATCH_SAMPLES + 8),
+        };
+        let batch = std::mem::replace(batch, next);
+        t.tx.send(ToWriter::Batch(batch))
+            .map_err(|_| format!("the writer of {} stopped", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Appends a sample to a batch, laid out as [`Layout`] says.
+fn push_sample(batch: &mut Batch, s: &Sample) {
+    let b = |on: &bool| if *on { 1.0 } else { 0.0 };
+    let v = &mut batch.values;
+    let at = v.len();
+    v.push(s.t_s);
+    v.push(b(&s.sunlit));
+    v.extend_from_slice(&s.temperatures_k);
+    v.extend(s.heaters_on.iter().map(b));
+    v.extend(s.modes_active.iter().map(b));
+    let f = &s.flows;
+    v.push(f.absorbed_w);
+    v.push(f.dissipated_w);
+    v.extend_from_slice(&f.to_boundary_w);
+    v.extend_from_slice(&f.load_w);
+    v.extend_from_slice(&f.heater_w);
+    let env = s.env.expect("the log samples the environment");
+    v.push(s.orbit_phase_deg);
+    v.push(env.beta_rad.to_degrees());
+    v.push(env.solar_flux_w_per_m2);
+    v.push(s.orbit_number as f64);
+    let mesh = batch.meshes.len();
+    batch.meshes.extend_from_slice(&s.mesh);
+    batch.items.push(Item::Sample(at, mesh));
+}
+
 /// Runs `w` on a thread fed by batches until `Finish`.
 fn spawn_writer(
     setup: impl FnOnce() -> Result<LogWriter, OutputError> + Send + 'static,
@@ -616,7 +607,7 @@ fn spawn_writer(
 }
 
 /// Writes one `orbitlash.GearMesh` message.
-fn encode_mesh(e: &mut Encoder, pair: &GearPair, m: &MeshState, temps: &[f64]) {
+fn encode_mesh(e: &mut Encoder, pair: &PairLayout, m: &MeshState, temps: &[f64]) {
     e.double(1, m.backlash_exact_m * 1e6);
     e.double(2, m.backlash_closed_form_m * 1e6);
     e.double(3, m.backlash_paper_m * 1e6);
@@ -624,7 +615,7 @@ fn encode_mesh(e: &mut Encoder, pair: &GearPair, m: &MeshState, temps: &[f64]) {
     e.double(5, m.pressure_angle_rad.to_degrees());
     e.double(6, m.center_distance_m * 1e3);
     e.double(7, m.contact_ratio);
-    for (k, g) in pair.gears.iter().enumerate() {
+    for k in 0..2 {
         let d = m.gears[k];
         e.message(8 + k as u32, |e| {
             e.double(1, d.base_displacement_m * 1e6);
@@ -633,8 +624,8 @@ fn encode_mesh(e: &mut Encoder, pair: &GearPair, m: &MeshState, temps: &[f64]) {
             e.double(4, d.base_thickness_m * 1e3);
             e.double(5, d.tip_radius_m * 1e3);
             e.double(6, d.coating_m * 1e6);
-            e.packed_doubles(7, g.node_radii_m.iter().map(|r| r * 1e3));
-            e.packed_doubles(8, g.nodes.iter().map(|&i| temps[i]));
+            e.packed_doubles(7, pair.radii_mm[k].iter().copied());
+            e.packed_doubles(8, pair.nodes[k].iter().map(|&i| temps[i]));
         });
     }
 }
@@ -691,16 +682,13 @@ fn open_log_writer(
     mut writer: Box<mcap::Writer<AtomicFile>>,
     provenance: Provenance,
     cadence: LogCadence,
-    model: ThermalModel,
-    pairs: &[GearPair],
+    d: LogDescription,
     t_end_s: f64,
     scene_interval_s: Option<f64>,
 ) -> Result<LogWriter, OutputError> {
     let w = &mut writer;
-    let model = &model;
-    let net = &model.network;
     let mut taken = vec!["time_s".to_string()];
-    let node_fields = field_names(net.nodes.iter().map(|n| n.name.clone()), "k", &mut taken);
+    let node_fields = field_names(d.nodes.iter().cloned(), "k", &mut taken);
     let mut temperature = MessageType::new("NodeTemperatures").with("time_s", Kind::Double);
     for f in &node_fields {
         temperature = temperature.with(f, Kind::Double);
@@ -710,16 +698,16 @@ fn open_log_writer(
         .with("absorbed_w", Kind::Double)
         .with("dissipated_w", Kind::Double);
     for f in field_names(
-        net.boundaries.iter().map(|b| format!("to_{}", b.name)),
+        d.boundaries.iter().map(|b| format!("to_{b}")),
         "w",
         &mut taken,
     ) {
         heat = heat.with(&f, Kind::Double);
     }
-    for f in field_names(net.loads.iter().map(|l| l.name.clone()), "w", &mut taken) {
+    for f in field_names(d.loads.iter().cloned(), "w", &mut taken) {
         heat = heat.with(&f, Kind::Double);
     }
-    for f in field_names(net.heaters.iter().map(|h| h.name.clone()), "w", &mut taken) {
+    for f in field_names(d.heaters.iter().cloned(), "w", &mut taken) {
         heat = heat.with(&f, Kind::Double);
     }
     let orbit = MessageType::new("OrbitState")
@@ -735,8 +723,8 @@ fn open_log_writer(
         LogCadence::Interval(dt) => format!("every {dt} s"),
     };
     let mut node_map = BTreeMap::new();
-    for (f, n) in node_fields.iter().zip(&net.nodes) {
-        node_map.insert(format!("node:{f}"), n.name.clone());
+    for (f, n) in node_fields.iter().zip(&d.nodes) {
+        node_map.insert(format!("node:{f}"), n.clone());
     }
     let empty = BTreeMap::new();
     let schema = |w: &mut mcap::Writer<AtomicFile>, name: &str, data: &[u8]| {
@@ -767,31 +755,31 @@ fn open_log_writer(
     )?;
     let orbit = channel(w, s, "/orbit/state", &empty)?;
     let mut gears = Vec::new();
-    if !pairs.is_empty() {
+    if !d.pairs.is_empty() {
         let s = schema(
             w,
             "orbitlash.GearMesh",
             &descriptor_set("GearMesh", &gear_types()),
         )?;
-        for g in pairs {
+        for name in &d.pair_names {
             let meta: BTreeMap<String, String> =
-                [("pair".to_string(), g.name.clone())].into_iter().collect();
+                [("pair".to_string(), name.clone())].into_iter().collect();
             gears.push(channel(
                 w,
                 s,
-                &format!("/gears/{}", identifier(&g.name)),
+                &format!("/gears/{}", identifier(name)),
                 &meta,
             )?);
         }
     }
     let mut scenes = Vec::new();
-    if scene_interval_s.is_some() && !pairs.is_empty() {
+    if scene_interval_s.is_some() && !d.pairs.is_empty() {
         let s = schema(w, "foxglove.SceneUpdate", &foxglove_scene_descriptor_set())?;
-        for g in pairs {
+        for name in &d.pair_names {
             scenes.push(channel(
                 w,
                 s,
-                &format!("/gears/{}/scene", identifier(&g.name)),
+                &format!("/gears/{}/scene", identifier(name)),
                 &empty,
             )?);
         }
@@ -854,21 +842,15 @@ fn open_log_writer(
         ch,
         enc: Encoder::default(),
         seq: 0,
-        model: model.clone(),
-        gears: pairs.to_vec(),
-        compiled: Compiled::new(net),
-        flows: Flows::default(),
-        scratch: vec![0.0; net.nodes.len()],
-        heater_power_w: net.heaters.iter().map(|h| h.power_w).collect(),
-        heaters_on: vec![false; net.heaters.len()],
-        modes_active: vec![false; model.modes.len()],
         scene: scene_interval_s
-            .filter(|_| !pairs.is_empty())
+            .filter(|_| !d.pairs.is_empty())
             .map(|interval_s| SceneState {
                 interval_s,
                 next_s: 0.0,
-                outlines: pairs.iter().map(scene::pair_outlines_m).collect(),
+                outlines: d.outlines,
+                names: d.pair_names.iter().map(|n| identifier(n)).collect(),
             }),
+        pairs: d.pairs,
     })
 }
 
@@ -877,39 +859,53 @@ impl Observer for McapLog {
         let State::Open(writer) = std::mem::replace(&mut self.state, State::Closed(false)) else {
             return Err("the log was already started".into());
         };
-        let (path, provenance, cadence, model, gears, t_end_s, scene_interval_s) = (
+        let net = &r.model.network;
+        let names = |v: &mut dyn Iterator<Item = &String>| v.cloned().collect::<Vec<_>>();
+        let description = LogDescription {
+            nodes: names(&mut net.nodes.iter().map(|n| &n.name)),
+            boundaries: names(&mut net.boundaries.iter().map(|b| &b.name)),
+            loads: names(&mut net.loads.iter().map(|l| &l.name)),
+            heaters: names(&mut net.heaters.iter().map(|h| &h.name)),
+            pair_names: names(&mut r.gears.iter().map(|g| &g.name)),
+            pairs: r
+                .gears
+                .iter()
+                .map(|p| PairLayout {
+                    nodes: [p.gears[0].nodes.clone(), p.gears[1].nodes.clone()],
+                    radii_mm: [0, 1]
+                        .map(|k| p.gears[k].node_radii_m.iter().map(|r| r * 1e3).collect()),
+                })
+                .collect(),
+            outlines: if self.scene_interval_s.is_some() {
+                r.gears.iter().map(scene::pair_outlines_m).collect()
+            } else {
+                vec![]
+            },
+        };
+        let (path, provenance, cadence, t_end_s, scene_interval_s) = (
             self.path.clone(),
             self.provenance.clone(),
             self.cadence,
-            r.model.clone(),
-            r.gears.to_vec(),
             r.t_end_s,
             self.scene_interval_s,
         );
-        let net = &r.model.network;
         self.names = Names {
-            pairs: r.gears.iter().map(|g| g.name.clone()).collect(),
-            heaters: net.heaters.iter().map(|h| h.name.clone()).collect(),
+            pairs: description.pair_names.clone(),
+            heaters: description.heaters.clone(),
             modes: r.model.modes.iter().map(|m| m.name.clone()).collect(),
         };
         self.layout = Layout {
             nodes: net.nodes.len(),
             heaters: net.heaters.len(),
             modes: r.model.modes.len(),
+            boundaries: net.boundaries.len(),
+            loads: net.loads.len(),
         };
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.
-        self.temps = r.temps_k.to_vec();
-        self.push_sample(
-            r.t_start_s,
-            r.sunlit,
-            r.heaters_on,
-            r.modes_active,
-            Some(r.mesh),
-        )?;
-        if let LogCadence::Interval(dt) = self.cadence {
-            self.grid = Grid::new(dt);
-            self.grid.start(r.t_start_s);
+        self.sampler = Sampler::new(self.cadence.cadence(), Want::ALL);
+        if let Some(s) = self.sampler.start(r) {
+            push_sample(&mut self.batch, s);
         }
         let setup = move || {
             open_log_writer(
@@ -917,8 +913,7 @@ impl Observer for McapLog {
                 writer,
                 provenance,
                 cadence,
-                model,
-                &gears,
+                description,
                 t_end_s,
                 scene_interval_s,
             )
@@ -928,35 +923,14 @@ impl Observer for McapLog {
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        match self.cadence {
-            LogCadence::Steps(n) => {
-                if step.index.is_multiple_of(n) {
-                    self.temps.copy_from_slice(step.temps1_k());
-                    self.push_sample(
-                        step.t1_s(),
-                        step.env1.sunlit,
-                        step.heaters_on,
-                        step.modes_active,
-                        Some(step.mesh),
-                    )?;
-                }
+        let (batch, state, path) = (&mut self.batch, &mut self.state, &self.path);
+        self.sampler.each(step, |s| {
+            push_sample(batch, s);
+            if batch.items.len() >= BATCH_SAMPLES {
+                send_batch(state, batch, path)?;
             }
-            LogCadence::Interval(_) => {
-                while let Some(t) = self.grid.next_due(step.t1_s()) {
-                    let mut temps = std::mem::take(&mut self.temps);
-                    step.temperatures_at(t, &mut temps);
-                    self.temps = temps;
-                    self.push_sample(
-                        t,
-                        step.env1.sunlit,
-                        step.heaters_on,
-                        step.modes_active,
-                        None,
-                    )?;
-                }
-            }
-        }
-        Ok(())
+            Ok(())
+        })
     }
 
     fn on_event(&mut self, event: &Event) -> ObserverResult {

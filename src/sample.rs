@@ -1,0 +1,343 @@
+//! Sampling a run: what observers record about one instant, evaluated by the run once
+//! and handed to them as values.
+//!
+//! Observers see, they do not recompute. A [`Sample`] holds everything the outputs
+//! record at a time (temperatures, switch states, environment, gear mesh states, heat
+//! flows); [`Probe`] evaluates one from the step's interpolant and the model the run
+//! was set up with; [`Sampler`] is the one helper that decides *when* to sample (every
+//! n-th step, a fixed interval, or given times such as a recording's) and fills the
+//! sample. The CSV export, the MCAP log, the summaries and the sensors all sample
+//! through it, so "the temperature at 3600 s" is the same number in every output.
+
+use std::cell::RefCell;
+
+use crate::gear::{GearPair, MeshState};
+use crate::orbit::{EnvState, EnvironmentModel};
+use crate::sim::{RunStart, StepView, mesh_or_nan};
+use crate::thermal::{Compiled, Flows, StepSwitches, ThermalModel};
+
+/// Heat flows at one instant, W.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct HeatFlows {
+    /// Sun, albedo and Earth infrared absorbed, summed over the network.
+    pub absorbed_w: f64,
+    /// Scheduled dissipation and heaters, summed.
+    pub dissipated_w: f64,
+    /// Net heat into each boundary node (as `Network::boundaries`).
+    pub to_boundary_w: Vec<f64>,
+    /// Each load (as `Network::loads`).
+    pub load_w: Vec<f64>,
+    /// Each heater's power: its rating when on, 0 when off (as `Network::heaters`).
+    pub heater_w: Vec<f64>,
+}
+
+/// What to evaluate besides temperatures, switch states and environment (which are
+/// always filled).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Want {
+    /// Every gear pair's mesh state ([`Sample::mesh`]).
+    pub mesh: bool,
+    /// Heat flows ([`Sample::flows`]).
+    pub flows: bool,
+}
+
+impl Want {
+    pub const TEMPERATURES: Want = Want {
+        mesh: false,
+        flows: false,
+    };
+    pub const MESH: Want = Want {
+        mesh: true,
+        flows: false,
+    };
+    pub const ALL: Want = Want {
+        mesh: true,
+        flows: true,
+    };
+}
+
+/// One instant of a run, as every output records it.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Sample {
+    pub t_s: f64,
+    /// Sunlit as during the step the sample falls in.
+    pub sunlit: bool,
+    /// Sun and Earth geometry and fluxes at `t_s`.
+    pub env: Option<EnvState>,
+    /// Orbit count (1 for the first) and angle from orbit noon, degrees in [0, 360).
+    pub orbit_number: u64,
+    pub orbit_phase_deg: f64,
+    /// Per diffusion node, K.
+    pub temperatures_k: Vec<f64>,
+    pub heaters_on: Vec<bool>,
+    pub modes_active: Vec<bool>,
+    /// Per gear pair (NaN backlash where there is no valid mesh), when wanted.
+    pub mesh: Vec<MeshState>,
+    /// When wanted.
+    pub flows: HeatFlows,
+}
+
+/// Evaluates samples from the model a run was set up with: handed to observers inside
+/// [`RunStart`] and [`StepView`]. Cheap to copy; its workspace is the setup's.
+#[derive(Clone, Copy)]
+pub struct Probe<'a> {
+    pub(crate) model: &'a ThermalModel,
+    pub(crate) gears: &'a [GearPair],
+    pub(crate) work: &'a RefCell<ProbeWork>,
+}
+
+/// The probe's workspace: a compiled network of its own (the stepper's is in the middle
+/// of a step) and scratch vectors, made on first use.
+#[derive(Default)]
+pub struct ProbeWork {
+    compiled: Option<Compiled>,
+    flows: Flows,
+    scratch_w: Vec<f64>,
+    temps_k: Vec<f64>,
+}
+
+impl<'a> Probe<'a> {
+    pub fn model(&self) -> &'a ThermalModel {
+        self.model
+    }
+    pub fn gears(&self) -> &'a [GearPair] {
+        self.gears
+    }
+
+    /// Fills everything but the temperatures (already in `out`) at `out.t_s`.
+    fn complete(&self, want: Want, mesh: Option<&[MeshState]>, out: &mut Sample) {
+        let env_model = &self.model.environment;
+        let env = env_model.state_with(out.t_s, out.sunlit);
+        out.env = Some(env);
+        out.orbit_number = env_model.orbit_number(out.t_s);
+        out.orbit_phase_deg = env_model.orbit_phase_deg(out.t_s);
+        out.mesh.clear();
+        if want.mesh {
+            match mesh {
+                Some(m) => out.mesh.extend_from_slice(m),
+                None => out.mesh.extend(
+                    self.gears
+                        .iter()
+                        .map(|g| mesh_or_nan(g, &out.temperatures_k)),
+                ),
+            }
+        }
+        if want.flows {
+            let mut w = self.work.borrow_mut();
+            let w = &mut *w;
+            let net = &self.model.network;
+            let compiled = w.compiled.get_or_insert_with(|| Compiled::new(net));
+            w.scratch_w.resize(net.nodes.len(), 0.0);
+            compiled.set_time(
+                self.model,
+                &env,
+                StepSwitches {
+                    heaters_on: &out.heaters_on,
+                    modes_active: &out.modes_active,
+                },
+            );
+            compiled.heat_w(&out.temperatures_k, &mut w.scratch_w, Some(&mut w.flows));
+            let f = &mut out.flows;
+            f.absorbed_w = w.flows.absorbed_w;
+            f.dissipated_w = w.flows.dissipated_w;
+            f.to_boundary_w.clone_from(&w.flows.to_boundary_w);
+            f.load_w.clone_from(&compiled.each_load_w);
+            f.heater_w.clear();
+            f.heater_w.extend(
+                net.heaters
+                    .iter()
+                    .zip(&out.heaters_on)
+                    .map(|(h, &on)| if on { h.power_w } else { 0.0 }),
+            );
+        }
+    }
+
+    /// The mesh state of gear pair `k` at node temperatures `temps_k`.
+    pub fn mesh(&self, k: usize, temps_k: &[f64]) -> MeshState {
+        mesh_or_nan(&self.gears[k], temps_k)
+    }
+
+    /// The mesh state of gear pair `k` at `t_s` within `step`.
+    pub fn mesh_at(&self, step: &StepView<'_>, k: usize, t_s: f64) -> MeshState {
+        let mut w = self.work.borrow_mut();
+        w.temps_k.resize(step.temps1_k().len(), 0.0);
+        step.temperatures_at(t_s, &mut w.temps_k);
+        mesh_or_nan(&self.gears[k], &w.temps_k)
+    }
+}
+
+impl RunStart<'_> {
+    /// The run's start as a sample.
+    pub fn sample(&self, want: Want, out: &mut Sample) {
+        out.t_s = self.t_start_s;
+        out.sunlit = self.sunlit;
+        out.temperatures_k.clear();
+        out.temperatures_k.extend_from_slice(self.temps_k);
+        out.heaters_on.clear();
+        out.heaters_on.extend_from_slice(self.heaters_on);
+        out.modes_active.clear();
+        out.modes_active.extend_from_slice(self.modes_active);
+        self.probe.complete(want, Some(self.mesh), out);
+    }
+}
+
+impl StepView<'_> {
+    /// The step's end as a sample (the step's own end values, not interpolated).
+    pub fn sample_end(&self, want: Want, out: &mut Sample) {
+        out.t_s = self.t1_s();
+        out.temperatures_k.clear();
+        out.temperatures_k.extend_from_slice(self.temps1_k());
+        self.switches_into(out);
+        self.probe.complete(want, Some(self.mesh), out);
+    }
+
+    /// The instant `t_s` within the step as a sample (temperatures from the solver's
+    /// interpolant).
+    pub fn sample_at(&self, t_s: f64, want: Want, out: &mut Sample) {
+        out.t_s = t_s;
+        out.temperatures_k.resize(self.temps1_k().len(), 0.0);
+        self.temperatures_at(t_s, &mut out.temperatures_k);
+        self.switches_into(out);
+        self.probe.complete(want, None, out);
+    }
+
+    fn switches_into(&self, out: &mut Sample) {
+        out.sunlit = self.env1.sunlit;
+        out.heaters_on.clear();
+        out.heaters_on.extend_from_slice(self.heaters_on);
+        out.modes_active.clear();
+        out.modes_active.extend_from_slice(self.modes_active);
+    }
+}
+
+/// Fixed-interval sampling times (for [`Cadence::Interval`]): the start of the run,
+/// then each multiple of `interval_s` after it, once, from the step that reaches it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grid {
+    interval_s: f64,
+    next: u64,
+}
+
+impl Grid {
+    pub fn new(interval_s: f64) -> Grid {
+        Grid {
+            interval_s,
+            next: 1,
+        }
+    }
+
+    pub fn interval_s(&self) -> f64 {
+        self.interval_s
+    }
+
+    /// A run starts at `t_start_s` (sampled by the caller): the next grid time is the
+    /// first multiple of the interval after it.
+    pub fn start(&mut self, t_start_s: f64) {
+        self.next = (t_start_s / self.interval_s).floor() as u64 + 1;
+    }
+
+    /// The next grid time at or before `t1_s` (a step's end), if any; each once.
+    pub fn next_due(&mut self, t1_s: f64) -> Option<f64> {
+        let t = self.next as f64 * self.interval_s;
+        (t <= t1_s * (1.0 + 1e-12)).then(|| {
+            self.next += 1;
+            t
+        })
+    }
+}
+
+/// When a [`Sampler`] samples.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Cadence {
+    /// The start, then the end of every n-th step (n ≥ 1): the solver's own values.
+    Steps(u64),
+    /// The start, then every multiple of the interval, s (interpolated).
+    Interval(f64),
+    /// The given times, s, ascending (interpolated; a time equal to the run's start is
+    /// the start state; times before the start are skipped).
+    Times(std::sync::Arc<[f64]>),
+}
+
+/// Samples a run at its [`Cadence`]: call [`Sampler::start`] from `on_start` and
+/// [`Sampler::each`] from `on_step`. Buffers are reused: no allocation after the first
+/// sample.
+#[derive(Debug, Clone)]
+pub struct Sampler {
+    cadence: Cadence,
+    want: Want,
+    grid: Grid,
+    next_time: usize,
+    sample: Sample,
+}
+
+impl Sampler {
+    pub fn new(cadence: Cadence, want: Want) -> Sampler {
+        let grid = Grid::new(match &cadence {
+            Cadence::Interval(dt) => *dt,
+            _ => 1.0,
+        });
+        Sampler {
+            cadence,
+            want,
+            grid,
+            next_time: 0,
+            sample: Sample::default(),
+        }
+    }
+
+    pub fn cadence(&self) -> &Cadence {
+        &self.cadence
+    }
+
+    /// The start of a run: its sample, unless the cadence skips it.
+    pub fn start(&mut self, r: &RunStart<'_>) -> Option<&Sample> {
+        let t0 = r.t_start_s;
+        match &self.cadence {
+            Cadence::Interval(_) => self.grid.start(t0),
+            Cadence::Steps(_) => {}
+            Cadence::Times(ts) => {
+                self.next_time = ts.partition_point(|&t| t < t0);
+                if ts.get(self.next_time) != Some(&t0) {
+                    return None;
+                }
+                self.next_time += 1;
+            }
+        }
+        r.sample(self.want, &mut self.sample);
+        Some(&self.sample)
+    }
+
+    /// Calls `f` with each sample due within `step`, in time order.
+    pub fn each<E>(
+        &mut self,
+        step: &StepView<'_>,
+        mut f: impl FnMut(&Sample) -> Result<(), E>,
+    ) -> Result<(), E> {
+        let t1 = step.t1_s();
+        match &self.cadence {
+            Cadence::Steps(n) => {
+                if step.index.is_multiple_of(*n) {
+                    step.sample_end(self.want, &mut self.sample);
+                    f(&self.sample)?;
+                }
+            }
+            Cadence::Interval(_) => {
+                while let Some(t) = self.grid.next_due(t1) {
+                    step.sample_at(t, self.want, &mut self.sample);
+                    f(&self.sample)?;
+                }
+            }
+            Cadence::Times(ts) => {
+                while let Some(&t) = ts.get(self.next_time) {
+                    if t > t1 * (1.0 + 1e-12) {
+                        break;
+                    }
+                    self.next_time += 1;
+                    step.sample_at(t, self.want, &mut self.sample);
+                    f(&self.sample)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
