@@ -22,6 +22,7 @@ pub mod model;
 pub mod orbit;
 pub mod sample;
 pub mod scenario;
+pub mod sensor;
 pub mod sim;
 pub mod spec;
 pub mod summary;

@@ -26,23 +26,7 @@ pub struct RunControl {
     pub output_interval_s: f64,
 }
 
-/// A recording column and what it measures.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Sensor {
-    pub column: String,
-    pub target: SensorTarget,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-pub enum SensorTarget {
-    /// A diffusion node's temperature.
-    Node(usize),
-    /// A derived quantity, by name (see [`DERIVED_QUANTITIES`]).
-    Derived(String),
-}
-
-/// Derived quantities a sensor may name.
-pub const DERIVED_QUANTITIES: [&str; 1] = ["backlash_um"];
+pub use crate::sensor::{DERIVED_QUANTITIES, Sensor, SensorTarget};
 
 /// Longest run, s (about 31.7 years). Beyond it the time of day no longer resolves the
 /// solver's shortest step (1e-7 s) in double precision.

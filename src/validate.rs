@@ -8,6 +8,7 @@ use crate::orbit::{Environment, EnvironmentModel, Profile};
 use crate::scenario::{
     MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, Scenario, SensorTarget,
 };
+use crate::sensor::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
 use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K};
 use crate::spec::compile::{
     MAX_AREA_M2, MAX_CONDUCTANCE_W_PER_K, MAX_PERIOD_S, MAX_POWER_W, MIN_CAPACITANCE_J_PER_K,
@@ -356,20 +357,35 @@ impl Scenario {
             ));
         }
         for (i, s) in self.sensors.iter().enumerate() {
+            let at = || format!("sensors[{i}] ({})", s.column);
             match &s.target {
                 SensorTarget::Node(j) if *j >= n => {
-                    return Err(bad(
-                        format!("sensors[{i}] ({})", s.column),
-                        "refers to a node that does not exist",
-                    ));
+                    return Err(bad(at(), "refers to a node that does not exist"));
                 }
-                SensorTarget::Derived(_) if self.gears.is_empty() => {
-                    return Err(bad(
-                        format!("sensors[{i}] ({})", s.column),
-                        "a derived quantity needs a gear pair",
-                    ));
+                SensorTarget::Backlash(k) if *k >= self.gears.len() => {
+                    return Err(bad(at(), "refers to a gear pair that does not exist"));
                 }
                 _ => {}
+            }
+            if !(0.0..=MAX_SENSOR_TAU_S).contains(&s.tau_s) {
+                return Err(bad(
+                    at(),
+                    format!(
+                        "time constant {} s outside 0 … {MAX_SENSOR_TAU_S} s",
+                        s.tau_s
+                    ),
+                ));
+            }
+            if !(-MAX_SENSOR_OFFSET_K..=MAX_SENSOR_OFFSET_K).contains(&s.offset_k) {
+                return Err(bad(
+                    at(),
+                    format!("offset {} K beyond ±{MAX_SENSOR_OFFSET_K} K", s.offset_k),
+                ));
+            }
+            if matches!(s.target, SensorTarget::Backlash(_))
+                && (s.tau_s != 0.0 || s.offset_k != 0.0)
+            {
+                return Err(bad(at(), "a backlash sensor has no lag or offset"));
             }
         }
         Ok(())

@@ -373,3 +373,31 @@ fn a_log_that_is_not_mcap_is_a_clear_error() {
     assert_failed("bad-log", &out, &[log.to_str().unwrap(), "MCAP"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn cli_sensor_lag_and_offset_are_checked() {
+    assert_rejected(
+        "sensor-tau",
+        "column = \"housing_c\"\nnode = \"housing\"",
+        "column = \"housing_c\"\nnode = \"housing\"\ntau_s = -5.0",
+        &["sensor.housing_c.tau_s", "0 … 86400", "got -5"],
+    );
+    assert_rejected(
+        "sensor-offset",
+        "column = \"motor_c\"\nnode = \"motor\"",
+        "column = \"motor_c\"\nnode = \"motor\"\noffset_k = 250.0",
+        &["sensor.motor_c.offset_k", "-100 … 100"],
+    );
+    assert_rejected(
+        "sensor-derived-lag",
+        "quantity = \"backlash_um\"",
+        "quantity = \"backlash_um\"\ntau_s = 10.0",
+        &["sensor.backlash_um.tau_s", "temperature sensors only"],
+    );
+    assert_rejected(
+        "sensor-pair",
+        "quantity = \"backlash_um\"",
+        "quantity = \"backlash_um\"\ngear_pair = \"spur\"",
+        &["sensor.backlash_um.gear_pair", "unknown gear pair `spur`"],
+    );
+}

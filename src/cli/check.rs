@@ -182,7 +182,16 @@ pub fn check(a: CheckArgs) -> Result<()> {
         } else {
             sc.sensors
                 .iter()
-                .map(|s| s.column.as_str())
+                .map(|s| {
+                    let mut t = s.column.clone();
+                    if s.tau_s > 0.0 {
+                        t += &format!(" (lag τ {} s)", s.tau_s);
+                    }
+                    if s.offset_k != 0.0 {
+                        t += &format!(" (offset {:+} K)", s.offset_k);
+                    }
+                    t
+                })
                 .collect::<Vec<_>>()
                 .join(", ")
         }

@@ -145,51 +145,6 @@ pub fn foxglove_log_descriptor_set() -> Vec<u8> {
     .encode_to_vec()
 }
 
-/// Field names and kinds of a message type in an encoded descriptor set, with nested
-/// message types resolved: `(number → (name, kind))` plus the nested types' tables.
-#[derive(Debug, Clone, Default)]
-pub struct DecodedType {
-    pub fields: Vec<(u32, String, Kind)>,
-    pub nested: std::collections::HashMap<String, DecodedType>,
-}
-
-/// Reads the type `full_name` (e.g. `orbitlash.GearMesh`) from an encoded descriptor
-/// set. Only the kinds this crate writes are kept (double, repeated double, message).
-pub fn decode_type(descriptor_set: &[u8], full_name: &str) -> Option<DecodedType> {
-    let set = FileDescriptorSet::decode(descriptor_set).ok()?;
-    let mut all = std::collections::HashMap::new();
-    for f in &set.file {
-        let pkg = f.package.clone().unwrap_or_default();
-        for m in &f.message_type {
-            all.insert(format!("{pkg}.{}", m.name()), m.clone());
-        }
-    }
-    fn build(
-        all: &std::collections::HashMap<String, DescriptorProto>,
-        name: &str,
-        depth: usize,
-    ) -> Option<DecodedType> {
-        let m = all.get(name)?;
-        let mut t = DecodedType::default();
-        for f in &m.field {
-            let kind = match (f.r#type(), f.label()) {
-                (Type::Double, Label::Repeated) => Kind::RepeatedDouble,
-                (Type::Double, _) => Kind::Double,
-                (Type::Message, _) if depth < 8 => {
-                    let tn = f.type_name().trim_start_matches('.').to_string();
-                    t.nested.insert(tn.clone(), build(all, &tn, depth + 1)?);
-                    Kind::Message(tn)
-                }
-                _ => continue,
-            };
-            t.fields
-                .push((f.number() as u32, f.name().to_string(), kind));
-        }
-        Some(t)
-    }
-    build(&all, full_name, 0)
-}
-
 /// A field of a foxglove schema: (name, number, type, repeated, message type).
 type FoxField = (&'static str, i32, Type, bool, Option<&'static str>);
 

@@ -1,11 +1,11 @@
-//! Reading MCAP logs back: every protobuf channel is decoded through the schema stored
-//! in the file and flattened into named numeric columns, joined on log time.
+//! Reading MCAP logs back: every protobuf channel is decoded through the descriptor set
+//! its schema stores (`prost-reflect`) and flattened into named numeric columns, joined
+//! on log time.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
-use super::log_schema::{DecodedType, Kind, decode_type};
-use super::protobuf::{Wire, fields};
+use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage, Value};
 
 #[derive(Debug, thiserror::Error)]
 pub enum LogReadError {
@@ -49,69 +49,67 @@ impl LogTable {
     }
 }
 
-fn flatten(
-    t: &DecodedType,
+/// The message type `name` from the descriptor set a channel's schema stores.
+pub fn message_type(schema_data: &[u8], name: &str) -> Result<MessageDescriptor, String> {
+    let pool = DescriptorPool::decode(schema_data)
+        .map_err(|e| format!("its schema {name} is not a readable descriptor set: {e}"))?;
+    pool.get_message_by_name(name)
+        .ok_or_else(|| format!("schema {name} not found in its descriptor set"))
+}
+
+/// A message decoded through its descriptor, flattened into `(path, value)` pairs:
+/// every numeric field (double, float, integers, bool as 1/0), repeated ones as
+/// `name[k]`, nested messages as `outer.inner`; absent fields at their proto3 default.
+pub fn flatten_message(
+    desc: &MessageDescriptor,
     data: &[u8],
     prefix: &str,
     out: &mut Vec<(String, f64)>,
 ) -> Result<(), String> {
-    let decoded = fields(data).map_err(|e| e.to_string())?;
-    for (number, name, kind) in &t.fields {
-        let path = format!("{prefix}.{name}");
-        let values: Vec<&Wire<'_>> = decoded
-            .iter()
-            .filter(|(n, _)| n == number)
-            .map(|(_, v)| v)
-            .collect();
-        match kind {
-            Kind::Double => {
-                let v = match values.last() {
-                    Some(Wire::Fixed64(b)) => f64::from_le_bytes(*b),
-                    None => 0.0, // proto3 default
-                    Some(other) => {
-                        return Err(format!("{path}: expected a double, found {other:?}"));
-                    }
-                };
-                out.push((path, v));
-            }
-            Kind::RepeatedDouble => {
-                let mut k = 0;
-                for v in values {
-                    let bytes: Vec<[u8; 8]> = match v {
-                        Wire::Len(b) if b.len() % 8 == 0 => b
-                            .chunks_exact(8)
-                            .map(|c| c.try_into().expect("8"))
-                            .collect(),
-                        Wire::Fixed64(b) => vec![*b],
-                        other => {
-                            return Err(format!(
-                                "{path}: expected packed doubles, found {other:?}"
-                            ));
+    let msg = DynamicMessage::decode(desc.clone(), data).map_err(|e| e.to_string())?;
+    flatten(&msg, prefix, out, 0);
+    Ok(())
+}
+
+fn number(v: &Value) -> Option<f64> {
+    Some(match v {
+        Value::F64(x) => *x,
+        Value::F32(x) => f64::from(*x),
+        Value::I32(x) => f64::from(*x),
+        Value::I64(x) => *x as f64,
+        Value::U32(x) => f64::from(*x),
+        Value::U64(x) => *x as f64,
+        Value::Bool(b) => f64::from(u8::from(*b)),
+        _ => return None,
+    })
+}
+
+fn flatten(msg: &DynamicMessage, prefix: &str, out: &mut Vec<(String, f64)>, depth: usize) {
+    for field in msg.descriptor().fields() {
+        let path = format!("{prefix}.{}", field.name());
+        match &*msg.get_field(&field) {
+            Value::List(items) => {
+                for (k, v) in items.iter().enumerate() {
+                    match v {
+                        Value::Message(m) if depth < 8 => {
+                            flatten(m, &format!("{path}[{k}]"), out, depth + 1)
                         }
-                    };
-                    for b in bytes {
-                        out.push((format!("{path}[{k}]"), f64::from_le_bytes(b)));
-                        k += 1;
+                        v => {
+                            if let Some(x) = number(v) {
+                                out.push((format!("{path}[{k}]"), x));
+                            }
+                        }
                     }
                 }
             }
-            Kind::Message(m) => {
-                let nested = t
-                    .nested
-                    .get(m)
-                    .ok_or_else(|| format!("{path}: unknown type {m}"))?;
-                let body = match values.last() {
-                    Some(Wire::Len(b)) => *b,
-                    None => &[],
-                    Some(other) => {
-                        return Err(format!("{path}: expected a message, found {other:?}"));
-                    }
-                };
-                flatten(nested, body, &path, out)?;
+            Value::Message(m) if depth < 8 => flatten(m, &path, out, depth + 1),
+            v => {
+                if let Some(x) = number(v) {
+                    out.push((path, x));
+                }
             }
         }
     }
-    Ok(())
 }
 
 /// Drops the tail of a scan from the first message the writer may not have finished
@@ -126,7 +124,7 @@ pub fn keep_valid_messages(scan: &mut super::mcap_scan::Scan<'_>) {
         .unwrap_or(u64::MAX);
     let schemas = scan.schemas.clone();
     let channels = scan.channels.clone();
-    let mut types: HashMap<u16, Option<DecodedType>> = HashMap::new();
+    let mut types: HashMap<u16, Option<MessageDescriptor>> = HashMap::new();
     let mut last_ns = 0u64;
     let mut flat = Vec::new();
     scan.keep_valid(|m| {
@@ -140,16 +138,17 @@ pub fn keep_valid_messages(scan: &mut super::mcap_scan::Scan<'_>) {
         if t < last_ns || t > t_end_ns {
             return false;
         }
-        let ok = if schema.name.starts_with("foxglove.") {
-            fields(m.data).is_ok()
-        } else {
-            let ty = types
-                .entry(ch.id)
-                .or_insert_with(|| decode_type(&schema.data, &schema.name));
-            flat.clear();
-            ty.as_ref()
-                .is_some_and(|ty| flatten(ty, m.data, &ch.topic, &mut flat).is_ok())
-        };
+        let ty = types
+            .entry(ch.id)
+            .or_insert_with(|| message_type(&schema.data, &schema.name).ok());
+        flat.clear();
+        let ok = ty.as_ref().is_some_and(|ty| {
+            if schema.name.starts_with("foxglove.") {
+                DynamicMessage::decode(ty.clone(), m.data).is_ok()
+            } else {
+                flatten_message(ty, m.data, &ch.topic, &mut flat).is_ok()
+            }
+        });
         if ok {
             last_ns = t;
         }
@@ -204,7 +203,7 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
     for a in &scan.attachments {
         table.attachments.push((a.name.clone(), a.data.to_vec()));
     }
-    let mut types: HashMap<u16, Option<DecodedType>> = HashMap::new();
+    let mut types: HashMap<u16, Result<MessageDescriptor, String>> = HashMap::new();
     let mut index: HashMap<String, usize> = HashMap::new();
     let mut rows: BTreeMap<u64, Vec<(usize, f64)>> = BTreeMap::new();
     let mut flat = Vec::new();
@@ -221,21 +220,21 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
         }
         let t = types
             .entry(ch.id)
-            .or_insert_with(|| decode_type(&schema.data, &schema.name));
-        let Some(t) = t.as_ref() else {
-            return Err(LogReadError::Decode {
-                file: file.clone(),
-                topic: ch.topic.clone(),
-                sequence: msg.header.sequence,
-                message: format!("schema {} not found in its descriptor set", schema.name),
-            });
-        };
-        flat.clear();
-        flatten(t, msg.data, &ch.topic, &mut flat).map_err(|message| LogReadError::Decode {
+            .or_insert_with(|| message_type(&schema.data, &schema.name));
+        let t = t.as_ref().map_err(|message| LogReadError::Decode {
             file: file.clone(),
             topic: ch.topic.clone(),
             sequence: msg.header.sequence,
-            message,
+            message: message.clone(),
+        })?;
+        flat.clear();
+        flatten_message(t, msg.data, &ch.topic, &mut flat).map_err(|message| {
+            LogReadError::Decode {
+                file: file.clone(),
+                topic: ch.topic.clone(),
+                sequence: msg.header.sequence,
+                message,
+            }
         })?;
         let row = rows.entry(msg.header.log_time).or_default();
         for (name, v) in flat.drain(..) {

@@ -8,5 +8,6 @@ pub mod mcap_read;
 pub mod mcap_scan;
 pub mod output;
 pub mod protobuf;
+pub mod recording;
 pub mod scenario_toml;
 pub mod scene;

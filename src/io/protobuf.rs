@@ -85,72 +85,41 @@ impl Encoder {
     }
 }
 
-/// One decoded field.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Wire<'a> {
-    Varint(u64),
-    Fixed64([u8; 8]),
-    Fixed32([u8; 4]),
-    Len(&'a [u8]),
-}
-
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("malformed protobuf message at byte {0}")]
-pub struct Malformed(pub usize);
-
-/// Splits a message into (field number, value) pairs.
-pub fn fields(mut data: &[u8]) -> Result<Vec<(u32, Wire<'_>)>, Malformed> {
-    let total = data.len();
-    let mut out = Vec::new();
-    let varint = |d: &mut &[u8]| -> Result<u64, Malformed> {
-        let mut v = 0u64;
-        for shift in (0..64).step_by(7) {
-            let (&b, rest) = d.split_first().ok_or(Malformed(total - d.len()))?;
-            *d = rest;
-            v |= u64::from(b & 0x7f) << shift;
-            if b < 0x80 {
-                return Ok(v);
-            }
-        }
-        Err(Malformed(total - d.len()))
-    };
-    while !data.is_empty() {
-        let at = total - data.len();
-        let key = varint(&mut data)?;
-        let field = (key >> 3) as u32;
-        if field == 0 {
-            // no protobuf field has number 0 (zeros where a message should be)
-            return Err(Malformed(at));
-        }
-        fn take<'a>(d: &mut &'a [u8], n: usize, at: usize) -> Result<&'a [u8], Malformed> {
-            if d.len() < n {
-                return Err(Malformed(at));
-            }
-            let (a, b) = d.split_at(n);
-            *d = b;
-            Ok(a)
-        }
-        let value = match (key & 7) as u32 {
-            VARINT => Wire::Varint(varint(&mut data)?),
-            FIXED64 => Wire::Fixed64(take(&mut data, 8, at)?.try_into().expect("8 bytes")),
-            FIXED32 => Wire::Fixed32(take(&mut data, 4, at)?.try_into().expect("4 bytes")),
-            LEN => {
-                let n = varint(&mut data)? as usize;
-                Wire::Len(take(&mut data, n, at)?)
-            }
-            _ => return Err(Malformed(at)),
-        };
-        out.push((field, value));
-    }
-    Ok(out)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use prost_reflect::{DescriptorPool, DynamicMessage, Value};
+    use prost_types::field_descriptor_proto::{Label, Type};
+    use prost_types::{
+        DescriptorProto, FieldDescriptorProto, FileDescriptorProto, FileDescriptorSet,
+    };
 
+    fn message(name: &str, fields: &[(&str, i32, Type, Option<&str>)]) -> DescriptorProto {
+        DescriptorProto {
+            name: Some(name.into()),
+            field: fields
+                .iter()
+                .map(|&(n, number, ty, type_name)| FieldDescriptorProto {
+                    name: Some(n.into()),
+                    number: Some(number),
+                    r#type: Some(ty as i32),
+                    label: Some(if n == "e" {
+                        Label::Repeated
+                    } else {
+                        Label::Optional
+                    } as i32),
+                    type_name: type_name.map(Into::into),
+                    ..Default::default()
+                })
+                .collect(),
+            ..Default::default()
+        }
+    }
+
+    /// What the encoder writes, read back by an independent decoder (`prost-reflect`)
+    /// through a descriptor written here by hand.
     #[test]
-    fn round_trip() {
+    fn val_prost_reflect_decodes_what_the_encoder_writes() {
         let mut e = Encoder::default();
         e.double(1, 293.15);
         e.uint64(2, 300);
@@ -162,20 +131,57 @@ mod tests {
             m.message(2, |n| n.uint64(1, 5));
         });
         e.fixed32(7, 9);
-        let f = fields(&e.buf).unwrap();
-        assert_eq!(f[0], (1, Wire::Fixed64(293.15f64.to_le_bytes())));
-        assert_eq!(f[1], (2, Wire::Varint(300)));
-        assert_eq!(f[2], (3, Wire::Varint(-2i64 as u64)));
-        assert_eq!(f[3], (4, Wire::Len(b"eclipse entry")));
-        assert!(matches!(f[4], (5, Wire::Len(b)) if b.len() == 16));
-        let Wire::Len(inner) = f[5].1 else { panic!() };
-        let inner = fields(inner).unwrap();
-        assert_eq!(inner[0], (1, Wire::Fixed64(7.0f64.to_le_bytes())));
-        let Wire::Len(deeper) = inner[1].1 else {
-            panic!()
+        let file = FileDescriptorProto {
+            name: Some("t.proto".into()),
+            package: Some("t".into()),
+            syntax: Some("proto3".into()),
+            message_type: vec![
+                message(
+                    "Outer",
+                    &[
+                        ("a", 1, Type::Double, None),
+                        ("b", 2, Type::Uint64, None),
+                        ("c", 3, Type::Int64, None),
+                        ("d", 4, Type::String, None),
+                        ("e", 5, Type::Double, None),
+                        ("f", 6, Type::Message, Some(".t.Inner")),
+                        ("g", 7, Type::Fixed32, None),
+                    ],
+                ),
+                message(
+                    "Inner",
+                    &[
+                        ("x", 1, Type::Double, None),
+                        ("y", 2, Type::Message, Some(".t.Deeper")),
+                    ],
+                ),
+                message("Deeper", &[("z", 1, Type::Uint64, None)]),
+            ],
+            ..Default::default()
         };
-        assert_eq!(fields(deeper).unwrap(), vec![(1, Wire::Varint(5))]);
-        assert_eq!(f[6], (7, Wire::Fixed32(9u32.to_le_bytes())));
-        assert!(fields(&[0x0a, 0x05, 1]).is_err());
+        let pool = DescriptorPool::from_file_descriptor_set(FileDescriptorSet { file: vec![file] })
+            .unwrap();
+        let desc = pool.get_message_by_name("t.Outer").unwrap();
+        let m = DynamicMessage::decode(desc.clone(), e.buf.as_slice()).unwrap();
+        let get = |m: &DynamicMessage, name: &str| m.get_field_by_name(name).unwrap().into_owned();
+        assert_eq!(get(&m, "a"), Value::F64(293.15));
+        assert_eq!(get(&m, "b"), Value::U64(300));
+        assert_eq!(get(&m, "c"), Value::I64(-2));
+        assert_eq!(get(&m, "d"), Value::String("eclipse entry".into()));
+        assert_eq!(
+            get(&m, "e"),
+            Value::List(vec![Value::F64(1.0), Value::F64(-2.5)])
+        );
+        assert_eq!(get(&m, "g"), Value::U32(9));
+        let Value::Message(inner) = get(&m, "f") else {
+            panic!("f")
+        };
+        assert_eq!(get(&inner, "x"), Value::F64(7.0));
+        let Value::Message(deeper) = get(&inner, "y") else {
+            panic!("y")
+        };
+        assert_eq!(get(&deeper, "z"), Value::U64(5));
+        // a length that runs past the end does not decode
+        assert!(DynamicMessage::decode(desc, [0x22u8, 0x05, 1].as_slice()).is_err());
     }
 }

@@ -19,6 +19,7 @@ use crate::scenario::{
     DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, RunControl,
     Scenario, Sensor, SensorTarget,
 };
+use crate::sensor::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
 use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K, SolverSettings};
 use crate::thermal::iteration::{
     DENSE_MAX_NODES, LinearSolver, SPARSE_MAX_FLOPS, direct_fill_estimate,
@@ -778,38 +779,6 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         });
     }
 
-    // Sensors.
-    let mut sensors: Vec<Sensor> = Vec::new();
-    for (i, s) in raw.sensor.into_iter().enumerate() {
-        let p = KeyPath::new("sensor").elem(i, &keys.sensor[i]);
-        if sensors.iter().any(|x| x.column == s.column) {
-            return Err(cx.err(
-                &p.key("column"),
-                format!("column `{}` is defined twice", s.column),
-            ));
-        }
-        let target = match (s.node, s.quantity) {
-            (Some(n), None) => SensorTarget::Node(diffusion(&p.key("node"), &n)?),
-            (None, Some(q)) => {
-                if !DERIVED_QUANTITIES.contains(&q.as_str()) {
-                    return Err(cx.err(
-                        &p.key("quantity"),
-                        format!(
-                            "unknown quantity `{q}` (known: {})",
-                            DERIVED_QUANTITIES.join(", ")
-                        ),
-                    ));
-                }
-                SensorTarget::Derived(q)
-            }
-            _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
-        };
-        sensors.push(Sensor {
-            column: s.column,
-            target,
-        });
-    }
-
     // Gear pairs.
     let mut gears = Vec::new();
     for (i, g) in raw.gear_pair.into_iter().enumerate() {
@@ -823,15 +792,74 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         }
         gears.push(pair);
     }
-    for (i, s) in sensors.iter().enumerate() {
-        if matches!(s.target, SensorTarget::Derived(_)) && gears.is_empty() {
+
+    // Sensors (after the gear pairs they may name).
+    let mut sensors: Vec<Sensor> = Vec::new();
+    for (i, s) in raw.sensor.into_iter().enumerate() {
+        let p = KeyPath::new("sensor").elem(i, &keys.sensor[i]);
+        if sensors.iter().any(|x| x.column == s.column) {
             return Err(cx.err(
-                &KeyPath::new("sensor")
-                    .elem(i, &keys.sensor[i])
-                    .key("quantity"),
-                "needs a [[gear_pair]] in the scenario",
+                &p.key("column"),
+                format!("column `{}` is defined twice", s.column),
             ));
         }
+        let target = match (s.node, s.quantity) {
+            (Some(n), None) => {
+                if s.gear_pair.is_some() {
+                    return Err(cx.err(
+                        &p.key("gear_pair"),
+                        "a temperature sensor reads a node, not a gear pair",
+                    ));
+                }
+                SensorTarget::Node(diffusion(&p.key("node"), &n)?)
+            }
+            (None, Some(q)) => {
+                if !DERIVED_QUANTITIES.contains(&q.as_str()) {
+                    return Err(cx.err(
+                        &p.key("quantity"),
+                        format!(
+                            "unknown quantity `{q}` (known: {})",
+                            DERIVED_QUANTITIES.join(", ")
+                        ),
+                    ));
+                }
+                for (key, given) in [("tau_s", s.tau_s), ("offset_k", s.offset_k)] {
+                    if given.is_some() {
+                        return Err(cx.err(
+                            &p.key(key),
+                            format!("applies to temperature sensors only (`{q}` is derived)"),
+                        ));
+                    }
+                }
+                let pair = match &s.gear_pair {
+                    None if gears.is_empty() => {
+                        return Err(
+                            cx.err(&p.key("quantity"), "needs a [[gear_pair]] in the scenario")
+                        );
+                    }
+                    None => 0,
+                    Some(name) => gears.iter().position(|g| &g.name == name).ok_or_else(|| {
+                        cx.err(&p.key("gear_pair"), format!("unknown gear pair `{name}`"))
+                    })?,
+                };
+                SensorTarget::Backlash(pair)
+            }
+            _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
+        };
+        let tau_s = match s.tau_s {
+            Some(v) => check::sensor_tau(&p.key("tau_s"), v)?,
+            None => 0.0,
+        };
+        let offset_k = match s.offset_k {
+            Some(v) => check::sensor_offset(&p.key("offset_k"), v)?,
+            None => 0.0,
+        };
+        sensors.push(Sensor {
+            column: s.column,
+            target,
+            offset_k,
+            tau_s,
+        });
     }
 
     let network = Network {
@@ -1371,6 +1399,20 @@ fn gear_pair(
 /// error text.
 pub(crate) mod check {
     use super::*;
+
+    pub fn sensor_tau(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(path, v, 0.0, MAX_SENSOR_TAU_S, "a sensor time constant (s)")
+    }
+
+    pub fn sensor_offset(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.within(
+            path,
+            v,
+            -MAX_SENSOR_OFFSET_K,
+            MAX_SENSOR_OFFSET_K,
+            "a sensor offset (K)",
+        )
+    }
 
     pub fn capacitance(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
         let c = Cx.positive(path, v)?;

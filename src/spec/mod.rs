@@ -354,4 +354,13 @@ pub struct SensorSpec {
     pub node: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub quantity: Option<String>,
+    /// For a derived quantity: the gear pair (default: the first).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gear_pair: Option<String>,
+    /// Temperature sensors: first-order time constant, s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tau_s: Option<f64>,
+    /// Temperature sensors: constant bias, K.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset_k: Option<f64>,
 }

@@ -226,6 +226,17 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             }
         });
     }
+    for (sn, key) in spec.sensor.iter_mut().zip(&keys.sensor) {
+        if !element("sensor", key) {
+            continue;
+        }
+        if sn.node.is_some() {
+            at!("sensor".into(), key.as_str().into(); {
+                at!("tau_s".into(); f(&path, Slot::Optional(&mut sn.tau_s, Default::Value(0.0)), m("s", "0 … 86 400")));
+                at!("offset_k".into(); f(&path, Slot::Optional(&mut sn.offset_k, Default::Value(0.0)), m("K", "−100 … 100")));
+            });
+        }
+    }
     for (g, key) in spec.gear_pair.iter_mut().zip(&keys.gear_pair) {
         if !element("gear_pair", key) {
             continue;

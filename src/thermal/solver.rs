@@ -139,6 +139,28 @@ impl StepData {
         }
     }
 
+    /// Node `i`'s interpolant as a polynomial in the fraction s of the step:
+    /// `[a0, a1, a2, a3]` with T(s) = a0 + a1 s + a2 s² + a3 s³ (a3 = 0 for a quadratic).
+    pub fn polynomial(&self, i: usize) -> [f64; 4] {
+        let (y0, y1) = (self.temps0_k[i], self.temps1_k[i]);
+        if self.quadratic[i] {
+            let (yg, g) = (self.temps_gamma_k[i], GAMMA);
+            let c = ((yg - y0) / g - (y1 - y0)) / (g - 1.0);
+            [y0, (y1 - y0) - c, c, 0.0]
+        } else {
+            let (d0, d1) = (
+                self.h_s * self.rates0_k_per_s[i],
+                self.h_s * self.rates1_k_per_s[i],
+            );
+            [
+                y0,
+                d0,
+                3.0 * (y1 - y0) - 2.0 * d0 - d1,
+                2.0 * (y0 - y1) + d0 + d1,
+            ]
+        }
+    }
+
     /// Interior extrema (fraction of the step, value) of node `i`'s interpolant.
     pub fn interior_extrema(&self, i: usize) -> [Option<(f64, f64)>; 2] {
         let (y0, y1) = (self.temps0_k[i], self.temps1_k[i]);

@@ -1,0 +1,396 @@
+//! Recordings: telemetry, thermal-vacuum test data, the cases in `shared/cases`. Time
+//! series of named channels, read from
+//!
+//! - CSV as `reference-mechanism.md` §4 defines it: a header row with `time_s` (seconds
+//!   since t = 0 of the scenario) and one column per channel, then one row per sample;
+//!   an empty cell is a missing sample; lines starting with `#` are comments;
+//! - MCAP: the messages of one topic (`/recording` when there is one, else the only
+//!   topic with numbers), protobuf decoded through the descriptor set its schema stores,
+//!   or JSON; every numeric field is a channel, `time_s` (or else the log time) is the
+//!   time; a JSON `null` is a missing sample.
+//!
+//! Anything else (a non-numeric cell, NaN, time that does not increase, an empty file,
+//! a row of the wrong length) is an error naming the file, line and column.
+
+use std::path::Path;
+
+use crate::sensor::Sensor;
+
+/// A recording: `values[k][j]` is channel `columns[k]` at `time_s[j]` (None: missing).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    /// The file it was read from, for messages.
+    pub file: String,
+    pub columns: Vec<String>,
+    pub time_s: Vec<f64>,
+    pub values: Vec<Vec<Option<f64>>>,
+    /// Where each row is in the file: its line (CSV) or message number (MCAP), 1-based.
+    pub rows_at: Vec<u64>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RecordingError {
+    #[error("cannot read {file}")]
+    Io {
+        file: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// At a line and column of a CSV file (both 1-based; column 0: the whole line).
+    #[error("{file}:{line}{}: {message}", if *column > 0 { format!(":{column}") } else { String::new() })]
+    At {
+        file: String,
+        line: u64,
+        column: usize,
+        message: String,
+    },
+    #[error("{file}: {message}")]
+    File { file: String, message: String },
+}
+
+/// The column every recording gives its time in.
+pub const TIME_COLUMN: &str = "time_s";
+
+impl Recording {
+    /// Reads a CSV or MCAP recording (told apart by the MCAP magic bytes).
+    pub fn read(path: &Path) -> Result<Recording, RecordingError> {
+        let file = path.display().to_string();
+        let bytes = super::output::check_input(path)
+            .and_then(|()| std::fs::read(path))
+            .map_err(|source| RecordingError::Io {
+                file: file.clone(),
+                source,
+            })?;
+        if bytes.starts_with(mcap::MAGIC) {
+            return read_mcap(&bytes, &file);
+        }
+        Recording::from_csv(&bytes, &file)
+    }
+
+    /// Parses CSV text; `file` names it in errors.
+    pub fn from_csv(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
+        let at = |line: u64, column: usize, message: String| RecordingError::At {
+            file: file.to_string(),
+            line,
+            column,
+            message,
+        };
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .trim(csv::Trim::All)
+            .comment(Some(b'#'))
+            .from_reader(bytes);
+        // Lines counted here: the csv crate does not count blank lines.
+        let newlines: Vec<usize> = bytes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &b)| (b == b'\n').then_some(i))
+            .collect();
+        let line_of = |p: Option<&csv::Position>| {
+            p.map_or(0, |p| {
+                // a record's position is where its reading began, before blank lines
+                let mut at = p.byte() as usize;
+                while matches!(bytes.get(at), Some(b'\n' | b'\r')) {
+                    at += 1;
+                }
+                newlines.partition_point(|&i| i < at) as u64 + 1
+            })
+        };
+        let csv_error = |e: csv::Error| {
+            let line = line_of(e.position());
+            match e.kind() {
+                csv::ErrorKind::UnequalLengths {
+                    expected_len, len, ..
+                } => at(
+                    line,
+                    0,
+                    format!("the row has {len} fields, the header {expected_len}"),
+                ),
+                csv::ErrorKind::Utf8 { .. } => at(line, 0, "not UTF-8 text".into()),
+                _ => at(line, 0, e.to_string()),
+            }
+        };
+        let header = reader.headers().map_err(&csv_error)?.clone();
+        let header_line = line_of(header.position()).max(1);
+        if header.is_empty() || header.iter().all(str::is_empty) {
+            return Err(RecordingError::File {
+                file: file.into(),
+                message: "is empty: a recording starts with a header row (`time_s,…`)".into(),
+            });
+        }
+        let names: Vec<String> = header.iter().map(str::to_string).collect();
+        for (k, name) in names.iter().enumerate() {
+            if name.is_empty() {
+                return Err(at(header_line, k + 1, "a column has no name".into()));
+            }
+            if names[..k].contains(name) {
+                return Err(at(
+                    header_line,
+                    k + 1,
+                    format!("column `{name}` appears twice"),
+                ));
+            }
+        }
+        let Some(time_col) = names.iter().position(|n| n == TIME_COLUMN) else {
+            return Err(at(
+                header_line,
+                0,
+                format!(
+                    "no `{TIME_COLUMN}` column (the header is {}): a recording gives its time in seconds since t = 0 of the scenario",
+                    names.join(",")
+                ),
+            ));
+        };
+        let columns: Vec<String> = names
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| k != time_col)
+            .map(|(_, n)| n.clone())
+            .collect();
+        let mut rec = Recording {
+            file: file.into(),
+            values: vec![Vec::new(); columns.len()],
+            columns,
+            time_s: Vec::new(),
+            rows_at: Vec::new(),
+        };
+        let mut row = csv::StringRecord::new();
+        loop {
+            match reader.read_record(&mut row) {
+                Ok(false) => break,
+                Ok(true) => {}
+                Err(e) => return Err(csv_error(e)),
+            }
+            let line = line_of(row.position());
+            let mut channel = 0;
+            for (k, cell) in row.iter().enumerate() {
+                let name = &names[k];
+                let value = if cell.is_empty() {
+                    None
+                } else {
+                    let v: f64 = cell.parse().map_err(|_| {
+                        at(
+                            line,
+                            k + 1,
+                            format!("`{cell}` in column `{name}` is not a number"),
+                        )
+                    })?;
+                    if !v.is_finite() {
+                        return Err(at(
+                            line,
+                            k + 1,
+                            format!(
+                                "`{cell}` in column `{name}` is not a finite number (a missing sample is an empty cell)"
+                            ),
+                        ));
+                    }
+                    Some(v)
+                };
+                if k == time_col {
+                    let Some(t) = value else {
+                        return Err(at(
+                            line,
+                            k + 1,
+                            format!("the time (`{TIME_COLUMN}`) is missing"),
+                        ));
+                    };
+                    if let Some(&last) = rec.time_s.last()
+                        && t <= last
+                    {
+                        return Err(at(
+                            line,
+                            k + 1,
+                            format!(
+                                "time does not increase: {t} s after {last} s on line {}",
+                                rec.rows_at.last().copied().unwrap_or(0)
+                            ),
+                        ));
+                    }
+                    rec.time_s.push(t);
+                } else {
+                    rec.values[channel].push(value);
+                    channel += 1;
+                }
+            }
+            rec.rows_at.push(line);
+        }
+        if rec.time_s.is_empty() {
+            return Err(RecordingError::File {
+                file: file.into(),
+                message: "has a header but no samples".into(),
+            });
+        }
+        Ok(rec)
+    }
+
+    /// The values of channel `name`.
+    pub fn channel(&self, name: &str) -> Option<&[Option<f64>]> {
+        let k = self.columns.iter().position(|c| c == name)?;
+        Some(&self.values[k])
+    }
+
+    /// For each channel, the index of the sensor of that column: every channel must be
+    /// a sensor of the scenario.
+    pub fn match_sensors(&self, sensors: &[Sensor]) -> Result<Vec<usize>, RecordingError> {
+        self.columns
+            .iter()
+            .map(|c| {
+                sensors.iter().position(|s| &s.column == c).ok_or_else(|| {
+                    let known: Vec<&str> = sensors.iter().map(|s| s.column.as_str()).collect();
+                    RecordingError::File {
+                        file: self.file.clone(),
+                        message: format!(
+                            "channel `{c}` is not a sensor of the scenario ({}); add a [[sensor]] with column = \"{c}\"",
+                            if known.is_empty() {
+                                "it has none".to_string()
+                            } else {
+                                format!("its sensors: {}", known.join(", "))
+                            }
+                        ),
+                    }
+                })
+            })
+            .collect()
+    }
+}
+
+/// The topic a recording is read from when an MCAP file has several.
+pub const RECORDING_TOPIC: &str = "/recording";
+
+fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
+    use super::mcap_read::{flatten_message, message_type};
+    let fail = |message: String| RecordingError::File {
+        file: file.to_string(),
+        message,
+    };
+    // The mcap crate's reader: any chunk compression, a whole file.
+    let mut messages = Vec::new();
+    for m in mcap::MessageStream::new(bytes)
+        .map_err(|e| fail(format!("is not a readable MCAP file: {e}")))?
+    {
+        messages.push(m.map_err(|e| {
+            fail(format!(
+                "is not a readable MCAP file: {e} (a file cut off by a killed run is recovered by `orbitlash recover`)"
+            ))
+        })?);
+    }
+    // Topics that can hold series: JSON, or protobuf other than foxglove's own types.
+    let mut topics: Vec<(&str, u16)> = Vec::new();
+    for m in &messages {
+        let ch = &m.channel;
+        let series = ch.message_encoding == "json"
+            || (ch.message_encoding == "protobuf"
+                && ch
+                    .schema
+                    .as_ref()
+                    .is_some_and(|s| !s.name.starts_with("foxglove.")));
+        if series && !topics.iter().any(|&(_, id)| id == ch.id) {
+            topics.push((ch.topic.as_str(), ch.id));
+        }
+    }
+    topics.sort();
+    let channel_id = match topics.iter().find(|(t, _)| *t == RECORDING_TOPIC) {
+        Some(&(_, id)) => id,
+        None if topics.len() == 1 => topics[0].1,
+        None if topics.is_empty() => {
+            return Err(fail(
+                "has no topic with numeric series (protobuf or JSON messages)".into(),
+            ));
+        }
+        None => {
+            let names: Vec<&str> = topics.iter().map(|(t, _)| *t).collect();
+            return Err(fail(format!(
+                "has several topics ({}); a recording is read from the topic `{RECORDING_TOPIC}`",
+                names.join(", ")
+            )));
+        }
+    };
+    let mut rec = Recording {
+        file: file.into(),
+        columns: Vec::new(),
+        time_s: Vec::new(),
+        values: Vec::new(),
+        rows_at: Vec::new(),
+    };
+    let mut descriptor = None;
+    let mut flat: Vec<(String, Option<f64>)> = Vec::new();
+    let mut numbers = Vec::new();
+    let mut n = 0u64;
+    for m in messages.iter().filter(|m| m.channel.id == channel_id) {
+        n += 1;
+        let ch = &m.channel;
+        let where_ = |message: String| {
+            fail(format!(
+                "topic {}, message {n} (log time {} s): {message}",
+                ch.topic,
+                m.log_time as f64 * 1e-9
+            ))
+        };
+        flat.clear();
+        if ch.message_encoding == "protobuf" {
+            if descriptor.is_none() {
+                let schema = ch.schema.as_ref().expect("a protobuf topic has a schema");
+                descriptor = Some(message_type(&schema.data, &schema.name).map_err(&where_)?);
+            }
+            numbers.clear();
+            flatten_message(descriptor.as_ref().expect("set"), &m.data, "", &mut numbers)
+                .map_err(|e| where_(format!("does not decode with its schema: {e}")))?;
+            flat.extend(
+                numbers
+                    .drain(..)
+                    .map(|(k, v)| (k.trim_start_matches('.').to_string(), Some(v))),
+            );
+        } else {
+            let v: serde_json::Value =
+                serde_json::from_slice(&m.data).map_err(|e| where_(format!("is not JSON: {e}")))?;
+            let serde_json::Value::Object(fields) = v else {
+                return Err(where_("is not a JSON object".into()));
+            };
+            for (k, v) in fields {
+                match v {
+                    serde_json::Value::Number(x) => flat.push((k, x.as_f64())),
+                    serde_json::Value::Null => flat.push((k, None)),
+                    _ => {}
+                }
+            }
+        }
+        let mut time = None;
+        for (name, v) in &flat {
+            if v.is_some_and(|x| !x.is_finite()) {
+                return Err(where_(format!("field `{name}` is not a finite number")));
+            }
+            if name == TIME_COLUMN {
+                time = *v;
+            }
+        }
+        let t = time.unwrap_or(m.log_time as f64 / 1e9);
+        if let Some(&last) = rec.time_s.last()
+            && t <= last
+        {
+            return Err(where_(format!(
+                "time does not increase: {t} s after {last} s"
+            )));
+        }
+        let row = rec.time_s.len();
+        rec.time_s.push(t);
+        rec.rows_at.push(n);
+        for (name, v) in flat.drain(..) {
+            if name == TIME_COLUMN {
+                continue;
+            }
+            let k = match rec.columns.iter().position(|c| *c == name) {
+                Some(k) => k,
+                None => {
+                    rec.columns.push(name);
+                    rec.values.push(vec![None; row]);
+                    rec.columns.len() - 1
+                }
+            };
+            rec.values[k].push(v);
+        }
+        for column in &mut rec.values {
+            column.resize(row + 1, None);
+        }
+    }
+    Ok(rec)
+}
