@@ -29,10 +29,7 @@ use std::path::{Path, PathBuf};
 use sha2::{Digest, Sha256};
 
 use super::atomic::{AtomicFile, OutputError, OutputPolicy};
-use super::log_schema::{
-    Kind, MessageType, descriptor_set, foxglove_log_descriptor_set, foxglove_scene_descriptor_set,
-    identifier,
-};
+use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
 use super::protobuf::Encoder;
 use super::scene;
 use crate::gear::{GearPair, MeshState};
@@ -284,19 +281,29 @@ impl LogWriter {
         r.map_err(|e| out_err(&self.path, e))
     }
 
-    fn event(&mut self, t_s: f64, level: i64, message: &str) -> Result<(), OutputError> {
-        let secs = t_s.floor();
+    /// Writes a foxglove message (the official crate's encoding).
+    fn write_foxglove(
+        &mut self,
+        channel: u16,
+        t_s: f64,
+        m: &impl foxglove::Encode,
+    ) -> Result<(), OutputError> {
         self.enc.clear();
-        self.enc.message(1, |m| {
-            m.int64(1, secs as i64);
-            m.int64(2, ((t_s - secs) * 1e9).round().min(999_999_999.0) as i64);
-        });
-        self.enc.int64(2, level);
-        self.enc.string(3, message);
-        self.enc.string(4, "orbitlash");
-        self.enc.string(5, "");
-        self.enc.fixed32(6, 0);
-        self.write_encoded(self.ch.log, t_s)
+        m.encode(&mut self.enc.buf)
+            .map_err(|e| OutputError::other(&self.path, e))?;
+        self.write_encoded(channel, t_s)
+    }
+
+    fn event(&mut self, t_s: f64, level: i64, message: &str) -> Result<(), OutputError> {
+        let log = foxglove::messages::Log {
+            timestamp: Some(scene::timestamp(t_s)),
+            level: level as i32,
+            message: message.into(),
+            name: "orbitlash".into(),
+            file: String::new(),
+            line: 0,
+        };
+        self.write_foxglove(self.ch.log, t_s, &log)
     }
 
     /// Writes every topic for one sample laid out as `Layout` says.
@@ -352,17 +359,15 @@ impl LogWriter {
         for k in 0..if due { self.pairs.len() } else { 0 } {
             let pair = &self.pairs[k];
             let rim = |g: usize| temps[*pair.nodes[g].last().expect("nodes")];
-            let outlines = &self.scene.as_ref().expect("due").outlines[k];
-            self.enc.clear();
-            scene::encode_scene(
-                &mut self.enc,
-                &self.scene.as_ref().expect("due").names[k],
-                outlines,
+            let sc = self.scene.as_ref().expect("due");
+            let update = scene::scene_update(
+                &sc.names[k],
+                &sc.outlines[k],
                 [rim(0), rim(1)],
                 t_s,
                 ["pinion", "wheel"],
             );
-            self.write_encoded(self.ch.scenes[k], t_s)?;
+            self.write_foxglove(self.ch.scenes[k], t_s, &update)?;
         }
         Ok(())
     }
@@ -674,6 +679,16 @@ fn field_names(
         .collect()
 }
 
+/// Adds the schema of a Foxglove well-known message type as the official crate gives it.
+fn foxglove_schema<M: foxglove::Encode>(
+    w: &mut mcap::Writer<AtomicFile>,
+    path: &Path,
+) -> Result<u16, OutputError> {
+    let s = M::get_schema().expect("foxglove message types have schemas");
+    w.add_schema(&s.name, &s.encoding, &s.data)
+        .map_err(|e| out_err(path, e))
+}
+
 /// Writes the schemas, channels, provenance and attachment of a new log and returns
 /// the writer ready for samples (runs on the writer thread).
 #[allow(clippy::too_many_arguments)]
@@ -774,7 +789,7 @@ fn open_log_writer(
     }
     let mut scenes = Vec::new();
     if scene_interval_s.is_some() && !d.pairs.is_empty() {
-        let s = schema(w, "foxglove.SceneUpdate", &foxglove_scene_descriptor_set())?;
+        let s = foxglove_schema::<foxglove::messages::SceneUpdate>(w, path)?;
         for name in &d.pair_names {
             scenes.push(channel(
                 w,
@@ -784,7 +799,7 @@ fn open_log_writer(
             )?);
         }
     }
-    let s = schema(w, "foxglove.Log", &foxglove_log_descriptor_set())?;
+    let s = foxglove_schema::<foxglove::messages::Log>(w, path)?;
     let log = channel(w, s, "/events", &empty)?;
 
     let sha = Sha256::digest(p.scenario_toml.as_bytes());

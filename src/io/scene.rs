@@ -3,9 +3,12 @@
 //! rim temperature (blue −60 °C … red +100 °C). Outlines are drawn at their assembly
 //! size: thermal displacements are micrometres.
 
-use super::protobuf::Encoder;
 use crate::gear::involute::inv;
 use crate::gear::{Gear, GearPair};
+use foxglove::messages::{
+    Color, LinePrimitive, Point3, Pose, Quaternion, SceneEntity, SceneUpdate, Timestamp, Vector3,
+    line_primitive,
+};
 
 /// A gear's outline placed at an x offset (the wheel sits at the centre distance), m.
 pub type PlacedOutline = (f64, Vec<(f64, f64)>);
@@ -74,51 +77,59 @@ pub fn pair_outlines_m(pair: &GearPair) -> [PlacedOutline; 2] {
     ]
 }
 
-/// One `foxglove.SceneUpdate` with an entity per gear.
-pub fn encode_scene(
-    e: &mut Encoder,
+/// One `foxglove.SceneUpdate` with an entity per gear (the official `foxglove` crate's
+/// message type).
+pub fn scene_update(
     pair_id: &str,
     outlines: &[PlacedOutline; 2],
     rim_k: [f64; 2],
     t_s: f64,
     names: [&str; 2],
-) {
-    let secs = t_s.floor();
-    for k in 0..2 {
-        let (x0, pts) = &outlines[k];
-        let (r, g, b) = temperature_rgb(rim_k[k]);
-        e.message(2, |ent| {
-            ent.message(1, |ts| {
-                ts.int64(1, secs as i64);
-                ts.int64(2, ((t_s - secs) * 1e9).round().min(999_999_999.0) as i64);
-            });
-            ent.string(2, "gears");
-            ent.string(3, &format!("{pair_id}/{}", names[k]));
-            ent.message(11, |line| {
-                line.int64(1, 1); // LINE_LOOP
-                line.message(2, |pose| {
-                    pose.message(1, |v| {
-                        v.double(1, *x0);
-                        v.double(2, 0.0);
-                        v.double(3, 0.0);
-                    });
-                    pose.message(2, |q| q.double(4, 1.0));
-                });
-                line.double(3, 2.0);
-                line.uint64(4, 1);
-                for &(x, y) in pts {
-                    line.message(5, |p| {
-                        p.double(1, x);
-                        p.double(2, y);
-                    });
-                }
-                line.message(6, |c| {
-                    c.double(1, r);
-                    c.double(2, g);
-                    c.double(3, b);
-                    c.double(4, 1.0);
-                });
-            });
-        });
+) -> SceneUpdate {
+    let entities = (0..2)
+        .map(|k| {
+            let (x0, pts) = &outlines[k];
+            let (r, g, b) = temperature_rgb(rim_k[k]);
+            SceneEntity {
+                timestamp: Some(timestamp(t_s)),
+                frame_id: "gears".into(),
+                id: format!("{pair_id}/{}", names[k]),
+                lines: vec![LinePrimitive {
+                    r#type: line_primitive::Type::LineLoop as i32,
+                    pose: Some(Pose {
+                        position: Some(Vector3 {
+                            x: *x0,
+                            y: 0.0,
+                            z: 0.0,
+                        }),
+                        orientation: Some(Quaternion {
+                            x: 0.0,
+                            y: 0.0,
+                            z: 0.0,
+                            w: 1.0,
+                        }),
+                    }),
+                    thickness: 2.0,
+                    scale_invariant: true,
+                    points: pts.iter().map(|&(x, y)| Point3 { x, y, z: 0.0 }).collect(),
+                    color: Some(Color { r, g, b, a: 1.0 }),
+                    ..Default::default()
+                }],
+                ..Default::default()
+            }
+        })
+        .collect();
+    SceneUpdate {
+        deletions: vec![],
+        entities,
     }
+}
+
+/// A simulated time as a `foxglove` timestamp (seconds since t = 0, not the epoch).
+pub fn timestamp(t_s: f64) -> Timestamp {
+    let secs = t_s.max(0.0).floor();
+    Timestamp::new(
+        secs.min(f64::from(u32::MAX)) as u32,
+        ((t_s.max(0.0) - secs) * 1e9).round().min(999_999_999.0) as u32,
+    )
 }
