@@ -46,7 +46,7 @@ mod tests {
     use super::{exact, num};
 
     #[test]
-    fn exact_numbers() {
+    fn core_exact_numbers() {
         assert_eq!(exact(6378137.0), "6378137");
         assert_eq!(exact(3.986004418e14), "3.986004418e14");
         assert_eq!(exact(0.002), "0.002");
@@ -54,7 +54,7 @@ mod tests {
     }
 
     #[test]
-    fn numbers_for_messages() {
+    fn core_numbers_for_messages() {
         assert_eq!(num(1e300), "1e300");
         assert_eq!(num(1.8564579906e10), "1.856e10");
         assert_eq!(num(1e-6), "1e-6");

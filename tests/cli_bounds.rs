@@ -28,7 +28,7 @@ fn refused(case: &str, edits: &[(&str, &str)], command: &[&str], needles: &[&str
 const RUN: &[&str] = &["run", "--quiet"];
 
 #[test]
-fn absurd_run_lengths_are_refused_by_key() {
+fn cli_absurd_run_lengths_are_refused_by_key() {
     refused(
         "days",
         &[("orbits = 6", "duration_days = 1e9")],
@@ -56,7 +56,7 @@ fn absurd_run_lengths_are_refused_by_key() {
 }
 
 #[test]
-fn solver_limits_have_physical_lower_bounds() {
+fn cli_solver_limits_have_physical_lower_bounds() {
     refused(
         "max-step",
         &[("max_step_s = 300.0", "max_step_s = 1e-300")],
@@ -84,7 +84,7 @@ fn solver_limits_have_physical_lower_bounds() {
 }
 
 #[test]
-fn a_run_over_the_step_limit_needs_force() {
+fn cli_a_run_over_the_step_limit_needs_force() {
     // 30 days in 1 ms steps: 2.6e9 steps
     let edits = [
         ("orbits = 6", "duration_days = 30"),
@@ -111,7 +111,7 @@ fn a_run_over_the_step_limit_needs_force() {
 }
 
 #[test]
-fn a_log_larger_than_the_free_space_is_refused_before_writing() {
+fn cli_a_log_larger_than_the_free_space_is_refused_before_writing() {
     // ten years logged every millisecond: 3e11 samples, hundreds of terabytes
     refused(
         "disk",
@@ -129,7 +129,7 @@ fn a_log_larger_than_the_free_space_is_refused_before_writing() {
 }
 
 #[test]
-fn large_runs_print_their_estimate_and_it_is_close() {
+fn cli_large_runs_print_their_estimate_and_it_is_close() {
     let dir = tmpdir("estimate");
     std::fs::write(dir.join("s.toml"), reference_text()).unwrap();
     // 2000 orbits logged every step: about 110 MB, so the estimate is printed
@@ -171,7 +171,7 @@ fn large_runs_print_their_estimate_and_it_is_close() {
 }
 
 #[test]
-fn between_takes_exactly_two_nodes() {
+fn cli_between_takes_exactly_two_nodes() {
     refused(
         "between-3",
         &[(
@@ -184,7 +184,7 @@ fn between_takes_exactly_two_nodes() {
 }
 
 #[test]
-fn mode_windows_take_exactly_two_times() {
+fn cli_mode_windows_take_exactly_two_times() {
     let dir = tmpdir("windows-3");
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml"),
@@ -200,7 +200,7 @@ fn mode_windows_take_exactly_two_times() {
 }
 
 #[test]
-fn tooth_thinning_larger_than_the_tooth() {
+fn cli_tooth_thinning_larger_than_the_tooth() {
     refused(
         "thinning",
         &[("tooth_thinning_um = 19.4745", "tooth_thinning_um = 2000")],
@@ -221,7 +221,7 @@ fn tooth_thinning_larger_than_the_tooth() {
 }
 
 #[test]
-fn gravitational_parameters_that_break_the_period() {
+fn cli_gravitational_parameters_that_break_the_period() {
     refused(
         "mu-big",
         &[("mu_m3_per_s2 = 3.986004418e14", "mu_m3_per_s2 = 1e300")],
@@ -244,7 +244,7 @@ fn gravitational_parameters_that_break_the_period() {
 }
 
 #[test]
-fn a_huge_start_angle_is_reduced_modulo_360_exactly() {
+fn cli_a_huge_start_angle_is_reduced_modulo_360_exactly() {
     // 1e20 = 360 × 277777777777777777 + 280 exactly (1e20 is an integer double), so
     // the run must be the one started at 280°.
     let dir = tmpdir("angle");
@@ -270,7 +270,7 @@ fn a_huge_start_angle_is_reduced_modulo_360_exactly() {
 }
 
 #[test]
-fn bench_needs_at_least_one_repetition() {
+fn cli_bench_needs_at_least_one_repetition() {
     let out = bin().args(["bench", "--repeat", "0"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -278,7 +278,7 @@ fn bench_needs_at_least_one_repetition() {
 }
 
 #[test]
-fn values_beyond_physical_sense_are_refused_by_key() {
+fn cli_values_beyond_physical_sense_are_refused_by_key() {
     refused(
         "conductance",
         &[("conductance_w_per_k = 0.25", "conductance_w_per_k = 1e20")],
@@ -303,7 +303,7 @@ fn values_beyond_physical_sense_are_refused_by_key() {
 }
 
 #[test]
-fn a_strain_polynomial_with_a_wrong_scale_is_refused() {
+fn cli_a_strain_polynomial_with_a_wrong_scale_is_refused() {
     let dir = tmpdir("strain-scale");
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml"),
@@ -325,7 +325,7 @@ fn a_strain_polynomial_with_a_wrong_scale_is_refused() {
 }
 
 #[test]
-fn powers_and_fluxes_have_upper_bounds() {
+fn cli_powers_and_fluxes_have_upper_bounds() {
     let dir = tmpdir("power");
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml"),
@@ -341,7 +341,7 @@ fn powers_and_fluxes_have_upper_bounds() {
 }
 
 #[test]
-fn explicit_direct_solvers_must_fit_the_network() {
+fn cli_explicit_direct_solvers_must_fit_the_network() {
     let dir = tmpdir("direct-limits");
     let emit = |spec: &str| {
         let out = bin()

@@ -59,7 +59,7 @@ fn assert_failed(case: &str, out: &Output, needles: &[&str]) {
 }
 
 #[test]
-fn malformed_toml_names_the_line() {
+fn cli_malformed_toml_names_the_line() {
     assert_rejected(
         "malformed",
         "capacitance_j_per_k = 120.0",
@@ -69,7 +69,7 @@ fn malformed_toml_names_the_line() {
 }
 
 #[test]
-fn unknown_key_is_named_with_its_line() {
+fn cli_unknown_key_is_named_with_its_line() {
     assert_rejected(
         "unknown-key",
         "capacitance_j_per_k = 120.0",
@@ -79,7 +79,7 @@ fn unknown_key_is_named_with_its_line() {
 }
 
 #[test]
-fn missing_key_is_named() {
+fn cli_missing_key_is_named() {
     assert_rejected(
         "missing",
         "initial_temperature_k = 293.15\n\n[[node]]\nname = \"motor\"",
@@ -89,7 +89,7 @@ fn missing_key_is_named() {
 }
 
 #[test]
-fn negative_capacitance() {
+fn cli_negative_capacitance() {
     assert_rejected(
         "neg-cap",
         "capacitance_j_per_k = 4.06",
@@ -99,7 +99,7 @@ fn negative_capacitance() {
 }
 
 #[test]
-fn emissivity_above_one() {
+fn cli_emissivity_above_one() {
     assert_rejected(
         "emissivity",
         "emissivity_area_m2 = 0.030",
@@ -109,7 +109,7 @@ fn emissivity_above_one() {
 }
 
 #[test]
-fn absorptivity_above_one() {
+fn cli_absorptivity_above_one() {
     assert_rejected(
         "absorptivity",
         "absorptivity = 0.7",
@@ -119,7 +119,7 @@ fn absorptivity_above_one() {
 }
 
 #[test]
-fn unknown_node_reference() {
+fn cli_unknown_node_reference() {
     assert_rejected(
         "unknown-node",
         "between = [\"housing\", \"motor\"]",
@@ -133,7 +133,7 @@ fn unknown_node_reference() {
 }
 
 #[test]
-fn duplicate_node_name() {
+fn cli_duplicate_node_name() {
     assert_rejected(
         "duplicate",
         "name = \"motor\"",
@@ -143,7 +143,7 @@ fn duplicate_node_name() {
 }
 
 #[test]
-fn temperature_in_celsius_by_mistake() {
+fn cli_temperature_in_celsius_by_mistake() {
     assert_rejected(
         "celsius",
         "initial_temperature_k = 293.15",
@@ -153,7 +153,7 @@ fn temperature_in_celsius_by_mistake() {
 }
 
 #[test]
-fn beta_out_of_range() {
+fn cli_beta_out_of_range() {
     assert_rejected(
         "beta",
         "beta_deg = 20.0",
@@ -163,7 +163,7 @@ fn beta_out_of_range() {
 }
 
 #[test]
-fn non_monotonic_profile_time() {
+fn cli_non_monotonic_profile_time() {
     assert_rejected(
         "non-monotonic",
         "beta_deg = 20.0",
@@ -173,7 +173,7 @@ fn non_monotonic_profile_time() {
 }
 
 #[test]
-fn heater_set_points_inverted() {
+fn cli_heater_set_points_inverted() {
     assert_rejected(
         "heater",
         "[[sun]]",
@@ -183,7 +183,7 @@ fn heater_set_points_inverted() {
 }
 
 #[test]
-fn zero_time_step() {
+fn cli_zero_time_step() {
     assert_rejected(
         "step",
         "max_step_s = 300.0",
@@ -193,7 +193,7 @@ fn zero_time_step() {
 }
 
 #[test]
-fn both_run_lengths() {
+fn cli_both_run_lengths() {
     assert_rejected(
         "run-length",
         "orbits = 6",
@@ -203,7 +203,7 @@ fn both_run_lengths() {
 }
 
 #[test]
-fn self_link() {
+fn cli_self_link() {
     assert_rejected(
         "self-link",
         "between = [\"housing\", \"motor\"]",
@@ -213,7 +213,7 @@ fn self_link() {
 }
 
 #[test]
-fn wrong_type() {
+fn cli_wrong_type() {
     assert_rejected(
         "type",
         "capacitance_j_per_k = 120.0",
@@ -223,7 +223,7 @@ fn wrong_type() {
 }
 
 #[test]
-fn missing_scenario_file() {
+fn cli_missing_scenario_file() {
     let out = bin()
         .args(["run", "/nonexistent/nothing.toml"])
         .output()
@@ -232,7 +232,7 @@ fn missing_scenario_file() {
 }
 
 #[test]
-fn unwritable_output_path_fails_before_the_run() {
+fn cli_unwritable_output_path_fails_before_the_run() {
     let dir = tmpdir("unwritable");
     let blocker = dir.join("file");
     std::fs::write(&blocker, "not a folder").unwrap();
@@ -257,7 +257,7 @@ fn unwritable_output_path_fails_before_the_run() {
 }
 
 #[test]
-fn bad_orbit_count_on_the_command_line() {
+fn cli_bad_orbit_count_on_the_command_line() {
     for bad in ["0", "-3", "nan", "many"] {
         let out = bin()
             .args(["run", "--no-log", &format!("--orbits={bad}")])
@@ -268,7 +268,7 @@ fn bad_orbit_count_on_the_command_line() {
 }
 
 #[test]
-fn gear_bore_not_below_base_radius() {
+fn cli_gear_bore_not_below_base_radius() {
     assert_rejected(
         "bore",
         "bore_radius_mm = 3.0",
@@ -282,7 +282,7 @@ fn gear_bore_not_below_base_radius() {
 }
 
 #[test]
-fn gear_too_few_teeth() {
+fn cli_gear_too_few_teeth() {
     assert_rejected(
         "teeth",
         "teeth = 20",
@@ -292,7 +292,7 @@ fn gear_too_few_teeth() {
 }
 
 #[test]
-fn gear_negative_backlash_at_assembly() {
+fn cli_gear_negative_backlash_at_assembly() {
     assert_rejected(
         "thick-teeth",
         "tooth_thinning_um = 19.4745         # s",
@@ -305,7 +305,7 @@ fn gear_negative_backlash_at_assembly() {
 }
 
 #[test]
-fn gear_pressure_angle_out_of_range() {
+fn cli_gear_pressure_angle_out_of_range() {
     assert_rejected(
         "alpha0",
         "pressure_angle_deg = 20.0",
@@ -315,7 +315,7 @@ fn gear_pressure_angle_out_of_range() {
 }
 
 #[test]
-fn gear_node_not_on_the_base_circle() {
+fn cli_gear_node_not_on_the_base_circle() {
     assert_rejected(
         "node-radius",
         "radius_mm = 9.396926",
@@ -325,7 +325,7 @@ fn gear_node_not_on_the_base_circle() {
 }
 
 #[test]
-fn gear_unknown_bore_fit() {
+fn cli_gear_unknown_bore_fit() {
     assert_rejected(
         "fit",
         "bore_fit = \"free\"",
@@ -335,7 +335,7 @@ fn gear_unknown_bore_fit() {
 }
 
 #[test]
-fn not_a_number_is_rejected() {
+fn cli_not_a_number_is_rejected() {
     assert_rejected(
         "nan",
         "capacitance_j_per_k = 4.06",
@@ -351,7 +351,7 @@ fn not_a_number_is_rejected() {
 }
 
 #[test]
-fn empty_and_binary_files() {
+fn cli_empty_and_binary_files() {
     let dir = tmpdir("empty");
     let empty = dir.join("empty.toml");
     std::fs::write(&empty, "").unwrap();
@@ -365,7 +365,7 @@ fn empty_and_binary_files() {
 }
 
 #[test]
-fn a_log_that_is_not_mcap_is_a_clear_error() {
+fn cli_a_log_that_is_not_mcap_is_a_clear_error() {
     let dir = tmpdir("bad-log");
     let log = dir.join("not.mcap");
     std::fs::write(&log, "time_s,housing_c\n0,20\n").unwrap();

@@ -48,7 +48,7 @@ fn refused(case: &str, args: &[&str], prepare: &dyn Fn(&Path), needles: &[&str])
 fn nothing(_: &Path) {}
 
 #[test]
-fn the_log_never_replaces_the_scenario() {
+fn cli_the_log_never_replaces_the_scenario() {
     refused(
         "out-is-input",
         &["run", "s.toml", "--out", "s.toml"],
@@ -71,7 +71,7 @@ fn the_log_never_replaces_the_scenario() {
 }
 
 #[test]
-fn the_csv_never_replaces_the_scenario_or_the_log() {
+fn cli_the_csv_never_replaces_the_scenario_or_the_log() {
     refused(
         "csv-is-input",
         &["run", "s.toml", "--no-log", "--csv", "s.toml"],
@@ -87,7 +87,7 @@ fn the_csv_never_replaces_the_scenario_or_the_log() {
 }
 
 #[test]
-fn outputs_cannot_take_a_temporary_name() {
+fn cli_outputs_cannot_take_a_temporary_name() {
     // `a.mcap`'s temporary file would be `a.mcap.<pid>.partial`; names ending in
     // `.partial` are reserved
     refused(
@@ -119,7 +119,7 @@ fn outputs_cannot_take_a_temporary_name() {
 }
 
 #[test]
-fn inputs_must_be_regular_files() {
+fn cli_inputs_must_be_regular_files() {
     // a FIFO would block the read forever, a device never end
     let dir = setup("input-fifo");
     let status = std::process::Command::new("mkfifo")
@@ -140,7 +140,7 @@ fn inputs_must_be_regular_files() {
 }
 
 #[test]
-fn a_dry_run_writes_nothing() {
+fn cli_a_dry_run_writes_nothing() {
     let dir = setup("dry-run");
     let before = snapshot(&dir);
     let out = run_in(&dir, &["run", "s.toml", "--dry-run", "--csv", "c.csv"]);
@@ -152,7 +152,7 @@ fn a_dry_run_writes_nothing() {
 }
 
 #[test]
-fn export_never_replaces_its_log() {
+fn cli_export_never_replaces_its_log() {
     refused(
         "export-over-log",
         &["export-csv", "l.mcap", "--out", "l.mcap"],
@@ -162,7 +162,7 @@ fn export_never_replaces_its_log() {
 }
 
 #[test]
-fn devices_fifos_folders_and_links_are_refused() {
+fn cli_devices_fifos_folders_and_links_are_refused() {
     refused(
         "dev-full",
         &["run", "s.toml", "--out", "/dev/full"],
@@ -210,7 +210,7 @@ fn devices_fifos_folders_and_links_are_refused() {
 }
 
 #[test]
-fn missing_folders_are_created_only_under_logs() {
+fn cli_missing_folders_are_created_only_under_logs() {
     refused(
         "no-such-dir",
         &["run", "s.toml", "--out", "missing/x.mcap"],
@@ -242,7 +242,7 @@ fn missing_folders_are_created_only_under_logs() {
 }
 
 #[test]
-fn scenario_names_cannot_leave_logs() {
+fn cli_scenario_names_cannot_leave_logs() {
     for (case, name) in [
         ("name-dotdot", "../../etc/evil"),
         ("name-abs", "/abs/path"),
@@ -270,7 +270,7 @@ fn scenario_names_cannot_leave_logs() {
 }
 
 #[test]
-fn recover_never_replaces_its_input() {
+fn cli_recover_never_replaces_its_input() {
     // recovering `x.mcap.partial` into `x.mcap` must not use `x.mcap.partial` as its
     // temporary file
     let dir = setup("recover-tmp");

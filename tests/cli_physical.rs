@@ -45,7 +45,7 @@ power_w = 100
 }
 
 #[test]
-fn an_isolated_heated_node_ends_the_run_with_its_name_and_cause() {
+fn cli_an_isolated_heated_node_ends_the_run_with_its_name_and_cause() {
     let dir = tmpdir("isolated");
     std::fs::write(dir.join("s.toml"), small("", "", 293.0)).unwrap();
     let out = run_in(
@@ -91,7 +91,7 @@ fn an_isolated_heated_node_ends_the_run_with_its_name_and_cause() {
 }
 
 #[test]
-fn a_fixed_step_far_above_a_time_constant_ends_the_run() {
+fn cli_a_fixed_step_far_above_a_time_constant_ends_the_run() {
     // b starts at 293 K and falls to the 3 K sink with a 1 ms time constant; a fixed
     // 100 s step cannot follow it and its interpolant dips below 0 K.
     let dir = tmpdir("fixed-step");
@@ -144,7 +144,7 @@ fn node_range(stdout: &str, node: &str) -> (f64, f64) {
 }
 
 #[test]
-fn a_stiff_node_with_fixed_steps_stays_physical() {
+fn cli_a_stiff_node_with_fixed_steps_stays_physical() {
     // The case of the issue: a thin film (0.05 J/K … 1e-6 J/K) stiffly tied to the
     // housing, run with fixed 300 s steps. Its end-of-step rates belong to the damped
     // fast transient; interpolating with them gave −24.7 K and worse. The film's
@@ -194,7 +194,7 @@ fn a_stiff_node_with_fixed_steps_stays_physical() {
 }
 
 #[test]
-fn check_warns_about_celsius_typed_as_kelvin() {
+fn cli_check_warns_about_celsius_typed_as_kelvin() {
     let dir = tmpdir("celsius");
     let text = reference_with(&[
         (

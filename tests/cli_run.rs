@@ -11,7 +11,7 @@ fn scenario(name: &str) -> PathBuf {
 }
 
 #[test]
-fn run_without_arguments_uses_the_embedded_reference_and_writes_a_log() {
+fn cli_run_without_arguments_uses_the_embedded_reference_and_writes_a_log() {
     let dir = tmpdir("default");
     let out = bin().arg("run").current_dir(&dir).output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -37,7 +37,7 @@ fn run_without_arguments_uses_the_embedded_reference_and_writes_a_log() {
 }
 
 #[test]
-fn csv_has_a_column_per_node_and_runs_are_reproducible() {
+fn cli_csv_has_a_column_per_node_and_runs_are_reproducible() {
     let dir = tmpdir("csv");
     let run = |tag: &str| {
         let csv = dir.join(format!("{tag}.csv"));
@@ -114,7 +114,7 @@ fn csv_has_a_column_per_node_and_runs_are_reproducible() {
 }
 
 #[test]
-fn check_prints_derived_quantities() {
+fn cli_check_prints_derived_quantities() {
     let out = bin()
         .args(["check"])
         .arg(scenario("reference-hinge.toml"))
@@ -149,7 +149,7 @@ fn check_prints_derived_quantities() {
 }
 
 #[test]
-fn every_shipped_scenario_is_valid() {
+fn cli_every_shipped_scenario_is_valid() {
     for entry in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios")).unwrap()
     {
         let p = entry.unwrap().path();
@@ -166,7 +166,7 @@ fn every_shipped_scenario_is_valid() {
 }
 
 #[test]
-fn backlash_calculator_table_and_json() {
+fn cli_backlash_calculator_table_and_json() {
     let out = bin().arg("backlash").output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(

@@ -7,6 +7,7 @@ use std::process::Output;
 
 mod common;
 use common::{assert_error, bin, reference_with, tmpdir};
+use predicates::str::starts_with;
 
 fn run_in(dir: &Path, args: &[&str]) -> Output {
     bin().args(args).current_dir(dir).output().unwrap()
@@ -17,7 +18,7 @@ fn with(dir: &Path, edits: &[(&str, &str)]) {
 }
 
 #[test]
-fn run_passes_with_the_reference() {
+fn cli_run_passes_with_the_reference() {
     let dir = tmpdir("verdict-pass");
     with(&dir, &[]);
     let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
@@ -38,32 +39,23 @@ fn run_passes_with_the_reference() {
 }
 
 #[test]
-fn run_fails_with_exit_1_when_the_margin_is_violated() {
+fn cli_run_fails_with_exit_1_when_the_margin_is_violated() {
     let dir = tmpdir("verdict-margin");
     // 30 µm minimum: the backlash falls to 24.4 µm in eclipse
     with(&dir, &[("min_backlash_um = 5.0", "min_backlash_um = 30.0")]);
-    let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        stdout
-            .lines()
-            .next()
-            .unwrap()
-            .starts_with("FAIL mesh: margin -5.60"),
-        "{stdout}"
-    );
-    assert!(out.stderr.is_empty(), "a failed verdict is not an error");
+    bin()
+        .args(["run", "s.toml", "--no-log"])
+        .current_dir(&dir)
+        .assert()
+        .code(1)
+        .stdout(starts_with("FAIL mesh: margin -5.60"))
+        // a failed verdict is not an error
+        .stderr("");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
-fn run_fails_with_exit_1_when_the_teeth_interfere() {
+fn cli_run_fails_with_exit_1_when_the_teeth_interfere() {
     let dir = tmpdir("verdict-interference");
     // 4 µm thinning: 3.6 µm nominal backlash, which the orbit closes
     with(
@@ -74,27 +66,17 @@ fn run_fails_with_exit_1_when_the_teeth_interfere() {
             ("min_backlash_um = 5.0", "min_backlash_um = 0.0"),
         ],
     );
-    let out = run_in(&dir, &["run", "s.toml", "--no-log"]);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        stdout
-            .lines()
-            .next()
-            .unwrap()
-            .starts_with("FAIL mesh: interference"),
-        "{stdout}"
-    );
+    bin()
+        .args(["run", "s.toml", "--no-log"])
+        .current_dir(&dir)
+        .assert()
+        .code(1)
+        .stdout(starts_with("FAIL mesh: interference"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
-fn run_exits_2_on_a_broken_scenario() {
+fn cli_run_exits_2_on_a_broken_scenario() {
     let dir = tmpdir("verdict-broken");
     with(
         &dir,
@@ -110,7 +92,7 @@ fn run_exits_2_on_a_broken_scenario() {
 }
 
 #[test]
-fn backlash_has_the_same_exit_statuses() {
+fn cli_backlash_has_the_same_exit_statuses() {
     let dir = tmpdir("verdict-backlash");
     with(&dir, &[]);
     let pass = run_in(&dir, &["backlash", "s.toml"]);
@@ -136,7 +118,7 @@ fn backlash_has_the_same_exit_statuses() {
 }
 
 #[test]
-fn every_cause_is_printed_once() {
+fn cli_every_cause_is_printed_once() {
     let dir = tmpdir("error-once");
     for args in [
         vec!["run", "missing.toml"],
@@ -161,7 +143,7 @@ fn every_cause_is_printed_once() {
 }
 
 #[test]
-fn help_documents_the_exit_statuses() {
+fn cli_help_documents_the_exit_statuses() {
     let out = bin().arg("--help").output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(

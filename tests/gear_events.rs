@@ -21,7 +21,7 @@ impl Observer for Trace {
 }
 
 #[test]
-fn heating_the_pinion_closes_the_backlash_and_reports_it() {
+fn core_heating_the_pinion_closes_the_backlash_and_reports_it() {
     // 40 W dissipated in the pinion rim from t = 0: it heats far above the wheel.
     let text = REFERENCE_HINGE_TOML.replacen(
         "[[sensor]]",

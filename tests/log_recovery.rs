@@ -60,7 +60,7 @@ fn message_ends(b: &[u8]) -> (Vec<usize>, usize) {
 }
 
 #[test]
-fn a_log_cut_anywhere_gives_back_every_whole_message() {
+fn cli_a_log_cut_anywhere_gives_back_every_whole_message() {
     let dir = tmpdir("recovery-cuts");
     let bytes = full_log(&dir);
     let (ends, data_end) = message_ends(&bytes);
@@ -98,7 +98,7 @@ fn a_log_cut_anywhere_gives_back_every_whole_message() {
 }
 
 #[test]
-fn export_reads_a_cut_log_and_recover_makes_it_valid() {
+fn cli_export_reads_a_cut_log_and_recover_makes_it_valid() {
     let dir = tmpdir("recovery-cli");
     let bytes = full_log(&dir);
     let cut = bytes.len() * 3 / 5;
@@ -168,7 +168,7 @@ fn export_reads_a_cut_log_and_recover_makes_it_valid() {
 }
 
 #[test]
-fn a_complete_log_needs_no_recovery_and_garbage_is_refused() {
+fn cli_a_complete_log_needs_no_recovery_and_garbage_is_refused() {
     let dir = tmpdir("recovery-complete");
     full_log(&dir);
     let out = bin()
@@ -198,7 +198,7 @@ fn cli(dir: &Path, args: &[&str]) -> std::process::Output {
 }
 
 #[test]
-fn a_log_cut_in_its_summary_is_rewritten_whole() {
+fn cli_a_log_cut_in_its_summary_is_rewritten_whole() {
     let dir = tmpdir("recovery-summary");
     let bytes = full_log(&dir);
     let (ends, data_end) = message_ends(&bytes);
@@ -223,7 +223,7 @@ fn a_log_cut_in_its_summary_is_rewritten_whole() {
 }
 
 #[test]
-fn a_zero_filled_tail_ends_the_data() {
+fn cli_a_zero_filled_tail_ends_the_data() {
     // A power loss can leave the end of a file as zeros: the messages before them are
     // recovered, the zeros (and a message cut by them) are not taken for data.
     let dir = tmpdir("recovery-zeros");
@@ -257,7 +257,7 @@ fn a_zero_filled_tail_ends_the_data() {
 }
 
 #[test]
-fn a_log_cut_before_its_first_message_is_a_clear_error() {
+fn cli_a_log_cut_before_its_first_message_is_a_clear_error() {
     let dir = tmpdir("recovery-early");
     let bytes = full_log(&dir);
     let (ends, _) = message_ends(&bytes);
@@ -279,7 +279,7 @@ fn a_log_cut_before_its_first_message_is_a_clear_error() {
 }
 
 #[test]
-fn a_killed_runs_partial_log_survives_the_next_run() {
+fn cli_a_killed_runs_partial_log_survives_the_next_run() {
     let dir = tmpdir("recovery-keep");
     std::fs::create_dir(dir.join("logs")).unwrap();
     let left = dir.join("logs/reference-hinge.mcap.4242.partial");

@@ -25,7 +25,7 @@ fn run_ok(args: &[&str]) -> String {
 }
 
 #[test]
-fn log_holds_every_series_by_name_and_its_provenance() {
+fn cli_log_holds_every_series_by_name_and_its_provenance() {
     let dir = tmpdir("log-contents");
     let log = dir.join("ref.mcap");
     let scenario = reference_file();
@@ -97,7 +97,7 @@ fn log_holds_every_series_by_name_and_its_provenance() {
 }
 
 #[test]
-fn export_csv_round_trips_the_run_csv() {
+fn cli_export_csv_round_trips_the_run_csv() {
     let dir = tmpdir("roundtrip");
     let (log, csv, back) = (dir.join("r.mcap"), dir.join("r.csv"), dir.join("back.csv"));
     run_ok(&[
@@ -136,7 +136,7 @@ fn export_csv_round_trips_the_run_csv() {
 }
 
 #[test]
-fn log_cadence_by_steps_and_by_interval() {
+fn cli_log_cadence_by_steps_and_by_interval() {
     let dir = tmpdir("cadence");
     let rows = |args: &[&str]| {
         let log = dir.join("c.mcap");
@@ -173,7 +173,8 @@ fn log_cadence_by_steps_and_by_interval() {
 /// Starts a long run and returns it once its temporary log exists.
 fn start_long_run(dir: &Path) -> (std::process::Child, std::path::PathBuf, std::path::PathBuf) {
     let (log, csv) = (dir.join("long.mcap"), dir.join("long.csv"));
-    let child = bin()
+    // std's Command: this run is signalled while it runs, which assert_cmd does not do
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_orbitlash"))
         .args(["run", "--quiet", "--orbits", "50000", "--log-every", "60s"])
         .args([
             "--out",
@@ -205,7 +206,7 @@ fn signal(child: &std::process::Child, sig: &str) {
 }
 
 #[test]
-fn ctrl_c_closes_the_log_and_says_so() {
+fn cli_ctrl_c_closes_the_log_and_says_so() {
     let dir = tmpdir("interrupt");
     let (child, log, csv) = start_long_run(&dir);
     signal(&child, "-INT");
@@ -237,7 +238,7 @@ fn ctrl_c_closes_the_log_and_says_so() {
 }
 
 #[test]
-fn a_killed_run_leaves_no_file_under_the_final_name() {
+fn cli_a_killed_run_leaves_no_file_under_the_final_name() {
     let dir = tmpdir("kill");
     let (mut child, log, csv) = start_long_run(&dir);
     signal(&child, "-KILL");
@@ -248,7 +249,7 @@ fn a_killed_run_leaves_no_file_under_the_final_name() {
 }
 
 #[test]
-fn scene_view_is_optional_and_decodes() {
+fn cli_scene_view_is_optional_and_decodes() {
     let dir = tmpdir("scene");
     let log = dir.join("s.mcap");
     run_ok(&[

@@ -20,6 +20,8 @@ fn run_to_end(sc: &Scenario) -> RunStats {
 
 #[test]
 fn regress_reference_solver_cost() {
+    // The "was" figures: `orbitlash run --no-log --verbose` (solver statistics), and
+    // `orbitlash bench` for steps per orbit.
     let sc = reference();
     let stats = run_to_end(&sc);
     let per_orbit = stats.steps as f64 / 6.0;
@@ -59,6 +61,8 @@ fn regress_mission_profile_runs_90_days() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml");
     let (sc, _) = load_file(&path).unwrap();
     let stats = run_to_end(&sc);
+    // `orbitlash run scenarios/hinge-90-day-drift.toml --no-log --verbose`: 1370 eclipse
+    // entries.
     // β passes 0 → 60°, below the 68° where eclipses stop: one eclipse per orbit.
     assert_eq!(stats.eclipse_entries, 1370);
     assert!(
@@ -80,9 +84,10 @@ fn regress_mission_profile_runs_90_days() {
 
 #[test]
 fn regress_reference_orbit6_golden_values() {
-    // Golden values of the reference run as of this version (the physics behind them
-    // is validated in tests/val_*): a change beyond these tolerances is a change of
-    // results and must be explained.
+    // Golden values of the reference run (the physics behind them is validated in
+    // tests/val_*): a change beyond these tolerances is a change of results and must be
+    // explained. Produced by `orbitlash run --no-log` (the "last orbit" table and the
+    // exact row of the gear-pair table), commit 3cfc369.
     use orbitlash::summary::{MeshStats, WindowStats};
     let sc = reference();
     let period = sc.period_s();

@@ -336,9 +336,15 @@ fn val_closed_form_orbit_averaged_environment_loads() {
         "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1e9\ninitial_temperature_k = 300.0\n",
     );
     let orbit = sc.thermal.environment.orbit.clone();
-    let (t, f_view) = (orbit.period_s(), orbit.earth_view_factor());
+    // Period and view factor from their definitions (reference-mechanism.md §2).
+    let a = orbit.earth_radius_m + orbit.altitude_m;
+    let t = 2.0 * PI * (a.powi(3) / orbit.mu_m3_per_s2).sqrt();
+    let f_view = (orbit.earth_radius_m / a).powi(2);
     let beta = 20f64.to_radians();
-    let phi = orbit.eclipse_half_angle_rad(beta);
+    // The eclipse half-angle from reference-mechanism.md §2, not from the code:
+    // cos φ = √((R+h)² − R²) / ((R+h) cos β).
+    let r = orbit.earth_radius_m;
+    let phi = ((a * a - r * r).sqrt() / (a * beta.cos())).acos();
     let cases = [
         (
             "[[sun]]\nnode = \"n\"\nabsorptivity_area_m2 = 1.0\nincidence = \"tracking\"",

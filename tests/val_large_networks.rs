@@ -89,7 +89,7 @@ fn val_second_method_synthetic_networks() {
 }
 
 #[test]
-fn iterative_runs_are_deterministic() {
+fn core_iterative_runs_are_deterministic() {
     let m = network(Shape::Lattice, 1000);
     let t = m.environment.orbit.period_s() / 3.0;
     let a = samples(&m, &with(LinearSolver::Iterative), t);
@@ -98,7 +98,7 @@ fn iterative_runs_are_deterministic() {
 }
 
 #[test]
-fn a_2000_node_lattice_runs_from_the_command_line() {
+fn cli_a_2000_node_lattice_runs_from_the_command_line() {
     let dir = tmpdir("lattice-2000");
     let out = bin()
         .args(["bench", "--emit-network", "lattice:2000"])

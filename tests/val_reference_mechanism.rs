@@ -4,6 +4,7 @@
 
 mod common;
 
+use orbitlash::io::recording::Recording;
 use orbitlash::io::scenario_toml::reference;
 use orbitlash::scenario::SensorTarget;
 use orbitlash::sim::simulate;
@@ -59,9 +60,9 @@ fn val_reference_mechanism_orbit6_extremes() {
 fn val_cases_null_recording_matches_within_noise() {
     // The null case carries no concealed effect: only thermistor noise of 0.15 K,
     // so the residual of every temperature channel must look like that noise.
-    let rec = common::Recording::read(&common::shared("cases/null/recording.csv"));
-    let time = rec.column("time_s");
-    let t_end = time.iter().flatten().copied().fold(0.0, f64::max);
+    let rec = Recording::read(&common::shared("cases/null/recording.csv")).unwrap();
+    let time = &rec.time_s;
+    let t_end = *time.last().unwrap();
     let sc = reference();
     let mut s = Samples::every(30.0);
     simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut s, None).unwrap();
@@ -70,12 +71,12 @@ fn val_cases_null_recording_matches_within_noise() {
         let SensorTarget::Node(i) = sensor.target else {
             continue;
         };
-        let col = rec.column(&sensor.column);
+        let col = rec.channel(&sensor.column).unwrap();
         let mut sum2 = 0.0;
         let mut sum = 0.0;
         let mut n = 0.0;
-        for (t, v) in time.iter().zip(&col) {
-            let (Some(t), Some(v)) = (t, v) else { continue };
+        for (t, v) in time.iter().zip(col) {
+            let Some(v) = v else { continue };
             let k = (t / 30.0).round() as usize;
             assert!(
                 (s.times_s[k] - t).abs() < 1e-6,

@@ -6,11 +6,11 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
-use serde_json::json;
 
-use orbitlash::gear::{CenterDistance, GearPair, MeshState};
+use orbitlash::gear::{CenterDistance, DeformedGear, GearPair, MeshState};
 use orbitlash::units::{c_to_k, k_to_c};
 
+use super::table::{self, Align};
 use super::{Outcome, print_out};
 
 #[derive(Args, Debug)]
@@ -166,50 +166,38 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             pair.module_m * 1e3,
             pair.min_backlash_m * 1e6
         );
-        outln!(
-            o,
-            "  {:9} {:>8} {:>8} {:>8} | {:>9} {:>11} {:>9} | {:>9} {:>9} {:>8}",
-            "case",
-            "pinion",
-            "wheel",
-            "housing",
-            "exact",
-            "closed form",
-            "paper",
-            "α_w",
-            "a",
-            "margin"
-        );
-        outln!(
-            o,
-            "  {:9} {:>8} {:>8} {:>8} | {:>9} {:>11} {:>9} | {:>9} {:>9} {:>8}",
-            "",
-            "°C",
-            "°C",
-            "°C",
-            "µm",
-            "µm",
-            "µm",
-            "deg",
-            "mm",
-            "µm"
+        let mut align = vec![Align::Right; 10];
+        align[0] = Align::Left;
+        let mut table = table::new(
+            &[
+                "case",
+                "pinion\n°C",
+                "wheel\n°C",
+                "housing\n°C",
+                "exact\nµm",
+                "closed form\nµm",
+                "paper\nµm",
+                "α_w\ndeg",
+                "a\nmm",
+                "margin\nµm",
+            ],
+            &align,
         );
         for (c, m) in states {
-            outln!(
-                o,
-                "  {:9} {:>8.2} {:>8.2} {:>8.2} | {:>9.3} {:>11.3} {:>9.3} | {:>9.4} {:>9.5} {:>8.3}",
-                c.label,
-                c.pinion_c,
-                c.wheel_c,
-                c.housing_c,
-                m.backlash_exact_m * 1e6,
-                m.backlash_closed_form_m * 1e6,
-                m.backlash_paper_m * 1e6,
-                m.pressure_angle_rad.to_degrees(),
-                m.center_distance_m * 1e3,
-                m.margin_m * 1e6
-            );
+            table.add_row(vec![
+                c.label.clone(),
+                format!("{:.2}", c.pinion_c),
+                format!("{:.2}", c.wheel_c),
+                format!("{:.2}", c.housing_c),
+                format!("{:.3}", m.backlash_exact_m * 1e6),
+                format!("{:.3}", m.backlash_closed_form_m * 1e6),
+                format!("{:.3}", m.backlash_paper_m * 1e6),
+                format!("{:.4}", m.pressure_angle_rad.to_degrees()),
+                format!("{:.5}", m.center_distance_m * 1e3),
+                format!("{:.3}", m.margin_m * 1e6),
+            ]);
         }
+        o += &table::render(&table, "  ");
         outln!(
             o,
             "  exact: smallest normal backlash over a mesh cycle (involute, unequal base pitches);"
@@ -238,35 +226,97 @@ fn temperatures(pair: &GearPair, n: usize, c: &Case) -> Vec<f64> {
     temps
 }
 
-fn to_json(name: &str, cases: &[(&GearPair, Vec<(Case, MeshState)>)]) -> serde_json::Value {
-    json!({
-        "scenario": name,
-        "pass": cases.iter().all(|(_, states)| worst(states).2),
-        "pairs": cases.iter().map(|(pair, states)| json!({
-            "name": pair.name,
-            "verdict": if worst(states).2 { "pass" } else { "fail" },
-            "min_margin_um": worst(states).1.margin_m * 1e6,
-            "min_backlash_um": pair.min_backlash_m * 1e6,
-            "cases": states.iter().map(|(c, m)| json!({
-                "case": c.label,
-                "pinion_c": c.pinion_c,
-                "wheel_c": c.wheel_c,
-                "housing_c": c.housing_c,
-                "backlash_um": {
-                    "exact": m.backlash_exact_m * 1e6,
-                    "closed_form": m.backlash_closed_form_m * 1e6,
-                    "paper": m.backlash_paper_m * 1e6,
-                },
-                "margin_um": m.margin_m * 1e6,
-                "pressure_angle_deg": m.pressure_angle_rad.to_degrees(),
-                "center_distance_mm": m.center_distance_m * 1e3,
-                "contact_ratio": m.contact_ratio,
-                "base_radius_mm": m.gears.iter().map(|g| g.base_radius_m * 1e3).collect::<Vec<_>>(),
-                "base_circle_displacement_um": m.gears.iter().map(|g| g.base_displacement_m * 1e6).collect::<Vec<_>>(),
-                "base_pitch_mm": m.gears.iter().map(|g| g.base_pitch_m * 1e3).collect::<Vec<_>>(),
-                "base_tooth_thickness_mm": m.gears.iter().map(|g| g.base_thickness_m * 1e3).collect::<Vec<_>>(),
-                "coating_um": m.gears.iter().map(|g| g.coating_m * 1e6).collect::<Vec<_>>(),
-            })).collect::<Vec<_>>(),
-        })).collect::<Vec<_>>(),
-    })
+/// `backlash --json`: keys in the order they are declared; documented in the README.
+#[derive(serde::Serialize)]
+struct BacklashReport<'a> {
+    scenario: &'a str,
+    pass: bool,
+    pairs: Vec<PairReport<'a>>,
+}
+
+#[derive(serde::Serialize)]
+struct PairReport<'a> {
+    name: &'a str,
+    /// "pass" or "fail".
+    verdict: &'static str,
+    min_margin_um: f64,
+    min_backlash_um: f64,
+    cases: Vec<CaseReport<'a>>,
+}
+
+#[derive(serde::Serialize)]
+struct CaseReport<'a> {
+    case: &'a str,
+    pinion_c: f64,
+    wheel_c: f64,
+    housing_c: f64,
+    backlash_um: Variants,
+    margin_um: f64,
+    pressure_angle_deg: f64,
+    center_distance_mm: f64,
+    contact_ratio: f64,
+    /// Pinion, wheel.
+    base_radius_mm: [f64; 2],
+    base_circle_displacement_um: [f64; 2],
+    base_pitch_mm: [f64; 2],
+    base_tooth_thickness_mm: [f64; 2],
+    coating_um: [f64; 2],
+}
+
+#[derive(serde::Serialize)]
+struct Variants {
+    exact: f64,
+    closed_form: f64,
+    paper: f64,
+}
+
+fn to_json<'a>(
+    name: &'a str,
+    cases: &'a [(&GearPair, Vec<(Case, MeshState)>)],
+) -> BacklashReport<'a> {
+    BacklashReport {
+        scenario: name,
+        pass: cases.iter().all(|(_, states)| worst(states).2),
+        pairs: cases
+            .iter()
+            .map(|(pair, states)| {
+                let (_, w, pass) = worst(states);
+                PairReport {
+                    name: &pair.name,
+                    verdict: if pass { "pass" } else { "fail" },
+                    min_margin_um: w.margin_m * 1e6,
+                    min_backlash_um: pair.min_backlash_m * 1e6,
+                    cases: states
+                        .iter()
+                        .map(|(c, m)| {
+                            let per_gear =
+                                |f: fn(&DeformedGear) -> f64| [f(&m.gears[0]), f(&m.gears[1])];
+                            CaseReport {
+                                case: &c.label,
+                                pinion_c: c.pinion_c,
+                                wheel_c: c.wheel_c,
+                                housing_c: c.housing_c,
+                                backlash_um: Variants {
+                                    exact: m.backlash_exact_m * 1e6,
+                                    closed_form: m.backlash_closed_form_m * 1e6,
+                                    paper: m.backlash_paper_m * 1e6,
+                                },
+                                margin_um: m.margin_m * 1e6,
+                                pressure_angle_deg: m.pressure_angle_rad.to_degrees(),
+                                center_distance_mm: m.center_distance_m * 1e3,
+                                contact_ratio: m.contact_ratio,
+                                base_radius_mm: per_gear(|g| g.base_radius_m * 1e3),
+                                base_circle_displacement_um: per_gear(|g| {
+                                    g.base_displacement_m * 1e6
+                                }),
+                                base_pitch_mm: per_gear(|g| g.base_pitch_m * 1e3),
+                                base_tooth_thickness_mm: per_gear(|g| g.base_thickness_m * 1e3),
+                                coating_um: per_gear(|g| g.coating_m * 1e6),
+                            }
+                        })
+                        .collect(),
+                }
+            })
+            .collect(),
+    }
 }

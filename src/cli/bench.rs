@@ -134,6 +134,8 @@ fn scaling(a: &BenchArgs) -> Result<()> {
         a.budget_s,
         a.conductance_scale
     );
+    // Fixed widths, not `cli::table`: each row prints as soon as it is measured (a
+    // large network takes minutes), so the widths cannot wait for the last row.
     outln!(
         o,
         "{:8} {:>6} {:>6} | {:>10} {:>10} {:>10} | {:>5} {:>7} {:>6} {:>6}",

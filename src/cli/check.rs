@@ -8,6 +8,7 @@ use clap::Args;
 use orbitlash::orbit::EnvironmentModel;
 use orbitlash::thermal::analysis::time_constants;
 
+use super::table::{self, Align};
 use super::{load_with, print_out};
 
 #[derive(Args, Debug)]
@@ -67,13 +68,6 @@ pub fn check(a: CheckArgs) -> Result<()> {
         .map(|b| b.temperature_k.at(0.0))
         .collect();
     let tc = time_constants(net, &temps, &boundary);
-    let width = net
-        .nodes
-        .iter()
-        .map(|n| n.name.len())
-        .max()
-        .unwrap_or(4)
-        .max(4);
     // Every node of a small network; the fastest of a large one.
     const LISTED: usize = 12;
     let mut order: Vec<usize> = (0..net.nodes.len()).collect();
@@ -91,15 +85,26 @@ pub fn check(a: CheckArgs) -> Result<()> {
             "  time constants at the initial temperatures (C_i / sum of conductances):"
         );
     }
+    let mut table = table::new(
+        &["", "", "", "", ""],
+        &[
+            Align::Left,
+            Align::Left,
+            Align::Right,
+            Align::Left,
+            Align::Right,
+        ],
+    );
     for (n, t) in order.iter().map(|&i| (&net.nodes[i], tc.node_s[i])) {
-        outln!(
-            o,
-            "    {:width$}  C = {:>9.3} J/K   tau = {:>10.2} s",
-            n.name,
-            n.capacitance_j_per_k,
-            t
-        );
+        table.add_row(vec![
+            n.name.clone(),
+            "C =".to_string(),
+            format!("{:.3} J/K", n.capacitance_j_per_k),
+            "tau =".to_string(),
+            format!("{t:.2} s"),
+        ]);
     }
+    o += &table::render(&table, "    ");
     outln!(
         o,
         "  linear systems: {} ({} nodes; solver.linear = \"{}\")",
@@ -131,22 +136,39 @@ pub fn check(a: CheckArgs) -> Result<()> {
             m.pressure_angle_rad.to_degrees(),
             m.contact_ratio
         );
+        let mut table = table::new(
+            &[
+                "gear",
+                "teeth",
+                "r_b mm",
+                "p_b mm",
+                "s_b mm (coated)",
+                "nodes",
+            ],
+            &[
+                Align::Left,
+                Align::Right,
+                Align::Right,
+                Align::Right,
+                Align::Right,
+                Align::Left,
+            ],
+        );
         for (g, d) in pair.gears.iter().zip(&m.gears) {
-            outln!(
-                o,
-                "  {:6} z = {:3}  r_b = {:.6} mm  p_b = {:.6} mm  s_b = {:.6} mm (coated)  nodes {}",
-                g.name,
-                g.teeth,
-                d.base_radius_m * 1e3,
-                d.base_pitch_m * 1e3,
-                d.base_thickness_m * 1e3,
+            table.add_row(vec![
+                g.name.clone(),
+                g.teeth.to_string(),
+                format!("{:.6}", d.base_radius_m * 1e3),
+                format!("{:.6}", d.base_pitch_m * 1e3),
+                format!("{:.6}", d.base_thickness_m * 1e3),
                 g.nodes
                     .iter()
                     .map(|&i| net.nodes[i].name.as_str())
                     .collect::<Vec<_>>()
-                    .join(", ")
-            );
+                    .join(", "),
+            ]);
         }
+        o += &table::render(&table, "  ");
         outln!(
             o,
             "  normal backlash {:.3} µm, minimum allowed {:.3} µm, margin {:.3} µm",

@@ -15,6 +15,7 @@ mod export;
 mod params;
 mod recover;
 mod run;
+mod table;
 
 use std::path::{Path, PathBuf};
 

@@ -91,7 +91,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn default_names_stay_in_logs() {
+    fn cli_default_names_stay_in_logs() {
         assert_eq!(
             default_out(Path::new("logs/a.mcap.partial")),
             PathBuf::from("logs/a.recovered.mcap")

@@ -22,6 +22,7 @@ use orbitlash::summary::{MeshStats, PairStats, PairVerdict, RunSummary, WindowSt
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
 
+use super::table::{self, Align};
 use super::{Outcome, default_log_path, error_chain, load_with, orbits_arg, print_out};
 
 #[derive(Args, Debug)]
@@ -555,21 +556,9 @@ fn format_summary(
             stats.t_end_s
         );
     }
-    let width = model
-        .network
-        .nodes
-        .iter()
-        .map(|n| n.name.len())
-        .max()
-        .unwrap_or(4)
-        .max(4);
-    outln!(
-        o,
-        "  {:width$}  {:>9}  {:>9}  {:>9}",
-        "node",
-        "min °C",
-        "max °C",
-        "mean °C"
+    let mut table = table::new(
+        &["node", "min °C", "max °C", "mean °C"],
+        &[Align::Left, Align::Right, Align::Right, Align::Right],
     );
     // Every node of a mechanism; the extremes of a large network (all of them are in
     // the log and the CSV).
@@ -591,35 +580,51 @@ fn format_summary(
         nodes = shown;
     }
     for s in nodes {
-        outln!(
-            o,
-            "  {:width$}  {:>9.2}  {:>9.2}  {:>9.2}",
-            s.name,
-            k_to_c(s.min_k),
-            k_to_c(s.max_k),
-            k_to_c(s.mean_k)
-        );
+        table.add_row(vec![
+            s.name.to_string(),
+            format!("{:.2}", k_to_c(s.min_k)),
+            format!("{:.2}", k_to_c(s.max_k)),
+            format!("{:.2}", k_to_c(s.mean_k)),
+        ]);
     }
+    o += &table::render(&table, "  ");
     let e = &stats.energy;
     outln!(o, "\nenergy balance over the run:");
-    outln!(o, "  absorbed (sun, albedo, IR)  {:>14.1} J", e.absorbed_j);
-    outln!(
-        o,
-        "  dissipated (loads, heaters) {:>14.1} J",
-        e.dissipated_j
-    );
+    let mut table = table::new(&["", "", ""], &[Align::Left, Align::Right, Align::Left]);
+    let joules = |v: f64| format!("{v:.1}");
+    table.add_row(vec![
+        "absorbed (sun, albedo, IR)".to_string(),
+        joules(e.absorbed_j),
+        "J".to_string(),
+    ]);
+    table.add_row(vec![
+        "dissipated (loads, heaters)".to_string(),
+        joules(e.dissipated_j),
+        "J".to_string(),
+    ]);
     for (b, q) in model.network.boundaries.iter().zip(&e.to_boundary_j) {
-        outln!(o, "  to boundary {:15} {:>14.1} J", b.name, q);
+        table.add_row(vec![
+            format!("to boundary {}", b.name),
+            joules(*q),
+            "J".to_string(),
+        ]);
     }
-    outln!(o, "  stored                      {:>14.1} J", e.stored_j);
-    outln!(
-        o,
-        "  error                       {:>14.3e} J ({:.2e} of the heat in)",
-        e.error_j(),
-        e.relative_error()
-    );
+    table.add_row(vec![
+        "stored".to_string(),
+        joules(e.stored_j),
+        "J".to_string(),
+    ]);
+    table.add_row(vec![
+        "error".to_string(),
+        format!("{:.3e}", e.error_j()),
+        format!("J ({:.2e} of the heat in)", e.relative_error()),
+    ]);
+    o += &table::render(&table, "  ");
     o
 }
+
+/// A model variant's (smallest, largest) backlash from a pair's statistics.
+type Extremes = fn(&PairStats) -> (f64, f64);
 
 fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
     let mut o = String::new();
@@ -631,14 +636,15 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
             pair.name,
             pair.min_backlash_m * 1e6
         );
-        outln!(
-            o,
-            "  {:26} {:>9} {:>9} {:>15} {:>15}",
-            "",
-            "run min",
-            "run max",
-            "last orbit min",
-            "last orbit max"
+        let mut table = table::new(
+            &["", "run min", "run max", "last orbit min", "last orbit max"],
+            &[
+                Align::Left,
+                Align::Right,
+                Align::Right,
+                Align::Right,
+                Align::Right,
+            ],
         );
         // "–" where a window saw no step (an interrupted run).
         let um = |v: f64| {
@@ -648,27 +654,21 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
                 "–".to_string()
             }
         };
-        let row = |o: &mut String, label: &str, f: &dyn Fn(&PairStats) -> (f64, f64)| {
+        let variants: [(&str, Extremes); 3] = [
+            ("exact (worst over a mesh)", |p| {
+                (p.min_exact_m, p.max_exact_m)
+            }),
+            ("closed form", |p| {
+                (p.min_closed_form_m, p.max_closed_form_m)
+            }),
+            ("paper (16)-(22)", |p| (p.min_paper_m, p.max_paper_m)),
+        ];
+        for (label, f) in variants {
             let (a, b) = f(r);
             let (c, d) = f(l);
-            outln!(
-                o,
-                "  {label:26} {:>9} {:>9} {:>15} {:>15}",
-                um(a),
-                um(b),
-                um(c),
-                um(d)
-            );
-        };
-        row(&mut o, "exact (worst over a mesh)", &|p| {
-            (p.min_exact_m, p.max_exact_m)
-        });
-        row(&mut o, "closed form", &|p| {
-            (p.min_closed_form_m, p.max_closed_form_m)
-        });
-        row(&mut o, "paper (16)-(22)", &|p| {
-            (p.min_paper_m, p.max_paper_m)
-        });
+            table.add_row(vec![label.to_string(), um(a), um(b), um(c), um(d)]);
+        }
+        o += &table::render(&table, "  ");
         outln!(o, "  smallest backlash at {}", phase(r.t_min_s));
         outln!(o, "  largest backlash at  {}", phase(r.t_max_s));
         outln!(

@@ -151,7 +151,7 @@ mod tests {
     }
 
     #[test]
-    fn physics_md_check_value_of_eq16() {
+    fn val_physics_md_check_value_of_eq16() {
         // r_a = 5, r_b = 28.19078 mm, t_a = −20 K, t_b = −60 K, α = 10.2e-6 → −0.0143012 mm
         let t_ref = 300.0;
         let d = base_circle_displacement(
@@ -170,7 +170,7 @@ mod tests {
     }
 
     #[test]
-    fn gauss_path_matches_closed_form_for_a_linear_law() {
+    fn val_second_method_gauss_path_matches_closed_form_for_a_linear_law() {
         let radii = [3e-3, 5.309499e-3, 9.396926e-3];
         let temps = [310.0, 290.0, 250.0];
         let lin = StrainLaw::Linear { alpha_per_k: 11e-6 };
@@ -184,7 +184,7 @@ mod tests {
     }
 
     #[test]
-    fn elastic_fit_limits() {
+    fn core_elastic_fit_limits() {
         let radii = [5e-3, 18.8e-3];
         let temps = [330.0, 340.0];
         let t_ref = 298.15;

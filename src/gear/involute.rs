@@ -22,7 +22,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn involute_function() {
+    fn val_published_involute_function() {
         // inv 20° = tan 20° − 20° in radians (tables: 0.0149044).
         assert!((inv(20f64.to_radians()) - 0.014_904_383_8).abs() < 1e-10);
         assert_eq!(inv(0.0), 0.0);

@@ -96,7 +96,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn laws_vanish_at_reference_and_agree_when_linear() {
+    fn core_strain_laws_vanish_at_reference_and_agree_when_linear() {
         let t_ref = 298.15;
         let lin = StrainLaw::Linear { alpha_per_k: 11e-6 };
         let quad = StrainLaw::Quadratic {

@@ -321,7 +321,7 @@ mod tests {
     }
 
     #[test]
-    fn refuses_inputs_links_and_devices() {
+    fn core_refuses_inputs_links_and_devices() {
         let d = dir("refuse");
         let input = d.join("s.toml");
         std::fs::write(&input, "x").unwrap();
@@ -359,7 +359,7 @@ mod tests {
     }
 
     #[test]
-    fn temporary_names_never_collide() {
+    fn core_temporary_names_never_collide() {
         let d = dir("tmp");
         let out = d.join("run.mcap");
         let policy = OutputPolicy::reading(&[]);

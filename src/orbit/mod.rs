@@ -430,10 +430,14 @@ mod tests {
     }
 
     #[test]
-    fn crossings_match_half_angle() {
+    fn val_spec_shadow_crossings_at_the_half_angle() {
         let env = reference();
         let t = env.orbit.period_s();
-        let phi = env.orbit.eclipse_half_angle_rad(20f64.to_radians());
+        // reference-mechanism.md §2, written out here rather than taken from the code:
+        // cos φ = √((R+h)² − R²) / ((R+h) cos β); 66.526° for the reference orbit.
+        let (r, h) = (EARTH_RADIUS_M, 500e3);
+        let phi = (((r + h).powi(2) - r * r).sqrt() / ((r + h) * 20f64.to_radians().cos())).acos();
+        assert!((phi.to_degrees() - 66.526).abs() < 5e-4);
         let (t_in, entering) = env.next_shadow_crossing(0.0, 2.0 * t).unwrap();
         assert!(entering);
         assert!((t_in - t * (PI - phi) / (2.0 * PI)).abs() < 1e-6);
@@ -445,7 +449,7 @@ mod tests {
     }
 
     #[test]
-    fn scanned_crossings_agree_with_the_closed_form() {
+    fn val_second_method_scanned_crossings_agree_with_the_closed_form() {
         // A β table holding a constant value takes the numerical scan-and-bisect path.
         let closed = reference();
         let mut scanned = reference();
@@ -465,7 +469,7 @@ mod tests {
     }
 
     #[test]
-    fn angle_crossings_every_half_orbit() {
+    fn core_angle_crossings_every_half_orbit() {
         let env = reference();
         let o = &env.orbit;
         let half = o.period_s() / 2.0;
@@ -483,7 +487,7 @@ mod tests {
     }
 
     #[test]
-    fn no_eclipse_above_critical_beta() {
+    fn core_no_eclipse_above_critical_beta() {
         let mut env = reference();
         let crit = env.orbit.critical_beta_rad();
         env.beta_rad = Profile::Constant(crit + 0.01);

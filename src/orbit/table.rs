@@ -72,7 +72,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn interpolates_and_clamps() {
+    fn core_table_interpolates_and_clamps() {
         let p = Profile::Table {
             time_s: vec![0.0, 10.0, 20.0],
             value: vec![1.0, 3.0, -1.0],

@@ -253,7 +253,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn paths_parse_and_print() {
+    fn core_key_paths_parse_and_print() {
         let p = parse_path("node.\"gear1.r2\".capacitance_j_per_k").unwrap();
         assert_eq!(
             p,

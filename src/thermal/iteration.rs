@@ -751,7 +751,7 @@ mod tests {
     }
 
     #[test]
-    fn sparse_solves_match_dense() {
+    fn val_second_method_sparse_solves_match_dense() {
         let net = network();
         let c = Compiled::new(&net);
         let temps = net.initial_temperatures_k();
@@ -780,7 +780,7 @@ mod tests {
 
     /// With only linear links W is symmetric, and CG must give the exact solution.
     #[test]
-    fn iterative_solves_a_linear_network_exactly_and_falls_back_when_it_struggles() {
+    fn val_second_method_iterative_solves_a_linear_network_exactly_and_falls_back() {
         let mut net = network();
         net.radiators
             .retain(|r| matches!(r.b, NodeRef::Boundary(_)));

@@ -125,7 +125,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn solves_against_nalgebra() {
+    fn val_second_method_lu_solves_against_nalgebra() {
         let n = 6;
         let m = nalgebra::DMatrix::from_fn(n, n, |i, j| {
             if i == j {
@@ -151,7 +151,7 @@ mod tests {
     }
 
     #[test]
-    fn reports_singular() {
+    fn core_lu_reports_singular() {
         let mut lu = Lu::new(2);
         lu.matrix_mut().copy_from_slice(&[1.0, 2.0, 2.0, 4.0]);
         assert_eq!(lu.factor(), Err(Singular));

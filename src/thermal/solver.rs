@@ -579,14 +579,14 @@ mod tests {
     use super::*;
 
     #[test]
-    fn coefficients_are_consistent() {
+    fn core_tr_bdf2_coefficients_are_consistent() {
         assert!((A - B - 1.0).abs() < 1e-15);
         assert!((2.0 * W0 + W1 - 1.0).abs() < 1e-15);
         assert!(((1.0 - GAMMA) / (2.0 - GAMMA) - D).abs() < 1e-15);
     }
 
     #[test]
-    fn hermite_reproduces_cubic() {
+    fn val_closed_form_hermite_reproduces_cubic() {
         // p(t) = t³ − 2t on [1, 3]
         let p = |t: f64| t * t * t - 2.0 * t;
         let dp = |t: f64| 3.0 * t * t - 2.0;

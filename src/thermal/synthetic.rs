@@ -273,7 +273,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_2000_node_lattice_is_the_issue_s_structure() {
+    fn core_the_2000_node_lattice_is_the_issue_s_structure() {
         let m = network(Shape::Lattice, 2000);
         let net = &m.network;
         assert_eq!(net.nodes.len(), 2000);

@@ -25,39 +25,10 @@ pub fn shared(rel: &str) -> std::path::PathBuf {
         .join(rel)
 }
 
-/// A recording CSV: header and rows (None for empty cells).
-pub struct Recording {
-    pub columns: Vec<String>,
-    pub rows: Vec<Vec<Option<f64>>>,
-}
-
-impl Recording {
-    pub fn read(path: &std::path::Path) -> Recording {
-        let text =
-            std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let mut lines = text.lines();
-        let columns = lines
-            .next()
-            .unwrap()
-            .split(',')
-            .map(|s| s.trim().to_string())
-            .collect();
-        let rows = lines
-            .filter(|l| !l.trim().is_empty())
-            .map(|l| l.split(',').map(|c| c.trim().parse().ok()).collect())
-            .collect();
-        Recording { columns, rows }
-    }
-
-    pub fn column(&self, name: &str) -> Vec<Option<f64>> {
-        let i = self.columns.iter().position(|c| c == name).unwrap();
-        self.rows.iter().map(|r| r[i]).collect()
-    }
-}
-
-/// The orbitlash binary built for these tests.
-pub fn bin() -> std::process::Command {
-    std::process::Command::new(env!("CARGO_BIN_EXE_orbitlash"))
+/// The orbitlash binary built for these tests, as an `assert_cmd` command (`.output()`
+/// for the raw result, `.assert()` for exit status and output predicates).
+pub fn bin() -> assert_cmd::Command {
+    assert_cmd::cargo::cargo_bin_cmd!("orbitlash")
 }
 
 /// A fresh, empty temporary folder for one test.
