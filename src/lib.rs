@@ -6,14 +6,39 @@
 //! Data flows one way:
 //!
 //! ```text
-//! scenario file ──io::scenario_toml──▶ Scenario (validated model)
-//!     ──sim::simulate (thermal::solver, orbit, gear at every step)──▶ Observer callbacks
-//!     ──▶ summary, io::csv_export, io::mcap_log ──▶ reports (cli)
+//! scenario file ──io::scenario_toml──▶ ScenarioSpec ──spec::compile──▶ Scenario
+//!     (model::Model keeps both in step: parameters by key path)
+//!     ──sim::Setup (once) ──Setup::run(State → State)──▶ observers
+//!     ──▶ summary, sensor::Readings, io::csv_export, io::mcap_log ──▶ reports (cli)
 //! ```
 //!
-//! Physics (`orbit`, `thermal`, `gear`, `sim`, `summary`) knows nothing of files or the CLI;
-//! `io` holds everything that reads or writes files; `cli` maps commands to the
-//! pipeline. See `docs/ARCHITECTURE.md` for the module map and invariants.
+//! Many runs of one model, as margins and fits make them:
+//!
+//! ```
+//! use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
+//! use orbitlash::model::Model;
+//! use orbitlash::sim::Setup;
+//! use orbitlash::summary::MeshStats;
+//!
+//! let mut model = Model::new(parse_spec(REFERENCE_HINGE_TOML, "reference").unwrap()).unwrap();
+//! let beta = model.param("environment.beta_deg").unwrap(); // resolve a key path once
+//! model.set_param(&beta, 35.0).unwrap(); // microseconds, the TOML's checks and errors
+//! assert!(model.set_param(&beta, 120.0).is_err());
+//!
+//! let sc = model.scenario();
+//! let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver); // once per model
+//! let mut state = setup.initial_state(); // or setup.state_at(t_s, temperatures_k)
+//! let mut mesh = MeshStats::last(sc.period_s());
+//! setup.run(&mut state, sc.period_s(), &mut mesh, Default::default()).unwrap();
+//! // `state` is the end state: running on from it equals one longer run, bit for bit.
+//! setup.run(&mut state, 2.0 * sc.period_s(), &mut mesh, Default::default()).unwrap();
+//! assert!(mesh.pairs[0].min_exact_m > sc.gears[0].min_backlash_m);
+//! ```
+//!
+//! Physics (`orbit`, `thermal`, `gear`, `sim`, `sample`, `sensor`, `summary`, `spec`,
+//! `model`, `validate`) knows nothing of files or the CLI; `io` holds everything that
+//! reads or writes files; `cli` maps commands to the pipeline. See
+//! `docs/ARCHITECTURE.md` for the module map and invariants.
 
 pub mod constants;
 pub mod gear;

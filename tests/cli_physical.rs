@@ -76,9 +76,22 @@ fn cli_an_isolated_heated_node_ends_the_run_with_its_name_and_cause() {
         "{stderr}"
     );
     assert!(!dir.join("x.csv").exists() && !dir.join("x.csv.partial").exists());
-    let log = std::fs::read(dir.join("x.mcap")).unwrap();
-    let status = b"failed";
-    assert!(log.windows(status.len()).any(|w| w == status));
+    // ... with the failure's time in its run_end record and its last event
+    let t_fail: f64 = lines[0]
+        .split("K at t = ")
+        .nth(1)
+        .and_then(|r| r.split(" s").next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no failure time in {stderr}"));
+    let log = orbitlash::io::mcap_read::read_log(&dir.join("x.mcap")).unwrap();
+    let end = &log.metadata["orbitlash.run_end"];
+    assert_eq!(end["status"], "failed");
+    let t_end: f64 = end["t_end_s"].parse().unwrap();
+    assert!(
+        (t_end - t_fail).abs() < 1e-3,
+        "run_end at {t_end} s, failure at {t_fail} s"
+    );
+    assert!(t_end > 0.0);
     // `check` saw it coming
     let check = run_in(&dir, &["check", "s.toml"]);
     assert!(check.status.success());

@@ -282,13 +282,22 @@ fn val_closed_form_eclipse_duration_with_drifting_beta() {
         None,
     )
     .unwrap();
-    let period = env.orbit.period_s();
-    let crit = env.orbit.critical_beta_rad();
+    // Written out from reference-mechanism.md §2, not taken from the code: the period,
+    // the eclipse half-angle φ(β) (cos φ = √((R+h)² − R²) / ((R+h) cos β)), the
+    // critical β = asin(R/(R+h)) and the β table itself (0 → 80° over 5 days).
+    let (r, a) = (
+        env.orbit.earth_radius_m,
+        env.orbit.earth_radius_m + env.orbit.altitude_m,
+    );
+    let period = 2.0 * PI * (a.powi(3) / env.orbit.mu_m3_per_s2).sqrt();
+    let crit = (r / a).asin();
+    let beta_at = |t_s: f64| (80f64 * t_s / (5.0 * 86400.0)).to_radians();
+    let half_angle = |beta: f64| ((a * a - r * r).sqrt() / (a * beta.cos())).acos();
     let mut checked = 0;
     for w in ev.0.windows(2) {
         if let (EventKind::EclipseEntry, EventKind::EclipseExit) = (w[0].kind, w[1].kind) {
-            let beta = env.beta_rad.at(0.5 * (w[0].t_s + w[1].t_s));
-            let want = env.orbit.eclipse_fraction(beta) * period;
+            let beta = beta_at(0.5 * (w[0].t_s + w[1].t_s));
+            let want = half_angle(beta) / PI * period;
             let got = w[1].t_s - w[0].t_s;
             if beta < crit - 0.02 {
                 assert!(
@@ -305,7 +314,7 @@ fn val_closed_form_eclipse_duration_with_drifting_beta() {
         ev.0.iter()
             .rfind(|e| e.kind == EventKind::EclipseExit)
             .unwrap();
-    let beta_last = env.beta_rad.at(last.t_s);
+    let beta_last = beta_at(last.t_s);
     assert!(
         beta_last <= crit + 1e-6,
         "eclipse at β {}°",

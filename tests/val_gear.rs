@@ -37,7 +37,19 @@ fn fd_rim_displacement(
             .unwrap_or(xs.len() - 2);
         temps[k] + (temps[k + 1] - temps[k]) * (x - xs[k]) / (xs[k + 1] - xs[k])
     };
-    let eps = |x: f64| law.strain(temp(x), t_ref);
+    // ε(T) written out, not taken from the code: α ΔT, plus ½ (dα/dT) ΔT² for α(T)
+    // linear in T.
+    let eps = |x: f64| {
+        let dt = temp(x) - t_ref;
+        match law {
+            StrainLaw::Linear { alpha_per_k } => alpha_per_k * dt,
+            StrainLaw::Quadratic {
+                alpha_per_k,
+                dalpha_dt_per_k2,
+            } => alpha_per_k * dt + 0.5 * dalpha_dt_per_k2 * dt * dt,
+            _ => unreachable!("the finite-difference reference covers these two laws"),
+        }
+    };
     // dε/dx, averaged over both sides at a node where the slope jumps (one-sided at
     // the ends of the gear).
     let deps = |x: f64| {
@@ -161,9 +173,14 @@ fn uniform(sc: &Scenario, t: f64) -> orbitlash::gear::MeshState {
 }
 
 #[test]
-fn val_exact_scaling_uniform_temperature() {
+fn val_closed_form_uniform_temperature() {
     // No coating and a housing of the gears' own α: every length of the pair scales by
-    // λ = 1 + α ΔT, so the backlash does too.
+    // λ = 1 + α ΔT. The textbook normal backlash of an involute pair, written out from
+    // the reference pair's numbers (reference-mechanism.md §3: m = 1 mm, z = 20/40,
+    // α₀ = 20°, 19.4745 µm thinning per gear, a = 30 mm):
+    //   j_n = p_b − s_b1 − s_b2 + 2 (r_b1 + r_b2) inv α_w,  cos α_w = (r_b1 + r_b2) / a,
+    //   s_b = r_b (s / r + 2 inv α₀),  s = π m / 2 − thinning,  p_b = 2π r_b1 / z1,
+    // every length × λ (α_w unchanged).
     let sc = with(&[
         ("thickness_um = 1.0", "thickness_um = 0.0"),
         (
@@ -171,21 +188,34 @@ fn val_exact_scaling_uniform_temperature() {
             "min_backlash_um = 5.0\n[gear_pair.center_distance]\nfollows = \"housing\"\nnode = \"housing\"\nalpha_per_k = 11.0e-6",
         ),
     ]);
-    let j0 = uniform(&sc, 298.15).backlash_exact_m;
-    for dt in [-120.0, -40.0, 35.0, 90.0] {
-        let m = uniform(&sc, 298.15 + dt);
+    let inv = |x: f64| x.tan() - x;
+    let (m, a0, a, thinning) = (1e-3f64, 20f64.to_radians(), 30e-3f64, 19.4745e-6);
+    let r = [m * 20.0 / 2.0, m * 40.0 / 2.0];
+    let rb = r.map(|r| r * a0.cos());
+    let s_pitch = std::f64::consts::PI * m / 2.0 - thinning;
+    let sb = [0, 1].map(|k| rb[k] * (s_pitch / r[k] + 2.0 * inv(a0)));
+    let pb = std::f64::consts::TAU * rb[0] / 20.0;
+    let alpha_w = ((rb[0] + rb[1]) / a).acos();
+    let j0 = pb - sb[0] - sb[1] + 2.0 * (rb[0] + rb[1]) * inv(alpha_w);
+    for dt in [-120.0, -40.0, 0.0, 35.0, 90.0] {
+        let got = uniform(&sc, 298.15 + dt);
         let lambda = 1.0 + 11e-6 * dt;
         assert!(
-            (m.backlash_exact_m - lambda * j0).abs() < 1e-12,
-            "ΔT {dt}: {} vs {}",
-            m.backlash_exact_m,
-            lambda * j0
+            (got.backlash_exact_m - lambda * j0).abs() < 1e-11,
+            "ΔT {dt}: {} µm vs {} µm",
+            got.backlash_exact_m * 1e6,
+            lambda * j0 * 1e6
         );
-        assert!((m.pressure_angle_rad - uniform(&sc, 298.15).pressure_angle_rad).abs() < 1e-9);
-        for g in m.gears {
-            let want = g.base_radius_m / lambda * 11e-6 * dt;
+        assert!(
+            (got.pressure_angle_rad - alpha_w).abs() < 1e-9,
+            "α_w {} vs {}",
+            got.pressure_angle_rad.to_degrees(),
+            alpha_w.to_degrees()
+        );
+        for (g, rb) in got.gears.iter().zip(rb) {
+            let want = rb * 11e-6 * dt;
             assert!(
-                (g.base_displacement_m - want).abs() < 1e-9 * want.abs(),
+                (g.base_displacement_m - want).abs() <= 1e-9 * want.abs(),
                 "{} vs {want}",
                 g.base_displacement_m
             );
@@ -263,7 +293,7 @@ fn val_published_profile_shifted_pair_zero_backlash() {
     // Δj ≈ 2 Δa sin α_w for a small change of centre distance.
     let da = 2e-6;
     let b2 = backlash(&g(12.0, 0.6), &g(24.0, 0.36), 56.4999e-3 + da).unwrap();
-    let predicted = 2.0 * da * b.pressure_angle_rad.sin();
+    let predicted = 2.0 * da * 26.0886f64.to_radians().sin();
     assert!(
         ((b2.exact_m - b.exact_m) - predicted).abs() < 1e-3 * predicted,
         "{} vs {}",
@@ -375,16 +405,19 @@ fn val_closed_form_lame_shrink_fit_and_rigid_bore() {
         "a shrink fit grows the pinion and closes the backlash"
     );
     // Warming the pinion (not its shaft) by 80 K opens the fit: free disc again.
-    let free = reference();
     let mut temps = vec![298.15; elastic.thermal.network.nodes.len()];
     for &i in &elastic.gears[0].gears[0].nodes {
         temps[i] += 80.0;
     }
+    // A free disc at uniform ΔT grows by α ΔT r: 11e-6 × 80 × r_b, more than the 2 µm
+    // interference, so the fit opens.
     let warm = elastic.gears[0].evaluate(&temps).unwrap();
     assert_eq!(warm.gears[0].bore_pressure_pa, 0.0);
-    assert_eq!(
-        warm.gears[0].base_displacement_m,
-        free.gears[0].evaluate(&temps).unwrap().gears[0].base_displacement_m
+    let want = 11e-6 * 80.0 * b;
+    assert!(
+        (warm.gears[0].base_displacement_m - want).abs() < 1e-6 * want,
+        "{} vs {want}",
+        warm.gears[0].base_displacement_m
     );
 
     // A bore bonded to a rigid shaft, uniform ΔT:

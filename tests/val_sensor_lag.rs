@@ -117,7 +117,7 @@ fn val_second_method_lagged_sensor_through_a_run() {
 /// Sampling at given times (a recording's) gives the numbers of sampling at an
 /// interval, at the same times.
 #[test]
-fn val_times_and_interval_sampling_agree() {
+fn core_times_and_interval_sampling_agree() {
     let sc = scenario_toml::reference();
     let t_end = 5560.0;
     let times: Vec<f64> = (0..=185).map(|k| k as f64 * 30.0).collect();

@@ -410,6 +410,24 @@ pub fn bench(a: BenchArgs) -> Result<()> {
                 times[rounds / 2] * 1e6
             );
         }
+        // A change that recompiles the whole scenario (the altitude: period, view
+        // factors, eclipse geometry).
+        if let Ok(id) = model.param("orbit.altitude_m") {
+            let base = model.get(id.path()).unwrap();
+            let rounds = 500;
+            let mut times = Vec::with_capacity(rounds);
+            for r in 0..rounds {
+                let start = Instant::now();
+                model.set_param(&id, base * (1.0 + 1e-3 * ((r % 7) as f64 - 3.0)))?;
+                times.push(start.elapsed().as_secs_f64());
+            }
+            times.sort_by(f64::total_cmp);
+            outln!(
+                o,
+                "            {:.2} µs for a change that recompiles the scenario (orbit.altitude_m, median of {rounds})",
+                times[rounds / 2] * 1e6
+            );
+        }
     }
     // Backlash: every pair evaluated at the node temperatures of the end of a run.
     if !sc.gears.is_empty() {

@@ -162,7 +162,7 @@ mod tests {
     }
 
     #[test]
-    fn val_second_method_closed_form_worst_case_matches_the_phase_scan() {
+    fn core_closed_form_worst_case_matches_the_phase_scan() {
         let mut checked = 0;
         for (z1, z2) in [(20, 40), (17, 53), (31, 31), (12, 90)] {
             for d1 in [-150.0, -40.0, 0.0, 25.0, 90.0] {

@@ -170,7 +170,7 @@ mod tests {
     }
 
     #[test]
-    fn val_second_method_gauss_path_matches_closed_form_for_a_linear_law() {
+    fn core_gauss_path_matches_closed_form_for_a_linear_law() {
         let radii = [3e-3, 5.309499e-3, 9.396926e-3];
         let temps = [310.0, 290.0, 250.0];
         let lin = StrainLaw::Linear { alpha_per_k: 11e-6 };

@@ -133,48 +133,47 @@ impl Gear {
 }
 
 impl GearPair {
-    /// The pair at node temperatures `temps_k` (indexed like the network's nodes).
-    pub fn evaluate(&self, temps_k: &[f64]) -> Result<MeshState, MeshError> {
+    /// Gear `k` deformed by its radial profile at node temperatures `temps_k`.
+    #[inline(always)]
+    fn deform(&self, k: usize, temps_k: &[f64]) -> DeformedGear {
         let t_ref = self.reference_temperature_k;
         let m = self.module_m;
         let a0 = self.pressure_angle_rad;
         let mut profile = [0.0f64; MAX_GEAR_NODES];
-        let deformed: [DeformedGear; 2] = std::array::from_fn(|k| {
-            let g = &self.gears[k];
-            let n = g.nodes.len();
-            let temps = &mut profile[..n];
-            for (t, &i) in temps.iter_mut().zip(&g.nodes) {
-                *t = temps_k[i];
-            }
-            let shaft_t = g.shaft_node.map_or(t_ref, |i| temps_k[i]);
-            let d = base_circle_displacement(
-                &g.node_radii_m,
-                temps,
-                &g.material,
-                &g.fit,
-                t_ref,
-                shaft_t,
-            );
-            let rb0 = g.base_radius_m(m, a0);
-            // The rim's hoop strain u/r at the base-circle node (whose radius may differ
-            // from r_b by the rounding of the scenario file).
-            let hoop = d.base_circle_m / g.node_radii_m[n - 1];
-            let scale = 1.0 + hoop;
-            let rim_t = temps[n - 1];
-            let coating = self
-                .coating
-                .thickness_at_m(rim_t - t_ref, g.material.strain.strain(rim_t, t_ref));
-            let rb = rb0 * scale;
-            DeformedGear {
-                base_displacement_m: rb0 * hoop,
-                base_radius_m: rb,
-                base_pitch_m: std::f64::consts::TAU * rb / g.teeth as f64,
-                base_thickness_m: g.base_thickness_m(m, a0) * scale + 2.0 * coating,
-                tip_radius_m: g.tip_radius_m * scale,
-                coating_m: coating,
-                bore_pressure_pa: d.bore_pressure_pa,
-            }
-        });
+        let g = &self.gears[k];
+        let n = g.nodes.len();
+        let temps = &mut profile[..n];
+        for (t, &i) in temps.iter_mut().zip(&g.nodes) {
+            *t = temps_k[i];
+        }
+        let shaft_t = g.shaft_node.map_or(t_ref, |i| temps_k[i]);
+        let d =
+            base_circle_displacement(&g.node_radii_m, temps, &g.material, &g.fit, t_ref, shaft_t);
+        let rb0 = g.base_radius_m(m, a0);
+        // The rim's hoop strain u/r at the base-circle node (whose radius may differ
+        // from r_b by the rounding of the scenario file).
+        let hoop = d.base_circle_m / g.node_radii_m[n - 1];
+        let scale = 1.0 + hoop;
+        let rim_t = temps[n - 1];
+        let coating = self
+            .coating
+            .thickness_at_m(rim_t - t_ref, g.material.strain.strain(rim_t, t_ref));
+        let rb = rb0 * scale;
+        DeformedGear {
+            base_displacement_m: rb0 * hoop,
+            base_radius_m: rb,
+            base_pitch_m: std::f64::consts::TAU * rb / g.teeth as f64,
+            base_thickness_m: g.base_thickness_m(m, a0) * scale + 2.0 * coating,
+            tip_radius_m: g.tip_radius_m * scale,
+            coating_m: coating,
+            bore_pressure_pa: d.bore_pressure_pa,
+        }
+    }
+
+    /// The pair at node temperatures `temps_k` (indexed like the network's nodes).
+    pub fn evaluate(&self, temps_k: &[f64]) -> Result<MeshState, MeshError> {
+        let t_ref = self.reference_temperature_k;
+        let deformed = [self.deform(0, temps_k), self.deform(1, temps_k)];
         let a = match &self.center {
             CenterDistance::Fixed => self.center_distance_m,
             CenterDistance::Housing { node, strain } => {

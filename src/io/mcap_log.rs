@@ -257,6 +257,8 @@ pub struct McapLog {
     sampler: Sampler,
     names: Names,
     scene_interval_s: Option<f64>,
+    /// End of the last step the log saw: a failure with no time of its own is dated here.
+    last_t_s: f64,
 }
 
 fn ns(t_s: f64) -> u64 {
@@ -426,6 +428,7 @@ impl McapLog {
             sampler: Sampler::new(cadence.cadence(), Want::ALL),
             names: Names::default(),
             scene_interval_s: None,
+            last_t_s: 0.0,
         })
     }
 
@@ -443,9 +446,12 @@ impl McapLog {
     /// Closes the log after a failed run: the data so far, an error event and a
     /// `run_end` record saying so. The file is then valid and complete as a record of
     /// a failed run.
+    /// `t_s` is the failure's time (the end of the last step the log saw when it is
+    /// not finite); the error event and `run_end.t_end_s` carry it.
     pub fn close_failed(&mut self, t_s: f64, reason: &str) -> Result<PathBuf, OutputError> {
+        let t_s = if t_s.is_finite() { t_s } else { self.last_t_s };
         self.batch.items.push(Item::Event {
-            t_s: if t_s.is_finite() { t_s } else { 0.0 },
+            t_s,
             level: 4,
             text: format!("run failed: {reason}"),
         });
@@ -918,6 +924,7 @@ impl Observer for McapLog {
         };
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.
+        self.last_t_s = r.t_start_s;
         self.sampler = Sampler::new(self.cadence.cadence(), Want::ALL);
         if let Some(s) = self.sampler.start(r) {
             push_sample(&mut self.batch, s);
@@ -938,6 +945,7 @@ impl Observer for McapLog {
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
+        self.last_t_s = step.t1_s();
         let (batch, state, path) = (&mut self.batch, &mut self.state, &self.path);
         self.sampler.each(step, |s| {
             push_sample(batch, s);

@@ -1,5 +1,6 @@
-//! Protocol Buffers wire format: a small encoder for the log's messages and a decoder
-//! that reads them back through the descriptors stored in the log.
+//! Protocol Buffers wire format: a small encoder for the log's messages, whose schemas
+//! are built at run time (`io::log_schema`). Reading them back goes through the stored
+//! descriptors with `prost-reflect` (`io::mcap_read`).
 //! <https://protobuf.dev/programming-guides/encoding/>
 
 /// Appends fields to a message buffer.

@@ -432,10 +432,12 @@ mod tests {
     #[test]
     fn val_spec_shadow_crossings_at_the_half_angle() {
         let env = reference();
-        let t = env.orbit.period_s();
         // reference-mechanism.md §2, written out here rather than taken from the code:
-        // cos φ = √((R+h)² − R²) / ((R+h) cos β); 66.526° for the reference orbit.
+        // T = 2π √((R+h)³/μ) (5676.978 s), cos φ = √((R+h)² − R²) / ((R+h) cos β)
+        // (66.526° for the reference orbit).
         let (r, h) = (EARTH_RADIUS_M, 500e3);
+        let t = 2.0 * PI * ((r + h).powi(3) / EARTH_MU_M3_PER_S2).sqrt();
+        assert!((t - 5676.978).abs() < 5e-4);
         let phi = (((r + h).powi(2) - r * r).sqrt() / ((r + h) * 20f64.to_radians().cos())).acos();
         assert!((phi.to_degrees() - 66.526).abs() < 5e-4);
         let (t_in, entering) = env.next_shadow_crossing(0.0, 2.0 * t).unwrap();
@@ -449,7 +451,7 @@ mod tests {
     }
 
     #[test]
-    fn val_second_method_scanned_crossings_agree_with_the_closed_form() {
+    fn core_scanned_crossings_agree_with_the_closed_form() {
         // A β table holding a constant value takes the numerical scan-and-bisect path.
         let closed = reference();
         let mut scanned = reference();

@@ -358,7 +358,7 @@ mod tests {
 
     /// The sparse iterations agree with the dense eigen decomposition.
     #[test]
-    fn val_second_method_sparse_time_constants_match_dense() {
+    fn core_sparse_time_constants_match_dense() {
         use crate::thermal::synthetic::{Shape, network};
         for shape in [Shape::Lattice, Shape::Random, Shape::Chain] {
             let m = network(shape, 120);

@@ -751,7 +751,7 @@ mod tests {
     }
 
     #[test]
-    fn val_second_method_sparse_solves_match_dense() {
+    fn core_sparse_solves_match_dense() {
         let net = network();
         let c = Compiled::new(&net);
         let temps = net.initial_temperatures_k();
@@ -780,7 +780,7 @@ mod tests {
 
     /// With only linear links W is symmetric, and CG must give the exact solution.
     #[test]
-    fn val_second_method_iterative_solves_a_linear_network_exactly_and_falls_back() {
+    fn core_iterative_solves_a_linear_network_exactly_and_falls_back() {
         let mut net = network();
         net.radiators
             .retain(|r| matches!(r.b, NodeRef::Boundary(_)));

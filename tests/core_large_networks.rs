@@ -3,6 +3,8 @@
 //! methods: their temperatures must agree with the dense solver's, and all three
 //! with a step-converged solution, on the reference mechanism and on synthetic
 //! networks of hundreds of nodes. Large networks also run end to end through the CLI.
+//! They share the residual and its assembly with the dense path, so these are
+//! consistency checks (`core_`), not validations.
 
 use orbitlash::io::scenario_toml::reference;
 use orbitlash::sim::{SolverSettings, simulate};
@@ -67,7 +69,7 @@ fn compare(name: &str, model: &ThermalModel, t_end_s: f64, bar_k: f64) {
 }
 
 #[test]
-fn val_second_method_reference_mechanism() {
+fn core_linear_solvers_agree_on_the_reference_mechanism() {
     let sc = reference().with_orbits(2.0).unwrap();
     compare("reference", &sc.thermal, sc.run.duration_s, 0.05);
     // `auto` keeps the reference on the dense path, so its results are unchanged
@@ -75,7 +77,7 @@ fn val_second_method_reference_mechanism() {
 }
 
 #[test]
-fn val_second_method_synthetic_networks() {
+fn core_linear_solvers_agree_on_synthetic_networks() {
     let period = network(Shape::Chain, 10).environment.orbit.period_s();
     compare("lattice 343", &network(Shape::Lattice, 343), period, 0.05);
     compare("random 200", &network(Shape::Random, 200), period, 0.05);

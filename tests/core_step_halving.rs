@@ -1,5 +1,7 @@
 //! The default step against a step-converged solution of the same scenario: fixed
-//! steps halved until the second-order error sequence has converged.
+//! steps halved until the second-order error sequence has converged. A convergence
+//! check of the integrator against itself, hence `core_`: the independent checks of
+//! the same accuracy are the closed forms in `val_closed_forms.rs` and the truth model.
 
 use orbitlash::io::scenario_toml::reference;
 use orbitlash::sim::{SolverSettings, simulate};
@@ -21,7 +23,7 @@ fn samples(settings: &SolverSettings, orbits: f64) -> Samples {
 }
 
 #[test]
-fn val_step_halving_reference_default_step_within_0_05_k() {
+fn core_step_halving_reference_default_step_within_0_05_k() {
     let orbits = 6.0;
     let fixed = |h: f64| SolverSettings {
         adaptive: false,
