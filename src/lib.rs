@@ -17,7 +17,7 @@
 //! ```
 //! use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
 //! use orbitlash::model::Model;
-//! use orbitlash::sim::Setup;
+//! use orbitlash::sim::{Setup, Stop};
 //! use orbitlash::summary::MeshStats;
 //!
 //! let mut model = Model::new(parse_spec(REFERENCE_HINGE_TOML, "reference").unwrap()).unwrap();
@@ -29,10 +29,15 @@
 //! let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver); // once per model
 //! let mut state = setup.initial_state(); // or setup.state_at(t_s, temperatures_k)
 //! let mut mesh = MeshStats::last(sc.period_s());
-//! setup.run(&mut state, sc.period_s(), &mut mesh, Default::default()).unwrap();
-//! // `state` is the end state: running on from it equals one longer run, bit for bit.
-//! setup.run(&mut state, 2.0 * sc.period_s(), &mut mesh, Default::default()).unwrap();
+//! // Pause after the step that passes half an orbit, then go on from the state it left:
+//! // the steps are those of one run to the end, bit for bit.
+//! let pause = Stop { pause_after_s: Some(0.5 * sc.period_s()), ..Stop::default() };
+//! setup.run(&mut state, 2.0 * sc.period_s(), &mut mesh, pause).unwrap();
+//! setup.run(&mut state, 2.0 * sc.period_s(), &mut mesh, Stop::default()).unwrap();
 //! assert!(mesh.pairs[0].min_exact_m > sc.gears[0].min_backlash_m);
+//! // A run *to* a time lands a step on it; going on from there agrees with one
+//! // longer run to the solver's tolerance, not to the bit.
+//! setup.run(&mut state, 3.0 * sc.period_s(), &mut (), Stop::default()).unwrap();
 //! ```
 //!
 //! Physics (`orbit`, `thermal`, `gear`, `sim`, `sample`, `sensor`, `summary`, `spec`,

@@ -38,6 +38,16 @@ pub struct Model {
     spec: ScenarioSpec,
     keys: ElementKeys,
     scenario: Scenario,
+    /// Which elements the model has, and how they are written: changed by
+    /// [`Model::modify`] (and what calls it), not by writing values. A [`ParamId`] of
+    /// another shape is resolved again.
+    shape: u64,
+}
+
+static SHAPES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+fn new_shape() -> u64 {
+    SHAPES.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 impl Model {
@@ -48,6 +58,7 @@ impl Model {
             keys: element_keys(&spec),
             spec,
             scenario,
+            shape: new_shape(),
         })
     }
 
@@ -89,7 +100,9 @@ impl Model {
     pub fn modify(&mut self, edit: impl FnOnce(&mut ScenarioSpec)) -> Result<(), ModelError> {
         let mut spec = self.spec.clone();
         edit(&mut spec);
-        self.replace(spec)
+        self.replace(spec)?;
+        self.shape = new_shape();
+        Ok(())
     }
 
     /// Adds a thermostat heater.
@@ -136,6 +149,8 @@ pub struct ParamId {
     position: Option<usize>,
     key: KeyPath,
     target: Target,
+    /// The model shape it was resolved for.
+    shape: u64,
 }
 
 impl ParamId {
@@ -290,12 +305,18 @@ impl Model {
             canonical,
             key,
             target,
+            shape: self.shape,
         })
     }
 
     /// Writes the value of a resolved parameter (see [`ParamId`]); on an error the
     /// model is unchanged.
     pub fn set_param(&mut self, id: &ParamId, value: f64) -> Result<(), ModelError> {
+        if id.shape != self.shape {
+            // resolved on a model with other elements: its indices may not hold here
+            let id = self.param(&id.path)?;
+            return self.set_param(&id, value);
+        }
         use crate::spec::check;
         use crate::thermal::LoadKind;
         let path = &id.key;

@@ -215,7 +215,7 @@ impl StepView<'_> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grid {
     interval_s: f64,
-    next: u64,
+    next: i64,
 }
 
 impl Grid {
@@ -233,7 +233,7 @@ impl Grid {
     /// A run starts at `t_start_s` (sampled by the caller): the next grid time is the
     /// first multiple of the interval after it.
     pub fn start(&mut self, t_start_s: f64) {
-        self.next = (t_start_s / self.interval_s).floor() as u64 + 1;
+        self.next = (t_start_s / self.interval_s).floor() as i64 + 1;
     }
 
     /// The next grid time at or before `t1_s` (a step's end), if any; each once.
@@ -260,13 +260,19 @@ pub enum Cadence {
 
 /// Samples a run at its [`Cadence`]: call [`Sampler::start`] from `on_start` and
 /// [`Sampler::each`] from `on_step`. Buffers are reused: no allocation after the first
-/// sample.
+/// sample. A run that starts where the last one this sampler saw ended (a split run
+/// resumed from its end state) continues the same sequence: no second start sample,
+/// the step count and the grid go on.
 #[derive(Debug, Clone)]
 pub struct Sampler {
     cadence: Cadence,
     want: Want,
     grid: Grid,
     next_time: usize,
+    /// Steps seen since the (first) start, for [`Cadence::Steps`].
+    steps: u64,
+    /// End of the last step seen.
+    last_t_s: Option<f64>,
     sample: Sample,
 }
 
@@ -281,6 +287,8 @@ impl Sampler {
             want,
             grid,
             next_time: 0,
+            steps: 0,
+            last_t_s: None,
             sample: Sample::default(),
         }
     }
@@ -289,9 +297,20 @@ impl Sampler {
         &self.cadence
     }
 
-    /// The start of a run: its sample, unless the cadence skips it.
+    /// Whether a run starting at `t_start_s` continues the last one this sampler saw.
+    pub fn continues(&self, t_start_s: f64) -> bool {
+        self.last_t_s
+            .is_some_and(|t| t.to_bits() == t_start_s.to_bits())
+    }
+
+    /// The start of a run: its sample, unless the cadence skips it or the run continues
+    /// the previous one (whose last step ended here).
     pub fn start(&mut self, r: &RunStart<'_>) -> Option<&Sample> {
         let t0 = r.t_start_s;
+        if self.continues(t0) {
+            return None;
+        }
+        self.steps = 0;
         match &self.cadence {
             Cadence::Interval(_) => self.grid.start(t0),
             Cadence::Steps(_) => {}
@@ -314,9 +333,11 @@ impl Sampler {
         mut f: impl FnMut(&Sample) -> Result<(), E>,
     ) -> Result<(), E> {
         let t1 = step.t1_s();
+        self.last_t_s = Some(t1);
+        self.steps += 1;
         match &self.cadence {
             Cadence::Steps(n) => {
-                if step.index.is_multiple_of(*n) {
+                if self.steps.is_multiple_of(*n) {
                     step.sample_end(self.want, &mut self.sample);
                     f(&self.sample)?;
                 }

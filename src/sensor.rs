@@ -142,7 +142,9 @@ fn cubic_until(step: &StepView<'_>, i: usize, t_s: f64) -> [f64; 4] {
 }
 
 /// Reads every sensor at the times of a cadence: `times_s[j]` and `values[k][j]` for
-/// sensor k, in its column's unit.
+/// sensor k, in its column's unit. A run that starts where the previous one it
+/// observed ended continues the readings (lag states carried, as one run would);
+/// any other start begins afresh, each lagged sensor in equilibrium with its node.
 #[derive(Debug, Clone)]
 pub struct Readings {
     pub sensors: Vec<Sensor>,
@@ -180,6 +182,10 @@ impl Readings {
 
 impl Observer for Readings {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        if self.sampler.continues(r.t_start_s) {
+            // A split run resumed from its end state: the readings and the lags go on.
+            return Ok(());
+        }
         self.times_s.clear();
         self.values.iter_mut().for_each(Vec::clear);
         // Every sensor starts in equilibrium with its node.

@@ -15,7 +15,7 @@ use crate::thermal::solver::{StepData, StepFailure, Stepper, StepperMemory, W0, 
 use crate::thermal::{StepSwitches, ThermalModel};
 
 /// Integration settings. Defaults meet 0.05 K against a step-converged solution on
-/// the reference network (see `tests/val_step_halving.rs`).
+/// the reference network (see `tests/core_step_halving.rs`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSettings {
     /// Local error per step allowed on any node, K. Default 0.002; typical 1e-4 … 0.01.
@@ -420,6 +420,12 @@ struct Memory {
     stepper: StepperMemory,
     /// The setup and run that left it: that setup's stepper is still in this state.
     made_by: (u64, u64),
+    /// The model it belongs to ([`Setup::fingerprint`]).
+    model_print: u64,
+    /// The public part of the state as the run left it: a state changed since (new
+    /// temperatures for shooting, a heater switched by hand, another time) no longer
+    /// matches its memory, which is then dropped.
+    left: (f64, Vec<f64>, Vec<bool>, bool),
 }
 
 impl State {
@@ -429,7 +435,9 @@ impl State {
     }
 
     /// The same physical state with the solver's memory forgotten: the next run starts
-    /// as a fresh one would (first step, Jacobian, restart steps).
+    /// as a fresh one would (first step, Jacobian, restart steps). Done by itself when
+    /// the public fields were changed after the run that left them, or the state is
+    /// run on a setup of another model.
     pub fn forget_solver(&mut self) {
         self.memory = None;
     }
@@ -460,6 +468,7 @@ pub struct Setup<'a> {
     probe_work: std::cell::RefCell<ProbeWork>,
     id: u64,
     runs: u64,
+    print: std::cell::OnceCell<u64>,
 }
 
 static SETUP_IDS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -484,11 +493,35 @@ impl<'a> Setup<'a> {
             probe_work: Default::default(),
             id: SETUP_IDS.fetch_add(1, Ordering::Relaxed),
             runs: 0,
+            print: std::cell::OnceCell::new(),
         }
     }
 
     pub fn model(&self) -> &ThermalModel {
         self.model
+    }
+
+    /// A hash of everything that shapes a run's steps (the thermal model, the gear
+    /// pairs, the solver settings), computed once: a state's solver memory is only
+    /// reused by a setup of the same numbers.
+    fn fingerprint(&self) -> u64 {
+        *self.print.get_or_init(|| {
+            struct Fnv(u64);
+            impl std::fmt::Write for Fnv {
+                fn write_str(&mut self, s: &str) -> std::fmt::Result {
+                    for b in s.bytes() {
+                        self.0 = (self.0 ^ b as u64).wrapping_mul(0x100_0000_01b3);
+                    }
+                    Ok(())
+                }
+            }
+            let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+            let _ = std::fmt::Write::write_fmt(
+                &mut h,
+                format_args!("{:?}{:?}{:?}", self.model, self.gears, self.settings),
+            );
+            h.0
+        })
     }
 
     /// The scenario's start: t = 0 at its initial temperatures.
@@ -548,8 +581,20 @@ impl<'a> Setup<'a> {
         let mut heaters_on = std::mem::take(&mut state.heaters_on);
         let mut sunlit = state.sunlit;
 
-        // The solver's memory: carried over, or that of a fresh start.
-        let resumed = state.memory.take();
+        // The solver's memory: carried over when the state is as its run left it and
+        // the model is the same, else that of a fresh start.
+        let resumed = state.memory.take().filter(|m| {
+            let (t, temps, heaters, lit) = &m.left;
+            t.to_bits() == t_start.to_bits()
+                && temps.len() == y.len()
+                && temps
+                    .iter()
+                    .zip(&y)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+                && *heaters == heaters_on
+                && *lit == sunlit
+                && (m.made_by.0 == self.id || m.model_print == self.fingerprint())
+        });
         let fresh = resumed.is_none();
         let Memory {
             step_s: mut h,
@@ -562,6 +607,8 @@ impl<'a> Setup<'a> {
             mut mesh_flags,
             stepper: stepper_memory,
             made_by,
+            model_print: _,
+            left: _,
         } = match resumed {
             Some(m) => m,
             None => Memory {
@@ -581,6 +628,8 @@ impl<'a> Setup<'a> {
                 mesh_flags: vec![[false; 3]; gears.len()],
                 stepper: self.stepper.fresh_memory(),
                 made_by: (0, 0),
+                model_print: 0,
+                left: (0.0, Vec::new(), Vec::new(), false),
             },
         };
         // The setup's stepper is in that state already when it ended that very run.
@@ -606,7 +655,7 @@ impl<'a> Setup<'a> {
         for (m, g) in self.mesh.iter_mut().zip(gears) {
             *m = mesh_or_nan(g, &y);
         }
-        observer
+        let early = observer
             .on_start(&RunStart {
                 model,
                 gears,
@@ -626,9 +675,19 @@ impl<'a> Setup<'a> {
             .map_err(|source| SimError::Observer {
                 t_s: t_start,
                 source,
-            })?;
-        if fresh {
-            mesh_events(&self.mesh, &mut mesh_flags, t_start, observer)?;
+            })
+            .and_then(|()| {
+                if fresh {
+                    mesh_events(&self.mesh, &mut mesh_flags, t_start, observer)
+                } else {
+                    Ok(())
+                }
+            });
+        if let Err(e) = early {
+            // Nothing ran: the caller keeps its start state (the solver forgotten).
+            state.temperatures_k = y;
+            state.heaters_on = heaters_on;
+            return Err(e);
         }
 
         let stepper = &mut self.stepper;
@@ -909,6 +968,13 @@ impl<'a> Setup<'a> {
             mesh_flags,
             stepper: self.stepper.memory(),
             made_by: (self.id, self.runs),
+            model_print: self.fingerprint(),
+            left: (
+                state.t_s,
+                state.temperatures_k.clone(),
+                state.heaters_on.clone(),
+                state.sunlit,
+            ),
         });
         result?;
         observer

@@ -297,6 +297,47 @@ fn gear_pair(k: usize, p: &GearPair, n: usize) -> Result<(), Invalid> {
                 "node radii must increase from the bore to the base circle",
             ));
         }
+        let w = format!("{w}, {}", g.name);
+        if g.teeth < 5 {
+            return Err(bad(&w, format!("{} teeth: at least 5", g.teeth)));
+        }
+        let rb = g.base_radius_m(p.module_m, p.pressure_angle_rad);
+        if !(g.bore_radius_m > 0.0 && g.bore_radius_m < rb.min(g.root_radius_m)) {
+            return Err(bad(
+                &w,
+                format!(
+                    "the bore ({} m) must lie within 0 … the base and root radii ({rb} m, {} m)",
+                    g.bore_radius_m, g.root_radius_m
+                ),
+            ));
+        }
+        if g.tip_radius_m.partial_cmp(&rb.max(g.root_radius_m)) != Some(std::cmp::Ordering::Greater)
+        {
+            return Err(bad(&w, "the tip must lie above the base and root radii"));
+        }
+        let pitch = std::f64::consts::PI * p.module_m;
+        if !(g.tooth_thickness_m > 0.0 && g.tooth_thickness_m < pitch) {
+            return Err(bad(
+                &w,
+                format!(
+                    "tooth thickness {} m outside 0 … π m = {pitch} m",
+                    g.tooth_thickness_m
+                ),
+            ));
+        }
+        let m = &g.material;
+        if !(m.youngs_modulus_pa > 0.0 && m.poisson > -1.0 && m.poisson < 0.5) {
+            return Err(bad(
+                &w,
+                "the material needs E > 0 and a Poisson ratio within −1 … 0.5",
+            ));
+        }
+    }
+    if !(p.module_m > 0.0 && p.module_m.is_finite()) {
+        return Err(bad(&w, "the module must be positive"));
+    }
+    if !(10f64.to_radians()..=35f64.to_radians()).contains(&p.pressure_angle_rad) {
+        return Err(bad(&w, "the pressure angle must lie within 10° … 35°"));
     }
     if let crate::gear::CenterDistance::Housing { node, .. } = p.center
         && node >= n

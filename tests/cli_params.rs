@@ -22,14 +22,57 @@ fn cli_every_key_path_round_trips() {
         let mut model = Model::new(spec_of(file)).unwrap();
         let params = model.params();
         assert!(params.len() > 60, "{file}: {} parameters", params.len());
+        let mut moved = 0;
+        let mut stuck = Vec::new();
         for p in &params {
             let v = model.get(&p.path).unwrap_or_else(|e| panic!("{file}: {e}"));
             assert_eq!(v.to_bits(), p.value.to_bits(), "{}", p.path);
+            // another valid value: it must land at this path and nowhere else (defaults
+            // derived from it, such as view factors from the altitude, may follow)
+            let Some(w) = [v * 1.001, v * 0.999, v + 1e-3, v - 1e-3, v + 1.0]
+                .into_iter()
+                .find(|&w| w != v && model.clone().set(&p.path, w).is_ok())
+            else {
+                stuck.push(p.path.clone());
+                continue;
+            };
+            model
+                .set(&p.path, w)
+                .unwrap_or_else(|e| panic!("{file}: set {} = {w}: {e}", p.path));
+            assert_eq!(
+                model.get(&p.path).unwrap().to_bits(),
+                w.to_bits(),
+                "{}",
+                p.path
+            );
+            for (a, b) in params.iter().zip(model.params()) {
+                assert_eq!(a.path, b.path);
+                if a.path != p.path && a.given {
+                    assert_eq!(
+                        a.value.to_bits(),
+                        b.value.to_bits(),
+                        "{file}: setting {} changed {}",
+                        p.path,
+                        a.path
+                    );
+                }
+            }
             model
                 .set(&p.path, v)
                 .unwrap_or_else(|e| panic!("{file}: set {} = {v}: {e}", p.path));
             assert_eq!(model.get(&p.path).unwrap().to_bits(), v.to_bits());
+            moved += 1;
         }
+        // Only the geometry tied together (node radii on the bore and base circles,
+        // which follow module, teeth and bore) cannot move alone.
+        assert!(
+            stuck.iter().all(|p| ["radius_mm", "module_mm", "teeth"]
+                .iter()
+                .any(|k| p.ends_with(k))),
+            "{file}: {moved} of {} parameters took another value; not: {stuck:?}",
+            params.len()
+        );
+        assert!(moved > 60, "{file}: {moved} moved");
         // the forms the issue names
         for path in [
             "node.housing.capacitance_j_per_k",
@@ -103,6 +146,8 @@ fn both(set: &str, old: &str, new: &str) -> (Vec<u8>, Vec<u8>) {
 
 #[test]
 fn cli_set_equals_the_same_edit_in_the_file() {
+    // the unchanged reference (the first key set to its own value)
+    let (baseline, _) = both("node.motor.capacitance_j_per_k=75", "x", "x");
     for (set, old, new) in [
         (
             "node.motor.capacitance_j_per_k=80",
@@ -126,8 +171,7 @@ fn cli_set_equals_the_same_edit_in_the_file() {
             "--set {set} and the edited file give different CSVs"
         );
         // and the change did something
-        let (c, _) = both("node.motor.capacitance_j_per_k=75", "x", "x");
-        assert!(a != c || set.starts_with("node.motor"));
+        assert!(a != baseline, "--set {set} changed nothing");
     }
 }
 
@@ -292,4 +336,42 @@ fn cli_resolved_parameters_write_what_a_full_compile_gives() {
             }
         }
     }
+}
+
+#[test]
+fn core_a_resolved_parameter_survives_a_change_of_elements() {
+    // Resolved on the model as loaded, used after a conductor was added in front of it:
+    // it still writes the conductor it names.
+    let mut model = Model::new(spec_of("reference-hinge.toml")).unwrap();
+    let id = model
+        .param("conductor.housing-bus.conductance_w_per_k")
+        .unwrap();
+    model
+        .modify(|s| {
+            s.conductor.insert(
+                0,
+                orbitlash::spec::ConductorSpec {
+                    name: None,
+                    between: vec!["motor".into(), "bus".into()],
+                    conductance_w_per_k: 0.01,
+                },
+            )
+        })
+        .unwrap();
+    model.set_param(&id, 0.05).unwrap();
+    assert_eq!(
+        model
+            .get("conductor.housing-bus.conductance_w_per_k")
+            .unwrap(),
+        0.05
+    );
+    assert_eq!(
+        model
+            .get("conductor.motor-bus.conductance_w_per_k")
+            .unwrap(),
+        0.01
+    );
+    let net = &model.scenario().thermal.network;
+    assert_eq!(net.conductors[0].conductance_w_per_k, 0.01);
+    assert_eq!(net.conductors[1].conductance_w_per_k, 0.05);
 }

@@ -292,6 +292,35 @@ fn core_recording_reads_mcap_json_and_protobuf_like_csv() {
         msg.contains("bad.mcap") && msg.contains("is not JSON"),
         "{msg}"
     );
+    // text where a number belongs, and two time bases in one recording
+    for (name, messages, needle) in [
+        (
+            "text.mcap",
+            vec![
+                (0, b"{\"time_s\": 0, \"a\": 21.0}".to_vec()),
+                (1, b"{\"time_s\": 30, \"a\": \"21.5\"}".to_vec()),
+            ],
+            "field `a` is not a number or null",
+        ),
+        (
+            "notime.mcap",
+            vec![(0, b"{\"time_s\": null, \"a\": 1}".to_vec())],
+            "`time_s` is missing",
+        ),
+        (
+            "mixed.mcap",
+            vec![
+                (0, b"{\"time_s\": 0, \"a\": 1}".to_vec()),
+                (2_000_000_000, b"{\"a\": 2}".to_vec()),
+            ],
+            "one time base per recording",
+        ),
+    ] {
+        let path = dir.join(name);
+        mcap_file(&path, "/recording", "json", None, &messages, false);
+        let msg = Recording::read(&path).unwrap_err().to_string();
+        assert!(msg.contains(name) && msg.contains(needle), "{msg}");
+    }
 }
 
 /// A truncated MCAP recording is refused (with the way out), not read in part.

@@ -34,13 +34,20 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-/// Every accepted step's end time and temperatures, bit for bit.
+/// Every accepted step's end time, temperatures and heater states, and every event
+/// (kind and time), bit for bit.
 #[derive(Default)]
-struct Record(Vec<(f64, Vec<f64>)>);
+struct Record(Vec<(f64, Vec<f64>)>, Vec<(EventKind, u64)>);
 
 impl Observer for Record {
     fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
-        self.0.push((s.t1_s(), s.temps1_k().to_vec()));
+        let mut v = s.temps1_k().to_vec();
+        v.extend(s.heaters_on.iter().map(|&h| if h { 1.0 } else { 0.0 }));
+        self.0.push((s.t1_s(), v));
+        Ok(())
+    }
+    fn on_event(&mut self, e: &Event) -> ObserverResult {
+        self.1.push((e.kind, e.t_s.to_bits()));
         Ok(())
     }
 }
@@ -86,6 +93,8 @@ fn split_at(sc: &Scenario, t_end: f64, whole: &Record, k: usize, new_setup: bool
             .run(&mut state, t_end, &mut second, Stop::default())
             .unwrap();
     }
+    let events: Vec<_> = first.1.into_iter().chain(second.1).collect();
+    assert_eq!(events, whole.1, "split at step {k}: events");
     let joined: Vec<_> = first.0.into_iter().chain(second.0).collect();
     assert_eq!(joined.len(), whole.0.len(), "split at step {k}: step count");
     for (i, (a, b)) in joined.iter().zip(&whole.0).enumerate() {
@@ -214,6 +223,8 @@ fn core_a_heater_inside_its_band_can_start_on() {
     setup
         .run(&mut b, t_end, &mut second, Stop::default())
         .unwrap();
+    let events: Vec<_> = first.1.into_iter().chain(second.1).collect();
+    assert_eq!(events, whole.1, "heater in its band: events");
     let joined: Vec<_> = first.0.into_iter().chain(second.0).collect();
     assert_eq!(joined, whole.0);
 }
@@ -286,5 +297,133 @@ fn core_sampling_does_not_allocate_per_sample() {
             long, short,
             "{cadence:?}: {short} allocations for {short_samples} samples, {long} for {long_samples}"
         );
+    }
+}
+
+/// Runs `state` on `setup` to `t_end` and returns the record.
+fn record(setup: &mut Setup<'_>, state: &mut State, t_end: f64) -> Record {
+    let mut r = Record::default();
+    setup.run(state, t_end, &mut r, Stop::default()).unwrap();
+    r
+}
+
+#[test]
+fn core_a_changed_state_or_model_drops_the_solver_memory() {
+    // The solver's memory belongs to the state a run left and to its model: a state
+    // edited by hand (shooting sets new temperatures) or run on another model starts as
+    // a fresh state would, bit for bit.
+    let sc = scenario("reference-hinge.toml");
+    let period = sc.period_s();
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut state = setup.initial_state();
+    setup
+        .run(&mut state, 0.7 * period, &mut (), Stop::default())
+        .unwrap();
+    assert!(state.is_resumed());
+
+    let mut edited = state.clone();
+    edited.temperatures_k[0] += 1.0;
+    let mut fresh = edited.clone();
+    fresh.forget_solver();
+    let a = record(&mut setup, &mut edited, 1.5 * period);
+    let b = record(&mut setup, &mut fresh, 1.5 * period);
+    assert_eq!(a.0, b.0, "an edited state resumes as a fresh one");
+
+    let mut moved = state.clone();
+    moved.t_s += 10.0;
+    let mut fresh = moved.clone();
+    fresh.forget_solver();
+    assert_eq!(
+        record(&mut setup, &mut moved, 1.5 * period).0,
+        record(&mut setup, &mut fresh, 1.5 * period).0,
+        "a state moved in time resumes as a fresh one"
+    );
+
+    // Another model (a heavier housing): its setup ignores the memory.
+    let mut heavier = sc.clone();
+    heavier.thermal.network.nodes[0].capacitance_j_per_k *= 1.5;
+    let mut other = Setup::new(&heavier.thermal, &heavier.gears, &heavier.solver);
+    let mut carried = state.clone();
+    let mut fresh = state.clone();
+    fresh.forget_solver();
+    assert_eq!(
+        record(&mut other, &mut carried, 1.5 * period).0,
+        record(&mut other, &mut fresh, 1.5 * period).0,
+        "another model starts fresh"
+    );
+    // The same model on a new setup keeps it (the split test shows it bit for bit).
+    let mut same = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut carried = state.clone();
+    let mut fresh = state.clone();
+    fresh.forget_solver();
+    assert_ne!(
+        record(&mut same, &mut carried, 1.5 * period).0,
+        record(&mut same, &mut fresh, 1.5 * period).0,
+        "the same model keeps the memory"
+    );
+}
+
+#[test]
+fn core_an_observer_that_fails_at_the_start_leaves_the_state() {
+    struct Refuses;
+    impl Observer for Refuses {
+        fn on_start(&mut self, _r: &RunStart<'_>) -> ObserverResult {
+            Err("no".into())
+        }
+    }
+    let sc = scenario("reference-hinge.toml");
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut state = setup.initial_state();
+    setup
+        .run(&mut state, 1000.0, &mut (), Stop::default())
+        .unwrap();
+    let before = state.clone();
+    assert!(
+        setup
+            .run(&mut state, 2000.0, &mut Refuses, Stop::default())
+            .is_err()
+    );
+    assert_eq!(state.t_s, before.t_s);
+    assert_eq!(state.temperatures_k, before.temperatures_k);
+    assert_eq!(state.heaters_on, before.heaters_on);
+    // and it runs on
+    setup
+        .run(&mut state, 2000.0, &mut (), Stop::default())
+        .unwrap();
+}
+
+#[test]
+fn core_sensor_readings_continue_across_a_split_run() {
+    use orbitlash::sensor::Readings;
+    let mut sc = scenario("reference-hinge.toml");
+    sc.sensors[0].tau_s = 600.0;
+    sc.sensors[1].offset_k = 0.5;
+    let t_end = 1.5 * sc.period_s();
+    for cadence in [Cadence::Interval(30.0), Cadence::Steps(3)] {
+        let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+        let mut whole = Readings::new(sc.sensors.clone(), cadence.clone());
+        let mut state = setup.initial_state();
+        setup
+            .run(&mut state, t_end, &mut whole, Stop::default())
+            .unwrap();
+        let mut split = Readings::new(sc.sensors.clone(), cadence.clone());
+        let mut state = setup.initial_state();
+        let stop = Stop {
+            pause_after_s: Some(0.6 * sc.period_s()),
+            ..Stop::default()
+        };
+        setup.run(&mut state, t_end, &mut split, stop).unwrap();
+        setup
+            .run(&mut state, t_end, &mut split, Stop::default())
+            .unwrap();
+        assert_eq!(split.times_s, whole.times_s, "{cadence:?}: times");
+        assert_eq!(split.values, whole.values, "{cadence:?}: readings");
+        // a fresh start (another time) begins afresh
+        let mut again = setup.initial_state();
+        setup
+            .run(&mut again, 1000.0, &mut split, Stop::default())
+            .unwrap();
+        assert_eq!(split.times_s[0], 0.0);
+        assert!(*split.times_s.last().unwrap() <= 1000.0);
     }
 }

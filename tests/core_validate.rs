@@ -96,6 +96,18 @@ fn core_broken_models_are_refused_naming_what() {
             "gears[0]",
             Box::new(|s| s.gears[0].center_distance_m *= 0.5),
         ),
+        (
+            "gears[0] (mesh), pinion: the bore",
+            Box::new(|s| s.gears[0].gears[0].bore_radius_m = 0.0095),
+        ),
+        (
+            "gears[0] (mesh), wheel: tooth thickness",
+            Box::new(|s| s.gears[0].gears[1].tooth_thickness_m = 4e-3),
+        ),
+        (
+            "gears[0] (mesh): the pressure angle",
+            Box::new(|s| s.gears[0].pressure_angle_rad = 0.1),
+        ),
         ("run.duration_s", Box::new(|s| s.run.duration_s = 0.0)),
         (
             "solver.tolerance_k",

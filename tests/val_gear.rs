@@ -6,7 +6,7 @@ mod common;
 
 use orbitlash::gear::backlash::{FlankGeometry, backlash};
 use orbitlash::gear::disc::{BoreFit, DiscMaterial, base_circle_displacement};
-use orbitlash::gear::involute::{base_tooth_thickness, shifted_tooth_thickness};
+use orbitlash::gear::involute::{base_tooth_thickness, inv, shifted_tooth_thickness};
 use orbitlash::gear::strain::StrainLaw;
 use orbitlash::io::recording::Recording;
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse, reference};
@@ -188,7 +188,7 @@ fn val_closed_form_uniform_temperature() {
             "min_backlash_um = 5.0\n[gear_pair.center_distance]\nfollows = \"housing\"\nnode = \"housing\"\nalpha_per_k = 11.0e-6",
         ),
     ]);
-    let inv = |x: f64| x.tan() - x;
+    let inv = |x: f64| x.tan() - x; // written out, not the code's `involute::inv`
     let (m, a0, a, thinning) = (1e-3f64, 20f64.to_radians(), 30e-3f64, 19.4745e-6);
     let r = [m * 20.0 / 2.0, m * 40.0 / 2.0];
     let rb = r.map(|r| r * a0.cos());
@@ -300,6 +300,7 @@ fn val_published_profile_shifted_pair_zero_backlash() {
         b2.exact_m - b.exact_m,
         predicted
     );
+    assert!(inv(b.pressure_angle_rad) > inv(a0));
 }
 
 #[test]

@@ -7,7 +7,8 @@
 //! - MCAP: the messages of one topic (`/recording` when there is one, else the only
 //!   topic with numbers), protobuf decoded through the descriptor set its schema stores,
 //!   or JSON; every numeric field is a channel, `time_s` (or else the log time) is the
-//!   time; a JSON `null` is a missing sample.
+//!   time; a JSON `null` is a missing sample, a field that is never a number (a note)
+//!   is no channel, and text in a number's field is an error.
 //!
 //! Anything else (a non-numeric cell, NaN, time that does not increase, an empty file,
 //! a row of the wrong length) is an error naming the file, line and column.
@@ -315,6 +316,8 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
     let mut descriptor = None;
     let mut flat: Vec<(String, Option<f64>)> = Vec::new();
     let mut numbers = Vec::new();
+    let mut time_base: Option<bool> = None;
+    let mut text_fields = std::collections::BTreeSet::new();
     let mut n = 0u64;
     for m in messages.iter().filter(|m| m.channel.id == channel_id) {
         n += 1;
@@ -348,9 +351,24 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
             };
             for (k, v) in fields {
                 match v {
+                    serde_json::Value::Number(_) if text_fields.contains(&k) => {
+                        return Err(where_(format!(
+                            "field `{k}` is a number here and text in earlier messages"
+                        )));
+                    }
                     serde_json::Value::Number(x) => flat.push((k, x.as_f64())),
                     serde_json::Value::Null => flat.push((k, None)),
-                    _ => {}
+                    other => {
+                        // A field that is never a number (a note, a label) is not a
+                        // channel; one that is a number elsewhere is a bad cell.
+                        if k == TIME_COLUMN || rec.columns.contains(&k) {
+                            return Err(where_(format!(
+                                "field `{k}` is not a number or null: {other}"
+                            )));
+                        }
+                        text_fields.insert(k);
+                        continue;
+                    }
                 }
             }
         }
@@ -360,8 +378,16 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
                 return Err(where_(format!("field `{name}` is not a finite number")));
             }
             if name == TIME_COLUMN {
-                time = *v;
+                time = Some(v.ok_or_else(|| where_(format!("`{TIME_COLUMN}` is missing")))?);
             }
+        }
+        // One time base for the whole recording: `time_s` in every message, or in none
+        // (then the log time).
+        let own_time = time.is_some();
+        if *time_base.get_or_insert(own_time) != own_time {
+            return Err(where_(format!(
+                "`{TIME_COLUMN}` is in some messages and not in others: one time base per recording"
+            )));
         }
         let t = time.unwrap_or(m.log_time as f64 / 1e9);
         if let Some(&last) = rec.time_s.last()

@@ -11,7 +11,7 @@
 //!   link's two off-diagonal entries 4σεA·T³ (one per end) are replaced by their
 //!   geometric mean; W only steers Newton's convergence, never the solution it
 //!   converges to, and the solutions agree with the dense solver's to ~1e-11 K
-//!   (`tests/val_large_networks.rs`). The mass matrix C keeps W well conditioned
+//!   (`tests/core_large_networks.rs`). The mass matrix C keeps W well conditioned
 //!   whatever the size, so a solve takes about six iterations of O(links) work: the
 //!   cost per step grows about linearly with the network. A network that needs more
 //!   than 400 iterations in a solve is switched to the sparse LU.
