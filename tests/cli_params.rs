@@ -204,6 +204,22 @@ fn cli_a_bad_value_gives_the_files_error() {
         a.starts_with("node.motor.capacitance_j_per_k`: must be > 0"),
         "{a}"
     );
+    // a whole number: the same words and the same named key path in both
+    let text = reference_text().replacen("teeth = 20", "teeth = 20.5", 1);
+    std::fs::write(dir.join("t.toml"), text).unwrap();
+    let a = err(&[
+        "check",
+        "s.toml",
+        "--set",
+        "gear_pair.mesh.pinion.teeth=20.5",
+    ]);
+    let b = err(&["check", "t.toml"]);
+    let first = |s: &str| s.lines().next().unwrap_or_default().to_string();
+    assert_eq!(first(&a), first(&b));
+    assert_eq!(
+        first(&a),
+        "gear_pair.mesh.pinion.teeth`: must be an integer (got 20.5)"
+    );
     // unknown paths and non-numbers name the key
     let c = err(&["run", "s.toml", "--set", "node.rotor.capacitance_j_per_k=3"]);
     assert!(

@@ -167,7 +167,11 @@ fn key_path_at(text: &str, offset: usize) -> Option<String> {
             Item::Table(t) => table(t, path, offset, best),
             Item::ArrayOfTables(a) => {
                 for (i, t) in a.iter().enumerate() {
-                    table(t, &format!("{path}[{i}]"), offset, best);
+                    let p = match element_key(path, i, t) {
+                        Some(k) => format!("{path}.{}", crate::spec::keys::quote_key(&k)),
+                        None => format!("{path}[{i}]"),
+                    };
+                    table(t, &p, offset, best);
                 }
             }
             Item::Value(v) => value(v, path, offset, best),
@@ -178,6 +182,32 @@ fn key_path_at(text: &str, offset: usize) -> Option<String> {
     let mut best = None;
     table(doc.as_table(), "", offset, &mut best);
     best.map(|(_, p)| p)
+}
+
+/// The key of element `i` of a top-level array `section`, as `spec::keys` names it
+/// (its `name`, or the default of its kind), so that schema errors name it as every
+/// other error does; `None` for other arrays.
+fn element_key(section: &str, i: usize, t: &toml_edit::Table) -> Option<String> {
+    let text = |k: &str| t.get(k).and_then(|v| v.as_str()).map(str::to_string);
+    let named = text("name");
+    match section {
+        "node" | "boundary" | "mode" => named,
+        "conductor" | "radiation" => named.or_else(|| {
+            let b = t.get("between")?.as_array()?;
+            let names: Option<Vec<&str>> = b.iter().map(|v| v.as_str()).collect();
+            Some(names?.join("-"))
+        }),
+        "sun" | "albedo" | "earth_ir" | "dissipation" | "heater" => named.or_else(|| text("node")),
+        "sensor" => text("column"),
+        "gear_pair" => Some(named.unwrap_or_else(|| {
+            if i == 0 {
+                "mesh".to_string()
+            } else {
+                format!("mesh{i}")
+            }
+        })),
+        _ => None,
+    }
 }
 
 /// Byte offset of the deepest key of `path` present in `text`.

@@ -98,6 +98,7 @@ pub struct CoatingSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct GearSpec {
+    #[serde(deserialize_with = "integer")]
     pub teeth: i64,
     #[serde(default)]
     pub profile_shift: f64,
@@ -363,4 +364,30 @@ pub struct SensorSpec {
     /// Temperature sensors: constant bias, K.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub offset_k: Option<f64>,
+}
+
+/// A whole number, also when written as a float (`20.0`); any other number is refused
+/// with the words `--set` uses ("must be an integer (got 20.5)").
+fn integer<'de, D: serde::Deserializer<'de>>(d: D) -> Result<i64, D::Error> {
+    struct Whole;
+    impl serde::de::Visitor<'_> for Whole {
+        type Value = i64;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("an integer")
+        }
+        fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<i64, E> {
+            Ok(v)
+        }
+        fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<i64, E> {
+            i64::try_from(v).map_err(|_| E::custom(format!("must be an integer (got {v})")))
+        }
+        fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<i64, E> {
+            if v.fract() == 0.0 && v.abs() < 1e15 {
+                Ok(v as i64)
+            } else {
+                Err(E::custom(format!("must be an integer (got {v})")))
+            }
+        }
+    }
+    d.deserialize_any(Whole)
 }
