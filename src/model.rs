@@ -444,17 +444,17 @@ impl Model {
             Target::Albedo => {
                 let a = check::albedo(path, value)?;
                 self.spec.environment.albedo = Some(value);
-                sc.thermal.environment.albedo = a;
+                sc.thermal.environment.circular_mut().albedo = a;
             }
             Target::EarthIr => {
                 let q = check::earth_ir(path, value)?;
                 self.spec.environment.earth_ir_w_per_m2 = Some(value);
-                sc.thermal.environment.earth_ir_w_per_m2 = q;
+                sc.thermal.environment.circular_mut().earth_ir_w_per_m2 = q;
             }
             Target::Sink => {
                 let t = check::sink(path, value)?;
                 self.spec.environment.space_sink_k = Some(value);
-                sc.thermal.environment.space_sink_k = t;
+                sc.thermal.environment.circular_mut().space_sink_k = t;
                 // the built-in boundary `space` sits at the sink temperature
                 net.boundaries[0].temperature_k = crate::orbit::Profile::Constant(t);
             }
@@ -463,7 +463,8 @@ impl Model {
             {
                 let b = check::beta_deg(path, value)?;
                 self.spec.environment.beta_deg = ProfileSpec::Constant(value);
-                sc.thermal.environment.beta_rad = crate::orbit::Profile::Constant(b.to_radians());
+                sc.thermal.environment.circular_mut().beta_rad =
+                    crate::orbit::Profile::Constant(b.to_radians());
             }
             Target::FluxConstant
                 if !matches!(
@@ -473,7 +474,8 @@ impl Model {
             {
                 let s = check::solar_flux(path, value)?;
                 self.spec.environment.solar_flux_w_per_m2 = Some(ProfileSpec::Constant(value));
-                sc.thermal.environment.solar_flux_w_per_m2 = crate::orbit::Profile::Constant(s);
+                sc.thermal.environment.circular_mut().solar_flux_w_per_m2 =
+                    crate::orbit::Profile::Constant(s);
             }
             Target::GearPair(g) => {
                 let old = self.spec.gear_pair[*g].clone();

@@ -4,7 +4,7 @@
 //! `Scenario` directly checks it with [`Scenario::validate`] before running it.
 
 use crate::gear::GearPair;
-use crate::orbit::{Environment, EnvironmentModel, Profile};
+use crate::orbit::{CircularEnvironment, Environment, EnvironmentModel, Profile};
 use crate::scenario::{
     MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, Scenario, SensorTarget,
 };
@@ -76,6 +76,12 @@ fn profile(
 }
 
 fn environment(e: &Environment) -> Result<(), Invalid> {
+    match e {
+        Environment::Circular(c) => circular(c),
+    }
+}
+
+fn circular(e: &CircularEnvironment) -> Result<(), Invalid> {
     let o = &e.orbit;
     within(
         "environment.orbit.altitude_m",

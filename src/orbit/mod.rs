@@ -146,10 +146,10 @@ impl Incidence {
     }
 }
 
-/// The orbital environment over mission time: the orbit plus the mission profile of
-/// β and solar flux, Earth albedo and infrared, and the deep-space sink.
+/// The circular-orbit environment over mission time: the orbit plus the mission
+/// profile of β and solar flux, Earth albedo and infrared, and the deep-space sink.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Environment {
+pub struct CircularEnvironment {
     pub orbit: Orbit,
     /// β(t), rad.
     pub beta_rad: Profile,
@@ -187,8 +187,8 @@ pub enum LoadKink {
 /// What the thermal model needs from where the spacecraft is, at any time: the sunlit
 /// state, the Sun and Earth geometry of the loads, the next shadow crossing and load
 /// kink, the orbit count and phase. The stepping loop, the summaries and the logs use
-/// only this; the circular orbit ([`Environment`]) is one implementation, real orbits
-/// (TLE/SGP4) will be another, so nothing outside `orbit/` may assume a uniform orbit
+/// only this; the circular orbit ([`CircularEnvironment`]) is one implementation, real
+/// orbits (TLE/SGP4) will be another variant of [`Environment`], so nothing outside `orbit/` may assume a uniform orbit
 /// rate or a constant period.
 pub trait EnvironmentModel {
     /// The environment at `t_s` with the sunlit flag decided by the caller (the solver
@@ -214,9 +214,103 @@ pub trait EnvironmentModel {
     fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64;
     /// Earth infrared on a nadir face, W.
     fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64;
+    /// Times at which the environment's own tables change their slope (the solver lands
+    /// steps on them), sorted or not.
+    fn breakpoints_s(&self) -> Vec<f64>;
+    /// Fraction of the orbit in eclipse for the orbit around `t_s`.
+    fn eclipse_fraction_at(&self, t_s: f64) -> f64;
+    /// Smallest and largest β over the mission, rad.
+    fn beta_range_rad(&self) -> (f64, f64);
+    /// The orbit and its eclipses as `orbitlash check` reports them, one line each.
+    fn report(&self) -> Vec<String>;
+}
+
+/// The environment of a model: one of the implementations of [`EnvironmentModel`].
+/// Code that needs what only one kind has (the circular orbit's altitude, its β
+/// table) asks for it by name ([`Environment::circular`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Environment {
+    /// A circular orbit about a spherical Earth with β and solar flux along a mission
+    /// profile.
+    Circular(CircularEnvironment),
 }
 
 impl Environment {
+    /// The circular-orbit environment (the only kind so far).
+    pub fn circular(&self) -> &CircularEnvironment {
+        match self {
+            Environment::Circular(c) => c,
+        }
+    }
+
+    pub fn circular_mut(&mut self) -> &mut CircularEnvironment {
+        match self {
+            Environment::Circular(c) => c,
+        }
+    }
+}
+
+impl From<CircularEnvironment> for Environment {
+    fn from(c: CircularEnvironment) -> Environment {
+        Environment::Circular(c)
+    }
+}
+
+/// Each call goes to the kind of environment the model has.
+macro_rules! each_kind {
+    ($self:ident, $e:ident => $call:expr) => {
+        match $self {
+            Environment::Circular($e) => $call,
+        }
+    };
+}
+
+impl EnvironmentModel for Environment {
+    fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
+        each_kind!(self, e => e.state_with(t_s, sunlit))
+    }
+    fn sunlit(&self, t_s: f64) -> bool {
+        each_kind!(self, e => e.sunlit(t_s))
+    }
+    fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
+        each_kind!(self, e => e.next_shadow_crossing(t_s, until_s))
+    }
+    fn next_load_kink(&self, t_s: f64, kinks: &[LoadKink]) -> f64 {
+        each_kind!(self, e => e.next_load_kink(t_s, kinks))
+    }
+    fn orbit_number(&self, t_s: f64) -> u64 {
+        each_kind!(self, e => e.orbit_number(t_s))
+    }
+    fn orbit_phase_deg(&self, t_s: f64) -> f64 {
+        each_kind!(self, e => e.orbit_phase_deg(t_s))
+    }
+    fn mean_period_s(&self) -> f64 {
+        each_kind!(self, e => e.mean_period_s())
+    }
+    fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
+        each_kind!(self, e => e.sun_w(s, absorptivity_area_m2, incidence))
+    }
+    fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64 {
+        each_kind!(self, e => e.albedo_w(s, absorptivity_area_m2, view_factor))
+    }
+    fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64 {
+        each_kind!(self, e => e.earth_ir_w(emissivity_area_m2, view_factor))
+    }
+    fn breakpoints_s(&self) -> Vec<f64> {
+        each_kind!(self, e => EnvironmentModel::breakpoints_s(e))
+    }
+    fn eclipse_fraction_at(&self, t_s: f64) -> f64 {
+        each_kind!(self, e => EnvironmentModel::eclipse_fraction_at(e, t_s))
+    }
+    fn beta_range_rad(&self) -> (f64, f64) {
+        each_kind!(self, e => EnvironmentModel::beta_range_rad(e))
+    }
+    fn report(&self) -> Vec<String> {
+        each_kind!(self, e => EnvironmentModel::report(e))
+    }
+}
+
+impl CircularEnvironment {
     fn shadow(&self, t_s: f64) -> f64 {
         self.orbit
             .shadow_function(self.orbit.orbit_angle_rad(t_s), self.beta_rad.at(t_s))
@@ -301,7 +395,7 @@ impl Environment {
 
 /// The circular orbit about a spherical Earth, with β and solar flux along a mission
 /// profile.
-impl EnvironmentModel for Environment {
+impl EnvironmentModel for CircularEnvironment {
     fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
         EnvState {
             t_s,
@@ -404,6 +498,28 @@ impl EnvironmentModel for Environment {
     fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64 {
         emissivity_area_m2 * self.earth_ir_w_per_m2 * view_factor
     }
+
+    /// The knots of the β and solar-flux tables.
+    fn breakpoints_s(&self) -> Vec<f64> {
+        self.beta_rad
+            .knots_s()
+            .iter()
+            .chain(self.solar_flux_w_per_m2.knots_s())
+            .copied()
+            .collect()
+    }
+
+    fn eclipse_fraction_at(&self, t_s: f64) -> f64 {
+        CircularEnvironment::eclipse_fraction_at(self, t_s)
+    }
+
+    fn beta_range_rad(&self) -> (f64, f64) {
+        CircularEnvironment::beta_range_rad(self)
+    }
+
+    fn report(&self) -> Vec<String> {
+        CircularEnvironment::report(self)
+    }
 }
 
 #[cfg(test)]
@@ -413,8 +529,8 @@ mod tests {
     use crate::orbit::EnvironmentModel;
     use std::f64::consts::FRAC_PI_2;
 
-    fn reference() -> Environment {
-        Environment {
+    fn reference() -> CircularEnvironment {
+        CircularEnvironment {
             orbit: Orbit {
                 altitude_m: 500e3,
                 earth_radius_m: EARTH_RADIUS_M,

@@ -14,7 +14,7 @@ use crate::gear::disc::{BoreFit, DiscMaterial};
 use crate::gear::involute::{inv, shifted_tooth_thickness};
 use crate::gear::strain::StrainLaw;
 use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
-use crate::orbit::{Environment, Incidence, Orbit, Profile};
+use crate::orbit::{CircularEnvironment, Incidence, Orbit, Profile};
 use crate::scenario::{
     DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, RunControl,
     Scenario, Sensor, SensorTarget,
@@ -327,7 +327,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         5000.0,
         "sink temperature (K)",
     )?;
-    let environment = Environment {
+    let environment = CircularEnvironment {
         orbit,
         beta_rad: beta_deg.map(f64::to_radians),
         solar_flux_w_per_m2: solar_flux,
@@ -904,7 +904,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         name: raw.scenario.name,
         description: raw.scenario.description,
         thermal: ThermalModel {
-            environment,
+            environment: environment.into(),
             network,
             modes,
         },

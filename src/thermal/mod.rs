@@ -171,14 +171,7 @@ impl ThermalModel {
     /// Every time at which a load or boundary changes its law (table knots, mode
     /// window edges), sorted and deduplicated. The solver lands steps on them.
     pub fn breakpoints_s(&self) -> Vec<f64> {
-        let env = &self.environment;
-        let mut v: Vec<f64> = env
-            .beta_rad
-            .knots_s()
-            .iter()
-            .chain(env.solar_flux_w_per_m2.knots_s())
-            .copied()
-            .collect();
+        let mut v: Vec<f64> = self.environment.breakpoints_s();
         for b in &self.network.boundaries {
             v.extend_from_slice(b.temperature_k.knots_s());
         }

@@ -15,7 +15,7 @@ use crate::constants::{
     EARTH_ALBEDO, EARTH_IR_W_PER_M2, EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2,
     SPACE_SINK_K,
 };
-use crate::orbit::{Environment, Incidence, Orbit, Profile};
+use crate::orbit::{CircularEnvironment, Incidence, Orbit, Profile};
 
 /// The shape of a synthetic network.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -180,7 +180,7 @@ pub fn network_scaled(shape: Shape, n: usize, g_scale: f64) -> ThermalModel {
         });
     }
     ThermalModel {
-        environment: Environment {
+        environment: CircularEnvironment {
             orbit: Orbit {
                 altitude_m: 500e3,
                 earth_radius_m: EARTH_RADIUS_M,
@@ -192,7 +192,8 @@ pub fn network_scaled(shape: Shape, n: usize, g_scale: f64) -> ThermalModel {
             albedo: EARTH_ALBEDO,
             earth_ir_w_per_m2: EARTH_IR_W_PER_M2,
             space_sink_k: SPACE_SINK_K,
-        },
+        }
+        .into(),
         network: Network {
             nodes,
             boundaries: vec![BoundaryNode {
@@ -224,8 +225,8 @@ pub fn to_toml(model: &ThermalModel, name: &str, orbits: f64) -> String {
          [scenario]\nname = \"{name}\"\n\n[orbit]\naltitude_m = {}\n\n\
          [environment]\nbeta_deg = {}\n\n[run]\norbits = {orbits}\n\n",
         net.nodes.len(),
-        model.environment.orbit.altitude_m,
-        model.environment.beta_rad.at(0.0).to_degrees()
+        model.environment.circular().orbit.altitude_m,
+        model.environment.circular().beta_rad.at(0.0).to_degrees()
     );
     for n in &net.nodes {
         let _ = writeln!(
