@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
+use orbitlash::dispersion::{Plan, Sampling};
 use orbitlash::orbit::EnvironmentModel;
 use orbitlash::thermal::analysis::time_constants;
 
@@ -23,6 +24,10 @@ pub struct CheckArgs {
 pub fn check(a: CheckArgs) -> Result<()> {
     let mut o = String::new();
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
+    // Dispersions are checked here too, before any margin run would start.
+    let dispersions = &loaded.model.spec().dispersion;
+    let plan = Plan::new(&loaded.model, dispersions, Sampling::Random, 1, 0)
+        .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
     let sc = &loaded.scenario;
     let env = &sc.thermal.environment;
     let net = &sc.thermal.network;
@@ -176,6 +181,22 @@ pub fn check(a: CheckArgs) -> Result<()> {
             pair.min_backlash_m * 1e6,
             m.margin_m * 1e6
         );
+    }
+    if !plan.dispersions.is_empty() {
+        outln!(o, "\ndispersions (for `orbitlash margins`)");
+        let mut table = table::new(
+            &["key path", "nominal", "distribution", "group"],
+            &[Align::Left, Align::Right, Align::Left, Align::Left],
+        );
+        for d in &plan.dispersions {
+            table.add_row(vec![
+                d.path.clone(),
+                orbitlash::units::exact(loaded.model.get(&d.path).unwrap_or(f64::NAN)),
+                d.distribution.to_string(),
+                d.group.clone().unwrap_or_default(),
+            ]);
+        }
+        o += &table::render(&table, "  ");
     }
     outln!(o, "\nrun");
     outln!(

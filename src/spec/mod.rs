@@ -50,6 +50,44 @@ pub struct ScenarioSpec {
     pub sensor: Vec<SensorSpec>,
     #[serde(default)]
     pub gear_pair: Vec<GearPairSpec>,
+    /// How numbers scatter in `orbitlash margins` (the nominal run ignores them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub dispersion: Vec<DispersionSpec>,
+}
+
+/// One dispersed number: a key path and its distribution (see `crate::dispersion`).
+#[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct DispersionSpec {
+    /// Key path of the number, as `orbitlash params` lists it.
+    pub path: String,
+    /// `normal`, `truncated_normal`, `uniform`, `triangular`, `lognormal` or `cases`.
+    pub distribution: String,
+    /// Normal and truncated normal: the mean (default: the nominal value).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean: Option<f64>,
+    /// Normal and truncated normal: the standard deviation (before truncation).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sd: Option<f64>,
+    /// Truncated normal, uniform, triangular: the bounds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max: Option<f64>,
+    /// Triangular: the most likely value (default: the nominal value).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mode: Option<f64>,
+    /// Log-normal: the median (default: the nominal value) and σ of ln x.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub median: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// Cases: the discrete values, equally likely.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub values: Option<Vec<f64>>,
+    /// Dispersions of one group draw together (one quantile per sample: the same lot).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

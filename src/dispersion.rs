@@ -1,0 +1,470 @@
+//! Dispersions: which numbers of a scenario scatter in a Monte Carlo margin check, how,
+//! and the values of sample k.
+//!
+//! Each `[[dispersion]]` names a number by its key path and gives it a distribution
+//! (normal, truncated normal, uniform, triangular, log-normal, or a list of equally
+//! likely cases). Dispersions with the same `group` draw one quantile per sample
+//! between them (one material lot: rank correlation 1). A sample's quantiles depend only
+//! on (seed, sample index): each sample has its own ChaCha12 stream, and Latin
+//! hypercube strata come from per-dimension permutations seeded by the seed alone, so
+//! any thread count and any sharding give the same numbers.
+//!
+//! Before any sample runs, [`Plan::new`] checks every path, every distribution's
+//! parameters, and that the distribution stays within the parameter's valid range (the
+//! bounds of bounded ones, the 1e-7 and 1 − 1e-7 quantiles of normal and log-normal
+//! ones, every case), by writing those values into a copy of the model: the error
+//! names the `dispersion` entry and says which value the model refused and why.
+
+use rand_chacha::ChaCha12Rng;
+use rand_chacha::rand_core::{Rng, SeedableRng};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+use crate::model::{Model, ModelError, ParamId};
+use crate::spec::DispersionSpec;
+use crate::spec::compile::SpecError;
+use crate::spec::keys::KeyPath;
+
+/// The tails a normal or log-normal distribution must keep inside the parameter's
+/// range: 1 in 10⁷ on each side (±5.2 σ).
+pub const TAIL: f64 = 1e-7;
+
+/// A distribution, by its quantile function.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Distribution {
+    Normal {
+        mean: f64,
+        sd: f64,
+    },
+    TruncatedNormal {
+        mean: f64,
+        sd: f64,
+        min: f64,
+        max: f64,
+    },
+    Uniform {
+        min: f64,
+        max: f64,
+    },
+    Triangular {
+        min: f64,
+        mode: f64,
+        max: f64,
+    },
+    /// ln x ~ N(ln median, σ²).
+    LogNormal {
+        median: f64,
+        sigma: f64,
+    },
+    /// Equally likely values.
+    Cases(Vec<f64>),
+}
+
+fn std_normal() -> Normal {
+    Normal::new(0.0, 1.0).expect("the standard normal")
+}
+
+impl Distribution {
+    /// The value at quantile `u` in (0, 1).
+    pub fn quantile(&self, u: f64) -> f64 {
+        match self {
+            Distribution::Normal { mean, sd } => mean + sd * std_normal().inverse_cdf(u),
+            Distribution::TruncatedNormal { mean, sd, min, max } => {
+                let n = std_normal();
+                let (a, b) = (n.cdf((min - mean) / sd), n.cdf((max - mean) / sd));
+                (mean + sd * n.inverse_cdf(a + u * (b - a))).clamp(*min, *max)
+            }
+            Distribution::Uniform { min, max } => min + u * (max - min),
+            Distribution::Triangular { min, mode, max } => {
+                let f = (mode - min) / (max - min);
+                if u < f {
+                    min + (u * (max - min) * (mode - min)).sqrt()
+                } else {
+                    max - ((1.0 - u) * (max - min) * (max - mode)).sqrt()
+                }
+            }
+            Distribution::LogNormal { median, sigma } => {
+                median * (sigma * std_normal().inverse_cdf(u)).exp()
+            }
+            Distribution::Cases(v) => v[((u * v.len() as f64) as usize).min(v.len() - 1)],
+        }
+    }
+
+    /// The values that must lie within the parameter's range.
+    fn extremes(&self) -> Vec<f64> {
+        match self {
+            Distribution::Normal { .. } | Distribution::LogNormal { .. } => {
+                vec![self.quantile(TAIL), self.quantile(1.0 - TAIL)]
+            }
+            Distribution::TruncatedNormal { min, max, .. }
+            | Distribution::Uniform { min, max }
+            | Distribution::Triangular { min, max, .. } => vec![*min, *max],
+            Distribution::Cases(v) => v.clone(),
+        }
+    }
+}
+
+impl std::fmt::Display for Distribution {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use crate::units::exact;
+        match self {
+            Distribution::Normal { mean, sd } => {
+                write!(f, "normal, mean {}, sd {}", exact(*mean), exact(*sd))
+            }
+            Distribution::TruncatedNormal { mean, sd, min, max } => write!(
+                f,
+                "truncated normal, mean {}, sd {}, {} … {}",
+                exact(*mean),
+                exact(*sd),
+                exact(*min),
+                exact(*max)
+            ),
+            Distribution::Uniform { min, max } => {
+                write!(f, "uniform, {} … {}", exact(*min), exact(*max))
+            }
+            Distribution::Triangular { min, mode, max } => write!(
+                f,
+                "triangular, {} … {} … {}",
+                exact(*min),
+                exact(*mode),
+                exact(*max)
+            ),
+            Distribution::LogNormal { median, sigma } => {
+                write!(
+                    f,
+                    "log-normal, median {}, σ(ln) {}",
+                    exact(*median),
+                    exact(*sigma)
+                )
+            }
+            Distribution::Cases(v) => write!(
+                f,
+                "cases {}",
+                v.iter().map(|x| exact(*x)).collect::<Vec<_>>().join(", ")
+            ),
+        }
+    }
+}
+
+/// How the samples cover the quantiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Sampling {
+    /// Independent draws.
+    Random,
+    /// Latin hypercube: each dimension's N quantiles fall one in each of N strata.
+    LatinHypercube,
+}
+
+/// A dispersed number, checked.
+#[derive(Debug, Clone)]
+pub struct Dispersion {
+    pub path: String,
+    pub id: ParamId,
+    pub distribution: Distribution,
+    pub group: Option<String>,
+    /// The quantile dimension it draws from (shared within a group).
+    pub dimension: usize,
+}
+
+/// The dispersions of a scenario and the draws of every sample.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub dispersions: Vec<Dispersion>,
+    pub sampling: Sampling,
+    pub samples: u64,
+    pub seed: u64,
+    dimensions: usize,
+    /// Latin hypercube: per dimension, the stratum of each sample.
+    strata: Vec<Vec<u32>>,
+}
+
+fn err(key: KeyPath, message: impl Into<String>) -> SpecError {
+    SpecError {
+        key,
+        message: message.into(),
+    }
+}
+
+impl Plan {
+    /// Checks `specs` against `model` (see the module docs) and prepares `samples`
+    /// samples from `seed`.
+    pub fn new(
+        model: &Model,
+        specs: &[DispersionSpec],
+        sampling: Sampling,
+        samples: u64,
+        seed: u64,
+    ) -> Result<Plan, SpecError> {
+        let mut dispersions = Vec::new();
+        let mut groups: Vec<String> = Vec::new();
+        let mut dimensions = 0;
+        for (i, d) in specs.iter().enumerate() {
+            let at = KeyPath::new("dispersion").at(i);
+            let id = model
+                .param(&d.path)
+                .map_err(|e| err(at.key("path"), e.to_string()))?;
+            let nominal = model
+                .get(&d.path)
+                .map_err(|e| err(at.key("path"), e.to_string()))?;
+            let distribution = distribution(d, nominal, &at)?;
+            // Within the parameter's range: the model itself says.
+            let mut probe = model.clone();
+            for v in distribution.extremes() {
+                probe.set_param(&id, v).map_err(|e| {
+                    let why = match e {
+                        ModelError::Param(e) => e.to_string(),
+                        ModelError::Invalid(e) => format!("`{}`: {}", e.key, e.message),
+                    };
+                    let tail = match distribution {
+                        Distribution::Normal { .. } | Distribution::LogNormal { .. } => {
+                            format!(" (at its {TAIL:e} tail; truncated_normal bounds it)")
+                        }
+                        _ => String::new(),
+                    };
+                    err(
+                        at.clone(),
+                        format!(
+                            "{} reaches {v}{tail}, which `{}` cannot take: {why}",
+                            d.distribution, d.path
+                        ),
+                    )
+                })?;
+            }
+            let dimension = match &d.group {
+                Some(g) => match groups.iter().position(|x| x == g) {
+                    Some(k) => dispersions
+                        .iter()
+                        .find(|x: &&Dispersion| x.group.as_deref() == Some(groups[k].as_str()))
+                        .map(|x| x.dimension)
+                        .expect("a group's first member"),
+                    None => {
+                        groups.push(g.clone());
+                        dimensions += 1;
+                        dimensions - 1
+                    }
+                },
+                None => {
+                    dimensions += 1;
+                    dimensions - 1
+                }
+            };
+            if dispersions.iter().any(|x: &Dispersion| x.path == d.path) {
+                return Err(err(
+                    at.key("path"),
+                    format!("`{}` is dispersed twice", d.path),
+                ));
+            }
+            dispersions.push(Dispersion {
+                path: d.path.clone(),
+                id,
+                distribution,
+                group: d.group.clone(),
+                dimension,
+            });
+        }
+        let strata = match sampling {
+            Sampling::Random => Vec::new(),
+            Sampling::LatinHypercube => (0..dimensions)
+                .map(|d| permutation(seed, d as u64, samples))
+                .collect(),
+        };
+        Ok(Plan {
+            dispersions,
+            sampling,
+            samples,
+            seed,
+            dimensions,
+            strata,
+        })
+    }
+
+    /// The quantile of every dimension for sample `k` (0-based), each in (0, 1).
+    pub fn quantiles(&self, k: u64) -> Vec<f64> {
+        let mut rng = ChaCha12Rng::seed_from_u64(self.seed);
+        rng.set_stream(k);
+        let unit = |x: u64| ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+        (0..self.dimensions)
+            .map(|d| {
+                let u = unit(rng.next_u64());
+                match self.sampling {
+                    Sampling::Random => u,
+                    Sampling::LatinHypercube => {
+                        (self.strata[d][k as usize] as f64 + u) / self.samples as f64
+                    }
+                }
+            })
+            .collect()
+    }
+
+    /// The value of every dispersion for sample `k`, in the order of `dispersions`.
+    pub fn values(&self, k: u64) -> Vec<f64> {
+        let u = self.quantiles(k);
+        self.dispersions
+            .iter()
+            .map(|d| d.distribution.quantile(u[d.dimension]))
+            .collect()
+    }
+
+    /// Writes sample `k`'s values into `model` (a copy of the nominal one).
+    pub fn apply(&self, model: &mut Model, k: u64) -> Result<Vec<f64>, ModelError> {
+        let values = self.values(k);
+        for (d, v) in self.dispersions.iter().zip(&values) {
+            model.set_param(&d.id, *v)?;
+        }
+        Ok(values)
+    }
+}
+
+/// A random permutation of 0 … n−1 for dimension `d` (Fisher–Yates on its own stream).
+fn permutation(seed: u64, d: u64, n: u64) -> Vec<u32> {
+    let mut rng = ChaCha12Rng::seed_from_u64(seed);
+    rng.set_stream(u64::MAX - d);
+    let mut p: Vec<u32> = (0..n as u32).collect();
+    for i in (1..p.len()).rev() {
+        let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+        p.swap(i, j);
+    }
+    p
+}
+
+fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distribution, SpecError> {
+    let need = |v: Option<f64>, key: &'static str| {
+        v.ok_or_else(|| err(at.key(key), format!("`{}` needs `{key}`", d.distribution)))
+            .and_then(|x| {
+                if x.is_finite() {
+                    Ok(x)
+                } else {
+                    Err(err(at.key(key), "must be a finite number"))
+                }
+            })
+    };
+    let positive = |v: f64, key: &'static str| {
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(err(at.key(key), format!("must be > 0 (got {v})")))
+        }
+    };
+    let ordered = |min: f64, max: f64| {
+        if min < max {
+            Ok(())
+        } else {
+            Err(err(
+                at.key("max"),
+                format!("must be above min ({min}), got {max}"),
+            ))
+        }
+    };
+    let unused = |keys: &[(&'static str, bool)]| match keys.iter().find(|(_, given)| *given) {
+        Some((k, _)) => Err(err(
+            at.key(k),
+            format!("is not a parameter of `{}`", d.distribution),
+        )),
+        None => Ok(()),
+    };
+    let given = |v: &Option<f64>| v.is_some();
+    Ok(match d.distribution.as_str() {
+        "normal" => {
+            unused(&[
+                ("min", given(&d.min)),
+                ("max", given(&d.max)),
+                ("mode", given(&d.mode)),
+                ("median", given(&d.median)),
+                ("sigma", given(&d.sigma)),
+                ("values", d.values.is_some()),
+            ])?;
+            Distribution::Normal {
+                mean: need(d.mean.or(Some(nominal)), "mean")?,
+                sd: positive(need(d.sd, "sd")?, "sd")?,
+            }
+        }
+        "truncated_normal" => {
+            unused(&[
+                ("mode", given(&d.mode)),
+                ("median", given(&d.median)),
+                ("sigma", given(&d.sigma)),
+                ("values", d.values.is_some()),
+            ])?;
+            let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
+            ordered(min, max)?;
+            Distribution::TruncatedNormal {
+                mean: need(d.mean.or(Some(nominal)), "mean")?,
+                sd: positive(need(d.sd, "sd")?, "sd")?,
+                min,
+                max,
+            }
+        }
+        "uniform" => {
+            unused(&[
+                ("mean", given(&d.mean)),
+                ("sd", given(&d.sd)),
+                ("mode", given(&d.mode)),
+                ("median", given(&d.median)),
+                ("sigma", given(&d.sigma)),
+                ("values", d.values.is_some()),
+            ])?;
+            let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
+            ordered(min, max)?;
+            Distribution::Uniform { min, max }
+        }
+        "triangular" => {
+            unused(&[
+                ("mean", given(&d.mean)),
+                ("sd", given(&d.sd)),
+                ("median", given(&d.median)),
+                ("sigma", given(&d.sigma)),
+                ("values", d.values.is_some()),
+            ])?;
+            let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
+            ordered(min, max)?;
+            let mode = need(d.mode.or(Some(nominal)), "mode")?;
+            if !(min..=max).contains(&mode) {
+                return Err(err(
+                    at.key("mode"),
+                    format!("must lie within min … max ({min} … {max}), got {mode}"),
+                ));
+            }
+            Distribution::Triangular { min, mode, max }
+        }
+        "lognormal" => {
+            unused(&[
+                ("mean", given(&d.mean)),
+                ("sd", given(&d.sd)),
+                ("min", given(&d.min)),
+                ("max", given(&d.max)),
+                ("mode", given(&d.mode)),
+                ("values", d.values.is_some()),
+            ])?;
+            Distribution::LogNormal {
+                median: positive(need(d.median.or(Some(nominal)), "median")?, "median")?,
+                sigma: positive(need(d.sigma, "sigma")?, "sigma")?,
+            }
+        }
+        "cases" => {
+            unused(&[
+                ("mean", given(&d.mean)),
+                ("sd", given(&d.sd)),
+                ("min", given(&d.min)),
+                ("max", given(&d.max)),
+                ("mode", given(&d.mode)),
+                ("median", given(&d.median)),
+                ("sigma", given(&d.sigma)),
+            ])?;
+            let v = d.values.clone().unwrap_or_default();
+            if v.is_empty() || v.iter().any(|x| !x.is_finite()) {
+                return Err(err(
+                    at.key("values"),
+                    "`cases` needs a non-empty list of finite values",
+                ));
+            }
+            Distribution::Cases(v)
+        }
+        other => {
+            return Err(err(
+                at.key("distribution"),
+                format!(
+                    "unknown distribution `{other}`: normal, truncated_normal, uniform, triangular, lognormal or cases"
+                ),
+            ));
+        }
+    })
+}
