@@ -49,6 +49,7 @@ pub mod constants;
 pub mod dispersion;
 pub mod gear;
 pub mod io;
+pub mod margins;
 pub mod model;
 pub mod orbit;
 pub mod sample;
