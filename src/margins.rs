@@ -239,3 +239,265 @@ pub mod stats {
         sxy / (sxx * syy).sqrt()
     }
 }
+
+/// The margin report: verdict, per gear pair the distribution of the smallest backlash,
+/// the one-sided 95/95 lower tolerance bound, violation and interference probabilities
+/// with Clopper–Pearson intervals, sensitivities and the worst samples. Keys are
+/// stable (documented in the README).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Report {
+    pub scenario: String,
+    /// "pass" when every pair's 95/95 lower bound of the smallest backlash is at or
+    /// above its minimum allowed and no sample interfered; else "fail".
+    pub verdict: &'static str,
+    pub seed: u64,
+    pub samples: u64,
+    pub sampling: &'static str,
+    pub horizon: String,
+    pub dispersed: Vec<String>,
+    pub pairs: Vec<PairReport>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PairReport {
+    pub name: String,
+    pub verdict: &'static str,
+    /// Why, in words.
+    pub reason: String,
+    pub min_backlash_allowed_um: f64,
+    /// The smallest backlash of each sample, over its run.
+    pub min_backlash_um: Distribution,
+    /// The one-sided lower bound covering 95 % of samples with 95 % confidence (Wilks),
+    /// or null with fewer than `tolerance_samples_needed` samples.
+    pub tolerance_95_95_um: Option<f64>,
+    pub tolerance_rank: Option<u64>,
+    pub tolerance_samples_needed: u64,
+    pub violations: Probability,
+    pub interference: Probability,
+    /// Spearman rank correlation of each dispersed number with the smallest backlash,
+    /// largest magnitude first.
+    pub sensitivities: Vec<Sensitivity>,
+    /// The five samples with the smallest backlash.
+    pub worst: Vec<Worst>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Distribution {
+    pub min: f64,
+    pub mean: f64,
+    pub max: f64,
+    /// Percentiles 1, 5, 50, 95, 99, each with a distribution-free 95 % interval.
+    pub percentiles: Vec<Percentile>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Percentile {
+    pub percent: f64,
+    pub value: f64,
+    /// From order statistics; null where the samples cannot bound it.
+    pub ci95: [Option<f64>; 2],
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Probability {
+    pub count: u64,
+    pub estimate: f64,
+    /// Clopper–Pearson, two-sided 95 %.
+    pub ci95: [f64; 2],
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Sensitivity {
+    pub path: String,
+    pub spearman: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Worst {
+    pub index: u64,
+    pub min_backlash_um: f64,
+    pub t_min_s: f64,
+    pub orbit_number: u64,
+    pub orbit_phase_deg: f64,
+    pub values: Vec<(String, f64)>,
+}
+
+/// Distribution-free interval of the q-quantile from order statistics: ranks l, u
+/// with P(l ≤ rank of the quantile < u) ≥ level under Bin(n, q).
+fn quantile_ci(sorted: &[f64], q: f64, level: f64) -> [Option<f64>; 2] {
+    let n = sorted.len() as u64;
+    let a = (1.0 - level) / 2.0;
+    let ln_choose =
+        |n: u64, k: u64| -> f64 { (1..=k).map(|i| ((n - k + i) as f64 / i as f64).ln()).sum() };
+    // cdf[r] = P(Bin(n, q) ≤ r)
+    let mut cdf = Vec::with_capacity(n as usize + 1);
+    let mut acc = 0.0;
+    for r in 0..=n {
+        acc += (ln_choose(n, r) + r as f64 * q.ln() + (n - r) as f64 * (1.0 - q).ln()).exp();
+        cdf.push(acc.min(1.0));
+    }
+    // lower: the largest l with P(Bin ≤ l − 1) ≤ a; upper: the smallest u with
+    // P(Bin ≤ u − 1) ≥ 1 − a
+    let lo = (1..=n).rev().find(|&l| cdf[(l - 1) as usize] <= a);
+    let hi = (1..=n).find(|&u| cdf[(u - 1) as usize] >= 1.0 - a);
+    [
+        lo.map(|l| sorted[(l - 1) as usize]),
+        hi.map(|u| sorted[(u - 1) as usize]),
+    ]
+}
+
+fn probability(count: u64, n: u64) -> Probability {
+    let (lo, hi) = stats::clopper_pearson(count, n, 0.95);
+    Probability {
+        count,
+        estimate: count as f64 / n as f64,
+        ci95: [lo, hi],
+    }
+}
+
+/// The report of `outcomes` (every sample of `plan`, in index order).
+pub fn report(
+    scenario: &str,
+    gears: &[crate::gear::GearPair],
+    plan: &Plan,
+    horizon: Horizon,
+    outcomes: &[SampleOutcome],
+) -> Report {
+    let n = outcomes.len() as u64;
+    let needed = stats::wilks_minimum_samples(0.95, 0.95);
+    let rank = stats::wilks_rank(n, 0.95, 0.95);
+    let pairs: Vec<PairReport> = gears
+        .iter()
+        .enumerate()
+        .map(|(p, g)| {
+            let allowed_um = g.min_backlash_m * 1e6;
+            // a lost mesh counts as no backlash at all
+            let mins: Vec<f64> = outcomes
+                .iter()
+                .map(|o| {
+                    let v = o.pairs[p].min_backlash_um;
+                    if v.is_nan() { f64::NEG_INFINITY } else { v }
+                })
+                .collect();
+            let mut sorted = mins.clone();
+            sorted.sort_by(f64::total_cmp);
+            let percentiles = [1.0, 5.0, 50.0, 95.0, 99.0]
+                .iter()
+                .map(|&pc| Percentile {
+                    percent: pc,
+                    value: stats::quantile(&sorted, pc / 100.0),
+                    ci95: quantile_ci(&sorted, pc / 100.0, 0.95),
+                })
+                .collect();
+            let tolerance = rank.map(|r| sorted[(r - 1) as usize]);
+            let violations = outcomes.iter().filter(|o| o.pairs[p].violated).count() as u64;
+            let interference = outcomes.iter().filter(|o| o.pairs[p].interference).count() as u64;
+            let mut sensitivities: Vec<Sensitivity> = plan
+                .dispersions
+                .iter()
+                .enumerate()
+                .map(|(d, disp)| {
+                    let x: Vec<f64> = outcomes.iter().map(|o| o.values[d]).collect();
+                    Sensitivity {
+                        path: disp.path.clone(),
+                        spearman: stats::spearman(&x, &mins),
+                    }
+                })
+                .collect();
+            sensitivities.sort_by(|a, b| {
+                b.spearman
+                    .abs()
+                    .total_cmp(&a.spearman.abs())
+                    .then(a.path.cmp(&b.path))
+            });
+            let mut order: Vec<usize> = (0..outcomes.len()).collect();
+            order.sort_by(|&a, &b| mins[a].total_cmp(&mins[b]).then(a.cmp(&b)));
+            let worst = order
+                .iter()
+                .take(5)
+                .map(|&i| {
+                    let o = &outcomes[i];
+                    Worst {
+                        index: o.index,
+                        min_backlash_um: o.pairs[p].min_backlash_um,
+                        t_min_s: o.pairs[p].t_min_s,
+                        orbit_number: o.pairs[p].orbit_number,
+                        orbit_phase_deg: o.pairs[p].orbit_phase_deg,
+                        values: plan
+                            .dispersions
+                            .iter()
+                            .zip(&o.values)
+                            .map(|(d, v)| (d.path.clone(), *v))
+                            .collect(),
+                    }
+                })
+                .collect();
+            let (verdict, reason) = if interference > 0 {
+                (
+                    "fail",
+                    format!("{interference} of {n} samples interfere or lose the mesh"),
+                )
+            } else {
+                match tolerance {
+                    None => (
+                        "fail",
+                        format!(
+                            "{n} samples cannot show 95/95: a one-sided Wilks bound needs at least {needed}"
+                        ),
+                    ),
+                    Some(t) if t >= allowed_um => (
+                        "pass",
+                        format!(
+                            "95/95 lower bound of the smallest backlash {t:.3} µm ≥ {allowed_um:.1} µm minimum"
+                        ),
+                    ),
+                    Some(t) => (
+                        "fail",
+                        format!(
+                            "95/95 lower bound of the smallest backlash {t:.3} µm < {allowed_um:.1} µm minimum"
+                        ),
+                    ),
+                }
+            };
+            PairReport {
+                name: g.name.clone(),
+                verdict,
+                reason,
+                min_backlash_allowed_um: allowed_um,
+                min_backlash_um: Distribution {
+                    min: sorted.first().copied().unwrap_or(f64::NAN),
+                    mean: mins.iter().sum::<f64>() / n as f64,
+                    max: sorted.last().copied().unwrap_or(f64::NAN),
+                    percentiles,
+                },
+                tolerance_95_95_um: tolerance,
+                tolerance_rank: rank,
+                tolerance_samples_needed: needed,
+                violations: probability(violations, n),
+                interference: probability(interference, n),
+                sensitivities,
+                worst,
+            }
+        })
+        .collect();
+    Report {
+        scenario: scenario.to_string(),
+        verdict: if pairs.iter().all(|p| p.verdict == "pass") {
+            "pass"
+        } else {
+            "fail"
+        },
+        seed: plan.seed,
+        samples: n,
+        sampling: match plan.sampling {
+            crate::dispersion::Sampling::Random => "random",
+            crate::dispersion::Sampling::LatinHypercube => "latin_hypercube",
+        },
+        horizon: match horizon {
+            Horizon::Orbits(o) => format!("{o} orbits"),
+            Horizon::Mission => "the scenario's run".to_string(),
+        },
+        dispersed: plan.dispersions.iter().map(|d| d.path.clone()).collect(),
+        pairs,
+    }
+}

@@ -12,6 +12,7 @@ mod backlash;
 mod bench;
 mod check;
 mod export;
+mod margins;
 mod params;
 mod recover;
 mod run;
@@ -51,6 +52,10 @@ enum Command {
     Run(run::RunArgs),
     /// Validate a scenario and print derived quantities without running it.
     Check(check::CheckArgs),
+    /// Monte Carlo margins: the scenario's `[[dispersion]]` entries sampled, each sample
+    /// run in parallel, and the verdict with its confidence (95/95 bound, probabilities).
+    #[command(after_help = VERDICT_HELP)]
+    Margins(margins::MarginsArgs),
     /// Measure the cost of the thermal solver (per step, per orbit, accuracy), of the
     /// backlash evaluation and of logging.
     Bench(bench::BenchArgs),
@@ -88,6 +93,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
     match cli.command {
         Command::Run(a) => run::run(a),
         Command::Check(a) => done(check::check(a)),
+        Command::Margins(a) => margins::margins(a),
         Command::Params(a) => done(params::params(a)),
         Command::Bench(a) => done(bench::bench(a)),
         Command::Backlash(a) => backlash::backlash(a),

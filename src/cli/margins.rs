@@ -1,0 +1,306 @@
+//! `orbitlash margins`: the scenario's `[[dispersion]]` entries sampled N times, each
+//! sample run in parallel, and the report an engineer signs (verdict first).
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use anyhow::{Result, bail};
+use clap::{Args, ValueEnum};
+
+use orbitlash::dispersion::{Plan, Sampling};
+use orbitlash::io::atomic::AtomicFile;
+use orbitlash::io::output::{OutputError, OutputPolicy, check_output, resolved};
+use orbitlash::margins::{Horizon, Report, SampleOutcome, report, run_samples};
+
+use super::table::{self, Align};
+use super::{Outcome, load_with, orbits_arg, print_out};
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum SamplingArg {
+    Random,
+    Lhs,
+}
+
+#[derive(Args, Debug)]
+pub struct MarginsArgs {
+    /// Scenario file (TOML) with `[[dispersion]]` entries.
+    scenario: PathBuf,
+    /// Number of samples, 1 … 10 000 000 (59 or more for a 95/95 bound).
+    #[arg(long, value_parser = samples_arg)]
+    samples: u64,
+    /// Seed of the draws: the same seed gives the same samples.
+    #[arg(long)]
+    seed: u64,
+    /// Orbits per sample (default: the scenario's run length).
+    #[arg(long, value_parser = orbits_arg, conflicts_with = "mission")]
+    orbits: Option<f64>,
+    /// Run the scenario's whole mission profile per sample (its `[run]` length).
+    #[arg(long)]
+    mission: bool,
+    /// How samples cover the distributions: independent draws (sample K depends only on
+    /// the seed and K), or a Latin hypercube over all N samples.
+    #[arg(long, value_enum, default_value = "random")]
+    sampling: SamplingArg,
+    /// Change a number of the nominal scenario by its key path (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+    /// Also write the report as JSON (stable keys, see the README).
+    #[arg(long, value_name = "FILE.json")]
+    json: Option<PathBuf>,
+    /// Also write every sample (index, dispersed values, results) as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    csv: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn samples_arg(s: &str) -> Result<u64, String> {
+    match s.parse::<u64>() {
+        Ok(n) if (1..=10_000_000).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "`{s}` is not a whole number of samples within 1 … 10000000"
+        )),
+    }
+}
+
+pub fn margins(a: MarginsArgs) -> Result<Outcome> {
+    let loaded = load_with(Some(&a.scenario), &a.sets)?;
+    let inputs = loaded.inputs();
+    let policy = OutputPolicy::reading(&inputs);
+    let outputs: Vec<&Path> = [a.json.as_deref(), a.csv.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    for p in &outputs {
+        check_output(p, &policy)?;
+    }
+    if outputs.len() == 2 && resolved(outputs[0]) == resolved(outputs[1]) {
+        bail!("--json and --csv are the same file");
+    }
+    let spec = loaded.model.spec();
+    if spec.dispersion.is_empty() {
+        bail!(
+            "{} has no [[dispersion]]: nothing to sample (see scenarios/README.md)",
+            loaded.file
+        );
+    }
+    let sampling = match a.sampling {
+        SamplingArg::Random => Sampling::Random,
+        SamplingArg::Lhs => Sampling::LatinHypercube,
+    };
+    let plan = Plan::new(&loaded.model, &spec.dispersion, sampling, a.samples, a.seed)
+        .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
+    let horizon = match (a.orbits, a.mission) {
+        (Some(n), _) => Horizon::Orbits(n),
+        (None, _) => Horizon::Mission, // the scenario's own run length
+    };
+    let done = AtomicU64::new(0);
+    let outcomes = run_with_progress(&loaded.model, &plan, horizon, &done, a.quiet)?;
+    let sc = &loaded.scenario;
+    let rep = report(&sc.name, &sc.gears, &plan, horizon, &outcomes);
+    let mut o = format_report(&rep);
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&rep)? + "\n";
+        write_file(p, &policy, text.as_bytes())?;
+        outln!(o, "json: {}", p.display());
+    }
+    if let Some(p) = &a.csv {
+        write_file(p, &policy, samples_csv(&plan, &outcomes, sc).as_bytes())?;
+        outln!(o, "csv: {}", p.display());
+    }
+    print_out(&o)?;
+    Ok(Outcome::from_pass(rep.verdict == "pass"))
+}
+
+fn write_file(path: &Path, policy: &OutputPolicy, bytes: &[u8]) -> Result<()> {
+    let mut f = AtomicFile::create(path, policy)?;
+    f.write_all(bytes).map_err(|e| OutputError::io(path, e))?;
+    f.commit()?;
+    Ok(())
+}
+
+fn run_with_progress(
+    model: &orbitlash::model::Model,
+    plan: &Plan,
+    horizon: Horizon,
+    done: &AtomicU64,
+    quiet: bool,
+) -> Result<Vec<SampleOutcome>> {
+    let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = indicatif::ProgressBar::new(plan.samples);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} samples, {elapsed} elapsed, ETA {eta}",
+            )
+            .expect("a valid template"),
+        );
+        b
+    });
+    let finished = std::sync::atomic::AtomicBool::new(false);
+    let result = std::thread::scope(|s| {
+        if let Some(b) = &bar {
+            let finished = &finished;
+            s.spawn(move || {
+                while !finished.load(Ordering::Relaxed) {
+                    b.set_position(done.load(Ordering::Relaxed));
+                    std::thread::sleep(std::time::Duration::from_millis(200));
+                }
+            });
+        }
+        let r = run_samples(model, plan, 0..plan.samples, horizon, done);
+        finished.store(true, Ordering::Relaxed);
+        r
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    Ok(result?)
+}
+
+fn format_report(r: &Report) -> String {
+    let mut o = String::new();
+    for p in &r.pairs {
+        outln!(o, "{} {}: {}", p.verdict.to_uppercase(), p.name, p.reason);
+    }
+    outln!(
+        o,
+        "{}: {} samples ({}), seed {}, {} each; dispersed: {}",
+        r.scenario,
+        r.samples,
+        r.sampling,
+        r.seed,
+        r.horizon,
+        r.dispersed.join(", ")
+    );
+    for p in &r.pairs {
+        outln!(
+            o,
+            "\ngear pair {} (smallest normal backlash per sample, µm; minimum allowed {:.1} µm):",
+            p.name,
+            p.min_backlash_allowed_um
+        );
+        let d = &p.min_backlash_um;
+        let mut t = table::new(
+            &["", "value", "95 % interval"],
+            &[Align::Left, Align::Right, Align::Left],
+        );
+        let um = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.3}"));
+        t.add_row(vec!["min".into(), format!("{:.3}", d.min), String::new()]);
+        for pc in &d.percentiles {
+            t.add_row(vec![
+                format!("p{}", pc.percent),
+                format!("{:.3}", pc.value),
+                format!("{} … {}", um(pc.ci95[0]), um(pc.ci95[1])),
+            ]);
+        }
+        t.add_row(vec!["max".into(), format!("{:.3}", d.max), String::new()]);
+        t.add_row(vec!["mean".into(), format!("{:.3}", d.mean), String::new()]);
+        o += &table::render(&t, "  ");
+        match p.tolerance_95_95_um {
+            Some(v) => outln!(
+                o,
+                "  95/95 lower tolerance bound: {v:.3} µm (the {} smallest of {} samples, Wilks)",
+                ordinal(p.tolerance_rank.unwrap_or(1)),
+                r.samples
+            ),
+            None => outln!(
+                o,
+                "  95/95 lower tolerance bound: not shown: it needs at least {} samples (Wilks), {} run",
+                p.tolerance_samples_needed,
+                r.samples
+            ),
+        }
+        for (what, pr) in [
+            ("below the minimum", &p.violations),
+            ("interference or lost mesh", &p.interference),
+        ] {
+            outln!(
+                o,
+                "  P({what}) = {}/{} = {:.4}, 95 % interval {:.4} … {:.4} (Clopper–Pearson)",
+                pr.count,
+                r.samples,
+                pr.estimate,
+                pr.ci95[0],
+                pr.ci95[1]
+            );
+        }
+        outln!(o, "  sensitivity (Spearman ρ with the smallest backlash):");
+        let mut t = table::new(&["", ""], &[Align::Left, Align::Right]);
+        for s in &p.sensitivities {
+            t.add_row(vec![s.path.clone(), format!("{:+.3}", s.spearman)]);
+        }
+        o += &table::render(&t, "    ");
+        outln!(o, "  worst samples:");
+        for w in &p.worst {
+            outln!(
+                o,
+                "    #{}: {:.3} µm at t = {:.1} s, orbit {}, θ = {:.1}° from noon; {}",
+                w.index,
+                w.min_backlash_um,
+                w.t_min_s,
+                w.orbit_number,
+                w.orbit_phase_deg,
+                w.values
+                    .iter()
+                    .map(|(k, v)| format!("{k} = {}", orbitlash::units::exact(*v)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
+    o
+}
+
+fn ordinal(r: u64) -> String {
+    match r {
+        1 => "smallest".into(),
+        2 => "2nd".into(),
+        3 => "3rd".into(),
+        n => format!("{n}th"),
+    }
+}
+
+/// Every sample: index, dispersed values, then per pair the smallest backlash, its
+/// margin, time, orbit, phase and flags.
+fn samples_csv(
+    plan: &Plan,
+    outcomes: &[SampleOutcome],
+    sc: &orbitlash::scenario::Scenario,
+) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut header = vec!["sample".to_string()];
+    header.extend(plan.dispersions.iter().map(|d| d.path.clone()));
+    for g in &sc.gears {
+        for f in [
+            "min_backlash_um",
+            "min_margin_um",
+            "t_min_s",
+            "orbit_number",
+            "orbit_phase_deg",
+            "violated",
+            "interference",
+        ] {
+            header.push(format!("{}.{f}", g.name));
+        }
+    }
+    w.write_record(&header).expect("in memory");
+    for s in outcomes {
+        let mut row = vec![s.index.to_string()];
+        row.extend(s.values.iter().map(|v| orbitlash::units::exact(*v)));
+        for p in &s.pairs {
+            row.extend([
+                orbitlash::units::exact(p.min_backlash_um),
+                orbitlash::units::exact(p.min_margin_um),
+                orbitlash::units::exact(p.t_min_s),
+                p.orbit_number.to_string(),
+                orbitlash::units::exact(p.orbit_phase_deg),
+                (p.violated as u8).to_string(),
+                (p.interference as u8).to_string(),
+            ]);
+        }
+        w.write_record(&row).expect("in memory");
+    }
+    String::from_utf8(w.into_inner().expect("in memory")).expect("utf-8")
+}

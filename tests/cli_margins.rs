@@ -1,0 +1,152 @@
+//! `orbitlash margins` end to end: the verdict in the first line and the exit status,
+//! the JSON report's keys, the same numbers on every run, and refusals.
+
+mod common;
+use common::{bin, reference_text, tmpdir};
+
+const DISPERSIONS: &str = r#"
+[[dispersion]]
+path = "gear_pair.mesh.pinion.tooth_thinning_um"
+distribution = "truncated_normal"
+sd = 2.0
+min = 15.0
+max = 24.0
+
+[[dispersion]]
+path = "sun.\"sun.housing\".absorptivity"
+distribution = "uniform"
+min = 0.6
+max = 0.8
+"#;
+
+fn setup(name: &str, min_backlash: &str) -> std::path::PathBuf {
+    let dir = tmpdir(name);
+    let text = reference_text().replacen("min_backlash_um = 5.0", min_backlash, 1) + DISPERSIONS;
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+    dir
+}
+
+#[test]
+fn cli_margins_pass_fail_and_report() {
+    let dir = setup("margins", "min_backlash_um = 5.0");
+    let args = [
+        "margins",
+        "m.toml",
+        "--samples",
+        "60",
+        "--seed",
+        "3",
+        "--orbits",
+        "2",
+    ];
+    let out = bin()
+        .args(args)
+        .args(["--json", "a.json", "--csv", "a.csv"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.starts_with("PASS mesh: 95/95 lower bound"), "{text}");
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("a.json")).unwrap()).unwrap();
+    assert_eq!(j["verdict"], "pass");
+    assert_eq!(j["samples"], 60);
+    let p = &j["pairs"][0];
+    for key in [
+        "min_backlash_um",
+        "tolerance_95_95_um",
+        "violations",
+        "interference",
+        "sensitivities",
+        "worst",
+    ] {
+        assert!(!p[key].is_null(), "{key}");
+    }
+    // 60 samples: the smallest is the 95/95 bound
+    assert_eq!(p["tolerance_rank"], 1);
+    assert_eq!(p["tolerance_95_95_um"], p["min_backlash_um"]["min"]);
+    // the thinning raises the backlash, the absorptivity lowers it
+    let s = p["sensitivities"].as_array().unwrap();
+    let rho = |path: &str| {
+        s.iter().find(|x| x["path"] == path).unwrap()["spearman"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(rho("gear_pair.mesh.pinion.tooth_thinning_um") > 0.3);
+    assert!(rho("sun.\"sun.housing\".absorptivity") < -0.3);
+    let csv = std::fs::read_to_string(dir.join("a.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 61);
+    // the same command again: the same report
+    let again = bin()
+        .args(args)
+        .args(["--json", "b.json"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(again.status.code(), Some(0));
+    assert_eq!(
+        std::fs::read(dir.join("a.json")).unwrap(),
+        std::fs::read(dir.join("b.json")).unwrap()
+    );
+    // fewer than 59 samples cannot show 95/95: FAIL, exit 1, saying why
+    let few = bin()
+        .args([
+            "margins",
+            "m.toml",
+            "--samples",
+            "20",
+            "--seed",
+            "3",
+            "--orbits",
+            "1",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(few.status.code(), Some(1));
+    let t = String::from_utf8_lossy(&few.stdout);
+    assert!(
+        t.starts_with("FAIL mesh: 20 samples cannot show 95/95") && t.contains("59"),
+        "{t}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn cli_margins_fail_when_the_bound_is_below_the_minimum() {
+    let dir = setup("margins-fail", "min_backlash_um = 22.0");
+    let out = bin()
+        .args([
+            "margins",
+            "m.toml",
+            "--samples",
+            "60",
+            "--seed",
+            "1",
+            "--orbits",
+            "2",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.starts_with("FAIL mesh: 95/95 lower bound"), "{text}");
+    assert!(text.contains("P(below the minimum) = "), "{text}");
+    // no dispersions: an error, exit 2
+    std::fs::write(dir.join("plain.toml"), reference_text()).unwrap();
+    let out = bin()
+        .args(["margins", "plain.toml", "--samples", "10", "--seed", "1"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no [[dispersion]]"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
