@@ -150,3 +150,79 @@ fn cli_margins_fail_when_the_bound_is_below_the_minimum() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("no [[dispersion]]"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn cli_run_replays_a_margins_sample_to_the_last_digit() {
+    let dir = setup("margins-replay", "min_backlash_um = 5.0");
+    for (sampling, extra) in [("random", vec![]), ("lhs", vec!["--samples", "60"])] {
+        let out = bin()
+            .args([
+                "margins",
+                "m.toml",
+                "--samples",
+                "60",
+                "--seed",
+                "5",
+                "--orbits",
+                "2",
+            ])
+            .args(["--sampling", sampling, "--json", "r.json", "--quiet"])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("r.json")).unwrap()).unwrap();
+        let worst = &r["pairs"][0]["worst"][0];
+        let k = worst["index"].as_u64().unwrap().to_string();
+        let _ = std::fs::remove_file(dir.join("s.json"));
+        let out = bin()
+            .args([
+                "run",
+                "m.toml",
+                "--sample",
+                &k,
+                "--seed",
+                "5",
+                "--sampling",
+                sampling,
+            ])
+            .args(extra)
+            .args(["--orbits", "2", "--no-log", "--quiet", "--json", "s.json"])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.code() != Some(2),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains(&format!("sample {k} of seed 5:")), "{text}");
+        let s: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+        assert_eq!(
+            s["gear_pairs"][0]["min_backlash_um"], worst["min_backlash_um"],
+            "{sampling}: sample {k}"
+        );
+    }
+    // a Latin hypercube sample depends on N: without --samples, an error
+    let out = bin()
+        .args([
+            "run",
+            "m.toml",
+            "--sample",
+            "3",
+            "--seed",
+            "5",
+            "--sampling",
+            "lhs",
+            "--no-log",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("needs --samples N"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

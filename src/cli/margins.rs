@@ -17,7 +17,7 @@ use super::table::{self, Align};
 use super::{Outcome, load_with, orbits_arg, print_out};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
-enum SamplingArg {
+pub enum SamplingArg {
     Random,
     Lhs,
 }
@@ -232,7 +232,16 @@ fn format_report(r: &Report) -> String {
             t.add_row(vec![s.path.clone(), format!("{:+.3}", s.spearman)]);
         }
         o += &table::render(&t, "    ");
-        outln!(o, "  worst samples:");
+        outln!(
+            o,
+            "  worst samples (replay one with `orbitlash run SCENARIO --sample K --seed {}{}`):",
+            r.seed,
+            if r.sampling == "latin_hypercube" {
+                format!(" --sampling lhs --samples {}", r.samples)
+            } else {
+                String::new()
+            }
+        );
         for w in &p.worst {
             outln!(
                 o,

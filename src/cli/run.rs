@@ -57,6 +57,19 @@ pub struct RunArgs {
     /// Also write the run summary as JSON (stable keys, see the README).
     #[arg(long, value_name = "FILE.json")]
     json: Option<PathBuf>,
+    /// Replay sample K of `orbitlash margins` (0-based, as its report numbers them):
+    /// the scenario with that sample's dispersed values. Needs --seed.
+    #[arg(long, requires = "seed")]
+    sample: Option<u64>,
+    /// The margins run's seed (with --sample).
+    #[arg(long, requires = "sample")]
+    seed: Option<u64>,
+    /// The margins run's sampling (with --sample; `lhs` also needs --samples).
+    #[arg(long, value_enum, default_value = "random", requires = "sample")]
+    sampling: super::margins::SamplingArg,
+    /// The margins run's number of samples (with --sample --sampling lhs).
+    #[arg(long, requires = "sample")]
+    samples: Option<u64>,
     /// No progress bar.
     #[arg(long, short)]
     quiet: bool,
@@ -87,7 +100,11 @@ impl Observer for Progress {
 }
 
 pub fn run(a: RunArgs) -> Result<Outcome> {
-    let loaded = load_with(a.scenario.as_deref(), &a.sets)?;
+    let mut loaded = load_with(a.scenario.as_deref(), &a.sets)?;
+    let replay = match (a.sample, a.seed) {
+        (Some(k), Some(seed)) => Some(replay_sample(&mut loaded, &a, k, seed)?),
+        _ => None,
+    };
     let mut sc = loaded.scenario.clone();
     if let Some(o) = a.orbits {
         sc = sc
@@ -156,7 +173,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
                     "tr-bdf2 tolerance_k={} max_step_s={} adaptive={}",
                     sc.solver.tolerance_k, sc.solver.max_step_s, sc.solver.adaptive
                 ),
-                seed: None,
+                seed: a.seed,
                 sets: loaded.sets.clone(),
             },
             a.log_every.unwrap_or(LogCadence::Steps(1)),
@@ -250,6 +267,9 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     };
     let verdicts: Vec<PairVerdict> = mesh.run_pairs.iter().map(PairStats::verdict).collect();
     let mut o = format_verdict(&sc, &stats, &mesh);
+    if let Some(line) = &replay {
+        outln!(o, "{line}");
+    }
     o.push_str(&format_summary(&sc.thermal, &stats, window, period_s));
     o.push_str(&format_mesh(&sc, &mesh));
     if a.verbose {
@@ -685,4 +705,45 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
         );
     }
     o
+}
+
+/// Writes sample `k`'s dispersed values into the loaded model (as `margins` drew them)
+/// and records them with the `--set` changes; returns a line for the summary.
+fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> Result<String> {
+    use orbitlash::dispersion::{Plan, Sampling};
+    let sampling = match a.sampling {
+        super::margins::SamplingArg::Random => Sampling::Random,
+        super::margins::SamplingArg::Lhs => Sampling::LatinHypercube,
+    };
+    let n = match (sampling, a.samples) {
+        (_, Some(n)) => n,
+        (Sampling::Random, None) => k + 1,
+        (Sampling::LatinHypercube, None) => {
+            anyhow::bail!(
+                "--sample with --sampling lhs needs --samples N: a Latin hypercube sample depends on N"
+            )
+        }
+    };
+    if k >= n {
+        anyhow::bail!("--sample {k} is not below --samples {n}");
+    }
+    let dispersions = loaded.model.spec().dispersion.clone();
+    if dispersions.is_empty() {
+        anyhow::bail!(
+            "{} has no [[dispersion]]: there is no sample {k} to replay",
+            loaded.file
+        );
+    }
+    let plan = Plan::new(&loaded.model, &dispersions, sampling, n, seed)
+        .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
+    let values = plan
+        .apply(&mut loaded.model, k)
+        .map_err(|e| anyhow!("sample {k}: {e}"))?;
+    loaded.scenario = loaded.model.scenario().clone();
+    let mut line = format!("sample {k} of seed {seed}:");
+    for (d, v) in plan.dispersions.iter().zip(values) {
+        loaded.sets.push((d.path.clone(), v));
+        line += &format!(" {} = {}", d.path, orbitlash::units::exact(v));
+    }
+    Ok(line)
 }
