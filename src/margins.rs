@@ -27,11 +27,14 @@ pub enum Horizon {
 }
 
 /// A gear pair's outcome in one sample.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PairOutcome {
-    /// Smallest exact backlash over the sample's run, µm (NaN: the mesh was lost).
+    /// Smallest exact backlash over the sample's run, µm (NaN, null in JSON: the mesh
+    /// was lost).
+    #[serde(deserialize_with = "nan_from_null")]
     pub min_backlash_um: f64,
     /// Smallest margin to the minimum allowed, µm.
+    #[serde(deserialize_with = "nan_from_null")]
     pub min_margin_um: f64,
     pub t_min_s: f64,
     /// Orbit number and angle from orbit noon at the minimum.
@@ -45,11 +48,17 @@ pub struct PairOutcome {
 
 /// One sample: its index, its dispersed values (in the plan's order) and each pair's
 /// outcome.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SampleOutcome {
     pub index: u64,
     pub values: Vec<f64>,
     pub pairs: Vec<PairOutcome>,
+}
+
+/// JSON writes NaN as null; read null back as NaN.
+fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    let v: Option<f64> = serde::Deserialize::deserialize(d)?;
+    Ok(v.unwrap_or(f64::NAN))
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -252,7 +261,7 @@ pub struct Report {
     pub verdict: &'static str,
     pub seed: u64,
     pub samples: u64,
-    pub sampling: &'static str,
+    pub sampling: String,
     pub horizon: String,
     pub dispersed: Vec<String>,
     pub pairs: Vec<PairReport>,
@@ -355,22 +364,191 @@ fn probability(count: u64, n: u64) -> Probability {
     }
 }
 
-/// The report of `outcomes` (every sample of `plan`, in index order).
-pub fn report(
-    scenario: &str,
-    gears: &[crate::gear::GearPair],
-    plan: &Plan,
-    horizon: Horizon,
-    outcomes: &[SampleOutcome],
-) -> Report {
+/// What a margin run is, apart from its samples: enough to write its report and to
+/// tell whether two shards belong to the same run.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RunIdentity {
+    pub scenario: String,
+    /// SHA-256 of the scenario text, and the `--set` changes, in order.
+    pub scenario_sha256: String,
+    pub sets: Vec<(String, f64)>,
+    pub seed: u64,
+    pub samples: u64,
+    pub sampling: String,
+    pub horizon: String,
+    pub dispersed: Vec<String>,
+    /// Gear pairs: name and minimum allowed backlash, µm.
+    pub pairs: Vec<(String, f64)>,
+}
+
+impl RunIdentity {
+    pub fn new(
+        scenario_toml: &str,
+        sets: &[(String, f64)],
+        sc: &crate::scenario::Scenario,
+        plan: &Plan,
+        horizon: Horizon,
+    ) -> RunIdentity {
+        use sha2::{Digest, Sha256};
+        RunIdentity {
+            scenario: sc.name.clone(),
+            scenario_sha256: Sha256::digest(scenario_toml.as_bytes())
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect(),
+            sets: sets.to_vec(),
+            seed: plan.seed,
+            samples: plan.samples,
+            sampling: match plan.sampling {
+                crate::dispersion::Sampling::Random => "random",
+                crate::dispersion::Sampling::LatinHypercube => "latin_hypercube",
+            }
+            .to_string(),
+            horizon: match horizon {
+                Horizon::Orbits(o) => format!("{o} orbits"),
+                Horizon::Mission => "the scenario's run".to_string(),
+            },
+            dispersed: plan.dispersions.iter().map(|d| d.path.clone()).collect(),
+            pairs: sc
+                .gears
+                .iter()
+                .map(|g| (g.name.clone(), g.min_backlash_m * 1e6))
+                .collect(),
+        }
+    }
+}
+
+/// One shard's samples: `range` of the run's indices.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Shard {
+    /// "orbitlash margins shard"
+    pub format: String,
+    pub run: RunIdentity,
+    /// Shard i of n (0-based).
+    pub shard: (u64, u64),
+    pub range: (u64, u64),
+    pub outcomes: Vec<SampleOutcome>,
+}
+
+pub const SHARD_FORMAT: &str = "orbitlash margins shard";
+
+/// The sample indices of shard `i` of `n` for `samples` samples: contiguous, in order,
+/// sizes differing by at most one.
+pub fn shard_range(samples: u64, i: u64, n: u64) -> Range<u64> {
+    (samples * i / n)..(samples * (i + 1) / n)
+}
+
+/// Why shards do not make one run.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum MergeError {
+    #[error("{file}: not a margins shard ({why})")]
+    NotAShard { file: String, why: String },
+    #[error("{file} is from another run than {first}: {what} differs")]
+    OtherRun {
+        file: String,
+        first: String,
+        what: String,
+    },
+    #[error("sample {index} is in both {a} and {b}")]
+    Duplicate { index: u64, a: String, b: String },
+    #[error("samples {from} … {to} are in no shard ({count} of {total} missing)")]
+    Gap {
+        from: u64,
+        to: u64,
+        count: u64,
+        total: u64,
+    },
+}
+
+/// The whole run's samples from its shards (`(file name, shard)`), checked: one run,
+/// no sample twice, none missing.
+pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutcome>), MergeError> {
+    let Some((first_file, first)) = shards.first() else {
+        return Err(MergeError::NotAShard {
+            file: "(none)".into(),
+            why: "no shard given".into(),
+        });
+    };
+    let id = &first.run;
+    for (file, s) in shards {
+        if s.format != SHARD_FORMAT {
+            return Err(MergeError::NotAShard {
+                file: file.clone(),
+                why: format!("format `{}`", s.format),
+            });
+        }
+        let r = &s.run;
+        let differs = [
+            (
+                "the scenario (SHA-256)",
+                r.scenario_sha256 != id.scenario_sha256,
+            ),
+            ("--set", r.sets != id.sets),
+            ("the seed", r.seed != id.seed),
+            ("the number of samples", r.samples != id.samples),
+            ("the sampling", r.sampling != id.sampling),
+            ("the horizon", r.horizon != id.horizon),
+            ("the dispersions", r.dispersed != id.dispersed),
+        ]
+        .into_iter()
+        .find(|(_, d)| *d);
+        if let Some((what, _)) = differs {
+            return Err(MergeError::OtherRun {
+                file: file.clone(),
+                first: first_file.clone(),
+                what: what.into(),
+            });
+        }
+    }
+    let mut owner: Vec<Option<usize>> = vec![None; id.samples as usize];
+    let mut all: Vec<Option<SampleOutcome>> = vec![None; id.samples as usize];
+    for (k, (file, s)) in shards.iter().enumerate() {
+        for o in &s.outcomes {
+            let i = o.index as usize;
+            if i >= owner.len() {
+                return Err(MergeError::NotAShard {
+                    file: file.clone(),
+                    why: format!("sample {} beyond the run's {}", o.index, id.samples),
+                });
+            }
+            if let Some(j) = owner[i] {
+                return Err(MergeError::Duplicate {
+                    index: o.index,
+                    a: shards[j].0.clone(),
+                    b: file.clone(),
+                });
+            }
+            owner[i] = Some(k);
+            all[i] = Some(o.clone());
+        }
+    }
+    if let Some(from) = all.iter().position(Option::is_none) {
+        let to = all[from..]
+            .iter()
+            .position(Option::is_some)
+            .map_or(all.len(), |p| from + p)
+            - 1;
+        return Err(MergeError::Gap {
+            from: from as u64,
+            to: to as u64,
+            count: all.iter().filter(|o| o.is_none()).count() as u64,
+            total: id.samples,
+        });
+    }
+    Ok((id.clone(), all.into_iter().flatten().collect()))
+}
+
+/// The report of `outcomes` (every sample of the run, in index order).
+pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
     let n = outcomes.len() as u64;
     let needed = stats::wilks_minimum_samples(0.95, 0.95);
     let rank = stats::wilks_rank(n, 0.95, 0.95);
-    let pairs: Vec<PairReport> = gears
+    let pairs: Vec<PairReport> = id
+        .pairs
         .iter()
         .enumerate()
-        .map(|(p, g)| {
-            let allowed_um = g.min_backlash_m * 1e6;
+        .map(|(p, (name, allowed_um))| {
+            let allowed_um = *allowed_um;
             // a lost mesh counts as no backlash at all
             let mins: Vec<f64> = outcomes
                 .iter()
@@ -392,14 +570,14 @@ pub fn report(
             let tolerance = rank.map(|r| sorted[(r - 1) as usize]);
             let violations = outcomes.iter().filter(|o| o.pairs[p].violated).count() as u64;
             let interference = outcomes.iter().filter(|o| o.pairs[p].interference).count() as u64;
-            let mut sensitivities: Vec<Sensitivity> = plan
-                .dispersions
+            let mut sensitivities: Vec<Sensitivity> = id
+                .dispersed
                 .iter()
                 .enumerate()
-                .map(|(d, disp)| {
+                .map(|(d, path)| {
                     let x: Vec<f64> = outcomes.iter().map(|o| o.values[d]).collect();
                     Sensitivity {
-                        path: disp.path.clone(),
+                        path: path.clone(),
                         spearman: stats::spearman(&x, &mins),
                     }
                 })
@@ -423,11 +601,11 @@ pub fn report(
                         t_min_s: o.pairs[p].t_min_s,
                         orbit_number: o.pairs[p].orbit_number,
                         orbit_phase_deg: o.pairs[p].orbit_phase_deg,
-                        values: plan
-                            .dispersions
+                        values: id
+                            .dispersed
                             .iter()
                             .zip(&o.values)
-                            .map(|(d, v)| (d.path.clone(), *v))
+                            .map(|(d, v)| (d.clone(), *v))
                             .collect(),
                     }
                 })
@@ -460,7 +638,7 @@ pub fn report(
                 }
             };
             PairReport {
-                name: g.name.clone(),
+                name: name.clone(),
                 verdict,
                 reason,
                 min_backlash_allowed_um: allowed_um,
@@ -481,23 +659,17 @@ pub fn report(
         })
         .collect();
     Report {
-        scenario: scenario.to_string(),
+        scenario: id.scenario.clone(),
         verdict: if pairs.iter().all(|p| p.verdict == "pass") {
             "pass"
         } else {
             "fail"
         },
-        seed: plan.seed,
+        seed: id.seed,
         samples: n,
-        sampling: match plan.sampling {
-            crate::dispersion::Sampling::Random => "random",
-            crate::dispersion::Sampling::LatinHypercube => "latin_hypercube",
-        },
-        horizon: match horizon {
-            Horizon::Orbits(o) => format!("{o} orbits"),
-            Horizon::Mission => "the scenario's run".to_string(),
-        },
-        dispersed: plan.dispersions.iter().map(|d| d.path.clone()).collect(),
+        sampling: id.sampling.clone(),
+        horizon: id.horizon.clone(),
+        dispersed: id.dispersed.clone(),
         pairs,
     }
 }

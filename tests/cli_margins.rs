@@ -226,3 +226,86 @@ fn cli_run_replays_a_margins_sample_to_the_last_digit() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("needs --samples N"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn cli_shards_merge_to_the_unsharded_report_bit_for_bit() {
+    let dir = setup("margins-shards", "min_backlash_um = 5.0");
+    let base = [
+        "margins",
+        "m.toml",
+        "--samples",
+        "61",
+        "--seed",
+        "8",
+        "--orbits",
+        "1",
+        "--quiet",
+    ];
+    let ok = |args: &[&str]| {
+        let out = bin().args(args).current_dir(&dir).output().unwrap();
+        assert!(
+            out.status.code() != Some(2),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out
+    };
+    ok(&[&base[..], &["--json", "full.json"]].concat());
+    for i in 0..4 {
+        let shard = format!("{i}/4");
+        let file = format!("s{i}.json");
+        ok(&[&base[..], &["--shard", &shard, "--json", &file]].concat());
+    }
+    // in any order
+    ok(&[
+        "merge",
+        "s3.json",
+        "s1.json",
+        "s0.json",
+        "s2.json",
+        "--json",
+        "merged.json",
+    ]);
+    assert_eq!(
+        std::fs::read(dir.join("full.json")).unwrap(),
+        std::fs::read(dir.join("merged.json")).unwrap()
+    );
+    let refused = |args: &[&str], needle: &str| {
+        let out = bin().args(args).current_dir(&dir).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert!(e.contains(needle), "{args:?}: {e}");
+    };
+    refused(
+        &["merge", "s0.json", "s1.json", "s3.json"],
+        "samples 30 … 44 are in no shard",
+    );
+    refused(
+        &[
+            "merge", "s0.json", "s0.json", "s1.json", "s2.json", "s3.json",
+        ],
+        "is in both s0.json and s0.json",
+    );
+    ok(&[
+        "margins",
+        "m.toml",
+        "--samples",
+        "61",
+        "--seed",
+        "9",
+        "--orbits",
+        "1",
+        "--quiet",
+        "--shard",
+        "1/4",
+        "--json",
+        "t1.json",
+    ]);
+    refused(
+        &["merge", "s0.json", "t1.json", "s2.json", "s3.json"],
+        "the seed differs",
+    );
+    std::fs::write(dir.join("junk.json"), "{}").unwrap();
+    refused(&["merge", "junk.json"], "not a margins shard");
+    let _ = std::fs::remove_dir_all(&dir);
+}

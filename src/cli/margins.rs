@@ -11,7 +11,10 @@ use clap::{Args, ValueEnum};
 use orbitlash::dispersion::{Plan, Sampling};
 use orbitlash::io::atomic::AtomicFile;
 use orbitlash::io::output::{OutputError, OutputPolicy, check_output, resolved};
-use orbitlash::margins::{Horizon, Report, SampleOutcome, report, run_samples};
+use orbitlash::margins::{
+    Horizon, MergeError, Report, RunIdentity, SHARD_FORMAT, SampleOutcome, Shard, merge, report,
+    run_samples, shard_range,
+};
 
 use super::table::{self, Align};
 use super::{Outcome, load_with, orbits_arg, print_out};
@@ -51,9 +54,26 @@ pub struct MarginsArgs {
     /// Also write every sample (index, dispersed values, results) as CSV.
     #[arg(long, value_name = "FILE.csv")]
     csv: Option<PathBuf>,
+    /// Run only shard i of n (0-based, e.g. `3/16`): a deterministic slice of the
+    /// samples, written with --json as a shard file for `orbitlash merge`.
+    #[arg(long, value_name = "I/N", value_parser = shard_arg, requires = "json")]
+    shard: Option<(u64, u64)>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+}
+
+fn shard_arg(s: &str) -> Result<(u64, u64), String> {
+    let bad = || format!("`{s}` is not a shard I/N with 0 ≤ I < N ≤ 100000");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (u64, u64) = (
+        i.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if n == 0 || n > 100_000 || i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
 }
 
 fn samples_arg(s: &str) -> Result<u64, String> {
@@ -96,10 +116,38 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         (Some(n), _) => Horizon::Orbits(n),
         (None, _) => Horizon::Mission, // the scenario's own run length
     };
-    let done = AtomicU64::new(0);
-    let outcomes = run_with_progress(&loaded.model, &plan, horizon, &done, a.quiet)?;
     let sc = &loaded.scenario;
-    let rep = report(&sc.name, &sc.gears, &plan, horizon, &outcomes);
+    let id = RunIdentity::new(&loaded.toml, &loaded.sets, sc, &plan, horizon);
+    let range = match a.shard {
+        Some((i, n)) => shard_range(plan.samples, i, n),
+        None => 0..plan.samples,
+    };
+    let done = AtomicU64::new(0);
+    let outcomes = run_with_progress(&loaded.model, &plan, range.clone(), horizon, &done, a.quiet)?;
+    if let Some((i, n)) = a.shard {
+        let shard = Shard {
+            format: SHARD_FORMAT.into(),
+            run: id,
+            shard: (i, n),
+            range: (range.start, range.end),
+            outcomes,
+        };
+        let p = a.json.as_ref().expect("--shard requires --json");
+        write_file(
+            p,
+            &policy,
+            (serde_json::to_string(&shard)? + "\n").as_bytes(),
+        )?;
+        print_out(&format!(
+            "shard {i}/{n}: samples {} … {} of {} written to {} (merge the shards with `orbitlash merge`)\n",
+            range.start,
+            range.end.saturating_sub(1),
+            plan.samples,
+            p.display()
+        ))?;
+        return Ok(Outcome::Pass);
+    }
+    let rep = report(&id, &outcomes);
     let mut o = format_report(&rep);
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&rep)? + "\n";
@@ -124,12 +172,13 @@ fn write_file(path: &Path, policy: &OutputPolicy, bytes: &[u8]) -> Result<()> {
 fn run_with_progress(
     model: &orbitlash::model::Model,
     plan: &Plan,
+    range: std::ops::Range<u64>,
     horizon: Horizon,
     done: &AtomicU64,
     quiet: bool,
 ) -> Result<Vec<SampleOutcome>> {
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
-        let b = indicatif::ProgressBar::new(plan.samples);
+        let b = indicatif::ProgressBar::new(range.end - range.start);
         b.set_style(
             indicatif::ProgressStyle::with_template(
                 "{bar:40} {pos}/{len} samples, {elapsed} elapsed, ETA {eta}",
@@ -149,7 +198,7 @@ fn run_with_progress(
                 }
             });
         }
-        let r = run_samples(model, plan, 0..plan.samples, horizon, done);
+        let r = run_samples(model, plan, range, horizon, done);
         finished.store(true, Ordering::Relaxed);
         r
     });
@@ -159,7 +208,7 @@ fn run_with_progress(
     Ok(result?)
 }
 
-fn format_report(r: &Report) -> String {
+pub fn format_report(r: &Report) -> String {
     let mut o = String::new();
     for p in &r.pairs {
         outln!(o, "{} {}: {}", p.verdict.to_uppercase(), p.name, p.reason);
@@ -312,4 +361,43 @@ fn samples_csv(
         w.write_record(&row).expect("in memory");
     }
     String::from_utf8(w.into_inner().expect("in memory")).expect("utf-8")
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Shard files written by `orbitlash margins --shard I/N --json FILE`.
+    #[arg(required = true)]
+    shards: Vec<PathBuf>,
+    /// Write the merged report as JSON (the same as the unsharded run's).
+    #[arg(long, value_name = "FILE.json")]
+    json: Option<PathBuf>,
+}
+
+pub fn merge_shards(a: MergeArgs) -> Result<Outcome> {
+    let inputs: Vec<&Path> = a.shards.iter().map(PathBuf::as_path).collect();
+    let policy = OutputPolicy::reading(&inputs);
+    if let Some(p) = &a.json {
+        check_output(p, &policy)?;
+    }
+    let mut shards = Vec::new();
+    for p in &a.shards {
+        orbitlash::io::output::check_input(p)?;
+        let text = std::fs::read_to_string(p)
+            .map_err(|e| anyhow::anyhow!("reading {}: {e}", p.display()))?;
+        let shard: Shard = serde_json::from_str(&text).map_err(|e| MergeError::NotAShard {
+            file: p.display().to_string(),
+            why: e.to_string(),
+        })?;
+        shards.push((p.display().to_string(), shard));
+    }
+    let (id, outcomes) = merge(&shards)?;
+    let rep = report(&id, &outcomes);
+    let mut o = format_report(&rep);
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&rep)? + "\n";
+        write_file(p, &policy, text.as_bytes())?;
+        outln!(o, "json: {}", p.display());
+    }
+    print_out(&o)?;
+    Ok(Outcome::from_pass(rep.verdict == "pass"))
 }

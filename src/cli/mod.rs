@@ -56,6 +56,10 @@ enum Command {
     /// run in parallel, and the verdict with its confidence (95/95 bound, probabilities).
     #[command(after_help = VERDICT_HELP)]
     Margins(margins::MarginsArgs),
+    /// Merge the shard files of `margins --shard I/N` into the unsharded run's report
+    /// (refusing shards of other runs, duplicates and gaps).
+    #[command(after_help = VERDICT_HELP)]
+    Merge(margins::MergeArgs),
     /// Measure the cost of the thermal solver (per step, per orbit, accuracy), of the
     /// backlash evaluation and of logging.
     Bench(bench::BenchArgs),
@@ -94,6 +98,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
         Command::Run(a) => run::run(a),
         Command::Check(a) => done(check::check(a)),
         Command::Margins(a) => margins::margins(a),
+        Command::Merge(a) => margins::merge_shards(a),
         Command::Params(a) => done(params::params(a)),
         Command::Bench(a) => done(bench::bench(a)),
         Command::Backlash(a) => backlash::backlash(a),
