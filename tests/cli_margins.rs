@@ -309,3 +309,65 @@ fn cli_shards_merge_to_the_unsharded_report_bit_for_bit() {
     refused(&["merge", "junk.json"], "not a margins shard");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn cli_margins_plots_are_svg_with_the_limit_and_the_bound() {
+    let dir = setup("margins-plots", "min_backlash_um = 5.0");
+    std::fs::create_dir_all(dir.join("plots")).unwrap();
+    let out = bin()
+        .args([
+            "margins",
+            "m.toml",
+            "--samples",
+            "60",
+            "--seed",
+            "2",
+            "--orbits",
+            "1",
+        ])
+        .args(["--quiet", "--plots", "plots", "--json", "r.json"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("r.json")).unwrap()).unwrap();
+    let hist = std::fs::read_to_string(dir.join("plots/mesh-min-backlash.svg")).unwrap();
+    assert!(hist.starts_with("<svg ") && hist.ends_with("</svg>\n"));
+    // 30 bars holding the 60 samples; the limit and the 95/95 bound marked and labelled
+    assert_eq!(hist.matches("class=\"bar\"").count(), 30);
+    assert!(hist.contains("class=\"limit\"") && hist.contains("minimum 5 µm"));
+    let bound = r["pairs"][0]["tolerance_95_95_um"].as_f64().unwrap();
+    assert!(
+        hist.contains(&format!("95/95 bound {bound:.3} µm")),
+        "{bound}"
+    );
+    assert!(hist.contains("class=\"cdf\""));
+    let tornado = std::fs::read_to_string(dir.join("plots/mesh-sensitivity.svg")).unwrap();
+    assert_eq!(tornado.matches("class=\"bar\"").count(), 2);
+    assert!(tornado.contains("gear_pair.mesh.pinion.tooth_thinning_um (+"));
+    // a missing folder is an error, nothing written
+    let out = bin()
+        .args([
+            "margins",
+            "m.toml",
+            "--samples",
+            "60",
+            "--seed",
+            "2",
+            "--orbits",
+            "1",
+        ])
+        .args(["--quiet", "--plots", "nowhere"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no such directory"));
+    let _ = std::fs::remove_dir_all(&dir);
+}

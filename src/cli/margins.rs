@@ -54,6 +54,11 @@ pub struct MarginsArgs {
     /// Also write every sample (index, dispersed values, results) as CSV.
     #[arg(long, value_name = "FILE.csv")]
     csv: Option<PathBuf>,
+    /// Also write plots into this folder (it must exist): per gear pair
+    /// `<pair>-min-backlash.svg` (histogram and CDF with the limit and the 95/95 bound)
+    /// and `<pair>-sensitivity.svg` (tornado chart).
+    #[arg(long, value_name = "DIR", conflicts_with = "shard")]
+    plots: Option<PathBuf>,
     /// Run only shard i of n (0-based, e.g. `3/16`): a deterministic slice of the
     /// samples, written with --json as a shard file for `orbitlash merge`.
     #[arg(long, value_name = "I/N", value_parser = shard_arg, requires = "json")]
@@ -98,6 +103,11 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     }
     if outputs.len() == 2 && resolved(outputs[0]) == resolved(outputs[1]) {
         bail!("--json and --csv are the same file");
+    }
+    if let Some(dir) = &a.plots
+        && !dir.is_dir()
+    {
+        bail!("--plots {}: no such directory", dir.display());
     }
     let spec = loaded.model.spec();
     if spec.dispersion.is_empty() {
@@ -158,6 +168,11 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         write_file(p, &policy, samples_csv(&plan, &outcomes, sc).as_bytes())?;
         outln!(o, "csv: {}", p.display());
     }
+    if let Some(dir) = &a.plots {
+        for p in write_plots(dir, &policy, &rep, &outcomes)? {
+            outln!(o, "plot: {}", p.display());
+        }
+    }
     print_out(&o)?;
     Ok(Outcome::from_pass(rep.verdict == "pass"))
 }
@@ -206,6 +221,54 @@ fn run_with_progress(
         b.finish_and_clear();
     }
     Ok(result?)
+}
+
+/// The plots of `rep` into `dir`; returns the files written.
+fn write_plots(
+    dir: &Path,
+    policy: &OutputPolicy,
+    rep: &Report,
+    outcomes: &[SampleOutcome],
+) -> Result<Vec<PathBuf>> {
+    if !dir.is_dir() {
+        bail!("--plots {}: no such directory", dir.display());
+    }
+    let mut written = Vec::new();
+    for (k, p) in rep.pairs.iter().enumerate() {
+        let values: Vec<f64> = outcomes
+            .iter()
+            .map(|o| o.pairs[k].min_backlash_um)
+            .collect();
+        let svg = orbitlash::io::svg::distribution(
+            &format!(
+                "{} / {}: smallest backlash of {} samples",
+                rep.scenario, p.name, rep.samples
+            ),
+            &values,
+            p.min_backlash_allowed_um,
+            p.tolerance_95_95_um,
+            30,
+        );
+        let file = dir.join(format!("{}-min-backlash.svg", p.name));
+        write_file(&file, policy, svg.as_bytes())?;
+        written.push(file);
+        let rows: Vec<(String, f64)> = p
+            .sensitivities
+            .iter()
+            .map(|s| (s.path.clone(), s.spearman))
+            .collect();
+        let svg = orbitlash::io::svg::tornado(
+            &format!(
+                "{} / {}: sensitivity of the smallest backlash",
+                rep.scenario, p.name
+            ),
+            &rows,
+        );
+        let file = dir.join(format!("{}-sensitivity.svg", p.name));
+        write_file(&file, policy, svg.as_bytes())?;
+        written.push(file);
+    }
+    Ok(written)
 }
 
 pub fn format_report(r: &Report) -> String {

@@ -11,3 +11,4 @@ pub mod protobuf;
 pub mod recording;
 pub mod scenario_toml;
 pub mod scene;
+pub mod svg;
