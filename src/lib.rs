@@ -57,6 +57,7 @@ pub mod scenario;
 pub mod sensor;
 pub mod sim;
 pub mod spec;
+pub mod steady;
 pub mod summary;
 pub mod thermal;
 pub mod units;

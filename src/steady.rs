@@ -1,0 +1,189 @@
+//! The orbit-periodic solution of a scenario whose environment repeats every orbit:
+//! the start-of-orbit temperatures x with Φ(x) = x, Φ the one-orbit map (run one period
+//! from x). Found by Newton shooting on F(x) = Φ(x) − x with the monodromy matrix ∂Φ/∂x
+//! from finite differences (one warm orbit per node), falling back to marching orbit
+//! after orbit when Newton does not converge (thermostats make Φ piecewise smooth) or
+//! the network is too large for a dense monodromy.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::sim::{Setup, SimError, State, Stop};
+
+/// How hard to try.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SteadyOptions {
+    /// Converged when every node returns within this, K.
+    pub tolerance_k: f64,
+    /// Orbits marched before Newton starts (from the given state).
+    pub warmup_orbits: u64,
+    pub max_newton_iterations: u32,
+    /// Most orbits in all (Newton's included) before giving up.
+    pub max_orbits: u64,
+    /// Above this many nodes, march only (a dense monodromy costs one orbit per node).
+    pub max_newton_nodes: usize,
+}
+
+impl Default for SteadyOptions {
+    fn default() -> SteadyOptions {
+        SteadyOptions {
+            tolerance_k: 1e-4,
+            warmup_orbits: 2,
+            max_newton_iterations: 8,
+            max_orbits: 20_000,
+            max_newton_nodes: 200,
+        }
+    }
+}
+
+/// The periodic orbit's start state and how it was found.
+#[derive(Debug, Clone)]
+pub struct Periodic {
+    /// At t = `t0_s`: temperatures and heater states that return after one period.
+    pub state: State,
+    /// "newton" or "marching".
+    pub method: &'static str,
+    /// One-orbit runs spent (warm-up, Jacobian columns, Newton steps, marching).
+    pub orbits: u64,
+    pub newton_iterations: u32,
+    /// max |Φ(x) − x| at the solution, K.
+    pub periodicity_error_k: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SteadyError {
+    #[error(transparent)]
+    Run(#[from] SimError),
+    #[error(
+        "no periodic orbit within {orbits} orbits: the last orbit still moved a node by {error_k:.3e} K (tolerance {tolerance_k} K)"
+    )]
+    NotConverged {
+        orbits: u64,
+        error_k: f64,
+        tolerance_k: f64,
+    },
+}
+
+/// One orbit from temperatures `x` and heater states `heaters` at `t0`: the end
+/// temperatures and heater states.
+fn one_orbit(
+    setup: &mut Setup<'_>,
+    t0: f64,
+    period: f64,
+    x: &[f64],
+    heaters: &[bool],
+) -> Result<(Vec<f64>, Vec<bool>), SimError> {
+    let mut s = setup.state_at(t0, x.to_vec());
+    s.heaters_on.copy_from_slice(heaters);
+    setup.run(&mut s, t0 + period, &mut (), Stop::default())?;
+    Ok((s.temperatures_k, s.heaters_on))
+}
+
+fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// The periodic orbit starting at `start.t_s`, for an environment of period `period_s`.
+pub fn periodic_orbit(
+    setup: &mut Setup<'_>,
+    start: &State,
+    period_s: f64,
+    opts: SteadyOptions,
+) -> Result<Periodic, SteadyError> {
+    let t0 = start.t_s;
+    let mut x = start.temperatures_k.clone();
+    let mut heaters = start.heaters_on.clone();
+    let mut orbits = 0u64;
+    let n = x.len();
+    // warm-up: march towards the orbit
+    let mut last_move = f64::INFINITY;
+    for _ in 0..opts.warmup_orbits {
+        let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;
+        orbits += 1;
+        last_move = max_diff(&y, &x);
+        x = y;
+        heaters = h;
+    }
+    let mut iterations = 0;
+    if n <= opts.max_newton_nodes && last_move > opts.tolerance_k {
+        let mut best = (last_move, x.clone(), heaters.clone());
+        for _ in 0..opts.max_newton_iterations {
+            let (fx, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;
+            orbits += 1;
+            let r = max_diff(&fx, &x);
+            if r <= opts.tolerance_k {
+                return Ok(Periodic {
+                    state: start_state(setup, t0, x, heaters),
+                    method: "newton",
+                    orbits,
+                    newton_iterations: iterations,
+                    periodicity_error_k: r,
+                });
+            }
+            if r > 2.0 * best.0 {
+                break; // diverging: march from the best point
+            }
+            if r < best.0 {
+                best = (r, x.clone(), heaters.clone());
+            }
+            // monodromy by forward differences (0.01 K per node)
+            let dx = 1e-2;
+            let mut j = DMatrix::<f64>::zeros(n, n);
+            for c in 0..n {
+                let mut xp = x.clone();
+                xp[c] += dx;
+                let (fp, _) = one_orbit(setup, t0, period_s, &xp, &heaters)?;
+                orbits += 1;
+                for rrow in 0..n {
+                    j[(rrow, c)] = (fp[rrow] - fx[rrow]) / dx;
+                }
+            }
+            for d in 0..n {
+                j[(d, d)] -= 1.0;
+            }
+            let f = DVector::from_iterator(n, fx.iter().zip(&x).map(|(a, b)| a - b));
+            let Some(delta) = j.lu().solve(&(-f)) else {
+                break;
+            };
+            for (xi, di) in x.iter_mut().zip(delta.iter()) {
+                *xi += di;
+            }
+            heaters = h;
+            iterations += 1;
+        }
+        x = best.1;
+        heaters = best.2;
+    }
+    // marching
+    loop {
+        let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;
+        orbits += 1;
+        let r = max_diff(&y, &x);
+        x = y;
+        heaters = h;
+        if r <= opts.tolerance_k {
+            return Ok(Periodic {
+                state: start_state(setup, t0, x, heaters),
+                method: "marching",
+                orbits,
+                newton_iterations: iterations,
+                periodicity_error_k: r,
+            });
+        }
+        if orbits >= opts.max_orbits {
+            return Err(SteadyError::NotConverged {
+                orbits,
+                error_k: r,
+                tolerance_k: opts.tolerance_k,
+            });
+        }
+    }
+}
+
+fn start_state(setup: &Setup<'_>, t0: f64, x: Vec<f64>, heaters: Vec<bool>) -> State {
+    let mut s = setup.state_at(t0, x);
+    s.heaters_on = heaters;
+    s
+}
