@@ -3,8 +3,9 @@
 //! on the backlash over the orbit, with and without a thermostat heater.
 
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse};
+use orbitlash::sample::{Cadence, Sampler, Want};
 use orbitlash::scenario::Scenario;
-use orbitlash::sim::{Setup, Stop};
+use orbitlash::sim::{Observer, ObserverResult, RunStart, Setup, StepView, Stop};
 use orbitlash::steady::{SteadyOptions, periodic_orbit};
 use orbitlash::summary::MeshStats;
 
@@ -78,4 +79,93 @@ fn val_second_method_periodic_orbit_with_a_thermostat() {
         stats.heater_switches
     );
     check(&sc, p.method);
+}
+
+#[test]
+fn cli_run_steady_state_writes_one_period_of_the_periodic_orbit() {
+    let dir = std::env::temp_dir().join(format!("orbitlash-test-{}-steady", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let bin = env!("CARGO_BIN_EXE_orbitlash");
+    let out = std::process::Command::new(bin)
+        .args([
+            "run",
+            "--steady-state",
+            "--no-log",
+            "--quiet",
+            "--csv",
+            "p.csv",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("periodic orbit: found by newton"), "{text}");
+    // the same phases of the 40th orbit of a marched run (sampled at 39 periods plus
+    // each row's time: time modulo the period is the orbit phase)
+    let p: Vec<Vec<f64>> = std::fs::read_to_string(dir.join("p.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let sc = parse(REFERENCE_HINGE_TOML, "<reference>").unwrap();
+    let period = sc.period_s();
+    assert!(p.last().unwrap()[0] <= period + 1e-9 && p.last().unwrap()[0] > period - 30.0);
+    let times: std::sync::Arc<[f64]> = p.iter().map(|r| 39.0 * period + r[0]).collect();
+    struct At(Sampler, Vec<Vec<f64>>);
+    impl Observer for At {
+        fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+            if let Some(s) = self.0.start(r) {
+                self.1.push(s.temperatures_k.clone());
+            }
+            Ok(())
+        }
+        fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
+            let out = &mut self.1;
+            self.0.each(step, |s| {
+                out.push(s.temperatures_k.clone());
+                Ok::<_, std::convert::Infallible>(())
+            })?;
+            Ok(())
+        }
+    }
+    let mut at = At(
+        Sampler::new(Cadence::Times(times), Want::TEMPERATURES),
+        Vec::new(),
+    );
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut state = setup.initial_state();
+    setup
+        .run(&mut state, 40.0 * period, &mut at, Stop::default())
+        .unwrap();
+    assert_eq!(at.1.len(), p.len());
+    let mut worst = 0.0f64;
+    for (row, marched) in p.iter().zip(&at.1) {
+        for (x, y) in row[1..11].iter().zip(marched) {
+            worst = worst.max((x - y).abs());
+        }
+    }
+    assert!(worst <= 0.01, "{worst} K");
+    // an environment that does not repeat is refused
+    let drift =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml");
+    let out = std::process::Command::new(bin)
+        .args(["run", drift.to_str().unwrap(), "--steady-state", "--no-log"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("repeats every orbit"));
+    let _ = std::fs::remove_dir_all(&dir);
 }

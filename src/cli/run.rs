@@ -15,9 +15,7 @@ use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_p
 use orbitlash::io::output::{OutputError, OutputPolicy, available_bytes, check_output, resolved};
 use orbitlash::orbit::EnvironmentModel;
 use orbitlash::scenario::Scenario;
-use orbitlash::sim::{
-    MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run, simulate,
-};
+use orbitlash::sim::{MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run};
 use orbitlash::summary::{MeshStats, PairStats, PairVerdict, RunSummary, WindowStats};
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
@@ -57,6 +55,11 @@ pub struct RunArgs {
     /// Also write the run summary as JSON (stable keys, see the README).
     #[arg(long, value_name = "FILE.json")]
     json: Option<PathBuf>,
+    /// Find the orbit-periodic solution first (Newton shooting, marching as the
+    /// fallback) and report one period of it; with --csv, exactly that period. Needs an
+    /// environment that repeats every orbit (no tables or mode windows).
+    #[arg(long, conflicts_with = "orbits")]
+    steady_state: bool,
     /// Replay sample K of `orbitlash margins` (0-based, as its report numbers them):
     /// the scenario with that sample's dispersed values. Needs --seed.
     #[arg(long, requires = "seed")]
@@ -112,6 +115,14 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             .map_err(|m| anyhow!("--orbits {}: {m}", orbitlash::units::num(o)))?;
     }
     let period_s = sc.period_s();
+    let mut steady = None;
+    if a.steady_state {
+        let (state, line) = periodic_start(&sc)?;
+        sc = sc
+            .with_orbits(1.0)
+            .map_err(|m| anyhow!("--steady-state: {m}"))?;
+        steady = Some((state, line));
+    }
     let t_end_s = sc.run.duration_s;
     for w in sc.warnings() {
         eprintln!("warning: {}: {w}", loaded.file);
@@ -218,13 +229,19 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             &mut log,
             progress,
         );
-        simulate(
-            &sc.thermal,
-            &sc.gears,
-            &sc.solver,
+        let mut setup = orbitlash::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+        let mut state = match &steady {
+            Some((start, _)) => start.clone(),
+            None => setup.initial_state(),
+        };
+        setup.run(
+            &mut state,
             t_end_s,
             &mut observers,
-            Some(interrupt),
+            orbitlash::sim::Stop {
+                cancel: Some(interrupt),
+                pause_after_s: None,
+            },
         )
     };
     let stats = match result {
@@ -268,6 +285,9 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     let verdicts: Vec<PairVerdict> = mesh.run_pairs.iter().map(PairStats::verdict).collect();
     let mut o = format_verdict(&sc, &stats, &mesh);
     if let Some(line) = &replay {
+        outln!(o, "{line}");
+    }
+    if let Some((_, line)) = &steady {
         outln!(o, "{line}");
     }
     o.push_str(&format_summary(&sc.thermal, &stats, window, period_s));
@@ -746,4 +766,26 @@ fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> 
         line += &format!(" {} = {}", d.path, orbitlash::units::exact(v));
     }
     Ok(line)
+}
+
+/// The start of the periodic orbit of `sc` (at t = 0) and a line saying how it was
+/// found.
+fn periodic_start(sc: &Scenario) -> Result<(orbitlash::sim::State, String)> {
+    use orbitlash::steady::{SteadyOptions, periodic_orbit};
+    let breaks = sc.thermal.breakpoints_s();
+    if let Some(t) = breaks.first() {
+        anyhow::bail!(
+            "--steady-state needs an environment that repeats every orbit; this scenario changes at t = {t} s (a table or a mode window)"
+        );
+    }
+    let period = sc.period_s();
+    let mut setup = orbitlash::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let start = setup.initial_state();
+    let p = periodic_orbit(&mut setup, &start, period, SteadyOptions::default())
+        .map_err(|e| anyhow!("--steady-state: {e}"))?;
+    let line = format!(
+        "periodic orbit: found by {} in {} orbits ({} Newton steps), periodicity error {:.2e} K; the summary covers one period of it",
+        p.method, p.orbits, p.newton_iterations, p.periodicity_error_k
+    );
+    Ok((p.state, line))
 }
