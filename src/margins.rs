@@ -24,6 +24,9 @@ pub enum Horizon {
     Orbits(f64),
     /// The scenario's own run length (its mission profile).
     Mission,
+    /// One period of the sample's orbit-periodic solution (environment repeating
+    /// every orbit).
+    SteadyState,
 }
 
 /// A gear pair's outcome in one sample.
@@ -75,6 +78,12 @@ pub enum MarginError {
         #[source]
         source: SimError,
     },
+    #[error("sample {index}: {source}")]
+    Steady {
+        index: u64,
+        #[source]
+        source: crate::steady::SteadyError,
+    },
 }
 
 /// Runs sample `k` of `plan` on a copy of `nominal`.
@@ -90,12 +99,24 @@ pub fn run_sample(
         .map_err(|source| MarginError::Model { index: k, source })?;
     let sc = model.scenario();
     let env = &sc.thermal.environment;
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut state = setup.initial_state();
     let t_end = match horizon {
         Horizon::Orbits(n) => n * env.mean_period_s(),
         Horizon::Mission => sc.run.duration_s,
+        Horizon::SteadyState => {
+            let period = env.mean_period_s();
+            state = crate::steady::periodic_orbit(
+                &mut setup,
+                &state,
+                period,
+                crate::steady::SteadyOptions::default(),
+            )
+            .map_err(|source| MarginError::Steady { index: k, source })?
+            .state;
+            state.t_s + period
+        }
     };
-    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
-    let mut state = setup.initial_state();
     let mut mesh = MeshStats::last(env.mean_period_s());
     let _: RunStats = setup
         .run(&mut state, t_end, &mut mesh, Stop::default())
@@ -407,6 +428,7 @@ impl RunIdentity {
             horizon: match horizon {
                 Horizon::Orbits(o) => format!("{o} orbits"),
                 Horizon::Mission => "the scenario's run".to_string(),
+                Horizon::SteadyState => "one period of the periodic orbit".to_string(),
             },
             dispersed: plan.dispersions.iter().map(|d| d.path.clone()).collect(),
             pairs: sc

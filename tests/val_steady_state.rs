@@ -169,3 +169,29 @@ fn cli_run_steady_state_writes_one_period_of_the_periodic_orbit() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("repeats every orbit"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn val_second_method_margin_samples_on_the_periodic_orbit() {
+    // Each sample's periodic-orbit minimum against 40 marched orbits of the same sample
+    // (the reference cools towards its periodic orbit, so the marched minimum is on
+    // its last orbits).
+    use orbitlash::dispersion::{Plan, Sampling};
+    use orbitlash::margins::{Horizon, run_sample};
+    use orbitlash::model::Model;
+    let text = format!(
+        "{REFERENCE_HINGE_TOML}\n[[dispersion]]\npath = \"node.housing.capacitance_j_per_k\"\ndistribution = \"uniform\"\nmin = 90.0\nmax = 150.0\n\n[[dispersion]]\npath = \"sun.\\\"sun.housing\\\".absorptivity\"\ndistribution = \"uniform\"\nmin = 0.6\nmax = 0.8\n"
+    );
+    let model =
+        Model::new(orbitlash::io::scenario_toml::parse_spec(&text, "s.toml").unwrap()).unwrap();
+    let plan = Plan::new(&model, &model.spec().dispersion, Sampling::Random, 4, 3).unwrap();
+    for k in 0..4 {
+        let s = run_sample(&model, &plan, k, Horizon::SteadyState).unwrap();
+        let m = run_sample(&model, &plan, k, Horizon::Orbits(40.0)).unwrap();
+        let (a, b) = (s.pairs[0].min_backlash_um, m.pairs[0].min_backlash_um);
+        assert!(
+            (a - b).abs() <= 0.01,
+            "sample {k}: periodic {a} µm, marched {b} µm"
+        );
+        assert!((s.pairs[0].orbit_phase_deg - m.pairs[0].orbit_phase_deg).abs() < 1.0);
+    }
+}

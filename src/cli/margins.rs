@@ -39,8 +39,11 @@ pub struct MarginsArgs {
     #[arg(long, value_parser = orbits_arg, conflicts_with = "mission")]
     orbits: Option<f64>,
     /// Run the scenario's whole mission profile per sample (its `[run]` length).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "steady_state")]
     mission: bool,
+    /// Each sample's orbit-periodic solution (Newton shooting), one period of it.
+    #[arg(long, conflicts_with = "orbits")]
+    steady_state: bool,
     /// How samples cover the distributions: independent draws (sample K depends only on
     /// the seed and K), or a Latin hypercube over all N samples.
     #[arg(long, value_enum, default_value = "random")]
@@ -122,9 +125,17 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     };
     let plan = Plan::new(&loaded.model, &spec.dispersion, sampling, a.samples, a.seed)
         .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
-    let horizon = match (a.orbits, a.mission) {
+    let horizon = match (a.orbits, a.steady_state) {
         (Some(n), _) => Horizon::Orbits(n),
-        (None, _) => Horizon::Mission, // the scenario's own run length
+        (None, true) => {
+            if let Some(t) = loaded.scenario.thermal.breakpoints_s().first() {
+                bail!(
+                    "--steady-state needs an environment that repeats every orbit; this scenario changes at t = {t} s (a table or a mode window)"
+                );
+            }
+            Horizon::SteadyState
+        }
+        (None, false) => Horizon::Mission, // the scenario's own run length
     };
     let sc = &loaded.scenario;
     let id = RunIdentity::new(&loaded.toml, &loaded.sets, sc, &plan, horizon);
