@@ -9,9 +9,22 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::sim::{Setup, SimError, State, Stop};
 
+/// Which way to the periodic orbit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// Newton when marching looks slower than a few monodromy matrices (from how fast
+    /// the warm-up orbits contract), else marching.
+    Auto,
+    /// Newton shooting (marching if it fails to converge).
+    Newton,
+    /// Marching only.
+    Marching,
+}
+
 /// How hard to try.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SteadyOptions {
+    pub method: Method,
     /// Converged when every node returns within this, K.
     pub tolerance_k: f64,
     /// Orbits marched before Newton starts (from the given state).
@@ -26,6 +39,7 @@ pub struct SteadyOptions {
 impl Default for SteadyOptions {
     fn default() -> SteadyOptions {
         SteadyOptions {
+            method: Method::Auto,
             tolerance_k: 1e-4,
             warmup_orbits: 2,
             max_newton_iterations: 8,
@@ -98,16 +112,30 @@ pub fn periodic_orbit(
     let mut orbits = 0u64;
     let n = x.len();
     // warm-up: march towards the orbit
-    let mut last_move = f64::INFINITY;
-    for _ in 0..opts.warmup_orbits {
+    let mut moves = Vec::new();
+    for _ in 0..opts.warmup_orbits.max(2) {
         let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;
         orbits += 1;
-        last_move = max_diff(&y, &x);
+        moves.push(max_diff(&y, &x));
         x = y;
         heaters = h;
     }
+    let last_move = *moves.last().expect("two warm-up orbits");
+    // Marching contracts by about ρ per orbit: it needs ln(tol/move)/ln ρ more orbits;
+    // Newton needs n + 1 orbits per iteration, two iterations at least.
+    let rho = moves[moves.len() - 1] / moves[moves.len() - 2];
+    let marching_orbits = if rho < 1.0 && rho > 0.0 {
+        ((opts.tolerance_k / last_move).ln() / rho.ln()).max(0.0)
+    } else {
+        f64::INFINITY
+    };
+    let newton = match opts.method {
+        Method::Marching => false,
+        Method::Newton => true,
+        Method::Auto => marching_orbits > 2.0 * (n as f64 + 1.0),
+    };
     let mut iterations = 0;
-    if n <= opts.max_newton_nodes && last_move > opts.tolerance_k {
+    if newton && n <= opts.max_newton_nodes && last_move > opts.tolerance_k {
         let mut best = (last_move, x.clone(), heaters.clone());
         for _ in 0..opts.max_newton_iterations {
             let (fx, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;

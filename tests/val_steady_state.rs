@@ -6,14 +6,18 @@ use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse};
 use orbitlash::sample::{Cadence, Sampler, Want};
 use orbitlash::scenario::Scenario;
 use orbitlash::sim::{Observer, ObserverResult, RunStart, Setup, StepView, Stop};
-use orbitlash::steady::{SteadyOptions, periodic_orbit};
+use orbitlash::steady::{Method, SteadyOptions, periodic_orbit};
 use orbitlash::summary::MeshStats;
 
 fn check(sc: &Scenario, want_method: &str) {
     let period = sc.period_s();
     let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
     let start = setup.initial_state();
-    let p = periodic_orbit(&mut setup, &start, period, SteadyOptions::default()).unwrap();
+    let newton = SteadyOptions {
+        method: Method::Newton,
+        ..SteadyOptions::default()
+    };
+    let p = periodic_orbit(&mut setup, &start, period, newton).unwrap();
     assert_eq!(p.method, want_method, "{} orbits", p.orbits);
     assert!(p.periodicity_error_k <= 1e-4);
     // brute force: march 80 orbits from the scenario's start, one run
@@ -68,7 +72,11 @@ fn val_second_method_periodic_orbit_with_a_thermostat() {
     let period = sc.period_s();
     let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
     let start = setup.initial_state();
-    let p = periodic_orbit(&mut setup, &start, period, SteadyOptions::default()).unwrap();
+    let newton = SteadyOptions {
+        method: Method::Newton,
+        ..SteadyOptions::default()
+    };
+    let p = periodic_orbit(&mut setup, &start, period, newton).unwrap();
     eprintln!("thermostat: {} in {} orbits", p.method, p.orbits);
     // the heater does switch on the periodic orbit
     let mut s = p.state.clone();
@@ -106,7 +114,7 @@ fn cli_run_steady_state_writes_one_period_of_the_periodic_orbit() {
         String::from_utf8_lossy(&out.stderr)
     );
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("periodic orbit: found by newton"), "{text}");
+    assert!(text.contains("periodic orbit: found by "), "{text}");
     // the same phases of the 40th orbit of a marched run (sampled at 39 periods plus
     // each row's time: time modulo the period is the orbit phase)
     let p: Vec<Vec<f64>> = std::fs::read_to_string(dir.join("p.csv"))
@@ -194,4 +202,92 @@ fn val_second_method_margin_samples_on_the_periodic_orbit() {
         );
         assert!((s.pairs[0].orbit_phase_deg - m.pairs[0].orbit_phase_deg).abs() < 1.0);
     }
+}
+
+#[test]
+fn core_marching_fallback_finds_the_same_orbit() {
+    // Newton disabled (as for a network above max_newton_nodes): marching alone reaches
+    // the same periodic orbit.
+    let sc = parse(REFERENCE_HINGE_TOML, "<reference>").unwrap();
+    let period = sc.period_s();
+    let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let start = setup.initial_state();
+    let newton = periodic_orbit(
+        &mut setup,
+        &start,
+        period,
+        SteadyOptions {
+            method: Method::Newton,
+            ..SteadyOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(newton.method, "newton");
+    let marching = periodic_orbit(
+        &mut setup,
+        &start,
+        period,
+        SteadyOptions {
+            max_newton_nodes: 0,
+            ..SteadyOptions::default()
+        },
+    )
+    .unwrap();
+    // Auto picks marching here: the reference contracts ~5× per orbit, cheaper than
+    // Newton's 11 orbits per iteration
+    let auto = periodic_orbit(&mut setup, &start, period, SteadyOptions::default()).unwrap();
+    assert_eq!(auto.method, "marching");
+    assert!(
+        auto.orbits < newton.orbits,
+        "{} vs {}",
+        auto.orbits,
+        newton.orbits
+    );
+    // a slow housing (100× the capacitance) contracts slowly: Auto takes Newton
+    let slow = parse(
+        &REFERENCE_HINGE_TOML.replacen(
+            "capacitance_j_per_k = 120.0",
+            "capacitance_j_per_k = 12000.0",
+            1,
+        ),
+        "<slow housing>",
+    )
+    .unwrap();
+    let mut slow_setup = Setup::new(&slow.thermal, &slow.gears, &slow.solver);
+    let slow_start = slow_setup.initial_state();
+    let p = periodic_orbit(
+        &mut slow_setup,
+        &slow_start,
+        period,
+        SteadyOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(p.method, "newton", "{} orbits", p.orbits);
+    assert_eq!(marching.method, "marching");
+    eprintln!(
+        "newton: {} orbits, marching: {} orbits",
+        newton.orbits, marching.orbits
+    );
+    for (a, b) in newton
+        .state
+        .temperatures_k
+        .iter()
+        .zip(&marching.state.temperatures_k)
+    {
+        assert!((a - b).abs() < 1e-3, "{a} vs {b}");
+    }
+    // and a budget too small is an error saying how far it got
+    let e = periodic_orbit(
+        &mut setup,
+        &start,
+        period,
+        SteadyOptions {
+            max_newton_nodes: 0,
+            max_orbits: 4,
+            ..SteadyOptions::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("no periodic orbit within 4 orbits"), "{e}");
 }
