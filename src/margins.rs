@@ -297,6 +297,8 @@ pub struct PairReport {
     pub min_backlash_allowed_um: f64,
     /// The smallest backlash of each sample, over its run.
     pub min_backlash_um: Distribution,
+    /// The smallest margin of each sample (backlash − minimum allowed).
+    pub min_margin_um: Distribution,
     /// The one-sided lower bound covering 95 % of samples with 95 % confidence (Wilks),
     /// or null with fewer than `tolerance_samples_needed` samples.
     pub tolerance_95_95_um: Option<f64>,
@@ -581,14 +583,20 @@ pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
                 .collect();
             let mut sorted = mins.clone();
             sorted.sort_by(f64::total_cmp);
-            let percentiles = [1.0, 5.0, 50.0, 95.0, 99.0]
-                .iter()
-                .map(|&pc| Percentile {
-                    percent: pc,
-                    value: stats::quantile(&sorted, pc / 100.0),
-                    ci95: quantile_ci(&sorted, pc / 100.0, 0.95),
-                })
-                .collect();
+            let distribution = |sorted: &[f64]| Distribution {
+                min: sorted.first().copied().unwrap_or(f64::NAN),
+                mean: sorted.iter().sum::<f64>() / n as f64,
+                max: sorted.last().copied().unwrap_or(f64::NAN),
+                percentiles: [1.0, 5.0, 50.0, 95.0, 99.0]
+                    .iter()
+                    .map(|&pc| Percentile {
+                        percent: pc,
+                        value: stats::quantile(sorted, pc / 100.0),
+                        ci95: quantile_ci(sorted, pc / 100.0, 0.95),
+                    })
+                    .collect(),
+            };
+            let margins: Vec<f64> = sorted.iter().map(|v| v - allowed_um).collect();
             let tolerance = rank.map(|r| sorted[(r - 1) as usize]);
             let violations = outcomes.iter().filter(|o| o.pairs[p].violated).count() as u64;
             let interference = outcomes.iter().filter(|o| o.pairs[p].interference).count() as u64;
@@ -664,12 +672,8 @@ pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
                 verdict,
                 reason,
                 min_backlash_allowed_um: allowed_um,
-                min_backlash_um: Distribution {
-                    min: sorted.first().copied().unwrap_or(f64::NAN),
-                    mean: mins.iter().sum::<f64>() / n as f64,
-                    max: sorted.last().copied().unwrap_or(f64::NAN),
-                    percentiles,
-                },
+                min_backlash_um: distribution(&sorted),
+                min_margin_um: distribution(&margins),
                 tolerance_95_95_um: tolerance,
                 tolerance_rank: rank,
                 tolerance_samples_needed: needed,

@@ -58,6 +58,13 @@ fn cli_margins_pass_fail_and_report() {
     assert_eq!(j["verdict"], "pass");
     assert_eq!(j["samples"], 60);
     let p = &j["pairs"][0];
+    // the margin is the backlash less the minimum allowed, percentile by percentile
+    let (b, m) = (&p["min_backlash_um"], &p["min_margin_um"]);
+    for i in 0..5 {
+        let d = b["percentiles"][i]["value"].as_f64().unwrap()
+            - m["percentiles"][i]["value"].as_f64().unwrap();
+        assert!((d - 5.0).abs() < 1e-9, "{d}");
+    }
     for key in [
         "min_backlash_um",
         "tolerance_95_95_um",

@@ -300,31 +300,48 @@ pub fn format_report(r: &Report) -> String {
     for p in &r.pairs {
         outln!(
             o,
-            "\ngear pair {} (smallest normal backlash per sample, µm; minimum allowed {:.1} µm):",
+            "\ngear pair {} (smallest normal backlash and margin per sample, µm; minimum allowed {:.1} µm):",
             p.name,
             p.min_backlash_allowed_um
         );
-        let d = &p.min_backlash_um;
+        let (d, m) = (&p.min_backlash_um, &p.min_margin_um);
         let mut t = table::new(
-            &["", "value", "95 % interval"],
-            &[Align::Left, Align::Right, Align::Left],
+            &["", "backlash", "95 % interval", "margin", "95 % interval"],
+            &[
+                Align::Left,
+                Align::Right,
+                Align::Left,
+                Align::Right,
+                Align::Left,
+            ],
         );
         let um = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.3}"));
-        t.add_row(vec!["min".into(), format!("{:.3}", d.min), String::new()]);
-        for pc in &d.percentiles {
+        let plain = |label: &str, a: f64, b: f64| {
+            vec![
+                label.to_string(),
+                format!("{a:.3}"),
+                String::new(),
+                format!("{b:.3}"),
+                String::new(),
+            ]
+        };
+        t.add_row(plain("min", d.min, m.min));
+        for (pc, pm) in d.percentiles.iter().zip(&m.percentiles) {
             t.add_row(vec![
                 format!("p{}", pc.percent),
                 format!("{:.3}", pc.value),
                 format!("{} … {}", um(pc.ci95[0]), um(pc.ci95[1])),
+                format!("{:.3}", pm.value),
+                format!("{} … {}", um(pm.ci95[0]), um(pm.ci95[1])),
             ]);
         }
-        t.add_row(vec!["max".into(), format!("{:.3}", d.max), String::new()]);
-        t.add_row(vec!["mean".into(), format!("{:.3}", d.mean), String::new()]);
+        t.add_row(plain("max", d.max, m.max));
+        t.add_row(plain("mean", d.mean, m.mean));
         o += &table::render(&t, "  ");
         match p.tolerance_95_95_um {
             Some(v) => outln!(
                 o,
-                "  95/95 lower tolerance bound: {v:.3} µm (the {} smallest of {} samples, Wilks)",
+                "  95/95 lower tolerance bound: {v:.3} µm (the {} of {} samples, Wilks)",
                 ordinal(p.tolerance_rank.unwrap_or(1)),
                 r.samples
             ),
@@ -388,9 +405,9 @@ pub fn format_report(r: &Report) -> String {
 fn ordinal(r: u64) -> String {
     match r {
         1 => "smallest".into(),
-        2 => "2nd".into(),
-        3 => "3rd".into(),
-        n => format!("{n}th"),
+        2 => "2nd smallest".into(),
+        3 => "3rd smallest".into(),
+        n => format!("{n}th smallest"),
     }
 }
 
