@@ -354,36 +354,45 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
             ))
         }
     };
-    let unused = |keys: &[(&'static str, bool)]| match keys.iter().find(|(_, given)| *given) {
-        Some((k, _)) => Err(err(
+    // Each distribution's keys; any other key given is an error naming it.
+    let allowed: &[&str] = match d.distribution.as_str() {
+        "normal" => &["mean", "sd"],
+        "truncated_normal" => &["mean", "sd", "min", "max"],
+        "uniform" => &["min", "max"],
+        "triangular" => &["min", "max", "mode"],
+        "lognormal" => &["median", "sigma"],
+        "cases" => &["values"],
+        other => {
+            return Err(err(
+                at.key("distribution"),
+                format!(
+                    "unknown distribution `{other}`: normal, truncated_normal, uniform, triangular, lognormal or cases"
+                ),
+            ));
+        }
+    };
+    let given = [
+        ("mean", d.mean.is_some()),
+        ("sd", d.sd.is_some()),
+        ("min", d.min.is_some()),
+        ("max", d.max.is_some()),
+        ("mode", d.mode.is_some()),
+        ("median", d.median.is_some()),
+        ("sigma", d.sigma.is_some()),
+        ("values", d.values.is_some()),
+    ];
+    if let Some((k, _)) = given.iter().find(|(k, g)| *g && !allowed.contains(k)) {
+        return Err(err(
             at.key(k),
             format!("is not a parameter of `{}`", d.distribution),
-        )),
-        None => Ok(()),
-    };
-    let given = |v: &Option<f64>| v.is_some();
+        ));
+    }
     Ok(match d.distribution.as_str() {
-        "normal" => {
-            unused(&[
-                ("min", given(&d.min)),
-                ("max", given(&d.max)),
-                ("mode", given(&d.mode)),
-                ("median", given(&d.median)),
-                ("sigma", given(&d.sigma)),
-                ("values", d.values.is_some()),
-            ])?;
-            Distribution::Normal {
-                mean: need(d.mean.or(Some(nominal)), "mean")?,
-                sd: positive(need(d.sd, "sd")?, "sd")?,
-            }
-        }
+        "normal" => Distribution::Normal {
+            mean: need(d.mean.or(Some(nominal)), "mean")?,
+            sd: positive(need(d.sd, "sd")?, "sd")?,
+        },
         "truncated_normal" => {
-            unused(&[
-                ("mode", given(&d.mode)),
-                ("median", given(&d.median)),
-                ("sigma", given(&d.sigma)),
-                ("values", d.values.is_some()),
-            ])?;
             let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
             ordered(min, max)?;
             Distribution::TruncatedNormal {
@@ -394,26 +403,11 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
             }
         }
         "uniform" => {
-            unused(&[
-                ("mean", given(&d.mean)),
-                ("sd", given(&d.sd)),
-                ("mode", given(&d.mode)),
-                ("median", given(&d.median)),
-                ("sigma", given(&d.sigma)),
-                ("values", d.values.is_some()),
-            ])?;
             let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
             ordered(min, max)?;
             Distribution::Uniform { min, max }
         }
         "triangular" => {
-            unused(&[
-                ("mean", given(&d.mean)),
-                ("sd", given(&d.sd)),
-                ("median", given(&d.median)),
-                ("sigma", given(&d.sigma)),
-                ("values", d.values.is_some()),
-            ])?;
             let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
             ordered(min, max)?;
             let mode = need(d.mode.or(Some(nominal)), "mode")?;
@@ -425,30 +419,11 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
             }
             Distribution::Triangular { min, mode, max }
         }
-        "lognormal" => {
-            unused(&[
-                ("mean", given(&d.mean)),
-                ("sd", given(&d.sd)),
-                ("min", given(&d.min)),
-                ("max", given(&d.max)),
-                ("mode", given(&d.mode)),
-                ("values", d.values.is_some()),
-            ])?;
-            Distribution::LogNormal {
-                median: positive(need(d.median.or(Some(nominal)), "median")?, "median")?,
-                sigma: positive(need(d.sigma, "sigma")?, "sigma")?,
-            }
-        }
+        "lognormal" => Distribution::LogNormal {
+            median: positive(need(d.median.or(Some(nominal)), "median")?, "median")?,
+            sigma: positive(need(d.sigma, "sigma")?, "sigma")?,
+        },
         "cases" => {
-            unused(&[
-                ("mean", given(&d.mean)),
-                ("sd", given(&d.sd)),
-                ("min", given(&d.min)),
-                ("max", given(&d.max)),
-                ("mode", given(&d.mode)),
-                ("median", given(&d.median)),
-                ("sigma", given(&d.sigma)),
-            ])?;
             let v = d.values.clone().unwrap_or_default();
             if v.is_empty() || v.iter().any(|x| !x.is_finite()) {
                 return Err(err(
@@ -458,13 +433,6 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
             }
             Distribution::Cases(v)
         }
-        other => {
-            return Err(err(
-                at.key("distribution"),
-                format!(
-                    "unknown distribution `{other}`: normal, truncated_normal, uniform, triangular, lognormal or cases"
-                ),
-            ));
-        }
+        _ => unreachable!("checked above"),
     })
 }

@@ -190,22 +190,28 @@ pub mod stats {
     /// n samples: the largest r with P(Bin(n, 1 − coverage) ≥ r) ≥ confidence. `None`
     /// when even r = 1 is not enough (n < 59 for 95/95).
     pub fn wilks_rank(n: u64, coverage: f64, confidence: f64) -> Option<u64> {
-        let q = 1.0 - coverage;
-        // P(Bin(n, q) ≤ r − 1), summed term by term in logs
-        let ln_choose =
-            |n: u64, k: u64| -> f64 { (1..=k).map(|i| ((n - k + i) as f64 / i as f64).ln()).sum() };
-        let mut best = None;
-        let mut below = 0.0; // P(Bin ≤ r − 1)
-        for r in 1..=n {
-            let i = r - 1;
-            below += (ln_choose(n, i) + i as f64 * q.ln() + (n - i) as f64 * coverage.ln()).exp();
-            if 1.0 - below >= confidence {
-                best = Some(r);
-            } else {
-                break;
+        // the largest r with 1 − P(Bin(n, 1 − coverage) ≤ r − 1) ≥ confidence
+        let cdf = binomial_cdf(n, 1.0 - coverage);
+        (1..=n)
+            .take_while(|&r| 1.0 - cdf[(r - 1) as usize] >= confidence)
+            .last()
+    }
+
+    /// `cdf[r]` = P(Bin(n, p) ≤ r) for r = 0 … n, 0 < p < 1: the probabilities by their
+    /// ratio recurrence in logs (O(n), no underflow for large n).
+    pub fn binomial_cdf(n: u64, p: f64) -> Vec<f64> {
+        let (lp, lq) = (p.ln(), (1.0 - p).ln());
+        let mut ln_pmf = n as f64 * lq;
+        let mut acc = 0.0;
+        let mut cdf = Vec::with_capacity(n as usize + 1);
+        for r in 0..=n {
+            acc += ln_pmf.exp();
+            cdf.push(acc.min(1.0));
+            if r < n {
+                ln_pmf += ((n - r) as f64).ln() - ((r + 1) as f64).ln() + lp - lq;
             }
         }
-        best
+        cdf
     }
 
     /// The fewest samples for which [`wilks_rank`] exists.
@@ -359,15 +365,7 @@ pub struct Worst {
 fn quantile_ci(sorted: &[f64], q: f64, level: f64) -> [Option<f64>; 2] {
     let n = sorted.len() as u64;
     let a = (1.0 - level) / 2.0;
-    let ln_choose =
-        |n: u64, k: u64| -> f64 { (1..=k).map(|i| ((n - k + i) as f64 / i as f64).ln()).sum() };
-    // cdf[r] = P(Bin(n, q) ≤ r)
-    let mut cdf = Vec::with_capacity(n as usize + 1);
-    let mut acc = 0.0;
-    for r in 0..=n {
-        acc += (ln_choose(n, r) + r as f64 * q.ln() + (n - r) as f64 * (1.0 - q).ln()).exp();
-        cdf.push(acc.min(1.0));
-    }
+    let cdf = stats::binomial_cdf(n, q);
     // lower: the largest l with P(Bin ≤ l − 1) ≤ a; upper: the smallest u with
     // P(Bin ≤ u − 1) ≥ 1 − a
     let lo = (1..=n).rev().find(|&l| cdf[(l - 1) as usize] <= a);

@@ -101,7 +101,7 @@ pub fn lag_over(s0: f64, tau_s: f64, h_s: f64, c: [f64; 4]) -> f64 {
     let p = |v: f64| c[0] + v * (c[1] + v * (c[2] + v * c[3]));
     if lambda <= 2.0 {
         // S(1) = e^{−λ} S0 + λ ∫₀¹ e^{−λ(1−v)} T(v) dv
-        let integral: f64 = GAUSS_8
+        let integral: f64 = crate::gear::disc::GAUSS8
             .iter()
             .map(|&(x, w)| {
                 let v = 0.5 * (x + 1.0);
@@ -121,18 +121,6 @@ pub fn lag_over(s0: f64, tau_s: f64, h_s: f64, c: [f64; 4]) -> f64 {
         particular(1.0) + (s0 - particular(0.0)) * decay
     }
 }
-
-/// Nodes and weights of the 8-point Gauss–Legendre rule on [−1, 1].
-const GAUSS_8: [(f64, f64); 8] = [
-    (-0.960_289_856_497_536_3, 0.101_228_536_290_376_26),
-    (-0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
-    (-0.525_532_409_916_329, 0.313_706_645_877_887_3),
-    (-0.183_434_642_495_649_8, 0.362_683_783_378_362),
-    (0.183_434_642_495_649_8, 0.362_683_783_378_362),
-    (0.525_532_409_916_329, 0.313_706_645_877_887_3),
-    (0.796_666_477_413_626_7, 0.222_381_034_453_374_47),
-    (0.960_289_856_497_536_3, 0.101_228_536_290_376_26),
-];
 
 /// The cubic of node `i` over the part [t0, t_s] of `step`, in the fraction of that part.
 fn cubic_until(step: &StepView<'_>, i: usize, t_s: f64) -> [f64; 4] {

@@ -68,6 +68,10 @@ pub enum SteadyError {
     #[error(transparent)]
     Run(#[from] SimError),
     #[error(
+        "a periodic orbit needs an environment that repeats every orbit; this one changes at t = {0} s (a table or a mode window)"
+    )]
+    NotPeriodic(f64),
+    #[error(
         "no periodic orbit within {orbits} orbits: the last orbit still moved a node by {error_k:.3e} K (tolerance {tolerance_k} K)"
     )]
     NotConverged {
@@ -75,6 +79,15 @@ pub enum SteadyError {
         error_k: f64,
         tolerance_k: f64,
     },
+}
+
+/// Whether `model`'s environment and loads repeat every orbit (no table knots or mode
+/// edges), as a periodic orbit needs.
+pub fn check_repeats(model: &crate::thermal::ThermalModel) -> Result<(), SteadyError> {
+    match model.breakpoints_s().first() {
+        Some(&t) => Err(SteadyError::NotPeriodic(t)),
+        None => Ok(()),
+    }
 }
 
 /// One orbit from temperatures `x` and heater states `heaters` at `t0`: the end
@@ -106,6 +119,7 @@ pub fn periodic_orbit(
     period_s: f64,
     opts: SteadyOptions,
 ) -> Result<Periodic, SteadyError> {
+    check_repeats(setup.model())?;
     let t0 = start.t_s;
     let mut x = start.temperatures_k.clone();
     let mut heaters = start.heaters_on.clone();

@@ -25,6 +25,15 @@ pub enum SamplingArg {
     Lhs,
 }
 
+impl From<SamplingArg> for Sampling {
+    fn from(a: SamplingArg) -> Sampling {
+        match a {
+            SamplingArg::Random => Sampling::Random,
+            SamplingArg::Lhs => Sampling::LatinHypercube,
+        }
+    }
+}
+
 #[derive(Args, Debug)]
 pub struct MarginsArgs {
     /// Scenario file (TOML) with `[[dispersion]]` entries.
@@ -119,20 +128,21 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
             loaded.file
         );
     }
-    let sampling = match a.sampling {
-        SamplingArg::Random => Sampling::Random,
-        SamplingArg::Lhs => Sampling::LatinHypercube,
-    };
-    let plan = Plan::new(&loaded.model, &spec.dispersion, sampling, a.samples, a.seed)
-        .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
+    let plan = Plan::new(
+        &loaded.model,
+        &spec.dispersion,
+        a.sampling.into(),
+        a.samples,
+        a.seed,
+    )
+    .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
     let horizon = match (a.orbits, a.steady_state) {
         (Some(n), _) => Horizon::Orbits(n),
         (None, true) => {
-            if let Some(t) = loaded.scenario.thermal.breakpoints_s().first() {
-                bail!(
-                    "--steady-state needs an environment that repeats every orbit; this scenario changes at t = {t} s (a table or a mode window)"
-                );
-            }
+            // before any sample runs
+            orbitlash::steady::check_repeats(&loaded.scenario.thermal).map_err(|e| {
+                anyhow::anyhow!("--steady-state needs an environment that repeats every orbit; {e}")
+            })?;
             Horizon::SteadyState
         }
         (None, false) => Horizon::Mission, // the scenario's own run length

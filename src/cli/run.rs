@@ -731,10 +731,7 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
 /// and records them with the `--set` changes; returns a line for the summary.
 fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> Result<String> {
     use orbitlash::dispersion::{Plan, Sampling};
-    let sampling = match a.sampling {
-        super::margins::SamplingArg::Random => Sampling::Random,
-        super::margins::SamplingArg::Lhs => Sampling::LatinHypercube,
-    };
+    let sampling: Sampling = a.sampling.into();
     let n = match (sampling, a.samples) {
         (_, Some(n)) => n,
         (Sampling::Random, None) => k + 1,
@@ -772,12 +769,6 @@ fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> 
 /// found.
 fn periodic_start(sc: &Scenario) -> Result<(orbitlash::sim::State, String)> {
     use orbitlash::steady::{SteadyOptions, periodic_orbit};
-    let breaks = sc.thermal.breakpoints_s();
-    if let Some(t) = breaks.first() {
-        anyhow::bail!(
-            "--steady-state needs an environment that repeats every orbit; this scenario changes at t = {t} s (a table or a mode window)"
-        );
-    }
     let period = sc.period_s();
     let mut setup = orbitlash::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
     let start = setup.initial_state();

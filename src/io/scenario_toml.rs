@@ -46,14 +46,8 @@ pub fn read_spec_file(path: &Path) -> Result<(ScenarioSpec, String), ScenarioErr
 
 /// Reads and validates a scenario file.
 pub fn load_file(path: &Path) -> Result<(Scenario, String), ScenarioError> {
-    let file = path.display().to_string();
-    let text = super::output::check_input(path)
-        .and_then(|()| std::fs::read_to_string(path))
-        .map_err(|source| ScenarioError::Read {
-            file: file.clone(),
-            source,
-        })?;
-    let scenario = parse(&text, &file)?;
+    let (spec, text) = read_spec_file(path)?;
+    let scenario = compile(spec).map_err(|e| located(&text, &path.display().to_string(), e))?;
     Ok((scenario, text))
 }
 
