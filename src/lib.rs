@@ -46,6 +46,7 @@
 //! `docs/ARCHITECTURE.md` for the module map and invariants.
 
 pub mod constants;
+pub mod diagnose;
 pub mod dispersion;
 pub mod gear;
 pub mod io;

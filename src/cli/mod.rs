@@ -11,6 +11,7 @@ macro_rules! outln {
 mod backlash;
 mod bench;
 mod check;
+mod diagnose;
 mod export;
 mod margins;
 mod params;
@@ -69,6 +70,14 @@ enum Command {
     /// Static backlash calculator: every model variant at given temperatures.
     #[command(after_help = VERDICT_HELP)]
     Backlash(backlash::BacklashArgs),
+    /// A recording (test or flight data) against the scenario: where they differ, which
+    /// physics the model left out (or which parameter or sensor is off), that physics
+    /// added and fitted, and the fit checked on held-out orbits it never saw.
+    #[command(
+        after_help = "Exit status: 0 when the analysis ran, whatever the verdict \
+(consistent, explained or unexplained); 2 on any error."
+    )]
+    Diagnose(diagnose::DiagnoseArgs),
     /// Convert an MCAP log back to CSV (the layout of `run --csv`); a cut-off log is
     /// read up to its last whole message.
     ExportCsv(export::ExportArgs),
@@ -102,6 +111,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
         Command::Params(a) => done(params::params(a)),
         Command::Bench(a) => done(bench::bench(a)),
         Command::Backlash(a) => backlash::backlash(a),
+        Command::Diagnose(a) => diagnose::diagnose(a),
         Command::ExportCsv(a) => done(export::export(a)),
         Command::Recover(a) => done(recover::recover(a)),
     }

@@ -221,3 +221,136 @@ pub fn tornado(title: &str, rows: &[(String, f64)]) -> String {
     o.push_str("</svg>\n");
     o
 }
+
+/// Residual of one recording channel against time, before (the baseline, grey) and
+/// after (the corrected model, blue), with the noise band (±1σ, ±3σ) and the held-out
+/// orbits shaded.
+pub fn residuals(s: &crate::diagnose::Series, c: usize) -> String {
+    let name = &s.channels[c];
+    let unit = if s.units[c] == "um" { "µm" } else { "K" };
+    let sigma = s.noise.get(c).copied().unwrap_or(f64::NAN);
+    let mut o = String::new();
+    header(
+        &mut o,
+        &format!("{name}: residual (recorded − model), before and after"),
+    );
+    let pts: Vec<(f64, f64, f64)> = s
+        .time_s
+        .iter()
+        .enumerate()
+        .filter_map(|(j, &t)| {
+            s.recorded[c][j].map(|v| (t / 3600.0, v - s.baseline[c][j], v - s.corrected[c][j]))
+        })
+        .filter(|p| p.1.is_finite() && p.2.is_finite())
+        .collect();
+    if pts.is_empty() {
+        o.push_str("</svg>\n");
+        return o;
+    }
+    let (t_lo, t_hi) = (0.0, pts.last().unwrap().0.max(1e-6));
+    let mut lo = pts
+        .iter()
+        .map(|p| p.1.min(p.2))
+        .fold(f64::INFINITY, f64::min);
+    let mut hi = pts
+        .iter()
+        .map(|p| p.1.max(p.2))
+        .fold(f64::NEG_INFINITY, f64::max);
+    if sigma.is_finite() {
+        lo = lo.min(-3.0 * sigma);
+        hi = hi.max(3.0 * sigma);
+    }
+    let pad = 0.05 * (hi - lo).max(1e-9);
+    lo -= pad;
+    hi += pad;
+    let (y0, y1) = (H - BOTTOM, TOP);
+    let y_of = |v: f64| y0 - (v - lo) / (hi - lo) * (y0 - y1);
+    let x_of_t = |t: f64| x_of(t, t_lo, t_hi);
+    // held-out orbits
+    let (ha, hb) = (s.train_end_s / 3600.0, s.holdout_end_s / 3600.0);
+    if ha.is_finite() && ha < t_hi {
+        let (xa, xb) = (x_of_t(ha), x_of_t(hb.min(t_hi)));
+        let _ = writeln!(
+            o,
+            "<rect class=\"holdout\" x=\"{xa:.2}\" y=\"{y1}\" width=\"{:.2}\" height=\"{:.2}\" fill=\"#fef3d8\"/><text x=\"{:.2}\" y=\"{}\" fill=\"#a70\">held out</text>",
+            xb - xa,
+            y0 - y1,
+            xa + 4.0,
+            y1 + 14.0
+        );
+    }
+    if sigma.is_finite() {
+        for (k, fill) in [(3.0, "#eeeeee"), (1.0, "#dddddd")] {
+            let (ya, yb) = (y_of(k * sigma), y_of(-k * sigma));
+            let _ = writeln!(
+                o,
+                "<rect class=\"noise\" x=\"{LEFT}\" y=\"{ya:.2}\" width=\"{:.2}\" height=\"{:.2}\" fill=\"{fill}\" fill-opacity=\"0.7\"/>",
+                W - RIGHT - LEFT,
+                yb - ya
+            );
+        }
+    }
+    let _ = writeln!(
+        o,
+        "<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{}\" y2=\"{y0}\" stroke=\"black\"/>\n<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{LEFT}\" y2=\"{y1}\" stroke=\"black\"/>",
+        W - RIGHT
+    );
+    let st = step(t_hi - t_lo);
+    let mut t = 0.0;
+    while t <= t_hi + 1e-9 {
+        let x = x_of_t(t);
+        let _ = writeln!(
+            o,
+            "<line x1=\"{x:.2}\" y1=\"{y0}\" x2=\"{x:.2}\" y2=\"{}\" stroke=\"black\"/><text x=\"{x:.2}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
+            y0 + 5.0,
+            y0 + 18.0,
+            crate::units::num(t)
+        );
+        t += st;
+    }
+    let sv = step(hi - lo);
+    let mut v = (lo / sv).ceil() * sv;
+    while v <= hi {
+        let y = y_of(v);
+        let _ = writeln!(
+            o,
+            "<line x1=\"{}\" y1=\"{y:.2}\" x2=\"{LEFT}\" y2=\"{y:.2}\" stroke=\"black\"/><text x=\"{}\" y=\"{:.2}\" text-anchor=\"end\">{}</text>",
+            LEFT - 5.0,
+            LEFT - 7.0,
+            y + 4.0,
+            crate::units::num((v / sv).round() * sv)
+        );
+        v += sv;
+    }
+    let _ = writeln!(
+        o,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">time since t = 0, h</text>\n<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">residual, {unit}</text>",
+        (LEFT + W - RIGHT) / 2.0,
+        H - 18.0,
+        (y0 + y1) / 2.0,
+        (y0 + y1) / 2.0
+    );
+    for (class, k, colour) in [("before", 1, "#888888"), ("after", 2, "#1f5fbf")] {
+        let mut path = String::new();
+        for p in &pts {
+            let v = if k == 1 { p.1 } else { p.2 };
+            let _ = write!(path, "M{:.1},{:.1}h0.01", x_of_t(p.0), y_of(v));
+        }
+        let _ = writeln!(
+            o,
+            "<path class=\"{class}\" d=\"{path}\" stroke=\"{colour}\" stroke-width=\"2.2\" stroke-linecap=\"round\" fill=\"none\"/>"
+        );
+    }
+    let _ = writeln!(
+        o,
+        "<text x=\"{}\" y=\"{}\" fill=\"#888888\">● before (baseline)</text><text x=\"{}\" y=\"{}\" fill=\"#1f5fbf\">● after (corrected)</text><text x=\"{}\" y=\"{}\" fill=\"#777\">bands: ±1σ, ±3σ noise</text>",
+        LEFT + 10.0,
+        y1 + 14.0,
+        LEFT + 170.0,
+        y1 + 14.0,
+        LEFT + 330.0,
+        y1 + 14.0
+    );
+    o.push_str("</svg>\n");
+    o
+}

@@ -1,0 +1,351 @@
+//! `orbitlash diagnose`: a recording against the scenario (see `orbitlash::diagnose`).
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use orbitlash::diagnose::{self, Diagnosis, Options, Verdict};
+use orbitlash::io::atomic::AtomicFile;
+use orbitlash::io::output::{OutputError, OutputPolicy, check_output, resolved};
+use orbitlash::io::recording::Recording;
+
+use super::{Outcome, load_with, print_out};
+
+#[derive(Args, Debug)]
+pub struct DiagnoseArgs {
+    /// The scenario as the model has it (e.g. scenarios/reference-hinge.toml).
+    scenario: PathBuf,
+    /// The recording: CSV (time_s and the scenario's sensor columns) or MCAP.
+    #[arg(long)]
+    recording: PathBuf,
+    /// Also write the machine-readable report (stable keys, see the README).
+    #[arg(long, value_name = "REPORT.json")]
+    json: Option<PathBuf>,
+    /// Also write into this folder (created if missing; a default-free name, any
+    /// place that is not an input): `corrected.toml` (the scenario with the accepted
+    /// effects, runnable as it is), `diagnose.mcap` (recording, baseline, corrected and
+    /// residuals side by side) and `residuals-<channel>.svg` (before and after).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+    /// Whole orbits held out at the end of the recording for validation (default: a
+    /// third of them, at least one). They are never used for fitting or ranking.
+    #[arg(long, value_name = "N")]
+    holdout_orbits: Option<usize>,
+    /// Change a number of the scenario by its key path (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
+    let loaded = load_with(Some(&a.scenario), &a.sets)?;
+    let mut inputs = loaded.inputs();
+    inputs.push(&a.recording);
+    let policy = OutputPolicy::reading(&inputs);
+    if let Some(p) = &a.json {
+        check_output(p, &policy)?;
+    }
+    if let Some(dir) = &a.out {
+        for r in &inputs {
+            if resolved(dir) == resolved(r) {
+                bail!("--out {}: is an input of this command", dir.display());
+            }
+        }
+        if dir.exists() && !dir.is_dir() {
+            bail!("--out {}: exists and is not a directory", dir.display());
+        }
+    }
+    if a.holdout_orbits == Some(0) {
+        bail!(
+            "--holdout-orbits 0: hold out at least one orbit (the fit must be checked on data it did not see)"
+        );
+    }
+    let rec = Recording::read(&a.recording)?;
+    let opts = Options {
+        holdout_orbits: a.holdout_orbits,
+        ..Options::default()
+    };
+    let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = indicatif::ProgressBar::new(1);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{msg:10} {bar:40} {pos}/{len}, {elapsed}")
+                .expect("a valid template"),
+        );
+        b
+    });
+    let stage = Mutex::new(String::new());
+    let progress = |name: &str, done: usize, total: usize| {
+        if let Some(b) = &bar {
+            let mut s = stage.lock().unwrap();
+            if *s != name {
+                *s = name.to_string();
+                b.set_message(name.to_string());
+                b.set_length(total as u64);
+            }
+            b.set_position(done as u64);
+        }
+    };
+    let d = diagnose::diagnose(&loaded.model, &rec, &opts, &progress)
+        .with_context(|| format!("diagnose {} against {}", rec.file, loaded.file))?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let mut o = format_report(&d, &loaded.file, &rec.file);
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&d)? + "\n";
+        write_file(p, &policy, text.as_bytes())?;
+        outln!(o, "json: {}", p.display());
+    }
+    if let Some(dir) = &a.out {
+        for f in write_out(dir, &policy, &d, &loaded)? {
+            outln!(o, "wrote: {}", f.display());
+        }
+    }
+    print_out(&o)?;
+    Ok(Outcome::Pass)
+}
+
+fn write_file(path: &Path, policy: &OutputPolicy, bytes: &[u8]) -> Result<()> {
+    let mut f = AtomicFile::create(path, policy)?;
+    f.write_all(bytes).map_err(|e| OutputError::io(path, e))?;
+    f.commit()?;
+    Ok(())
+}
+
+/// `--out DIR`: corrected scenario, side-by-side MCAP, residual plots.
+fn write_out(
+    dir: &Path,
+    policy: &OutputPolicy,
+    d: &Diagnosis,
+    loaded: &super::Loaded,
+) -> Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("--out {}: cannot create it", dir.display()))?;
+    let mut written = Vec::new();
+    // The corrected scenario (the original when nothing was accepted).
+    let spec = d
+        .corrected
+        .as_ref()
+        .map_or(loaded.model.spec(), |m| m.spec());
+    let mut toml_text = format!(
+        "# {} corrected by `orbitlash diagnose` (verdict: {}).\n",
+        loaded.file,
+        d.verdict.as_str()
+    );
+    for f in &d.findings {
+        toml_text += &format!("# added: {} {}\n", f.effect, finding_target(f));
+        for (k, v) in &f.set {
+            toml_text += &format!("#   {k} = {v}\n");
+        }
+    }
+    toml_text += &toml::to_string(spec).context("cannot write the corrected scenario as TOML")?;
+    let p = dir.join("corrected.toml");
+    write_file(&p, policy, toml_text.as_bytes())?;
+    written.push(p);
+    let p = dir.join("diagnose.mcap");
+    orbitlash::io::diagnose_out::write_mcap(&p, policy, d)?;
+    written.push(p);
+    for (c, name) in d.series.channels.iter().enumerate() {
+        let svg = orbitlash::io::svg::residuals(&d.series, c);
+        let p = dir.join(format!("residuals-{name}.svg"));
+        write_file(&p, policy, svg.as_bytes())?;
+        written.push(p);
+    }
+    Ok(written)
+}
+
+fn finding_target(f: &diagnose::Finding) -> String {
+    let mut parts = Vec::new();
+    for (k, v) in [
+        ("node", &f.node),
+        ("channel", &f.channel),
+        ("conductor", &f.conductor),
+        ("load", &f.load),
+        ("gear", &f.gear),
+        ("gear pair", &f.gear_pair),
+        ("schedule", &f.schedule),
+    ] {
+        if let Some(v) = v {
+            if k == "gear pair" && f.gear.is_some() {
+                continue;
+            }
+            parts.push(format!("{k} {v}"));
+        }
+    }
+    parts.join(", ")
+}
+
+fn unit_of(name: &str) -> &'static str {
+    if name.ends_with("_um") { "µm" } else { "K" }
+}
+
+/// The human report.
+pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
+    let mut o = String::new();
+    let verdict = match d.verdict {
+        Verdict::Consistent => {
+            "CONSISTENT: the model fits the recording to its noise; nothing to add"
+        }
+        Verdict::Explained => "EXPLAINED: the model left out what the findings below add",
+        Verdict::Unexplained => {
+            "UNEXPLAINED: a structured residual remains that no effect of the vocabulary fits"
+        }
+    };
+    outln!(o, "{verdict}");
+    outln!(o, "scenario {scenario}, recording {recording}");
+    let s = &d.split;
+    if s.holdout_orbits > 0 {
+        outln!(
+            o,
+            "{} whole orbits of {:.1} s: fitted on orbits 1–{}, checked on orbits {}–{} (held out, never fitted)",
+            s.orbits,
+            s.period_s,
+            s.train_orbits,
+            s.train_orbits + 1,
+            s.orbits
+        );
+    }
+    for n in &d.notes {
+        outln!(o, "note: {n}");
+    }
+    outln!(o, "");
+    outln!(
+        o,
+        "channel        noise   baseline rms (fit / held-out)   corrected held-out rms"
+    );
+    for (name, sigma) in &d.noise.0 {
+        let u = unit_of(name);
+        let b = d.baseline.rmse.get(name).unwrap_or(f64::NAN);
+        let bh = d.baseline.heldout_rmse.get(name).unwrap_or(f64::NAN);
+        let ch = d.heldout_rmse.get(name).unwrap_or(f64::NAN);
+        outln!(
+            o,
+            "{name:<13} {sigma:>6.3} {u:<2}  {b:>8.3} / {bh:>8.3} {u:<2}        {ch:>8.3} {u:<2} ({:.2}× noise)",
+            ch / sigma
+        );
+    }
+    outln!(o, "");
+    if d.mismatches.is_empty() {
+        outln!(o, "where: no channel's baseline residual exceeds its noise");
+    } else {
+        outln!(o, "where the baseline residual sits (largest first):");
+        for m in d.mismatches.iter().take(12) {
+            outln!(
+                o,
+                "  {:<13} {:<13} rms {:.3} {} ({:.1}× noise, mean {:+.3}), {:.0} % of the channel's residual; \
+                 first at t = {:.0} … {:.0} s; {:.0} … {:.0} s after orbit noon in {} orbit(s)",
+                m.channel,
+                m.phase,
+                m.rms,
+                unit_of(&m.channel),
+                m.rms_over_noise,
+                m.mean,
+                100.0 * m.share,
+                m.t_start_s,
+                m.t_end_s,
+                m.orbit_t_start_s,
+                m.orbit_t_end_s,
+                m.orbits.len()
+            );
+        }
+    }
+    outln!(o, "");
+    if !d.findings.is_empty() {
+        outln!(o, "what the model left out:");
+        for f in &d.findings {
+            outln!(o, "  {} ({}) on {}", f.effect, f.kind, finding_target(f));
+            for (k, v) in &f.parameters {
+                let se = f.std_errors.get(k).copied().flatten();
+                match se {
+                    Some(se) => outln!(o, "      {k} = {} ± {}", sig(*v), sig(se)),
+                    None => outln!(o, "      {k} = {}", sig(*v)),
+                }
+            }
+            if f.correlation.len() > 1 {
+                for i in 0..f.correlation.len() {
+                    for j in i + 1..f.correlation.len() {
+                        if let Some(r) = f.correlation[i][j] {
+                            outln!(
+                                o,
+                                "      correlation({}, {}) = {:+.2}",
+                                f.correlation_order[i],
+                                f.correlation_order[j],
+                                r
+                            );
+                        }
+                    }
+                }
+            }
+            outln!(
+                o,
+                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0}",
+                f.delta_bic,
+                f.heldout_chi2_drop
+            );
+        }
+        outln!(o, "");
+    }
+    if d.verdict != Verdict::Consistent
+        && !d.remaining.is_empty()
+        && d.verdict == Verdict::Unexplained
+    {
+        outln!(o, "the residual that remains sits:");
+        for m in d.remaining.iter().take(6) {
+            outln!(
+                o,
+                "  {:<13} {:<13} rms {:.3} {} ({:.1}× noise), {:.0} … {:.0} s after orbit noon",
+                m.channel,
+                m.phase,
+                m.rms,
+                unit_of(&m.channel),
+                m.rms_over_noise,
+                m.orbit_t_start_s,
+                m.orbit_t_end_s
+            );
+        }
+        outln!(o, "");
+    }
+    outln!(o, "candidates ({} tried):", d.candidates.len());
+    for c in &d.candidates {
+        if c.status == "not_fitted" && c.rank_chi2_drop <= 0.0 {
+            continue;
+        }
+        outln!(o, "  {:<9} {}: {}", c.status, c.target, c.reason);
+    }
+    let quiet = d
+        .candidates
+        .iter()
+        .filter(|c| c.status == "not_fitted" && c.rank_chi2_drop <= 0.0)
+        .count();
+    if quiet > 0 {
+        outln!(
+            o,
+            "  ({quiet} more do not lower the training residual at any start point)"
+        );
+    }
+    outln!(
+        o,
+        "time: {:.2} s ({:.3} s per candidate)",
+        d.time_s,
+        d.time_per_candidate_s
+    );
+    o
+}
+
+/// Four significant digits.
+fn sig(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let e = v.abs().log10().floor() as i32;
+    if (-3..5).contains(&e) {
+        format!("{:.*}", (3 - e).max(0) as usize, v)
+    } else {
+        format!("{v:.3e}")
+    }
+}

@@ -1,0 +1,521 @@
+//! The recording as the fit sees it: channels matched to the model's sensors, the
+//! training and held-out orbits, each channel's noise, orbit phases, and where a
+//! residual sits (mismatches).
+
+use serde::Serialize;
+
+use crate::io::recording::Recording;
+use crate::orbit::EnvironmentModel;
+use crate::scenario::Scenario;
+
+use super::DiagnoseError;
+
+/// Which part of the recording a sample belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Part {
+    Train,
+    Holdout,
+    /// After the last whole orbit: used by neither the fit nor the held-out check.
+    Tail,
+}
+
+/// The recording's orbits and how they are split.
+#[derive(Debug, Clone, Serialize)]
+pub struct Split {
+    pub period_s: f64,
+    /// Whole orbits the recording covers (from t = 0).
+    pub orbits: usize,
+    pub train_orbits: usize,
+    pub holdout_orbits: usize,
+    pub train_end_s: f64,
+    pub holdout_end_s: f64,
+}
+
+impl Split {
+    /// The last `holdout` of the whole orbits are held out; `None`: a third (at least
+    /// one). Fewer than two whole orbits: nothing can be held out (`holdout_orbits`
+    /// 0, everything is training).
+    /// `slack_s`: an orbit counts as whole when the recording ends within this of its
+    /// end (one sampling interval).
+    pub fn new(
+        period_s: f64,
+        t_last_s: f64,
+        slack_s: f64,
+        holdout: Option<usize>,
+    ) -> Result<Split, String> {
+        let orbits = ((t_last_s + slack_s.max(1e-6 * period_s)) / period_s).floor() as usize;
+        if orbits < 2 {
+            return Ok(Split {
+                period_s,
+                orbits,
+                train_orbits: orbits,
+                holdout_orbits: 0,
+                train_end_s: f64::INFINITY,
+                holdout_end_s: f64::INFINITY,
+            });
+        }
+        let h = holdout.unwrap_or((orbits / 3).max(1));
+        if h == 0 || h >= orbits {
+            return Err(format!(
+                "--holdout-orbits {h}: the recording has {orbits} whole orbits; hold out \
+                 at least 1 and leave at least 1 to fit"
+            ));
+        }
+        let train = orbits - h;
+        Ok(Split {
+            period_s,
+            orbits,
+            train_orbits: train,
+            holdout_orbits: h,
+            train_end_s: train as f64 * period_s,
+            holdout_end_s: orbits as f64 * period_s,
+        })
+    }
+
+    pub fn part(&self, t_s: f64) -> Part {
+        if t_s < self.train_end_s {
+            Part::Train
+        } else if t_s <= self.holdout_end_s {
+            Part::Holdout
+        } else {
+            Part::Tail
+        }
+    }
+
+    pub fn can_validate(&self) -> bool {
+        self.holdout_orbits > 0
+    }
+}
+
+/// Orbit phases a residual is folded by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    Sunlit,
+    Eclipse,
+    EclipseEntry,
+    EclipseExit,
+}
+
+impl Phase {
+    pub const ALL: [Phase; 4] = [
+        Phase::Sunlit,
+        Phase::EclipseEntry,
+        Phase::Eclipse,
+        Phase::EclipseExit,
+    ];
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Phase::Sunlit => "sunlit",
+            Phase::Eclipse => "eclipse",
+            Phase::EclipseEntry => "eclipse_entry",
+            Phase::EclipseExit => "eclipse_exit",
+        }
+    }
+}
+
+/// A channel of the recording and the model's sensor that reads it.
+#[derive(Debug, Clone)]
+pub struct Channel {
+    pub name: String,
+    /// Index into the scenario's sensors.
+    pub sensor: usize,
+    /// `K` for temperatures (residuals of °C and K columns are kelvin), `um` for backlash.
+    pub unit: &'static str,
+    pub is_temperature: bool,
+}
+
+/// The recording aligned to the model.
+#[derive(Debug, Clone)]
+pub struct Observations {
+    pub file: String,
+    pub channels: Vec<Channel>,
+    pub time_s: Vec<f64>,
+    /// Per channel, per time.
+    pub values: Vec<Vec<Option<f64>>>,
+    pub split: Split,
+    /// Per time: its part and orbit phase.
+    pub part: Vec<Part>,
+    pub phase: Vec<Phase>,
+    /// Per time: the orbit it falls in (0-based).
+    pub orbit: Vec<usize>,
+    /// Eclipse windows (entry, exit) over the recording.
+    pub eclipses: Vec<(f64, f64)>,
+}
+
+/// Width of the eclipse-entry and eclipse-exit windows, as a fraction of the orbit.
+pub const TRANSITION_FRACTION: f64 = 0.1;
+
+impl Observations {
+    pub fn new(
+        rec: &Recording,
+        sc: &Scenario,
+        holdout: Option<usize>,
+    ) -> Result<Observations, DiagnoseError> {
+        let sensor_of = rec
+            .match_sensors(&sc.sensors)
+            .map_err(|e| DiagnoseError::Recording(e.to_string()))?;
+        if rec.time_s.is_empty() {
+            return Err(DiagnoseError::Recording(format!(
+                "{}: the recording has no rows",
+                rec.file
+            )));
+        }
+        if rec.time_s[0] < 0.0 {
+            return Err(DiagnoseError::Recording(format!(
+                "{}: time_s starts at {} s; recordings are timed from the scenario's t = 0",
+                rec.file, rec.time_s[0]
+            )));
+        }
+        let channels: Vec<Channel> = rec
+            .columns
+            .iter()
+            .zip(&sensor_of)
+            .map(|(name, &k)| {
+                let temp = matches!(sc.sensors[k].target, crate::sensor::SensorTarget::Node(_));
+                Channel {
+                    name: name.clone(),
+                    sensor: k,
+                    unit: if temp { "K" } else { "um" },
+                    is_temperature: temp,
+                }
+            })
+            .collect();
+        for (c, v) in channels.iter().zip(&rec.values) {
+            if v.iter().all(|x| x.is_none()) {
+                return Err(DiagnoseError::Recording(format!(
+                    "{}: channel `{}` has no values",
+                    rec.file, c.name
+                )));
+            }
+        }
+        let period = sc.period_s();
+        let t_last = *rec.time_s.last().unwrap();
+        let mut gaps: Vec<f64> = rec.time_s.windows(2).map(|w| w[1] - w[0]).collect();
+        let slack = if gaps.is_empty() {
+            0.0
+        } else {
+            1.5 * median(&mut gaps)
+        };
+        let split = Split::new(period, t_last, slack, holdout).map_err(DiagnoseError::Options)?;
+        let env = &sc.thermal.environment;
+        let mut eclipses = Vec::new();
+        let mut t = 0.0;
+        let mut entry = if env.sunlit(0.0) { None } else { Some(0.0) };
+        while let Some((tc, entering)) = env.next_shadow_crossing(t, t_last + period) {
+            if entering {
+                entry = Some(tc);
+            } else if let Some(e) = entry.take() {
+                eclipses.push((e, tc));
+            }
+            t = tc;
+        }
+        if let Some(e) = entry {
+            eclipses.push((e, f64::INFINITY));
+        }
+        let width = TRANSITION_FRACTION * period;
+        let phase = rec
+            .time_s
+            .iter()
+            .map(|&t| phase_at(&eclipses, t, width))
+            .collect();
+        Ok(Observations {
+            file: rec.file.clone(),
+            part: rec.time_s.iter().map(|&t| split.part(t)).collect(),
+            orbit: rec
+                .time_s
+                .iter()
+                .map(|&t| (t / period).floor() as usize)
+                .collect(),
+            phase,
+            eclipses,
+            channels,
+            time_s: rec.time_s.clone(),
+            values: rec.values.clone(),
+            split,
+        })
+    }
+
+    /// Residuals (recorded − simulated) per channel, None where the cell is missing.
+    pub fn residuals(&self, predicted: &[Vec<f64>]) -> Vec<Vec<Option<f64>>> {
+        self.channels
+            .iter()
+            .enumerate()
+            .map(|(c, ch)| {
+                self.values[c]
+                    .iter()
+                    .zip(&predicted[ch.sensor])
+                    .map(|(v, p)| v.map(|v| v - p))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Root-mean-square residual per channel over the samples of `part`.
+    pub fn rms(&self, residuals: &[Vec<Option<f64>>], part: Part) -> Vec<f64> {
+        residuals
+            .iter()
+            .map(|r| {
+                let (mut s, mut n) = (0.0, 0usize);
+                for (j, v) in r.iter().enumerate() {
+                    if let (Some(v), true) = (v, self.part[j] == part) {
+                        s += v * v;
+                        n += 1;
+                    }
+                }
+                if n == 0 {
+                    f64::NAN
+                } else {
+                    (s / n as f64).sqrt()
+                }
+            })
+            .collect()
+    }
+}
+
+fn phase_at(eclipses: &[(f64, f64)], t: f64, width: f64) -> Phase {
+    for &(a, b) in eclipses {
+        if t >= a && t < b {
+            return if t - a < width {
+                Phase::EclipseEntry
+            } else {
+                Phase::Eclipse
+            };
+        }
+        if t >= b && t - b < width {
+            return Phase::EclipseExit;
+        }
+    }
+    Phase::Sunlit
+}
+
+/// A channel's noise from its residual: the robust spread (1.4826 × MAD) of the
+/// second differences of consecutive samples, scaled to one sample's standard
+/// deviation. Smooth model error has almost no second difference at the recording's
+/// cadence, so this sees the measurement noise, not the mismatch; the median makes it
+/// blind to the few kinks (switchings, eclipse edges). Irregular sampling is weighted
+/// exactly; triples spanning a gap of more than 4 typical spacings are skipped.
+pub fn noise(
+    time_s: &[f64],
+    residual: &[Option<f64>],
+    keep: impl Fn(usize) -> bool,
+) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = residual
+        .iter()
+        .enumerate()
+        .filter(|(j, v)| v.is_some() && keep(*j))
+        .map(|(j, v)| (time_s[j], v.unwrap()))
+        .collect();
+    if pts.len() < 12 {
+        return None;
+    }
+    let mut gaps: Vec<f64> = pts.windows(2).map(|w| w[1].0 - w[0].0).collect();
+    let typical = median(&mut gaps);
+    let mut z = Vec::with_capacity(pts.len());
+    for w in pts.windows(3) {
+        let (ta, ra) = w[0];
+        let (tb, rb) = w[1];
+        let (tc, rc) = w[2];
+        let span = tc - ta;
+        if span <= 0.0 || span > 8.0 * typical {
+            continue;
+        }
+        let wa = (tc - tb) / span;
+        let wc = (tb - ta) / span;
+        let d = rb - (wa * ra + wc * rc);
+        z.push(d / (1.0 + wa * wa + wc * wc).sqrt());
+    }
+    if z.len() < 10 {
+        return None;
+    }
+    let m = median(&mut z.clone());
+    let mut dev: Vec<f64> = z.iter().map(|v| (v - m).abs()).collect();
+    Some(1.4826 * median(&mut dev))
+}
+
+pub fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Where a channel's residual sits.
+#[derive(Debug, Clone, Serialize)]
+pub struct Mismatch {
+    pub channel: String,
+    /// `sunlit`, `eclipse`, `eclipse_entry`, `eclipse_exit` or `all`.
+    pub phase: String,
+    /// The first window of the recording where it shows (absolute time).
+    pub t_start_s: f64,
+    pub t_end_s: f64,
+    /// The same window folded into the orbit: seconds after orbit noon, over all
+    /// orbits where it shows.
+    pub orbit_t_start_s: f64,
+    pub orbit_t_end_s: f64,
+    /// Orbits (0-based) in which it shows.
+    pub orbits: Vec<usize>,
+    /// RMS residual in this phase (K or µm).
+    pub rms: f64,
+    /// Mean residual in this phase (sign: recorded above the model when positive).
+    pub mean: f64,
+    /// Share of the channel's residual energy in this phase.
+    pub share: f64,
+    /// RMS over the noise.
+    pub rms_over_noise: f64,
+}
+
+/// Residual energy folded by orbit phase and by orbit, and the mismatches: for each
+/// channel whose residual exceeds `ratio` × its noise, the phases where it sits, or
+/// `all` when it is spread over the orbit. Sorted by residual energy over the noise,
+/// largest first.
+pub fn mismatches(
+    obs: &Observations,
+    residuals: &[Vec<Option<f64>>],
+    noise: &[f64],
+    ratio: f64,
+) -> Vec<Mismatch> {
+    let mut out = Vec::new();
+    let period = obs.split.period_s;
+    for (c, r) in residuals.iter().enumerate() {
+        let sigma = noise[c];
+        let (mut total, mut n_total) = (0.0, 0usize);
+        let mut by_phase = [(0.0f64, 0.0f64, 0usize); 4];
+        for (j, v) in r.iter().enumerate() {
+            let Some(v) = v else { continue };
+            if obs.part[j] == Part::Tail {
+                continue;
+            }
+            total += v * v;
+            n_total += 1;
+            let p = Phase::ALL.iter().position(|&p| p == obs.phase[j]).unwrap();
+            by_phase[p].0 += v * v;
+            by_phase[p].1 += v;
+            by_phase[p].2 += 1;
+        }
+        if n_total == 0 || total <= 0.0 {
+            continue;
+        }
+        let rms_all = (total / n_total as f64).sqrt();
+        if rms_all.is_nan() || rms_all <= ratio * sigma {
+            continue;
+        }
+        // Phases whose mean square stands out against the channel's.
+        let ms_all = total / n_total as f64;
+        let mut phases: Vec<usize> = (0..4)
+            .filter(|&p| by_phase[p].2 > 0 && by_phase[p].0 / by_phase[p].2 as f64 > 1.5 * ms_all)
+            .collect();
+        let spread = phases.is_empty();
+        if spread {
+            phases = vec![usize::MAX];
+        }
+        for p in phases {
+            let in_phase = |j: usize| p == usize::MAX || Phase::ALL[p] == obs.phase[j];
+            let (e, s, n) = if p == usize::MAX {
+                (total, r.iter().flatten().sum::<f64>(), n_total)
+            } else {
+                by_phase[p]
+            };
+            let rms = (e / n as f64).sqrt();
+            // Where it shows: samples of this phase whose smoothed residual exceeds
+            // three noise widths of the smoothed series.
+            let smooth = smoothed(r, 5);
+            let limit = (3.0 * sigma / 5f64.sqrt()).max(0.5 * rms);
+            let mut hits: Vec<usize> = (0..r.len())
+                .filter(|&j| obs.part[j] != Part::Tail && in_phase(j))
+                .filter(|&j| smooth[j].is_some_and(|v| v.abs() > limit))
+                .collect();
+            if hits.is_empty() {
+                hits = (0..r.len())
+                    .filter(|&j| obs.part[j] != Part::Tail && in_phase(j) && r[j].is_some())
+                    .collect();
+            }
+            let first = hits[0];
+            let mut last = first;
+            for &j in &hits[1..] {
+                if obs.time_s[j] - obs.time_s[last] > 0.05 * period
+                    || obs.orbit[j] != obs.orbit[first]
+                {
+                    break;
+                }
+                last = j;
+            }
+            let mut orbits: Vec<usize> = hits.iter().map(|&j| obs.orbit[j]).collect();
+            orbits.dedup();
+            let folded: Vec<f64> = hits
+                .iter()
+                .map(|&j| obs.time_s[j] - obs.orbit[j] as f64 * period)
+                .collect();
+            out.push(Mismatch {
+                channel: obs.channels[c].name.clone(),
+                phase: if p == usize::MAX {
+                    "all".into()
+                } else {
+                    Phase::ALL[p].as_str().into()
+                },
+                t_start_s: obs.time_s[first],
+                t_end_s: obs.time_s[last],
+                orbit_t_start_s: folded.iter().copied().fold(f64::INFINITY, f64::min),
+                orbit_t_end_s: folded.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                orbits,
+                rms,
+                mean: s / n as f64,
+                share: e / total,
+                rms_over_noise: rms / sigma,
+            });
+        }
+    }
+    out.sort_by(|a, b| {
+        let ka = a.share * a.rms_over_noise.powi(2);
+        let kb = b.share * b.rms_over_noise.powi(2);
+        kb.total_cmp(&ka)
+    });
+    out
+}
+
+/// Centred moving average over up to `w` present neighbours.
+pub fn smoothed(r: &[Option<f64>], w: usize) -> Vec<Option<f64>> {
+    let h = w / 2;
+    (0..r.len())
+        .map(|j| {
+            r[j]?;
+            let lo = j.saturating_sub(h);
+            let hi = (j + h + 1).min(r.len());
+            let v: Vec<f64> = r[lo..hi].iter().flatten().copied().collect();
+            Some(v.iter().sum::<f64>() / v.len() as f64)
+        })
+        .collect()
+}
+
+/// RMS residual per channel and orbit (NaN where an orbit has no samples).
+pub fn orbit_rms(obs: &Observations, residuals: &[Vec<Option<f64>>]) -> Vec<Vec<f64>> {
+    let n = obs.orbit.iter().copied().max().unwrap_or(0) + 1;
+    residuals
+        .iter()
+        .map(|r| {
+            let mut s = vec![(0.0, 0usize); n];
+            for (j, v) in r.iter().enumerate() {
+                if let Some(v) = v {
+                    s[obs.orbit[j]].0 += v * v;
+                    s[obs.orbit[j]].1 += 1;
+                }
+            }
+            s.iter()
+                .map(|&(e, k)| {
+                    if k == 0 {
+                        f64::NAN
+                    } else {
+                        (e / k as f64).sqrt()
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}

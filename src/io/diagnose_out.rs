@@ -1,0 +1,120 @@
+//! The MCAP file of `diagnose --out`: per recording channel, a topic
+//! `/diagnose/<channel>` with `recorded`, `baseline`, `corrected`, `residual_before`
+//! and `residual_after` side by side, one message per recorded sample (missing cells
+//! have no message, so every field of every message is a real number); and
+//! `/diagnose/model/<channel>` with the baseline and corrected series at every time.
+//! Protobuf with the schemas stored in the file, as the run logs, so Foxglove's Plot
+//! panel and Rerun's importer read them (`tools/check_mcap.py`).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use crate::diagnose::Diagnosis;
+
+use super::atomic::{AtomicFile, OutputError, OutputPolicy};
+use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
+use super::protobuf::Encoder;
+
+fn ns(t_s: f64) -> u64 {
+    (t_s * 1e9).round().max(0.0) as u64
+}
+
+/// Writes the side-by-side file (atomically: complete or not at all).
+pub fn write_mcap(
+    path: &Path,
+    policy: &OutputPolicy,
+    d: &Diagnosis,
+) -> Result<PathBuf, OutputError> {
+    let err = |e: mcap::McapError| OutputError::mcap(path, e);
+    let file = AtomicFile::create(path, policy)?;
+    let mut w = mcap::WriteOptions::new()
+        .library(format!("orbitlash {}", env!("CARGO_PKG_VERSION")))
+        .profile("")
+        .compression(None)
+        .create(file)
+        .map_err(err)?;
+    let s = &d.series;
+    let side = MessageType::new("DiagnoseSample")
+        .with("recorded", Kind::Double)
+        .with("baseline", Kind::Double)
+        .with("corrected", Kind::Double)
+        .with("residual_before", Kind::Double)
+        .with("residual_after", Kind::Double)
+        .with("train", Kind::Double);
+    let model = MessageType::new("DiagnoseModel")
+        .with("baseline", Kind::Double)
+        .with("corrected", Kind::Double);
+    let side_schema = w
+        .add_schema(
+            "orbitlash.DiagnoseSample",
+            "protobuf",
+            &descriptor_set("DiagnoseSample", &[side]),
+        )
+        .map_err(err)?;
+    let model_schema = w
+        .add_schema(
+            "orbitlash.DiagnoseModel",
+            "protobuf",
+            &descriptor_set("DiagnoseModel", &[model]),
+        )
+        .map_err(err)?;
+    let mut meta = BTreeMap::new();
+    meta.insert("verdict".to_string(), d.verdict.as_str().to_string());
+    meta.insert("train_end_s".to_string(), format!("{}", s.train_end_s));
+    meta.insert("holdout_end_s".to_string(), format!("{}", s.holdout_end_s));
+    w.write_metadata(&mcap::records::Metadata {
+        name: "diagnose".into(),
+        metadata: meta,
+    })
+    .map_err(err)?;
+    let mut enc = Encoder::default();
+    let mut seq = 0u32;
+    for (c, name) in s.channels.iter().enumerate() {
+        let unit = s.units[c];
+        let mut m = BTreeMap::new();
+        m.insert("unit".to_string(), unit.to_string());
+        let topic = identifier(name);
+        let ch = w
+            .add_channel(side_schema, &format!("/diagnose/{topic}"), "protobuf", &m)
+            .map_err(err)?;
+        let chm = w
+            .add_channel(
+                model_schema,
+                &format!("/diagnose/model/{topic}"),
+                "protobuf",
+                &m,
+            )
+            .map_err(err)?;
+        for (j, &t) in s.time_s.iter().enumerate() {
+            let (b, k) = (s.baseline[c][j], s.corrected[c][j]);
+            if !(b.is_finite() && k.is_finite()) {
+                continue;
+            }
+            seq += 1;
+            let header = |channel_id| mcap::records::MessageHeader {
+                channel_id,
+                sequence: seq,
+                log_time: ns(t),
+                publish_time: ns(t),
+            };
+            enc.clear();
+            enc.double(1, b);
+            enc.double(2, k);
+            w.write_to_known_channel(&header(chm), &enc.buf)
+                .map_err(err)?;
+            if let Some(v) = s.recorded[c][j] {
+                enc.clear();
+                enc.double(1, v);
+                enc.double(2, b);
+                enc.double(3, k);
+                enc.double(4, v - b);
+                enc.double(5, v - k);
+                enc.double(6, if t < s.train_end_s { 1.0 } else { 0.0 });
+                w.write_to_known_channel(&header(ch), &enc.buf)
+                    .map_err(err)?;
+            }
+        }
+    }
+    w.finish().map_err(err)?;
+    w.into_inner().commit()
+}
