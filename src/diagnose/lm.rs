@@ -119,16 +119,33 @@ where
         iterations += 1;
         let jtj = jac.transpose() * &jac;
         let g = jac.transpose() * DVector::from_column_slice(&r);
-        let mut a = jtj.clone();
-        for i in 0..k {
-            let d = jtj[(i, i)].max(1e-300);
-            a[(i, i)] += lambda * d;
+        // Parameters on a bound that descent would push out of it stay there this
+        // step (an active set); the others take the damped Gauss–Newton step.
+        let free: Vec<usize> = (0..k)
+            .filter(|&i| !((x[i] <= lower[i] && g[i] > 0.0) || (x[i] >= upper[i] && g[i] < 0.0)))
+            .collect();
+        if free.is_empty() {
+            break;
         }
-        let Some(delta) = a.cholesky().map(|c| c.solve(&(-&g))) else {
+        let m = free.len();
+        let mut a = DMatrix::zeros(m, m);
+        let mut rhs = DVector::zeros(m);
+        for (p, &i) in free.iter().enumerate() {
+            rhs[p] = -g[i];
+            for (q, &j) in free.iter().enumerate() {
+                a[(p, q)] = jtj[(i, j)];
+            }
+            a[(p, p)] += lambda * jtj[(i, i)].max(1e-300);
+        }
+        let Some(sol) = a.cholesky().map(|c| c.solve(&rhs)) else {
             lambda *= nu;
             nu *= 2.0;
             continue;
         };
+        let mut delta = DVector::zeros(k);
+        for (p, &i) in free.iter().enumerate() {
+            delta[i] = sol[p];
+        }
         let mut trial = x.clone();
         for i in 0..k {
             trial[i] += delta[i];

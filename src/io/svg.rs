@@ -272,11 +272,11 @@ pub fn residuals(s: &crate::diagnose::Series, c: usize) -> String {
         let (xa, xb) = (x_of_t(ha), x_of_t(hb.min(t_hi)));
         let _ = writeln!(
             o,
-            "<rect class=\"holdout\" x=\"{xa:.2}\" y=\"{y1}\" width=\"{:.2}\" height=\"{:.2}\" fill=\"#fef3d8\"/><text x=\"{:.2}\" y=\"{}\" fill=\"#a70\">held out</text>",
+            "<rect class=\"holdout\" x=\"{xa:.2}\" y=\"{y1}\" width=\"{:.2}\" height=\"{:.2}\" fill=\"#fef3d8\"/><text x=\"{:.2}\" y=\"{}\" fill=\"#a70\">held out (never fitted)</text>",
             xb - xa,
             y0 - y1,
             xa + 4.0,
-            y1 + 14.0
+            y0 - 8.0
         );
     }
     if sigma.is_finite() {
@@ -318,7 +318,7 @@ pub fn residuals(s: &crate::diagnose::Series, c: usize) -> String {
             LEFT - 5.0,
             LEFT - 7.0,
             y + 4.0,
-            crate::units::num((v / sv).round() * sv)
+            crate::units::num((v / sv).round() * sv + 0.0)
         );
         v += sv;
     }

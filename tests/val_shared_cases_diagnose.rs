@@ -1,0 +1,127 @@
+//! `diagnose` on the recordings of `shared/cases` (made by an independent
+//! implementation of the reference mechanism, one concealed effect each, and one with
+//! none), against their `expected.json`: the verdict, the effect and where it acts,
+//! the fitted parameters within 20 % (set points within 1.5 K), and the held-out RMS
+//! after the fit within 1.5 × the recording's noise on the affected channels.
+
+mod common;
+
+use orbitlash::diagnose::{Options, Verdict, diagnose};
+use orbitlash::io::recording::Recording;
+use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
+use orbitlash::model::Model;
+use serde_json::Value;
+
+fn reference() -> Model {
+    Model::new(parse_spec(REFERENCE_HINGE_TOML, "<reference>").unwrap()).unwrap()
+}
+
+fn expected(case: &str) -> Value {
+    let p = common::shared(&format!("cases/{case}/expected.json"));
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn run(case: &str) -> orbitlash::diagnose::Diagnosis {
+    let rec = Recording::read(&common::shared(&format!("cases/{case}/recording.csv"))).unwrap();
+    diagnose(&reference(), &rec, &Options::default(), &|_, _, _| {}).unwrap()
+}
+
+fn check_case(case: &str) {
+    let exp = expected(case);
+    let d = run(case);
+    let verdict = exp["verdict"].as_str().unwrap();
+    assert_eq!(d.verdict.as_str(), verdict, "{case}: {:#?}", d.candidates.iter().take(5).collect::<Vec<_>>());
+    // Whole orbits held out, never fitted: the last third of the twelve.
+    assert_eq!((d.split.orbits, d.split.holdout_orbits), (12, 4), "{case}");
+    let truth = &exp["truth"];
+    let noise_of = |ch: &str| {
+        if ch.ends_with("_um") {
+            truth["noise_um"].as_f64().unwrap()
+        } else {
+            truth["noise_k"].as_f64().unwrap()
+        }
+    };
+    // The estimated noise is the recording's.
+    for (ch, sigma) in &d.noise.0 {
+        let truth_sigma = noise_of(ch);
+        assert!(
+            (sigma / truth_sigma - 1.0).abs() < 0.15,
+            "{case}: noise of {ch} estimated {sigma}, recorded with {truth_sigma}"
+        );
+    }
+    if verdict == "consistent" {
+        assert!(d.findings.is_empty(), "{case}: {:?}", d.findings);
+        return;
+    }
+    assert_eq!(d.findings.len(), 1, "{case}: {:?}", d.findings);
+    let f = &d.findings[0];
+    assert_eq!(f.effect, exp["effect"].as_str().unwrap(), "{case}");
+    if let Some(node) = exp.get("node").and_then(Value::as_str) {
+        assert_eq!(f.node.as_deref(), Some(node), "{case}");
+    }
+    if let Some(params) = exp.get("parameters").and_then(Value::as_object) {
+        for (k, v) in params {
+            let want = v.as_f64().unwrap();
+            let got = f.parameters[k];
+            if k.ends_with("_c") {
+                assert!((got - want).abs() <= 1.5, "{case}: {k} = {got}, expected {want} ± 1.5 K");
+            } else {
+                assert!((got / want - 1.0).abs() <= 0.2, "{case}: {k} = {got}, expected {want} ± 20 %");
+            }
+            let se = f.std_errors[k].expect("a standard error");
+            assert!(se > 0.0 && se < 0.2 * got.abs().max(1.0), "{case}: {k} ± {se}");
+        }
+    }
+    let channels: Vec<String> = match exp.get("channels").and_then(Value::as_array) {
+        Some(a) => a.iter().map(|c| c.as_str().unwrap().to_string()).collect(),
+        None => d.noise.0.iter().map(|(c, _)| c.clone()).collect(),
+    };
+    for ch in &channels {
+        let after = d.heldout_rmse.get(ch).unwrap();
+        let before = d.baseline.heldout_rmse.get(ch).unwrap();
+        assert!(
+            after <= 1.5 * noise_of(ch),
+            "{case}: held-out RMS of {ch} after the fit {after} > 1.5 × {}",
+            noise_of(ch)
+        );
+        assert!(after < before, "{case}: {ch} {after} !< {before}");
+    }
+    // The mismatches name every affected channel, in the expected phase if given.
+    for ch in &channels {
+        assert!(d.mismatches.iter().any(|m| &m.channel == ch), "{case}: no mismatch on {ch}");
+    }
+    if let Some(phase) = exp.get("phase").and_then(Value::as_str) {
+        assert!(
+            d.mismatches.iter().any(|m| m.phase.starts_with(phase)),
+            "{case}: no mismatch in {phase}: {:?}",
+            d.mismatches
+        );
+    }
+}
+
+#[test]
+fn val_shared_cases_null_is_consistent() {
+    check_case("null");
+    assert_eq!(run("null").verdict, Verdict::Consistent);
+}
+
+#[test]
+fn val_shared_cases_heater() {
+    check_case("heater");
+}
+
+#[test]
+fn val_shared_cases_albedo_ir() {
+    check_case("albedo-ir");
+    // Effective albedo and IR on the housing's sun and space areas: the truth's
+    // 0.30 × 0.007 m² / 0.0175 m² and 237 W/m² × 0.0085 m² / 0.030 m².
+    let d = run("albedo-ir");
+    let p = &d.findings[0].parameters;
+    assert!((p["albedo"] / (0.30 * 0.007 / 0.0175) - 1.0).abs() < 0.2, "{p:?}");
+    assert!((p["earth_ir_w_per_m2"] / (237.0 * 0.0085 / 0.030) - 1.0).abs() < 0.2, "{p:?}");
+}
+
+#[test]
+fn val_shared_cases_housing_expansion() {
+    check_case("housing-expansion");
+}
