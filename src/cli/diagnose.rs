@@ -143,7 +143,8 @@ fn write_out(
             toml_text += &format!("#   {k} = {v}\n");
         }
     }
-    toml_text += &toml::to_string(spec).context("cannot write the corrected scenario as TOML")?;
+    toml_text += "# [run] lasts as long as the recording.\n";
+    toml_text += &toml::to_string(&spec).context("cannot write the corrected scenario as TOML")?;
     let p = dir.join("corrected.toml");
     write_file(&p, policy, toml_text.as_bytes())?;
     written.push(p);

@@ -1,0 +1,256 @@
+//! `orbitlash diagnose` as a user runs it: the JSON contract of
+//! `shared/spec/diagnose.md`, the `--out` folder (a corrected scenario that runs and
+//! reproduces the corrected series, a side-by-side MCAP file, residual plots), bad
+//! recordings, a recording too short to hold orbits out, and outputs that would
+//! replace an input.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use orbitlash::io::scenario_toml;
+use orbitlash::sample::Cadence;
+use orbitlash::sensor::Readings;
+use orbitlash::sim::simulate;
+use predicates::prelude::*;
+use serde_json::Value;
+
+fn reference() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml")
+}
+
+fn heater() -> PathBuf {
+    common::shared("cases/heater/recording.csv")
+}
+
+/// (time, value) pairs of field `field` (1-based, doubles) of every message on `topic`.
+fn mcap_series(path: &Path, topic: &str, field: u32) -> Vec<(f64, f64)> {
+    let bytes = std::fs::read(path).unwrap();
+    let mut out = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic != topic {
+            continue;
+        }
+        let d = &m.data;
+        let mut i = 0;
+        while i < d.len() {
+            let key = d[i] as u32;
+            assert_eq!(key & 7, 1, "a double field");
+            let v = f64::from_le_bytes(d[i + 1..i + 9].try_into().unwrap());
+            if key >> 3 == field {
+                out.push((m.log_time as f64 * 1e-9, v));
+            }
+            i += 9;
+        }
+    }
+    out
+}
+
+#[test]
+fn cli_diagnose_heater_report_json_and_out_folder() {
+    let dir = common::tmpdir("diagnose-heater");
+    let json = dir.join("report.json");
+    let out = dir.join("out");
+    common::bin()
+        .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+        .arg(heater())
+        .arg("--json")
+        .arg(&json)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .code(0)
+        .stdout(predicate::str::starts_with("EXPLAINED"))
+        .stdout(predicate::str::contains(
+            "heater_thermostat (physics) on node housing",
+        ))
+        .stdout(predicate::str::contains("on_c = "));
+    // The contract's keys.
+    let r: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(r["verdict"], "explained");
+    for ch in [
+        "housing_c",
+        "motor_c",
+        "shaft2_c",
+        "gear1_c",
+        "gear2_c",
+        "backlash_um",
+    ] {
+        assert!(r["noise"][ch].as_f64().unwrap() > 0.0, "{ch}");
+        assert!(r["baseline"]["rmse"][ch].as_f64().unwrap() > 0.0);
+        assert!(r["baseline"]["heldout_rmse"][ch].as_f64().unwrap() > 0.0);
+        assert!(r["heldout_rmse"][ch].as_f64().unwrap() > 0.0);
+    }
+    let m = &r["mismatches"][0];
+    for k in ["channel", "phase", "t_start_s", "t_end_s", "rms", "share"] {
+        assert!(!m[k].is_null(), "mismatch lacks {k}");
+    }
+    let f = &r["findings"][0];
+    assert_eq!(f["effect"], "heater_thermostat");
+    assert_eq!(f["kind"], "physics");
+    assert_eq!(f["node"], "housing");
+    for k in ["power_w", "on_c", "off_c"] {
+        assert!(f["parameters"][k].is_f64(), "{k}");
+    }
+    assert!(f["delta_bic"].as_f64().unwrap() < 0.0);
+    assert!(f["heldout_rmse"]["housing_c"].as_f64().unwrap() < 0.3);
+
+    // The corrected scenario runs as it is …
+    let corrected = out.join("corrected.toml");
+    common::bin()
+        .arg("run")
+        .arg(&corrected)
+        .arg("--no-log")
+        .assert()
+        .code(0);
+    // … and its sensors reproduce the corrected series of the MCAP file, which stands
+    // beside the recording.
+    let sc = scenario_toml::load_file(&corrected).unwrap().0;
+    let recorded = mcap_series(&out.join("diagnose.mcap"), "/diagnose/housing_c", 1);
+    let fixed = mcap_series(&out.join("diagnose.mcap"), "/diagnose/housing_c", 3);
+    assert_eq!(recorded.len(), 2271);
+    let times: Vec<f64> = fixed.iter().map(|p| (p.0 * 1e3).round() / 1e3).collect();
+    let mut readings = Readings::new(sc.sensors.clone(), Cadence::Times(times.clone().into()));
+    simulate(
+        &sc.thermal,
+        &sc.gears,
+        &sc.solver,
+        *times.last().unwrap(),
+        &mut readings,
+        None,
+    )
+    .unwrap();
+    let k = sc
+        .sensors
+        .iter()
+        .position(|s| s.column == "housing_c")
+        .unwrap();
+    let worst = fixed
+        .iter()
+        .zip(&readings.values[k])
+        .map(|(a, b)| (a.1 - b).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-9,
+        "corrected.toml differs from the corrected series by {worst} K"
+    );
+    // The recorded column is the recording's.
+    let rec = orbitlash::io::recording::Recording::read(&heater()).unwrap();
+    let col = rec.channel("housing_c").unwrap();
+    assert!(recorded.iter().zip(col).all(|(a, b)| Some(a.1) == *b));
+    // Plots: before and after, one mark per recorded sample.
+    for ch in ["housing_c", "backlash_um"] {
+        let svg = std::fs::read_to_string(out.join(format!("residuals-{ch}.svg"))).unwrap();
+        for class in ["before", "after"] {
+            let path = svg
+                .lines()
+                .find(|l| l.contains(&format!("class=\"{class}\"")))
+                .unwrap_or_else(|| panic!("{ch}: no {class} series"));
+            assert_eq!(path.matches('M').count(), 2271, "{ch} {class}");
+        }
+        assert!(svg.contains("class=\"holdout\""));
+    }
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn cli_diagnose_bad_recordings_name_file_line_and_column() {
+    let dir = common::tmpdir("diagnose-bad");
+    let header = "time_s,housing_c,backlash_um\n";
+    let cases: Vec<(&str, String, Vec<&str>)> = vec![
+        (
+            "unknown.csv",
+            "time_s,housing_c,case_c\n0,20,20\n".into(),
+            vec!["unknown.csv", "case_c"],
+        ),
+        (
+            "text.csv",
+            format!("{header}0,20,33\n30,warm,33\n"),
+            vec!["text.csv:3:2", "warm"],
+        ),
+        (
+            "time.csv",
+            format!("{header}0,20,33\n30,20,33\n30,20,33\n"),
+            vec!["time.csv:4", "increas"],
+        ),
+        (
+            "nan.csv",
+            format!("{header}0,20,33\n30,NaN,33\n"),
+            vec!["nan.csv:3:2"],
+        ),
+        ("empty.csv", String::new(), vec!["empty.csv"]),
+        (
+            "missing.csv",
+            format!("{header}0,,33\n30,,33\n60,,33\n"),
+            vec!["missing.csv", "housing_c", "no values"],
+        ),
+    ];
+    for (name, text, needles) in cases {
+        let p = write(&dir, name, &text);
+        let out = common::bin()
+            .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+            .arg(&p)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{name}");
+        common::assert_error(name, &out, &needles);
+    }
+}
+
+#[test]
+fn cli_diagnose_short_recording_reports_baseline_and_says_why() {
+    let dir = common::tmpdir("diagnose-short");
+    let text = std::fs::read_to_string(heater()).unwrap();
+    // 1.5 orbits: fewer than two whole orbits.
+    let short: String = text
+        .lines()
+        .take(1 + 284)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let p = write(&dir, "short.csv", &short);
+    common::bin()
+        .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+        .arg(&p)
+        .assert()
+        .code(0)
+        .stdout(predicate::str::contains(
+            "held-out validation needs at least two",
+        ))
+        .stdout(predicate::str::contains("where the baseline residual sits"))
+        .stdout(predicate::str::contains("housing_c"));
+}
+
+#[test]
+fn cli_diagnose_refuses_outputs_that_are_inputs_and_bad_holdouts() {
+    let dir = common::tmpdir("diagnose-refuse");
+    let rec = dir.join("rec.csv");
+    std::fs::copy(heater(), &rec).unwrap();
+    let before = std::fs::read(&rec).unwrap();
+    let out = common::bin()
+        .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+        .arg(&rec)
+        .arg("--json")
+        .arg(&rec)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        std::fs::read(&rec).unwrap(),
+        before,
+        "the recording was changed"
+    );
+    let out = common::bin()
+        .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+        .arg(&rec)
+        .args(["--holdout-orbits", "12"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    common::assert_error("holdout", &out, &["--holdout-orbits 12", "12 whole orbits"]);
+}
