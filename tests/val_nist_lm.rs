@@ -62,13 +62,29 @@ fn check(name: &str, c: &Certified) {
         .unwrap();
         for i in 0..2 {
             let rel = (fit.x[i] - c.b[i]).abs() / c.b[i].abs();
-            assert!(rel < 1e-6, "{name} from {start:?}: b{} = {} (certified {}, rel {rel:e})", i + 1, fit.x[i], c.b[i]);
+            assert!(
+                rel < 1e-6,
+                "{name} from {start:?}: b{} = {} (certified {}, rel {rel:e})",
+                i + 1,
+                fit.x[i],
+                c.b[i]
+            );
             let se = fit.std_errors()[i];
             let rel = (se - c.se[i]).abs() / c.se[i];
-            assert!(rel < 1e-3, "{name} from {start:?}: se(b{}) = {se} (certified {}, rel {rel:e})", i + 1, c.se[i]);
+            assert!(
+                rel < 1e-3,
+                "{name} from {start:?}: se(b{}) = {se} (certified {}, rel {rel:e})",
+                i + 1,
+                c.se[i]
+            );
         }
         let rel = (fit.sum_squares - c.ssr).abs() / c.ssr;
-        assert!(rel < 1e-8, "{name} from {start:?}: SSR {} (certified {})", fit.sum_squares, c.ssr);
+        assert!(
+            rel < 1e-8,
+            "{name} from {start:?}: SSR {} (certified {})",
+            fit.sum_squares,
+            c.ssr
+        );
         let r = fit.correlation();
         assert!((r[0][1] - r[1][0]).abs() < 1e-12 && r[0][1].abs() < 1.0);
     }
@@ -98,10 +114,19 @@ fn val_closed_form_bounded_fit_ends_on_the_bound() {
             .map(|(x, y)| y - b[0] * (1.0 - (-b[1] * x).exp()))
             .collect())
     };
-    let fit = minimize(f, &[250.0, 3e-4], &[0.0, 0.0], &[1e4, cap], &[1e-5, 1e-11], LmOptions::default()).unwrap();
+    let fit = minimize(
+        f,
+        &[250.0, 3e-4],
+        &[0.0, 0.0],
+        &[1e4, cap],
+        &[1e-5, 1e-11],
+        LmOptions::default(),
+    )
+    .unwrap();
     assert_eq!(fit.x[1], cap);
     assert_eq!(fit.at_bound, vec![false, true]);
     let g: Vec<f64> = c.x.iter().map(|x| 1.0 - (-cap * x).exp()).collect();
-    let b1 = g.iter().zip(c.y).map(|(g, y)| g * y).sum::<f64>() / g.iter().map(|g| g * g).sum::<f64>();
+    let b1 =
+        g.iter().zip(c.y).map(|(g, y)| g * y).sum::<f64>() / g.iter().map(|g| g * g).sum::<f64>();
     assert!((fit.x[0] - b1).abs() / b1 < 1e-8, "{} vs {b1}", fit.x[0]);
 }

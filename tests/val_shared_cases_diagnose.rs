@@ -30,7 +30,12 @@ fn check_case(case: &str) {
     let exp = expected(case);
     let d = run(case);
     let verdict = exp["verdict"].as_str().unwrap();
-    assert_eq!(d.verdict.as_str(), verdict, "{case}: {:#?}", d.candidates.iter().take(5).collect::<Vec<_>>());
+    assert_eq!(
+        d.verdict.as_str(),
+        verdict,
+        "{case}: {:#?}",
+        d.candidates.iter().take(5).collect::<Vec<_>>()
+    );
     // Whole orbits held out, never fitted: the last third of the twelve.
     assert_eq!((d.split.orbits, d.split.holdout_orbits), (12, 4), "{case}");
     let truth = &exp["truth"];
@@ -64,12 +69,21 @@ fn check_case(case: &str) {
             let want = v.as_f64().unwrap();
             let got = f.parameters[k];
             if k.ends_with("_c") {
-                assert!((got - want).abs() <= 1.5, "{case}: {k} = {got}, expected {want} ± 1.5 K");
+                assert!(
+                    (got - want).abs() <= 1.5,
+                    "{case}: {k} = {got}, expected {want} ± 1.5 K"
+                );
             } else {
-                assert!((got / want - 1.0).abs() <= 0.2, "{case}: {k} = {got}, expected {want} ± 20 %");
+                assert!(
+                    (got / want - 1.0).abs() <= 0.2,
+                    "{case}: {k} = {got}, expected {want} ± 20 %"
+                );
             }
             let se = f.std_errors[k].expect("a standard error");
-            assert!(se > 0.0 && se < 0.2 * got.abs().max(1.0), "{case}: {k} ± {se}");
+            assert!(
+                se > 0.0 && se < 0.2 * got.abs().max(1.0),
+                "{case}: {k} ± {se}"
+            );
         }
     }
     let channels: Vec<String> = match exp.get("channels").and_then(Value::as_array) {
@@ -88,7 +102,10 @@ fn check_case(case: &str) {
     }
     // The mismatches name every affected channel, in the expected phase if given.
     for ch in &channels {
-        assert!(d.mismatches.iter().any(|m| &m.channel == ch), "{case}: no mismatch on {ch}");
+        assert!(
+            d.mismatches.iter().any(|m| &m.channel == ch),
+            "{case}: no mismatch on {ch}"
+        );
     }
     if let Some(phase) = exp.get("phase").and_then(Value::as_str) {
         assert!(
@@ -117,8 +134,14 @@ fn val_shared_cases_albedo_ir() {
     // 0.30 × 0.007 m² / 0.0175 m² and 237 W/m² × 0.0085 m² / 0.030 m².
     let d = run("albedo-ir");
     let p = &d.findings[0].parameters;
-    assert!((p["albedo"] / (0.30 * 0.007 / 0.0175) - 1.0).abs() < 0.2, "{p:?}");
-    assert!((p["earth_ir_w_per_m2"] / (237.0 * 0.0085 / 0.030) - 1.0).abs() < 0.2, "{p:?}");
+    assert!(
+        (p["albedo"] / (0.30 * 0.007 / 0.0175) - 1.0).abs() < 0.2,
+        "{p:?}"
+    );
+    assert!(
+        (p["earth_ir_w_per_m2"] / (237.0 * 0.0085 / 0.030) - 1.0).abs() < 0.2,
+        "{p:?}"
+    );
 }
 
 #[test]
