@@ -45,6 +45,11 @@ pub struct BenchArgs {
     /// 1e-3 … 1e6.
     #[arg(long, default_value_t = 1.0, requires = "scaling", value_parser = scale_arg)]
     conductance_scale: f64,
+    /// Instead: the wall time of `diagnose` on this recording (CSV or MCAP) with the
+    /// full vocabulary, the median of --repeat runs (at most 9), and the time per
+    /// candidate.
+    #[arg(long, value_name = "RECORDING", conflicts_with_all = ["scaling", "emit_network"])]
+    diagnose: Option<PathBuf>,
     /// Print a synthetic network as a scenario file (e.g. `lattice:2000`) and exit.
     #[arg(long, value_name = "SHAPE:NODES", conflicts_with = "scaling")]
     emit_network: Option<String>,
@@ -219,6 +224,9 @@ fn parse_shape(s: &str) -> Result<orbitlash::thermal::synthetic::Shape> {
 pub fn bench(a: BenchArgs) -> Result<()> {
     if a.scaling {
         return scaling(&a);
+    }
+    if let Some(rec) = &a.diagnose {
+        return bench_diagnose(&a, rec);
     }
     if let Some(spec) = &a.emit_network {
         use orbitlash::thermal::synthetic::{network, to_toml};
@@ -488,6 +496,54 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         o,
         "accuracy: max |T − T_converged| = {:.4} K over all nodes, every 30 s",
         ours.max_abs_diff_k(&reference)
+    );
+    print_out(&o)
+}
+
+/// `bench --diagnose`: whole diagnoses of one recording.
+fn bench_diagnose(a: &BenchArgs, recording: &std::path::Path) -> Result<()> {
+    use orbitlash::diagnose::{Options, diagnose};
+    let loaded = load(a.scenario.as_deref())?;
+    let rec = orbitlash::io::recording::Recording::read(recording)?;
+    let n = a.repeat.clamp(1, 9) as usize;
+    let mut runs = Vec::new();
+    for _ in 0..n {
+        let t0 = std::time::Instant::now();
+        let d = diagnose(&loaded.model, &rec, &Options::default(), &|_, _, _| {})?;
+        runs.push((t0.elapsed().as_secs_f64(), d));
+    }
+    runs.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let (wall, d) = &runs[n / 2];
+    let fitted = d.candidates.iter().filter(|c| c.status != "not_fitted").count();
+    let mut o = String::new();
+    outln!(
+        o,
+        "diagnose {} against {} ({} threads): median of {n} runs",
+        rec.file,
+        loaded.file,
+        rayon::current_num_threads()
+    );
+    outln!(
+        o,
+        "  {:.2} s wall (fastest {:.2} s, slowest {:.2} s); verdict {}",
+        wall,
+        runs[0].0,
+        runs[n - 1].0,
+        d.verdict.as_str()
+    );
+    outln!(
+        o,
+        "  {} candidates ranked, {fitted} fitted by least squares: {:.1} ms of wall time per candidate",
+        d.candidates.len(),
+        1e3 * d.time_per_candidate_s
+    );
+    outln!(
+        o,
+        "  {} samples × {} channels, {} whole orbits ({} held out)",
+        d.series.time_s.len(),
+        d.series.channels.len(),
+        d.split.orbits,
+        d.split.holdout_orbits
     );
     print_out(&o)
 }
