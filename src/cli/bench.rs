@@ -514,7 +514,11 @@ fn bench_diagnose(a: &BenchArgs, recording: &std::path::Path) -> Result<()> {
     }
     runs.sort_by(|x, y| x.0.total_cmp(&y.0));
     let (wall, d) = &runs[n / 2];
-    let fitted = d.candidates.iter().filter(|c| c.status != "not_fitted").count();
+    let fitted = d
+        .candidates
+        .iter()
+        .filter(|c| c.status != "not_fitted")
+        .count();
     let mut o = String::new();
     outln!(
         o,

@@ -16,7 +16,7 @@
 //!    training orbits, Jacobian by finite differences of whole simulations.
 //! 6. Selection: an effect is accepted when it wins BIC by [`Options::bic_margin`]
 //!    (with the estimated noise) *and* lowers the held-out χ² by
-//!    [`Options::holdout_margin`]; pairs are tried when one effect leaves a
+//!    [`Options::holdout_margin`] *and* is material ([`Options::min_effect`]); pairs are tried when one effect leaves a
 //!    structured residual. The verdict is `explained` when the accepted effects bring
 //!    every channel's held-out RMS to [`Options::noise_ratio`] × its noise,
 //!    `consistent` when nothing is accepted and the baseline is at the noise, and
@@ -70,6 +70,10 @@ pub struct Options {
     pub bic_margin: f64,
     /// … and lower the held-out χ² by more than this.
     pub holdout_margin: f64,
+    /// … and be material: on some channel, lower the held-out mean square residual by
+    /// at least this fraction of the noise variance (a real effect changes what a
+    /// sensor reads; fitting the last hundredths of a kelvin of model error does not).
+    pub min_effect: f64,
     /// A channel is at its noise when its RMS residual is at most this × the noise.
     pub noise_ratio: f64,
     /// Candidates fitted by least squares after the ranking.
@@ -84,6 +88,7 @@ impl Default for Options {
             holdout_orbits: None,
             bic_margin: 40.0,
             holdout_margin: 20.0,
+            min_effect: 0.05,
             noise_ratio: 1.3,
             fits: 8,
             pair_partners: 5,
@@ -396,6 +401,30 @@ impl Problem<'_> {
             }
         }
         out
+    }
+
+    /// The largest, over channels, drop of the held-out mean square residual from
+    /// `before` to `after`, in units of the channel's noise variance.
+    fn material(&self, before: &[Vec<f64>], after: &[Vec<f64>]) -> f64 {
+        let mut best = f64::NEG_INFINITY;
+        for (c, ch) in self.obs.channels.iter().enumerate() {
+            let (b, a) = (&before[ch.sensor], &after[ch.sensor]);
+            let (mut s, mut n) = (0.0, 0usize);
+            for (j, v) in self.obs.values[c]
+                .iter()
+                .enumerate()
+                .take(a.len().min(b.len()))
+            {
+                if let (Some(v), Part::Holdout) = (v, self.obs.part[j]) {
+                    s += ((v - b[j]).powi(2) - (v - a[j]).powi(2)) / self.noise[c].powi(2);
+                    n += 1;
+                }
+            }
+            if n > 0 {
+                best = best.max(s / n as f64);
+            }
+        }
+        best
     }
 
     fn chi2(&self, pred: &[Vec<f64>], part: Part) -> f64 {
@@ -711,6 +740,12 @@ pub fn diagnose(
                                  the held-out orbits (χ² drop {hdrop:.1} ≤ {:.0})",
                                 opts.holdout_margin
                             );
+                        } else if problem.material(&base_pred, &h.pred) < opts.min_effect {
+                            rep.reason = format!(
+                                "significant but immaterial: lowers no channel's held-out mean \
+                                 square residual by {:.0} % of its noise variance",
+                                100.0 * opts.min_effect
+                            );
                         } else {
                             rep.status = "accepted";
                             singles.push(h.clone());
@@ -733,27 +768,52 @@ pub fn diagnose(
         if explains(first) {
             best = Some(first.clone());
         } else {
-            // One effect is not enough: the best one with each of the next candidates,
-            // fitted together from their single optima.
-            let partners: Vec<usize> = order
-                .iter()
-                .copied()
-                .filter(|&i| i != first.members[0])
-                .filter(|&i| score(i) > 0.0)
-                .take(opts.pair_partners)
+            // One effect is not enough: rank every other candidate again on the
+            // residual the best one leaves (forward selection), then fit the leading
+            // ones together with it.
+            let f0 = first.members[0];
+            let r_first = problem.train_residuals(&first.pred);
+            let done = std::sync::atomic::AtomicUsize::new(0);
+            let second: Vec<Option<(f64, Vec<f64>)>> = (0..cands.len())
+                .into_par_iter()
+                .map(|j| {
+                    let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    progress("pairs: ranking", k, cands.len());
+                    if j == f0 || ranked[j].0.is_none() {
+                        return None;
+                    }
+                    let comp = Composite::new(model, &[&cands[f0], &cands[j]]).ok()?;
+                    let mut best: Option<(f64, Vec<f64>)> = None;
+                    for s in &cands[j].starts {
+                        let mut theta = first.theta.clone();
+                        theta.extend_from_slice(s);
+                        let Ok(r1) = problem.train_residuals_at(&comp, &theta) else {
+                            continue;
+                        };
+                        for (x2, th) in rank_point(&r_first, &r1, &cands[j], s) {
+                            if best.as_ref().is_none_or(|b| x2 < b.0) {
+                                best = Some((x2, th));
+                            }
+                        }
+                    }
+                    best
+                })
                 .collect();
+            let mut partners: Vec<usize> = (0..cands.len())
+                .filter(|&j| second[j].as_ref().is_some_and(|b| b.0 < first.train_chi2))
+                .collect();
+            partners.sort_by(|&a, &b| {
+                let (xa, xb) = (second[a].as_ref().unwrap().0, second[b].as_ref().unwrap().0);
+                xa.total_cmp(&xb).then(a.cmp(&b))
+            });
+            partners.truncate(opts.pair_partners);
             let npairs = partners.len();
             let done = std::sync::atomic::AtomicUsize::new(0);
             let pairs: Vec<Result<Hypothesis, String>> = partners
                 .par_iter()
                 .map(|&j| {
-                    let start_j = singles
-                        .iter()
-                        .find(|h| h.members == [j])
-                        .map(|h| h.theta.clone())
-                        .unwrap_or_else(|| ranked[j].0.as_ref().unwrap().1.clone());
                     let mut start = first.theta.clone();
-                    start.extend(start_j);
+                    start.extend_from_slice(&second[j].as_ref().unwrap().1);
                     let r = fit(&problem, model, &cands, &[first.members[0], j], &start);
                     let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     progress("pairs", k, npairs);
@@ -766,6 +826,7 @@ pub fn diagnose(
                 let hdrop = first.holdout_chi2 - h.holdout_chi2;
                 if extra > opts.bic_margin
                     && hdrop > opts.holdout_margin
+                    && problem.material(&first.pred, &h.pred) >= opts.min_effect
                     && best_pair
                         .as_ref()
                         .is_none_or(|b| h.train_chi2 < b.train_chi2)
@@ -876,7 +937,13 @@ pub fn diagnose(
                 let _ = r;
             }
             for (ci, rep) in reports.iter_mut().enumerate() {
-                if rep.status == "accepted" && !h.members.contains(&ci) {
+                if h.members.contains(&ci) {
+                    rep.status = "accepted";
+                    rep.reason = match h.members.iter().find(|&&m| m != ci) {
+                        Some(&other) => format!("together with {}", cands[other].label()),
+                        None => String::new(),
+                    };
+                } else if rep.status == "accepted" {
                     rep.status = "rejected";
                     rep.reason = format!(
                         "improves the fit, but {} explains the residual better",
