@@ -312,11 +312,33 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
         outln!(o, "");
     }
     outln!(o, "candidates ({} tried):", d.candidates.len());
+    let mut unfitted = 0;
     for c in &d.candidates {
         if c.status == "not_fitted" && c.rank_chi2_drop <= 0.0 {
             continue;
         }
-        outln!(o, "  {:<9} {}: {}", c.status, c.target, c.reason);
+        if c.status == "not_fitted" {
+            unfitted += 1;
+            if unfitted > 4 {
+                continue;
+            }
+        }
+        let bic = c
+            .delta_bic
+            .map_or(String::new(), |b| format!(" (ΔBIC {b:.0})"));
+        let reason = if c.reason.is_empty() {
+            "fits".to_string()
+        } else {
+            c.reason.clone()
+        };
+        outln!(o, "  {:<10} {}: {reason}{bic}", c.status, c.target);
+    }
+    if unfitted > 4 {
+        outln!(
+            o,
+            "  ({} more ranked below the fitted candidates)",
+            unfitted - 4
+        );
     }
     let quiet = d
         .candidates
