@@ -254,3 +254,34 @@ fn cli_diagnose_refuses_outputs_that_are_inputs_and_bad_holdouts() {
     assert_eq!(out.status.code(), Some(2));
     common::assert_error("holdout", &out, &["--holdout-orbits 12", "12 whole orbits"]);
 }
+
+/// An `orbitlash run` log is a recording too (its node temperatures and backlash as
+/// the sensors read them): the model against its own output is consistent, with a
+/// note that the channels are noise-free.
+#[test]
+fn cli_diagnose_reads_a_run_log_as_a_recording() {
+    let dir = common::tmpdir("diagnose-log");
+    let log = dir.join("run.mcap");
+    common::bin()
+        .args([
+            "run",
+            "--orbits",
+            "3",
+            "--log-every",
+            "30s",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&log)
+        .assert()
+        .code(0);
+    common::bin()
+        .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+        .arg(&log)
+        .assert()
+        .code(0)
+        .stdout(predicate::str::starts_with("CONSISTENT"))
+        .stdout(predicate::str::contains(
+            "model output rather than a measurement",
+        ));
+}

@@ -65,7 +65,14 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
             "--holdout-orbits 0: hold out at least one orbit (the fit must be checked on data it did not see)"
         );
     }
-    let rec = Recording::read(&a.recording)?;
+    let rec = match Recording::read(&a.recording) {
+        Ok(r) => r,
+        // An orbitlash run log: its node temperatures and backlash as the sensors read.
+        Err(e) => match recording_from_log(&a.recording, &loaded.scenario) {
+            Some(r) => r,
+            None => return Err(e.into()),
+        },
+    };
     let opts = Options {
         holdout_orbits: a.holdout_orbits,
         ..Options::default()
@@ -371,4 +378,67 @@ fn sig(v: f64) -> String {
     } else {
         format!("{v:.3e}")
     }
+}
+
+/// A run log of `orbitlash run` as a recording: each sensor's node temperature (in the
+/// column's unit) or its pair's exact backlash at every logged time. The sensors' lags
+/// and offsets are not applied (a log holds the model's own values). None when the
+/// file is not an orbitlash log.
+fn recording_from_log(path: &Path, sc: &orbitlash::scenario::Scenario) -> Option<Recording> {
+    use orbitlash::sensor::{ColumnUnit, SensorTarget};
+    let table = orbitlash::io::mcap_read::read_log(path).ok()?;
+    let topic = "/thermal/temperature";
+    let t_col = table.column(&format!("{topic}.time_s"))?;
+    let meta = table
+        .channel_metadata
+        .get(topic)
+        .cloned()
+        .unwrap_or_default();
+    let node_col = |name: &str| {
+        table.columns.iter().position(|c| {
+            c.strip_prefix(&format!("{topic}.")).is_some_and(|field| {
+                meta.get(&format!("node:{field}"))
+                    .map_or(field.trim_end_matches("_k") == name, |n| n == name)
+            })
+        })
+    };
+    let mut cols = Vec::new();
+    for s in &sc.sensors {
+        let i = match s.target {
+            SensorTarget::Node(n) => node_col(&sc.thermal.network.nodes[n].name)?,
+            SensorTarget::Backlash(k) => {
+                let pair = &sc.gears[k].name;
+                let (t, _) = table
+                    .channel_metadata
+                    .iter()
+                    .find(|(t, m)| t.starts_with("/gears/") && m.get("pair") == Some(pair))?;
+                table.column(&format!("{t}.backlash_exact_um"))?
+            }
+        };
+        cols.push((s.column.clone(), i, s.unit()));
+    }
+    let mut rec = Recording {
+        file: path.display().to_string(),
+        columns: cols.iter().map(|c| c.0.clone()).collect(),
+        time_s: Vec::new(),
+        values: vec![Vec::new(); cols.len()],
+        rows_at: Vec::new(),
+    };
+    for (k, (_, row)) in table.rows.iter().enumerate() {
+        let t = row[t_col];
+        if !t.is_finite() || rec.time_s.last().is_some_and(|&l| t <= l) {
+            continue;
+        }
+        rec.time_s.push(t);
+        rec.rows_at.push(k as u64 + 1);
+        for (c, (_, i, unit)) in cols.iter().enumerate() {
+            let v = row[*i];
+            let v = match unit {
+                ColumnUnit::Celsius => v - orbitlash::constants::ZERO_CELSIUS_K,
+                _ => v,
+            };
+            rec.values[c].push(v.is_finite().then_some(v));
+        }
+    }
+    Some(rec)
 }

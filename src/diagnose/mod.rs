@@ -59,6 +59,10 @@ pub enum DiagnoseError {
     Model(#[from] ModelError),
 }
 
+/// The smallest noise assumed for a channel (K or µm): a recording can resolve no
+/// better, and the model itself is computed to a tolerance of this order.
+pub const NOISE_FLOOR: f64 = 1e-3;
+
 /// Settings of a diagnosis.
 #[derive(Debug, Clone)]
 pub struct Options {
@@ -526,7 +530,14 @@ pub fn diagnose(
                 obs.file, obs.channels[c].name
             ))
         })?;
-        noise.push(sigma.max(1e-6));
+        if sigma < NOISE_FLOOR {
+            notes.push(format!(
+                "channel `{}` is smoother than {NOISE_FLOOR} {} (noise estimated {sigma:.1e}): \
+                 model output rather than a measurement? Its noise is taken as {NOISE_FLOOR}",
+                obs.channels[c].name, obs.channels[c].unit
+            ));
+        }
+        noise.push(sigma.max(NOISE_FLOOR));
     }
     let names: Vec<String> = obs.channels.iter().map(|c| c.name.clone()).collect();
     let cmap = |v: &[f64]| ChannelMap(names.iter().cloned().zip(v.iter().copied()).collect());
