@@ -1,6 +1,6 @@
 //! `orbitlash diagnose`: a recording against the scenario (see `orbitlash::diagnose`).
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -8,11 +8,10 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use orbitlash::diagnose::{self, Diagnosis, Options, Verdict};
-use orbitlash::io::atomic::AtomicFile;
-use orbitlash::io::output::{OutputError, OutputPolicy, check_output, resolved};
+use orbitlash::io::output::{OutputPolicy, check_output, resolved};
 use orbitlash::io::recording::Recording;
 
-use super::{Outcome, load_with, print_out};
+use super::{Outcome, load_with, print_out, write_file};
 
 #[derive(Args, Debug)]
 pub struct DiagnoseArgs {
@@ -59,11 +58,6 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         if dir.exists() && !dir.is_dir() {
             bail!("--out {}: exists and is not a directory", dir.display());
         }
-    }
-    if a.holdout_orbits == Some(0) {
-        bail!(
-            "--holdout-orbits 0: hold out at least one orbit (the fit must be checked on data it did not see)"
-        );
     }
     let rec = match Recording::read(&a.recording) {
         Ok(r) => r,
@@ -115,13 +109,6 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     }
     print_out(&o)?;
     Ok(Outcome::Pass)
-}
-
-fn write_file(path: &Path, policy: &OutputPolicy, bytes: &[u8]) -> Result<()> {
-    let mut f = AtomicFile::create(path, policy)?;
-    f.write_all(bytes).map_err(|e| OutputError::io(path, e))?;
-    f.commit()?;
-    Ok(())
 }
 
 /// `--out DIR`: corrected scenario, side-by-side MCAP, residual plots.

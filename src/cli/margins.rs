@@ -1,7 +1,7 @@
 //! `orbitlash margins`: the scenario's `[[dispersion]]` entries sampled N times, each
 //! sample run in parallel, and the report an engineer signs (verdict first).
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -9,15 +9,14 @@ use anyhow::{Result, bail};
 use clap::{Args, ValueEnum};
 
 use orbitlash::dispersion::{Plan, Sampling};
-use orbitlash::io::atomic::AtomicFile;
-use orbitlash::io::output::{OutputError, OutputPolicy, check_output, resolved};
+use orbitlash::io::output::{OutputPolicy, check_output, resolved};
 use orbitlash::margins::{
     Horizon, MergeError, Report, RunIdentity, SHARD_FORMAT, SampleOutcome, Shard, merge, report,
     run_samples, shard_range,
 };
 
 use super::table::{self, Align};
-use super::{Outcome, load_with, orbits_arg, print_out};
+use super::{Outcome, load_with, orbits_arg, print_out, write_file};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum SamplingArg {
@@ -196,13 +195,6 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     }
     print_out(&o)?;
     Ok(Outcome::from_pass(rep.verdict == "pass"))
-}
-
-fn write_file(path: &Path, policy: &OutputPolicy, bytes: &[u8]) -> Result<()> {
-    let mut f = AtomicFile::create(path, policy)?;
-    f.write_all(bytes).map_err(|e| OutputError::io(path, e))?;
-    f.commit()?;
-    Ok(())
 }
 
 fn run_with_progress(

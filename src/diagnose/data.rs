@@ -329,7 +329,7 @@ pub fn noise(
     if z.len() < 10 {
         return None;
     }
-    let m = median(&mut z.clone());
+    let m = median(&mut z);
     let mut dev: Vec<f64> = z.iter().map(|v| (v - m).abs()).collect();
     Some(1.4826 * median(&mut dev))
 }
@@ -403,6 +403,7 @@ pub fn mismatches(
         if n_total == 0 || total <= 0.0 {
             continue;
         }
+        let smooth = smoothed(r, 5);
         let rms_all = (total / n_total as f64).sqrt();
         if rms_all.is_nan() || rms_all <= ratio * sigma {
             continue;
@@ -426,7 +427,6 @@ pub fn mismatches(
             let rms = (e / n as f64).sqrt();
             // Where it shows: samples of this phase whose smoothed residual exceeds
             // three noise widths of the smoothed series.
-            let smooth = smoothed(r, 5);
             let limit = (3.0 * sigma / 5f64.sqrt()).max(0.5 * rms);
             let mut hits: Vec<usize> = (0..r.len())
                 .filter(|&j| obs.part[j] != Part::Tail && in_phase(j))

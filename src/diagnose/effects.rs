@@ -97,6 +97,39 @@ pub struct Setter {
     pub terms: Vec<(usize, f64)>,
 }
 
+impl ParamDef {
+    pub fn new(name: &'static str, lower: f64, upper: f64, step: f64) -> ParamDef {
+        ParamDef {
+            name,
+            lower,
+            upper,
+            step,
+        }
+    }
+}
+
+impl Setter {
+    /// The key path set to `scale` × parameter `index`.
+    pub fn scaled(path: String, index: usize, scale: f64) -> Setter {
+        Setter {
+            path,
+            constant: 0.0,
+            terms: vec![(index, scale)],
+        }
+    }
+}
+
+/// The key-path values of `setters` for parameters `theta`.
+pub fn values(setters: &[Setter], theta: &[f64]) -> Vec<(String, f64)> {
+    setters
+        .iter()
+        .map(|s| {
+            let v = s.constant + s.terms.iter().map(|&(i, c)| c * theta[i]).sum::<f64>();
+            (s.path.clone(), v)
+        })
+        .collect()
+}
+
 /// An effect on one target, ready to be fitted.
 #[derive(Clone)]
 pub struct Candidate {
@@ -150,13 +183,7 @@ impl Candidate {
 
     /// The key-path values for parameters `theta`.
     pub fn values(&self, theta: &[f64]) -> Vec<(String, f64)> {
-        self.setters
-            .iter()
-            .map(|s| {
-                let v = s.constant + s.terms.iter().map(|&(i, c)| c * theta[i]).sum::<f64>();
-                (s.path.clone(), v)
-            })
-            .collect()
+        values(&self.setters, theta)
     }
 
     /// Parameters as the report gives them (derived ones added: a heater's `off_c`).
@@ -295,30 +322,12 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                     let mut c = blank(Effect::EarthAlbedoIr, Some(edit.clone()));
                     c.node = Some(n.clone());
                     c.params = vec![
-                        ParamDef {
-                            name: "albedo",
-                            lower: 1e-4,
-                            upper: 1.0,
-                            step: 0.005,
-                        },
-                        ParamDef {
-                            name: "earth_ir_w_per_m2",
-                            lower: 0.01,
-                            upper: 500.0,
-                            step: 2.0,
-                        },
+                        ParamDef::new("albedo", 1e-4, 1.0, 0.005),
+                        ParamDef::new("earth_ir_w_per_m2", 0.01, 500.0, 2.0),
                     ];
                     c.setters = vec![
-                        Setter {
-                            path: pa,
-                            constant: 0.0,
-                            terms: vec![(0, a_ref / env_albedo)],
-                        },
-                        Setter {
-                            path: pe,
-                            constant: 0.0,
-                            terms: vec![(1, e_ref / env_ir)],
-                        },
+                        Setter::scaled(pa, 0, a_ref / env_albedo),
+                        Setter::scaled(pe, 1, e_ref / env_ir),
                     ];
                     c.starts = vec![
                         vec![0.15, 0.01],
@@ -357,31 +366,12 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                     let mut c = blank(Effect::HeaterThermostat, Some(edit.clone()));
                     c.node = Some(n.clone());
                     c.params = vec![
-                        ParamDef {
-                            name: "power_w",
-                            lower: 0.01,
-                            upper: 1000.0,
-                            step: 0.02,
-                        },
-                        ParamDef {
-                            name: "on_c",
-                            lower: on_c - 30.0,
-                            upper: on_c + 30.0,
-                            step: 0.05,
-                        },
-                        ParamDef {
-                            name: "hysteresis_k",
-                            lower: 0.1,
-                            upper: 50.0,
-                            step: 0.05,
-                        },
+                        ParamDef::new("power_w", 0.01, 1000.0, 0.02),
+                        ParamDef::new("on_c", on_c - 30.0, on_c + 30.0, 0.05),
+                        ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05),
                     ];
                     c.setters = vec![
-                        Setter {
-                            path: pp,
-                            constant: 0.0,
-                            terms: vec![(0, 1.0)],
-                        },
+                        Setter::scaled(pp, 0, 1.0),
                         Setter {
                             path: pon,
                             constant: C_TO_K,
@@ -429,17 +419,8 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
             let mut c = blank(Effect::InternalDissipation, Some(edit.clone()));
             c.node = Some(n.clone());
             c.schedule = Some(when);
-            c.params = vec![ParamDef {
-                name: "power_w",
-                lower: 0.0,
-                upper: 1000.0,
-                step: 0.02,
-            }];
-            c.setters = vec![Setter {
-                path: pp,
-                constant: 0.0,
-                terms: vec![(0, 1.0)],
-            }];
+            c.params = vec![ParamDef::new("power_w", 0.0, 1000.0, 0.02)];
+            c.setters = vec![Setter::scaled(pp, 0, 1.0)];
             c.starts = vec![vec![0.25], vec![1.0], vec![4.0]];
             c.null = Some(vec![0.0]);
             out.push(c);
@@ -478,17 +459,8 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                 let mut c = blank(Effect::HousingExpansion, Some(edit.clone()));
                 c.node = Some(n.clone());
                 c.gear_pair = Some(pair);
-                c.params = vec![ParamDef {
-                    name: "alpha_per_k",
-                    lower: -2e-5,
-                    upper: 1e-4,
-                    step: 1e-7,
-                }];
-                c.setters = vec![Setter {
-                    path: p,
-                    constant: 0.0,
-                    terms: vec![(0, 1.0)],
-                }];
+                c.params = vec![ParamDef::new("alpha_per_k", -2e-5, 1e-4, 1e-7)];
+                c.setters = vec![Setter::scaled(p, 0, 1.0)];
                 c.starts = vec![vec![2e-6], vec![8e-6], vec![2e-5]];
                 c.null = Some(vec![0.0]);
                 out.push(c);
@@ -525,24 +497,8 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                     if base.get(&p1).is_ok() && base.get(&p2).is_ok() {
                         let mut c = blank(Effect::CteTemperature, Some(edit.clone()));
                         c.gear_pair = Some(pair.clone());
-                        c.params = vec![ParamDef {
-                            name: "dalpha_dt_per_k2",
-                            lower: -1e-6,
-                            upper: 1e-6,
-                            step: 1e-9,
-                        }];
-                        c.setters = vec![
-                            Setter {
-                                path: p1,
-                                constant: 0.0,
-                                terms: vec![(0, 1.0)],
-                            },
-                            Setter {
-                                path: p2,
-                                constant: 0.0,
-                                terms: vec![(0, 1.0)],
-                            },
-                        ];
+                        c.params = vec![ParamDef::new("dalpha_dt_per_k2", -1e-6, 1e-6, 1e-9)];
+                        c.setters = vec![Setter::scaled(p1, 0, 1.0), Setter::scaled(p2, 0, 1.0)];
                         c.starts = vec![vec![-5e-8], vec![-1.5e-8], vec![1.5e-8], vec![5e-8]];
                         c.null = Some(vec![0.0]);
                         out.push(c);
@@ -551,23 +507,10 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
             }
             let mut c = blank(Effect::CteScale, None);
             c.gear_pair = Some(pair.clone());
-            c.params = vec![ParamDef {
-                name: "scale",
-                lower: 0.1,
-                upper: 5.0,
-                step: 0.005,
-            }];
+            c.params = vec![ParamDef::new("scale", 0.1, 5.0, 0.005)];
             c.setters = vec![
-                Setter {
-                    path: format!("gear_pair.{q}.pinion.material.alpha_per_k"),
-                    constant: 0.0,
-                    terms: vec![(0, a1)],
-                },
-                Setter {
-                    path: format!("gear_pair.{q}.wheel.material.alpha_per_k"),
-                    constant: 0.0,
-                    terms: vec![(0, a2)],
-                },
+                Setter::scaled(format!("gear_pair.{q}.pinion.material.alpha_per_k"), 0, a1),
+                Setter::scaled(format!("gear_pair.{q}.wheel.material.alpha_per_k"), 0, a2),
             ];
             c.starts = vec![vec![0.8], vec![0.9], vec![1.1], vec![1.25]];
             c.null = Some(vec![1.0]);
@@ -614,17 +557,8 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
             c.gear_pair = Some(pair.clone());
             c.gear = Some(format!("{pair}.{which}"));
             c.node = Some(shaft.clone());
-            c.params = vec![ParamDef {
-                name: "interference_um",
-                lower: 0.0,
-                upper: 500.0,
-                step: 0.2,
-            }];
-            c.setters = vec![Setter {
-                path: p,
-                constant: 0.0,
-                terms: vec![(0, 1.0)],
-            }];
+            c.params = vec![ParamDef::new("interference_um", 0.0, 500.0, 0.2)];
+            c.setters = vec![Setter::scaled(p, 0, 1.0)];
             c.starts = vec![vec![2.0], vec![10.0], vec![40.0]];
             out.push(c);
         }
@@ -642,12 +576,7 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
         };
         let mut c = blank(Effect::SensorLag, None);
         c.channel = Some(col.clone());
-        c.params = vec![ParamDef {
-            name: "tau_s",
-            lower: 0.0,
-            upper: 7200.0,
-            step: 1.0,
-        }];
+        c.params = vec![ParamDef::new("tau_s", 0.0, 7200.0, 1.0)];
         c.setters = vec![Setter {
             path: pt,
             constant: tau0,
@@ -658,12 +587,7 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
         out.push(c);
         let mut c = blank(Effect::SensorOffset, None);
         c.channel = Some(col.clone());
-        c.params = vec![ParamDef {
-            name: "offset_k",
-            lower: -50.0,
-            upper: 50.0,
-            step: 0.05,
-        }];
+        c.params = vec![ParamDef::new("offset_k", -50.0, 50.0, 0.05)];
         c.setters = vec![Setter {
             path: po,
             constant: off0,
@@ -700,12 +624,7 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
         };
         if what == "load" {
             c.load = Some(name);
-            c.params = vec![ParamDef {
-                name: "scale",
-                lower: 0.05,
-                upper,
-                step: 0.003,
-            }];
+            c.params = vec![ParamDef::new("scale", 0.05, upper, 0.003)];
             c.starts = vec![
                 vec![0.8],
                 vec![0.9],
@@ -714,12 +633,7 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
             ];
         } else {
             c.conductor = Some(name);
-            c.params = vec![ParamDef {
-                name: "scale",
-                lower: 0.02,
-                upper,
-                step: 0.01,
-            }];
+            c.params = vec![ParamDef::new("scale", 0.02, upper, 0.01)];
             c.starts = vec![
                 vec![0.3],
                 vec![0.6],
@@ -727,11 +641,7 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                 vec![3.0f64.min(upper)],
             ];
         }
-        c.setters = vec![Setter {
-            path: p.path.clone(),
-            constant: 0.0,
-            terms: vec![(0, p.value)],
-        }];
+        c.setters = vec![Setter::scaled(p.path.clone(), 0, p.value)];
         c.null = Some(vec![1.0]);
         out.push(c);
     }

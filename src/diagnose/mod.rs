@@ -44,7 +44,7 @@ use crate::sim::{
     Event, Observer, ObserverResult, RunStart, RunStats, SimError, StepView, simulate,
 };
 
-use data::{Mismatch, Observations, Part, Phase};
+use data::{Mismatch, Observations, Part};
 use effects::{Candidate, Hints, ParamDef, Setter};
 
 #[derive(Debug, thiserror::Error)]
@@ -55,6 +55,8 @@ pub enum DiagnoseError {
     Options(String),
     #[error("the baseline simulation failed")]
     Baseline(#[source] SimError),
+    #[error("the corrected model failed over the whole recording")]
+    Corrected(#[source] SimError),
     #[error(transparent)]
     Model(#[from] ModelError),
 }
@@ -368,15 +370,7 @@ impl Composite {
 
     fn model_at(&self, theta: &[f64]) -> Result<Model, ModelError> {
         let mut m = self.base.clone();
-        let values: Vec<(String, f64)> = self
-            .setters
-            .iter()
-            .map(|s| {
-                let v = s.constant + s.terms.iter().map(|&(i, c)| c * theta[i]).sum::<f64>();
-                (s.path.clone(), v)
-            })
-            .collect();
-        m.set_many(&values)?;
+        m.set_many(&effects::values(&self.setters, theta))?;
         Ok(m)
     }
 }
@@ -934,19 +928,11 @@ pub fn diagnose(
                 });
                 off += k;
             }
-            series.corrected = obs
-                .channels
-                .iter()
-                .map(|c| h.pred[c.sensor].clone())
-                .collect();
             // The corrected series over the whole recording (tail included).
-            if let Ok((p, _)) = predict(&h.model, &whole, &[], u64::MAX) {
-                series.corrected = obs.channels.iter().map(|c| p[c.sensor].clone()).collect();
-            }
+            let (p, _) =
+                predict(&h.model, &whole, &[], u64::MAX).map_err(DiagnoseError::Corrected)?;
+            series.corrected = obs.channels.iter().map(|c| p[c.sensor].clone()).collect();
             report.corrected = Some(h.model.clone());
-            for r in &mut report.candidates {
-                let _ = r;
-            }
             for (ci, rep) in reports.iter_mut().enumerate() {
                 if h.members.contains(&ci) {
                     rep.status = "accepted";
@@ -995,7 +981,6 @@ pub fn diagnose(
     report.time_per_candidate_s =
         search_started.elapsed().as_secs_f64() / cands.len().max(1) as f64;
     report.time_s = started.elapsed().as_secs_f64();
-    let _ = Phase::ALL;
     Ok(report)
 }
 

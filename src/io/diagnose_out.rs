@@ -13,11 +13,8 @@ use crate::diagnose::Diagnosis;
 
 use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
+use super::mcap_log::ns;
 use super::protobuf::Encoder;
-
-fn ns(t_s: f64) -> u64 {
-    (t_s * 1e9).round().max(0.0) as u64
-}
 
 /// Writes the side-by-side file (atomically: complete or not at all).
 pub fn write_mcap(

@@ -261,7 +261,8 @@ pub struct McapLog {
     last_t_s: f64,
 }
 
-fn ns(t_s: f64) -> u64 {
+/// Seconds to MCAP nanoseconds (never negative).
+pub(crate) fn ns(t_s: f64) -> u64 {
     (t_s * 1e9).round().max(0.0) as u64
 }
 

@@ -40,6 +40,46 @@ fn step(span: f64) -> f64 {
         .unwrap_or(10.0 * p)
 }
 
+/// The plot area's axes: bottom (at `y0`) and left (up to `y1`).
+fn frame(o: &mut String, y0: f64, y1: f64) {
+    let _ = writeln!(
+        o,
+        "<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{}\" y2=\"{y0}\" stroke=\"black\"/>\n<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{LEFT}\" y2=\"{y1}\" stroke=\"black\"/>",
+        W - RIGHT
+    );
+}
+
+/// Round ticks with labels along the bottom axis for values lo … hi.
+fn x_ticks(o: &mut String, lo: f64, hi: f64, y0: f64) {
+    let s = step(hi - lo);
+    let mut t = (lo / s).ceil() * s;
+    while t <= hi {
+        let x = x_of(t, lo, hi);
+        let _ = writeln!(
+            o,
+            "<line x1=\"{x:.2}\" y1=\"{y0}\" x2=\"{x:.2}\" y2=\"{}\" stroke=\"black\"/><text x=\"{x:.2}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
+            y0 + 5.0,
+            y0 + 18.0,
+            crate::units::num(t)
+        );
+        t += s;
+    }
+}
+
+/// The axis titles: `x` under the plot, `y` turned along the left side.
+fn axis_labels(o: &mut String, x: &str, y: &str, y0: f64, y1: f64) {
+    let _ = writeln!(
+        o,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">{}</text>",
+        (LEFT + W - RIGHT) / 2.0,
+        H - 18.0,
+        esc(x),
+        (y0 + y1) / 2.0,
+        (y0 + y1) / 2.0,
+        esc(y)
+    );
+}
+
 /// The plot area's x position of value `v` on [lo, hi].
 pub fn x_of(v: f64, lo: f64, hi: f64) -> f64 {
     LEFT + (v - lo) / (hi - lo) * (W - LEFT - RIGHT)
@@ -77,31 +117,14 @@ pub fn distribution(
     let (y0, y1) = (H - BOTTOM, TOP);
     let y_of = |c: f64| y0 - c / top * (y0 - y1);
     // axes and ticks
-    let _ = writeln!(
-        o,
-        "<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{}\" y2=\"{y0}\" stroke=\"black\"/>\n<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{LEFT}\" y2=\"{y1}\" stroke=\"black\"/>",
-        W - RIGHT
-    );
-    let s = step(hi - lo);
-    let mut t = (lo / s).ceil() * s;
-    while t <= hi {
-        let x = x_of(t, lo, hi);
-        let _ = writeln!(
-            o,
-            "<line x1=\"{x:.2}\" y1=\"{y0}\" x2=\"{x:.2}\" y2=\"{}\" stroke=\"black\"/><text x=\"{x:.2}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
-            y0 + 5.0,
-            y0 + 18.0,
-            crate::units::num(t)
-        );
-        t += s;
-    }
-    let _ = writeln!(
-        o,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">smallest normal backlash per sample, µm</text>\n<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">samples per bin; CDF (line, 0 … 1)</text>",
-        (LEFT + W - RIGHT) / 2.0,
-        H - 18.0,
-        (y0 + y1) / 2.0,
-        (y0 + y1) / 2.0
+    frame(&mut o, y0, y1);
+    x_ticks(&mut o, lo, hi, y0);
+    axis_labels(
+        &mut o,
+        "smallest normal backlash per sample, µm",
+        "samples per bin; CDF (line, 0 … 1)",
+        y0,
+        y1,
     );
     // counts on the left, CDF on the right
     for f in [0.0, 0.5, 1.0] {
@@ -290,24 +313,8 @@ pub fn residuals(s: &crate::diagnose::Series, c: usize) -> String {
             );
         }
     }
-    let _ = writeln!(
-        o,
-        "<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{}\" y2=\"{y0}\" stroke=\"black\"/>\n<line x1=\"{LEFT}\" y1=\"{y0}\" x2=\"{LEFT}\" y2=\"{y1}\" stroke=\"black\"/>",
-        W - RIGHT
-    );
-    let st = step(t_hi - t_lo);
-    let mut t = 0.0;
-    while t <= t_hi + 1e-9 {
-        let x = x_of_t(t);
-        let _ = writeln!(
-            o,
-            "<line x1=\"{x:.2}\" y1=\"{y0}\" x2=\"{x:.2}\" y2=\"{}\" stroke=\"black\"/><text x=\"{x:.2}\" y=\"{}\" text-anchor=\"middle\">{}</text>",
-            y0 + 5.0,
-            y0 + 18.0,
-            crate::units::num(t)
-        );
-        t += st;
-    }
+    frame(&mut o, y0, y1);
+    x_ticks(&mut o, t_lo, t_hi, y0);
     let sv = step(hi - lo);
     let mut v = (lo / sv).ceil() * sv;
     while v <= hi {
@@ -322,13 +329,12 @@ pub fn residuals(s: &crate::diagnose::Series, c: usize) -> String {
         );
         v += sv;
     }
-    let _ = writeln!(
-        o,
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">time since t = 0, h</text>\n<text x=\"18\" y=\"{}\" transform=\"rotate(-90 18 {})\" text-anchor=\"middle\">residual, {unit}</text>",
-        (LEFT + W - RIGHT) / 2.0,
-        H - 18.0,
-        (y0 + y1) / 2.0,
-        (y0 + y1) / 2.0
+    axis_labels(
+        &mut o,
+        "time since t = 0, h",
+        &format!("residual, {unit}"),
+        y0,
+        y1,
     );
     for (class, k, colour) in [("before", 1, "#888888"), ("after", 2, "#1f5fbf")] {
         let mut path = String::new();
