@@ -24,6 +24,20 @@ use crate::spec::DispersionSpec;
 use crate::spec::compile::SpecError;
 use crate::spec::keys::KeyPath;
 
+/// The most samples a plan holds (its Latin hypercube keeps a stratum per sample and
+/// dimension; a margins run reports every sample).
+pub const MAX_SAMPLES: u64 = 10_000_000;
+
+/// Why a plan cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// A `[[dispersion]]` entry is wrong (the key path names the entry).
+    #[error(transparent)]
+    Spec(#[from] SpecError),
+    #[error("{samples} samples: a plan holds 1 … {MAX_SAMPLES}")]
+    Samples { samples: u64 },
+}
+
 /// The tails a normal or log-normal distribution must keep inside the parameter's
 /// range: 1 in 10⁷ on each side (±5.2 σ).
 pub const TAIL: f64 = 1e-7;
@@ -69,9 +83,8 @@ impl Distribution {
         match self {
             Distribution::Normal { mean, sd } => mean + sd * std_normal().inverse_cdf(u),
             Distribution::TruncatedNormal { mean, sd, min, max } => {
-                let n = std_normal();
-                let (a, b) = (n.cdf((min - mean) / sd), n.cdf((max - mean) / sd));
-                (mean + sd * n.inverse_cdf(a + u * (b - a))).clamp(*min, *max)
+                let z = truncated_std_normal((min - mean) / sd, (max - mean) / sd, u);
+                (mean + sd * z).clamp(*min, *max)
             }
             Distribution::Uniform { min, max } => min + u * (max - min),
             Distribution::Triangular { min, mode, max } => {
@@ -145,6 +158,63 @@ impl std::fmt::Display for Distribution {
     }
 }
 
+/// ln Φ̄(z) = ln P(Z > z) for the standard normal, accurate for every z: from erfc
+/// up to z = 5, beyond that from the Mills ratio R(z) = Φ̄(z)/φ(z) by its continued
+/// fraction R = 1/(z + 1/(z + 2/(z + 3/(z + …)))) (no underflow: Φ̄(40) ≈ 4e-350).
+pub fn ln_upper_tail(z: f64) -> f64 {
+    if z < 5.0 {
+        (0.5 * statrs::function::erf::erfc(z / std::f64::consts::SQRT_2)).ln()
+    } else {
+        let mut t = z;
+        for k in (1..=80).rev() {
+            t = z + k as f64 / t;
+        }
+        -0.5 * z * z - 0.5 * (2.0 * std::f64::consts::PI).ln() - t.ln()
+    }
+}
+
+/// The u-quantile of the standard normal restricted to [a, b] (a < b). Where the
+/// interval lies in one tail, the inverse is taken on ln Φ̄ (upper tail; the lower by
+/// symmetry), so bounds tens of σ from the mean still spread the samples over the
+/// interval instead of piling them on a bound.
+pub fn truncated_std_normal(a: f64, b: f64, u: f64) -> f64 {
+    if b <= 0.0 {
+        return -truncated_std_normal(-b, -a, 1.0 - u);
+    }
+    if a < 0.0 {
+        // the interval holds the mode: the plain CDF has no cancellation to fear
+        let n = std_normal();
+        let (pa, pb) = (n.cdf(a), n.cdf(b));
+        return n.inverse_cdf(pa + u * (pb - pa)).clamp(a, b);
+    }
+    // 0 ≤ a < b: solve ln Φ̄(x) = ln(Φ̄(a) − u (Φ̄(a) − Φ̄(b))), in logs
+    let (la, lb) = (ln_upper_tail(a), ln_upper_tail(b));
+    let target = la + (-u * -(lb - la).exp_m1()).ln_1p();
+    // ln Φ̄ falls strictly: Newton steps kept inside a shrinking bracket [lo, hi]
+    let (mut lo, mut hi) = (a, b);
+    let mut x = a;
+    for _ in 0..200 {
+        let f = ln_upper_tail(x) - target;
+        if f > 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        // d/dx ln Φ̄(x) = −φ(x)/Φ̄(x)
+        let ln_phi = -0.5 * x * x - 0.5 * (2.0 * std::f64::consts::PI).ln();
+        let slope = -(ln_phi - ln_upper_tail(x)).exp();
+        let mut next = x - f / slope;
+        if !(next > lo && next < hi) || !next.is_finite() {
+            next = 0.5 * (lo + hi);
+        }
+        if (next - x).abs() <= 1e-15 * x.abs().max(1.0) || hi - lo <= 1e-15 * hi.abs() {
+            return next.clamp(a, b);
+        }
+        x = next;
+    }
+    x.clamp(a, b)
+}
+
 /// How the samples cover the quantiles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Sampling {
@@ -193,7 +263,10 @@ impl Plan {
         sampling: Sampling,
         samples: u64,
         seed: u64,
-    ) -> Result<Plan, SpecError> {
+    ) -> Result<Plan, PlanError> {
+        if !(1..=MAX_SAMPLES).contains(&samples) {
+            return Err(PlanError::Samples { samples });
+        }
         let mut dispersions = Vec::new();
         let mut groups: Vec<String> = Vec::new();
         let mut dimensions = 0;
@@ -247,11 +320,21 @@ impl Plan {
                     dimensions - 1
                 }
             };
-            if dispersions.iter().any(|x: &Dispersion| x.path == d.path) {
-                return Err(err(
+            // the same number however it is spelled (`node."housing"`, `node . housing`)
+            if let Some((j, x)) = dispersions
+                .iter()
+                .enumerate()
+                .find(|(_, x): &(usize, &Dispersion)| x.id.same_number(&id))
+            {
+                return Err(PlanError::Spec(err(
                     at.key("path"),
-                    format!("`{}` is dispersed twice", d.path),
-                ));
+                    format!(
+                        "`{}` is `{}`, which dispersion[{j}] (`{}`) already disperses; one number has one distribution",
+                        d.path,
+                        id.canonical_path(),
+                        x.path
+                    ),
+                )));
             }
             dispersions.push(Dispersion {
                 path: d.path.clone(),
@@ -277,48 +360,108 @@ impl Plan {
         })
     }
 
-    /// The quantile of every dimension for sample `k` (0-based), each in (0, 1).
-    pub fn quantiles(&self, k: u64) -> Vec<f64> {
+    /// The quantile of every dimension for sample `k` (0-based), each in (0, 1); `None`
+    /// when the plan has no sample `k` (k ≥ samples).
+    pub fn quantiles(&self, k: u64) -> Option<Vec<f64>> {
+        if k >= self.samples {
+            return None;
+        }
         let mut rng = ChaCha12Rng::seed_from_u64(self.seed);
         rng.set_stream(k);
         let unit = |x: u64| ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-        (0..self.dimensions)
-            .map(|d| {
-                let u = unit(rng.next_u64());
-                match self.sampling {
-                    Sampling::Random => u,
-                    Sampling::LatinHypercube => {
-                        (self.strata[d][k as usize] as f64 + u) / self.samples as f64
+        Some(
+            (0..self.dimensions)
+                .map(|d| {
+                    let u = unit(rng.next_u64());
+                    match self.sampling {
+                        Sampling::Random => u,
+                        Sampling::LatinHypercube => {
+                            (self.strata[d][k as usize] as f64 + u) / self.samples as f64
+                        }
                     }
-                }
-            })
-            .collect()
+                })
+                .collect(),
+        )
     }
 
-    /// The value of every dispersion for sample `k`, in the order of `dispersions`.
-    pub fn values(&self, k: u64) -> Vec<f64> {
-        let u = self.quantiles(k);
+    /// The value of every dispersion for sample `k`, in the order of `dispersions`;
+    /// `None` when the plan has no sample `k`.
+    pub fn values(&self, k: u64) -> Option<Vec<f64>> {
+        let u = self.quantiles(k)?;
+        Some(
+            self.dispersions
+                .iter()
+                .map(|d| d.distribution.quantile(u[d.dimension]))
+                .collect(),
+        )
+    }
+
+    /// The dispersion of the number `id` names, however spelled.
+    pub fn dispersion_of(&self, id: &ParamId) -> Option<(usize, &Dispersion)> {
         self.dispersions
             .iter()
-            .map(|d| d.distribution.quantile(u[d.dimension]))
-            .collect()
+            .enumerate()
+            .find(|(_, d)| d.id.same_number(id))
     }
 
     /// Writes sample `k`'s values into `model` (a copy of the nominal one).
-    pub fn apply(&self, model: &mut Model, k: u64) -> Result<Vec<f64>, ModelError> {
-        let values = self.values(k);
-        for (d, v) in self.dispersions.iter().zip(&values) {
-            model.set_param(&d.id, *v)?;
+    pub fn apply(&self, model: &mut Model, k: u64) -> Result<Vec<f64>, SampleError> {
+        let values = self.values(k).ok_or(SampleError::NoSuchSample {
+            index: k,
+            samples: self.samples,
+        })?;
+        // A value may be refused beside the nominal value of another number and
+        // accepted beside its sampled one (heater on_k above the nominal off_k, off_k
+        // raised by the same sample): values refused are tried again after the others,
+        // until none goes in; then the first refusal is the sample's error.
+        let mut pending: Vec<usize> = (0..values.len()).collect();
+        loop {
+            let mut refused = Vec::new();
+            let mut first_error = None;
+            for &i in &pending {
+                if let Err(e) = model.set_param(&self.dispersions[i].id, values[i]) {
+                    refused.push(i);
+                    first_error.get_or_insert((i, e));
+                }
+            }
+            match first_error {
+                None => return Ok(values),
+                Some((i, source)) if refused.len() == pending.len() => {
+                    return Err(SampleError::Model {
+                        index: k,
+                        path: self.dispersions[i].path.clone(),
+                        value: values[i],
+                        source,
+                    });
+                }
+                Some(_) => pending = refused,
+            }
         }
-        Ok(values)
     }
+}
+
+/// Why sample k cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub enum SampleError {
+    #[error("there is no sample {index}: the plan has {samples} (0 … {})", samples - 1)]
+    NoSuchSample { index: u64, samples: u64 },
+    #[error("sample {index}: {path} = {}: {source}", crate::units::exact(*value))]
+    Model {
+        index: u64,
+        path: String,
+        value: f64,
+        #[source]
+        source: ModelError,
+    },
 }
 
 /// A random permutation of 0 … n−1 for dimension `d` (Fisher–Yates on its own stream).
 fn permutation(seed: u64, d: u64, n: u64) -> Vec<u32> {
     let mut rng = ChaCha12Rng::seed_from_u64(seed);
     rng.set_stream(u64::MAX - d);
-    let mut p: Vec<u32> = (0..n as u32).collect();
+    // n ≤ MAX_SAMPLES < 2³², checked by `Plan::new`
+    let n = u32::try_from(n).expect("n ≤ MAX_SAMPLES");
+    let mut p: Vec<u32> = (0..n).collect();
     for i in (1..p.len()).rev() {
         let j = (rng.next_u64() % (i as u64 + 1)) as usize;
         p.swap(i, j);

@@ -12,7 +12,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 
 use crate::dispersion::Plan;
-use crate::model::{Model, ModelError};
+use crate::model::Model;
 use crate::orbit::EnvironmentModel;
 use crate::sim::{RunStats, Setup, SimError, Stop};
 use crate::summary::MeshStats;
@@ -50,12 +50,28 @@ pub struct PairOutcome {
 }
 
 /// One sample: its index, its dispersed values (in the plan's order) and each pair's
-/// outcome.
+/// outcome; or, for a sample that could not be run, why (and no pair outcomes).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SampleOutcome {
     pub index: u64,
     pub values: Vec<f64>,
     pub pairs: Vec<PairOutcome>,
+    /// Why the sample could not be run: the model refused its values together (a
+    /// heater's on_k above its off_k), or its run failed. Such a sample has no result,
+    /// and a report with one fails.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub invalid: Option<String>,
+}
+
+impl PairOutcome {
+    /// The flags that follow from the smallest backlash and the minimum allowed:
+    /// (violated, interference). A lost mesh (NaN) is both.
+    pub fn flags_from_values(min_backlash_um: f64, allowed_um: f64) -> (bool, bool) {
+        (
+            !(min_backlash_um >= allowed_um),
+            !(min_backlash_um > 0.0),
+        )
+    }
 }
 
 /// JSON writes NaN as null; read null back as NaN.
@@ -64,39 +80,29 @@ fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error
     Ok(v.unwrap_or(f64::NAN))
 }
 
-#[derive(Debug, thiserror::Error)]
-pub enum MarginError {
-    #[error("sample {index}: its values make an invalid model: {source}")]
-    Model {
-        index: u64,
-        #[source]
-        source: ModelError,
-    },
-    #[error("sample {index}: {source}")]
-    Run {
-        index: u64,
-        #[source]
-        source: SimError,
-    },
-    #[error("sample {index}: {source}")]
-    Steady {
-        index: u64,
-        #[source]
-        source: crate::steady::SteadyError,
-    },
-}
-
-/// Runs sample `k` of `plan` on a copy of `nominal`.
-pub fn run_sample(
-    nominal: &Model,
-    plan: &Plan,
-    k: u64,
-    horizon: Horizon,
-) -> Result<SampleOutcome, MarginError> {
+/// Runs sample `k` of `plan` on a copy of `nominal`. A sample whose values the model
+/// refuses, or whose run fails, is an outcome too (`invalid`), so that one bad
+/// combination of tolerances does not lose the other samples.
+pub fn run_sample(nominal: &Model, plan: &Plan, k: u64, horizon: Horizon) -> SampleOutcome {
+    let invalid = |values: Vec<f64>, why: String| SampleOutcome {
+        index: k,
+        values,
+        pairs: Vec::new(),
+        invalid: Some(why),
+    };
     let mut model = nominal.clone();
-    let values = plan
-        .apply(&mut model, k)
-        .map_err(|source| MarginError::Model { index: k, source })?;
+    let values = match plan.apply(&mut model, k) {
+        Ok(v) => v,
+        Err(e) => {
+            let why = match &e {
+                crate::dispersion::SampleError::Model { source, path, .. } => {
+                    format!("the model refuses {path} with the other values: {source}")
+                }
+                other => other.to_string(),
+            };
+            return invalid(plan.values(k).unwrap_or_default(), why);
+        }
+    };
     let sc = model.scenario();
     let env = &sc.thermal.environment;
     let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
@@ -106,21 +112,23 @@ pub fn run_sample(
         Horizon::Mission => sc.run.duration_s,
         Horizon::SteadyState => {
             let period = env.mean_period_s();
-            state = crate::steady::periodic_orbit(
+            match crate::steady::periodic_orbit(
                 &mut setup,
                 &state,
                 period,
                 crate::steady::SteadyOptions::default(),
-            )
-            .map_err(|source| MarginError::Steady { index: k, source })?
-            .state;
+            ) {
+                Ok(p) => state = p.state,
+                Err(e) => return invalid(values, format!("periodic orbit: {e}")),
+            }
             state.t_s + period
         }
     };
     let mut mesh = MeshStats::last(env.mean_period_s());
-    let _: RunStats = setup
-        .run(&mut state, t_end, &mut mesh, Stop::default())
-        .map_err(|source| MarginError::Run { index: k, source })?;
+    let run: Result<RunStats, SimError> = setup.run(&mut state, t_end, &mut mesh, Stop::default());
+    if let Err(e) = run {
+        return invalid(values, format!("the run failed: {e}"));
+    }
     let pairs = sc
         .gears
         .iter()
@@ -128,23 +136,26 @@ pub fn run_sample(
         .map(|(g, p)| {
             let lost = p.invalid_samples > 0;
             let t = if lost { p.t_first_invalid_s } else { p.t_min_s };
-            let min = if lost { f64::NAN } else { p.min_exact_m };
+            let min_um = if lost { f64::NAN } else { p.min_exact_m * 1e6 };
+            let allowed_um = g.min_backlash_m * 1e6;
+            let (violated, interference) = PairOutcome::flags_from_values(min_um, allowed_um);
             PairOutcome {
-                min_backlash_um: min * 1e6,
+                min_backlash_um: min_um,
                 min_margin_um: if lost { f64::NAN } else { p.min_margin_m * 1e6 },
                 t_min_s: t,
                 orbit_number: env.orbit_number(t),
                 orbit_phase_deg: env.orbit_phase_deg(t),
-                interference: lost || p.interference_events > 0 || min <= 0.0,
-                violated: lost || min < g.min_backlash_m,
+                interference: interference || p.interference_events > 0,
+                violated,
             }
         })
         .collect();
-    Ok(SampleOutcome {
+    SampleOutcome {
         index: k,
         values,
         pairs,
-    })
+        invalid: None,
+    }
 }
 
 /// Runs samples `range` in parallel; results in index order. `done` counts finished
@@ -155,7 +166,7 @@ pub fn run_samples(
     range: Range<u64>,
     horizon: Horizon,
     done: &AtomicU64,
-) -> Result<Vec<SampleOutcome>, MarginError> {
+) -> Vec<SampleOutcome> {
     range
         .into_par_iter()
         .map(|k| {
@@ -288,10 +299,20 @@ pub struct Report {
     pub verdict: &'static str,
     pub seed: u64,
     pub samples: u64,
+    /// Samples that ran (the statistics are over these); `samples` minus `invalid`.
+    pub valid_samples: u64,
+    /// Samples that could not be run, with why (a report with any fails).
+    pub invalid: Vec<InvalidSample>,
     pub sampling: String,
     pub horizon: String,
     pub dispersed: Vec<String>,
     pub pairs: Vec<PairReport>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct InvalidSample {
+    pub index: u64,
+    pub reason: String,
 }
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -426,7 +447,7 @@ impl RunIdentity {
             }
             .to_string(),
             horizon: match horizon {
-                Horizon::Orbits(o) => format!("{o} orbits"),
+                Horizon::Orbits(o) => crate::units::count(o, "orbit"),
                 Horizon::Mission => "the scenario's run".to_string(),
                 Horizon::SteadyState => "one period of the periodic orbit".to_string(),
             },
@@ -482,8 +503,123 @@ pub enum MergeError {
     },
 }
 
-/// The whole run's samples from its shards (`(file name, shard)`), checked: one run,
-/// no sample twice, none missing.
+/// Reads a shard file's text and checks it against itself: its sizes (samples, shard
+/// i of n, the range shard i of n has, one outcome per index of it, one value per
+/// dispersion, one result per gear pair) and its flags (each must follow from the
+/// values: a hand-edited or damaged shard is refused, naming the sample). Never
+/// panics, whatever the text.
+pub fn read_shard(text: &str, file: &str) -> Result<Shard, MergeError> {
+    let bad = |why: String| MergeError::NotAShard {
+        file: file.to_string(),
+        why,
+    };
+    let s: Shard = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+    check_shard(&s, file)?;
+    Ok(s)
+}
+
+/// The checks of [`read_shard`] on a parsed shard.
+pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
+    let bad = |why: String| MergeError::NotAShard {
+        file: file.to_string(),
+        why,
+    };
+    if s.format != SHARD_FORMAT {
+        return Err(bad(format!("format `{}`", crate::units::shown(&s.format))));
+    }
+    let r = &s.run;
+    if !(1..=crate::dispersion::MAX_SAMPLES).contains(&r.samples) {
+        return Err(bad(format!(
+            "the run has {} samples, outside 1 … {}",
+            r.samples,
+            crate::dispersion::MAX_SAMPLES
+        )));
+    }
+    let (i, n) = s.shard;
+    if !(1..=MAX_SHARDS).contains(&n) || i >= n {
+        return Err(bad(format!(
+            "shard {i}/{n} is not a shard I/N with 0 ≤ I < N ≤ {MAX_SHARDS}"
+        )));
+    }
+    let range = shard_range(r.samples, i, n);
+    if (s.range.0, s.range.1) != (range.start, range.end) {
+        return Err(bad(format!(
+            "its range {} … {} is not shard {i}/{n} of {} samples ({} … {})",
+            s.range.0, s.range.1, r.samples, range.start, range.end
+        )));
+    }
+    if s.outcomes.len() as u64 != range.end - range.start {
+        return Err(bad(format!(
+            "{} outcomes for the {} samples of its range",
+            s.outcomes.len(),
+            range.end - range.start
+        )));
+    }
+    if r.pairs.is_empty() || r.pairs.iter().any(|(_, a)| !a.is_finite()) {
+        return Err(bad("its run has no gear pair with a finite minimum".into()));
+    }
+    for (j, o) in s.outcomes.iter().enumerate() {
+        let at = range.start + j as u64;
+        let sample = |why: String| bad(format!("sample {}: {why}", o.index));
+        if o.index != at {
+            return Err(bad(format!(
+                "outcome {j} is sample {}, not {at} (outcomes go in index order)",
+                o.index
+            )));
+        }
+        if o.values.len() != r.dispersed.len() && o.invalid.is_none() {
+            return Err(sample(format!(
+                "{} values for {} dispersions",
+                o.values.len(),
+                r.dispersed.len()
+            )));
+        }
+        if o.values.iter().any(|v| !v.is_finite()) {
+            return Err(sample("a dispersed value is not a finite number".into()));
+        }
+        let expected_pairs = if o.invalid.is_some() { 0 } else { r.pairs.len() };
+        if o.pairs.len() != expected_pairs {
+            return Err(sample(format!(
+                "{} gear pair results for {expected_pairs} gear pairs",
+                o.pairs.len()
+            )));
+        }
+        for (p, (name, allowed)) in o.pairs.iter().zip(&r.pairs) {
+            let (violated, interference) =
+                PairOutcome::flags_from_values(p.min_backlash_um, *allowed);
+            if p.violated != violated || p.interference != interference {
+                return Err(sample(format!(
+                    "{name}: min_backlash_um = {} with a minimum of {} µm means violated = {violated}, interference = {interference}, but the shard says {} and {}",
+                    crate::units::num(p.min_backlash_um),
+                    crate::units::num(*allowed),
+                    p.violated,
+                    p.interference
+                )));
+            }
+            let margin = p.min_backlash_um - allowed;
+            let agrees = if p.min_backlash_um.is_nan() {
+                p.min_margin_um.is_nan()
+            } else {
+                (p.min_margin_um - margin).abs() <= 1e-6 * margin.abs().max(1.0)
+            };
+            if !agrees || p.min_backlash_um.is_infinite() {
+                return Err(sample(format!(
+                    "{name}: min_margin_um = {} does not follow from min_backlash_um = {} and the minimum {} µm",
+                    crate::units::num(p.min_margin_um),
+                    crate::units::num(p.min_backlash_um),
+                    crate::units::num(*allowed)
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The most shards a run may be split into.
+pub const MAX_SHARDS: u64 = 100_000;
+
+/// The whole run's samples from its shards (`(file name, shard)`, each checked by
+/// [`read_shard`]), checked: one run, no sample twice, none missing.
 pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutcome>), MergeError> {
     let Some((first_file, first)) = shards.first() else {
         return Err(MergeError::NotAShard {
@@ -493,12 +629,7 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
     };
     let id = &first.run;
     for (file, s) in shards {
-        if s.format != SHARD_FORMAT {
-            return Err(MergeError::NotAShard {
-                file: file.clone(),
-                why: format!("format `{}`", s.format),
-            });
-        }
+        check_shard(s, file)?;
         let r = &s.run;
         let differs = [
             (
@@ -521,6 +652,12 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
                 what: what.into(),
             });
         }
+    }
+    if !(1..=crate::dispersion::MAX_SAMPLES).contains(&id.samples) {
+        return Err(MergeError::NotAShard {
+            file: first_file.clone(),
+            why: format!("the run has {} samples", id.samples),
+        });
     }
     let mut owner: Vec<Option<usize>> = vec![None; id.samples as usize];
     let mut all: Vec<Option<SampleOutcome>> = vec![None; id.samples as usize];
@@ -560,8 +697,24 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
     Ok((id.clone(), all.into_iter().flatten().collect()))
 }
 
-/// The report of `outcomes` (every sample of the run, in index order).
-pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
+/// The report of `all` (every sample of the run, in index order). Statistics are over
+/// the samples that ran; the flags (below the minimum, interference) are derived from
+/// each sample's smallest backlash, never taken from the outcome. `None` when no
+/// sample ran: there is nothing to judge.
+pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
+    let outcomes: Vec<&SampleOutcome> = all.iter().filter(|o| o.invalid.is_none()).collect();
+    let invalid: Vec<InvalidSample> = all
+        .iter()
+        .filter_map(|o| {
+            o.invalid.as_ref().map(|why| InvalidSample {
+                index: o.index,
+                reason: why.clone(),
+            })
+        })
+        .collect();
+    if outcomes.is_empty() || id.pairs.is_empty() {
+        return None;
+    }
     let n = outcomes.len() as u64;
     let needed = stats::wilks_minimum_samples(0.95, 0.95);
     let rank = stats::wilks_rank(n, 0.95, 0.95);
@@ -596,8 +749,12 @@ pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
             };
             let margins: Vec<f64> = sorted.iter().map(|v| v - allowed_um).collect();
             let tolerance = rank.map(|r| sorted[(r - 1) as usize]);
-            let violations = outcomes.iter().filter(|o| o.pairs[p].violated).count() as u64;
-            let interference = outcomes.iter().filter(|o| o.pairs[p].interference).count() as u64;
+            let flags: Vec<(bool, bool)> = outcomes
+                .iter()
+                .map(|o| PairOutcome::flags_from_values(o.pairs[p].min_backlash_um, allowed_um))
+                .collect();
+            let violations = flags.iter().filter(|f| f.0).count() as u64;
+            let interference = flags.iter().filter(|f| f.1).count() as u64;
             let mut sensitivities: Vec<Sensitivity> = id
                 .dispersed
                 .iter()
@@ -638,7 +795,18 @@ pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
                     }
                 })
                 .collect();
-            let (verdict, reason) = if interference > 0 {
+            let (verdict, reason) = if !invalid.is_empty() {
+                (
+                    "fail",
+                    format!(
+                        "{} of {} samples could not be run (first: sample {}: {}); the tolerances allow combinations the model cannot take, so 95/95 cannot be shown",
+                        invalid.len(),
+                        all.len(),
+                        invalid[0].index,
+                        invalid[0].reason
+                    ),
+                )
+            } else if interference > 0 {
                 (
                     "fail",
                     format!("{interference} of {n} samples interfere or lose the mesh"),
@@ -682,7 +850,7 @@ pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
             }
         })
         .collect();
-    Report {
+    Some(Report {
         scenario: id.scenario.clone(),
         verdict: if pairs.iter().all(|p| p.verdict == "pass") {
             "pass"
@@ -690,10 +858,12 @@ pub fn report(id: &RunIdentity, outcomes: &[SampleOutcome]) -> Report {
             "fail"
         },
         seed: id.seed,
-        samples: n,
+        samples: all.len() as u64,
+        valid_samples: n,
+        invalid,
         sampling: id.sampling.clone(),
         horizon: id.horizon.clone(),
         dispersed: id.dispersed.clone(),
         pairs,
-    }
+    })
 }

@@ -154,8 +154,32 @@ pub struct ParamId {
 }
 
 impl ParamId {
+    /// The path as it was given.
     pub fn path(&self) -> &str {
         &self.path
+    }
+
+    /// The path in one spelling (`node."housing" . capacitance_j_per_k` and
+    /// `node.housing.capacitance_j_per_k` give the same), for messages and comparisons.
+    pub fn canonical_path(&self) -> String {
+        self.canonical
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                // inner keys may hold dots (`coating.poisson`); only element keys quote
+                if i == 1 {
+                    crate::spec::keys::quote_key(p)
+                } else {
+                    p.clone()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(".")
+    }
+
+    /// True when both name the same number of the scenario, however spelled.
+    pub fn same_number(&self, other: &ParamId) -> bool {
+        self.canonical == other.canonical
     }
 }
 

@@ -41,6 +41,34 @@ pub fn exact(v: f64) -> String {
     }
 }
 
+/// `v` followed by `unit`, plural unless v is 1: "1 orbit", "6 orbits", "1e300 orbits".
+pub fn count(v: f64, unit: &str) -> String {
+    if v == 1.0 {
+        format!("1 {unit}")
+    } else {
+        format!("{} {unit}s", num(v))
+    }
+}
+
+/// Text from a file or the user as it may be shown on a terminal: control characters
+/// (escape sequences, bells, carriage returns) written as `\u{1b}`, never sent raw.
+pub fn shown(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.chars().any(char::is_control) {
+        text.chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_unicode().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect::<String>()
+            .into()
+    } else {
+        text.into()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{exact, num};

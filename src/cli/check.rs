@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use orbitlash::dispersion::{Plan, Sampling};
+use orbitlash::dispersion::Sampling;
 use orbitlash::orbit::EnvironmentModel;
 use orbitlash::thermal::analysis::time_constants;
 
@@ -25,9 +25,7 @@ pub fn check(a: CheckArgs) -> Result<()> {
     let mut o = String::new();
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
     // Dispersions are checked here too, before any margin run would start.
-    let dispersions = &loaded.model.spec().dispersion;
-    let plan = Plan::new(&loaded.model, dispersions, Sampling::Random, 1, 0)
-        .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
+    let plan = super::plan(&loaded, Sampling::Random, 1, 0)?;
     let sc = &loaded.scenario;
     let env = &sc.thermal.environment;
     let net = &sc.thermal.network;

@@ -5,18 +5,18 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 
 use orbitlash::dispersion::{Plan, Sampling};
-use orbitlash::io::output::{OutputPolicy, check_output, resolved};
+use orbitlash::io::output::{OutputPolicy, Outputs};
 use orbitlash::margins::{
-    Horizon, MergeError, Report, RunIdentity, SHARD_FORMAT, SampleOutcome, Shard, merge, report,
+    Horizon, Report, RunIdentity, SHARD_FORMAT, SampleOutcome, Shard, merge, read_shard, report,
     run_samples, shard_range,
 };
 
 use super::table::{self, Align};
-use super::{Outcome, load_with, orbits_arg, print_out, write_file};
+use super::{Outcome, load_with, orbits_arg, print_out};
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum SamplingArg {
@@ -77,49 +77,52 @@ pub struct MarginsArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Run even when the estimate exceeds the limits (5e7 steps per sample, 1e9 in all).
+    #[arg(long)]
+    force: bool,
 }
 
 fn shard_arg(s: &str) -> Result<(u64, u64), String> {
-    let bad = || format!("`{s}` is not a shard I/N with 0 ≤ I < N ≤ 100000");
+    let max = orbitlash::margins::MAX_SHARDS;
+    let bad = || format!("`{s}` is not a shard I/N with 0 ≤ I < N ≤ {max}");
     let (i, n) = s.split_once('/').ok_or_else(bad)?;
     let (i, n): (u64, u64) = (
         i.trim().parse().map_err(|_| bad())?,
         n.trim().parse().map_err(|_| bad())?,
     );
-    if n == 0 || n > 100_000 || i >= n {
+    if n == 0 || n > max || i >= n {
         return Err(bad());
     }
     Ok((i, n))
 }
 
-fn samples_arg(s: &str) -> Result<u64, String> {
+pub fn samples_arg(s: &str) -> Result<u64, String> {
+    let max = orbitlash::dispersion::MAX_SAMPLES;
     match s.parse::<u64>() {
-        Ok(n) if (1..=10_000_000).contains(&n) => Ok(n),
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
         _ => Err(format!(
-            "`{s}` is not a whole number of samples within 1 … 10000000"
+            "`{s}` is not a whole number of samples within 1 … {max}"
         )),
     }
 }
 
 pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
-    let inputs = loaded.inputs();
-    let policy = OutputPolicy::reading(&inputs);
-    let outputs: Vec<&Path> = [a.json.as_deref(), a.csv.as_deref()]
-        .into_iter()
-        .flatten()
-        .collect();
-    for p in &outputs {
-        check_output(p, &policy)?;
+    let sc = &loaded.scenario;
+    if sc.gears.is_empty() {
+        bail!(
+            "{} has no [[gear_pair]]: margins judge the backlash of gear pairs, so there is nothing to judge",
+            loaded.file
+        );
     }
-    if outputs.len() == 2 && resolved(outputs[0]) == resolved(outputs[1]) {
-        bail!("--json and --csv are the same file");
+    if a.shard.is_some() && a.csv.is_some() {
+        bail!(
+            "--csv with --shard: a shard writes only its shard file (--json); give --csv to `orbitlash merge`, which writes every sample"
+        );
     }
-    if let Some(dir) = &a.plots
-        && !dir.is_dir()
-    {
-        bail!("--plots {}: no such directory", dir.display());
-    }
+    // Every output, checked against the inputs and each other before anything runs.
+    let mut outs = Outputs::new(OutputPolicy::reading(&loaded.inputs()));
+    plan_outputs(&mut outs, a.json.as_deref(), a.csv.as_deref(), a.plots.as_deref(), sc.gears.iter().map(|g| g.name.as_str()))?;
     let spec = loaded.model.spec();
     if spec.dispersion.is_empty() {
         bail!(
@@ -127,33 +130,31 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
             loaded.file
         );
     }
-    let plan = Plan::new(
-        &loaded.model,
-        &spec.dispersion,
-        a.sampling.into(),
-        a.samples,
-        a.seed,
-    )
-    .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
+    let plan = super::plan(&loaded, a.sampling.into(), a.samples, a.seed)?;
     let horizon = match (a.orbits, a.steady_state) {
-        (Some(n), _) => Horizon::Orbits(n),
+        (Some(n), _) => {
+            // the bounds of `run --orbits`
+            sc.clone()
+                .with_orbits(n)
+                .map_err(|m| anyhow::anyhow!("--orbits {}: {m}", orbitlash::units::num(n)))?;
+            Horizon::Orbits(n)
+        }
         (None, true) => {
             // before any sample runs
-            orbitlash::steady::check_repeats(&loaded.scenario.thermal).map_err(|e| {
-                anyhow::anyhow!("--steady-state needs an environment that repeats every orbit; {e}")
-            })?;
+            orbitlash::steady::check_repeats(&sc.thermal)
+                .map_err(|e| anyhow::anyhow!("--steady-state: {e}"))?;
             Horizon::SteadyState
         }
         (None, false) => Horizon::Mission, // the scenario's own run length
     };
-    let sc = &loaded.scenario;
-    let id = RunIdentity::new(&loaded.toml, &loaded.sets, sc, &plan, horizon);
     let range = match a.shard {
         Some((i, n)) => shard_range(plan.samples, i, n),
         None => 0..plan.samples,
     };
+    super::estimate::margins(sc, horizon, range.end - range.start, a.force)?;
+    let id = RunIdentity::new(&loaded.toml, &loaded.sets, sc, &plan, horizon);
     let done = AtomicU64::new(0);
-    let outcomes = run_with_progress(&loaded.model, &plan, range.clone(), horizon, &done, a.quiet)?;
+    let outcomes = run_with_progress(&loaded.model, &plan, range.clone(), horizon, &done, a.quiet);
     if let Some((i, n)) = a.shard {
         let shard = Shard {
             format: SHARD_FORMAT.into(),
@@ -162,36 +163,101 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
             range: (range.start, range.end),
             outcomes,
         };
-        let p = a.json.as_ref().expect("--shard requires --json");
-        write_file(
-            p,
-            &policy,
-            (serde_json::to_string(&shard)? + "\n").as_bytes(),
-        )?;
+        let p = a.json.as_deref().expect("--shard requires --json");
+        let text = serde_json::to_string(&shard)? + "\n";
+        outs.write_all(&[(p, text.as_bytes())])?;
+        let invalid = shard.outcomes.iter().filter(|o| o.invalid.is_some()).count();
         print_out(&format!(
-            "shard {i}/{n}: samples {} … {} of {} written to {} (merge the shards with `orbitlash merge`)\n",
+            "shard {i}/{n}: samples {} … {} of {} written to {}{} (merge the shards with `orbitlash merge`)\n",
             range.start,
             range.end.saturating_sub(1),
             plan.samples,
-            p.display()
+            p.display(),
+            if invalid > 0 {
+                format!("; {invalid} of them could not be run")
+            } else {
+                String::new()
+            }
         ))?;
         return Ok(Outcome::Pass);
     }
-    let rep = report(&id, &outcomes);
+    finish(&outs, &id, &outcomes, a.json.as_deref(), a.csv.as_deref(), a.plots.as_deref())
+}
+
+/// Plans the outputs of `margins` or `merge`: the report, the samples and the plots of
+/// each gear pair (`<pair>-min-backlash.svg`, `<pair>-sensitivity.svg`).
+fn plan_outputs<'a>(
+    outs: &mut Outputs,
+    json: Option<&Path>,
+    csv: Option<&Path>,
+    plots: Option<&Path>,
+    pairs: impl Iterator<Item = &'a str>,
+) -> Result<()> {
+    if let Some(p) = json {
+        outs.file("--json", p)?;
+    }
+    if let Some(p) = csv {
+        outs.file("--csv", p)?;
+    }
+    if let Some(dir) = plots {
+        outs.folder("--plots", dir, false)?;
+        for pair in pairs {
+            for name in plot_names(pair) {
+                outs.file(&format!("--plots ({name})"), &dir.join(name))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn plot_names(pair: &str) -> [String; 2] {
+    [
+        format!("{pair}-min-backlash.svg"),
+        format!("{pair}-sensitivity.svg"),
+    ]
+}
+
+/// The report of every sample: printed, and written where asked (all files or none).
+fn finish(
+    outs: &Outputs,
+    id: &RunIdentity,
+    outcomes: &[SampleOutcome],
+    json: Option<&Path>,
+    csv: Option<&Path>,
+    plots: Option<&Path>,
+) -> Result<Outcome> {
+    let Some(rep) = report(id, outcomes) else {
+        let first = outcomes
+            .iter()
+            .find_map(|o| o.invalid.as_ref().map(|w| (o.index, w.clone())));
+        match first {
+            Some((k, why)) => bail!(
+                "no sample could be run, so there is nothing to judge (sample {k}: {why})"
+            ),
+            None => bail!("no sample and no gear pair: there is nothing to judge"),
+        }
+    };
     let mut o = format_report(&rep);
-    if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&rep)? + "\n";
-        write_file(p, &policy, text.as_bytes())?;
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    if let Some(p) = json {
+        files.push((p.to_path_buf(), (serde_json::to_string_pretty(&rep)? + "\n").into_bytes()));
+    }
+    if let Some(p) = csv {
+        files.push((p.to_path_buf(), samples_csv(id, outcomes).into_bytes()));
+    }
+    if let Some(dir) = plots {
+        files.extend(plots_of(dir, &rep, outcomes));
+    }
+    let refs: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (p.as_path(), b.as_slice())).collect();
+    outs.write_all(&refs)?;
+    if let Some(p) = json {
         outln!(o, "json: {}", p.display());
     }
-    if let Some(p) = &a.csv {
-        write_file(p, &policy, samples_csv(&plan, &outcomes, sc).as_bytes())?;
+    if let Some(p) = csv {
         outln!(o, "csv: {}", p.display());
     }
-    if let Some(dir) = &a.plots {
-        for p in write_plots(dir, &policy, &rep, &outcomes)? {
-            outln!(o, "plot: {}", p.display());
-        }
+    for (p, _) in files.iter().filter(|(p, _)| plots.is_some_and(|d| p.starts_with(d))) {
+        outln!(o, "plot: {}", p.display());
     }
     print_out(&o)?;
     Ok(Outcome::from_pass(rep.verdict == "pass"))
@@ -204,7 +270,7 @@ fn run_with_progress(
     horizon: Horizon,
     done: &AtomicU64,
     quiet: bool,
-) -> Result<Vec<SampleOutcome>> {
+) -> Vec<SampleOutcome> {
     let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::new(range.end - range.start);
         b.set_style(
@@ -233,38 +299,30 @@ fn run_with_progress(
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    Ok(result?)
+    result
 }
 
-/// The plots of `rep` into `dir`; returns the files written.
-fn write_plots(
-    dir: &Path,
-    policy: &OutputPolicy,
-    rep: &Report,
-    outcomes: &[SampleOutcome],
-) -> Result<Vec<PathBuf>> {
-    if !dir.is_dir() {
-        bail!("--plots {}: no such directory", dir.display());
-    }
-    let mut written = Vec::new();
+/// The plots of `rep` for `dir`: (path, SVG text) per gear pair.
+fn plots_of(dir: &Path, rep: &Report, outcomes: &[SampleOutcome]) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut files = Vec::new();
     for (k, p) in rep.pairs.iter().enumerate() {
         let values: Vec<f64> = outcomes
             .iter()
+            .filter(|o| o.invalid.is_none())
             .map(|o| o.pairs[k].min_backlash_um)
             .collect();
+        let [dist_name, tornado_name] = plot_names(&p.name);
         let svg = orbitlash::io::svg::distribution(
             &format!(
                 "{} / {}: smallest backlash of {} samples",
-                rep.scenario, p.name, rep.samples
+                rep.scenario, p.name, rep.valid_samples
             ),
             &values,
             p.min_backlash_allowed_um,
             p.tolerance_95_95_um,
             30,
         );
-        let file = dir.join(format!("{}-min-backlash.svg", p.name));
-        write_file(&file, policy, svg.as_bytes())?;
-        written.push(file);
+        files.push((dir.join(dist_name), svg.into_bytes()));
         let rows: Vec<(String, f64)> = p
             .sensitivities
             .iter()
@@ -277,11 +335,9 @@ fn write_plots(
             ),
             &rows,
         );
-        let file = dir.join(format!("{}-sensitivity.svg", p.name));
-        write_file(&file, policy, svg.as_bytes())?;
-        written.push(file);
+        files.push((dir.join(tornado_name), svg.into_bytes()));
     }
-    Ok(written)
+    files
 }
 
 pub fn format_report(r: &Report) -> String {
@@ -291,14 +347,29 @@ pub fn format_report(r: &Report) -> String {
     }
     outln!(
         o,
-        "{}: {} samples ({}), seed {}, {} each; dispersed: {}",
+        "{}: {} ({}), seed {}, {} each; dispersed: {}",
         r.scenario,
-        r.samples,
+        orbitlash::units::count(r.samples as f64, "sample"),
         r.sampling,
         r.seed,
         r.horizon,
         r.dispersed.join(", ")
     );
+    if !r.invalid.is_empty() {
+        outln!(
+            o,
+            "{} of {} samples could not be run; the statistics below are over the {} that ran:",
+            r.invalid.len(),
+            r.samples,
+            r.valid_samples
+        );
+        for s in r.invalid.iter().take(5) {
+            outln!(o, "  sample {}: {}", s.index, s.reason);
+        }
+        if r.invalid.len() > 5 {
+            outln!(o, "  … and {} more (all of them in --json)", r.invalid.len() - 5);
+        }
+    }
     for p in &r.pairs {
         outln!(
             o,
@@ -345,13 +416,13 @@ pub fn format_report(r: &Report) -> String {
                 o,
                 "  95/95 lower tolerance bound: {v:.3} µm (the {} of {} samples, Wilks)",
                 ordinal(p.tolerance_rank.unwrap_or(1)),
-                r.samples
+                r.valid_samples
             ),
             None => outln!(
                 o,
                 "  95/95 lower tolerance bound: not shown: it needs at least {} samples (Wilks), {} run",
                 p.tolerance_samples_needed,
-                r.samples
+                r.valid_samples
             ),
         }
         for (what, pr) in [
@@ -362,7 +433,7 @@ pub fn format_report(r: &Report) -> String {
                 o,
                 "  P({what}) = {}/{} = {:.4}, 95 % interval {:.4} … {:.4} (Clopper–Pearson)",
                 pr.count,
-                r.samples,
+                r.valid_samples,
                 pr.estimate,
                 pr.ci95[0],
                 pr.ci95[1]
@@ -371,7 +442,14 @@ pub fn format_report(r: &Report) -> String {
         outln!(o, "  sensitivity (Spearman ρ with the smallest backlash):");
         let mut t = table::new(&["", ""], &[Align::Left, Align::Right]);
         for s in &p.sensitivities {
-            t.add_row(vec![s.path.clone(), format!("{:+.3}", s.spearman)]);
+            t.add_row(vec![
+                s.path.clone(),
+                if s.spearman.is_finite() {
+                    format!("{:+.3}", s.spearman)
+                } else {
+                    "– (no variation to rank)".to_string()
+                },
+            ]);
         }
         o += &table::render(&t, "    ");
         outln!(
@@ -414,16 +492,13 @@ fn ordinal(r: u64) -> String {
 }
 
 /// Every sample: index, dispersed values, then per pair the smallest backlash, its
-/// margin, time, orbit, phase and flags.
-fn samples_csv(
-    plan: &Plan,
-    outcomes: &[SampleOutcome],
-    sc: &orbitlash::scenario::Scenario,
-) -> String {
+/// margin, time, orbit, phase and flags (derived from the values); a sample that could
+/// not be run has empty results and its reason in `invalid`.
+fn samples_csv(id: &RunIdentity, outcomes: &[SampleOutcome]) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header = vec!["sample".to_string()];
-    header.extend(plan.dispersions.iter().map(|d| d.path.clone()));
-    for g in &sc.gears {
+    header.extend(id.dispersed.iter().cloned());
+    for (name, _) in &id.pairs {
         for f in [
             "min_backlash_um",
             "min_margin_um",
@@ -433,24 +508,34 @@ fn samples_csv(
             "violated",
             "interference",
         ] {
-            header.push(format!("{}.{f}", g.name));
+            header.push(format!("{name}.{f}"));
         }
     }
+    header.push("invalid".to_string());
     w.write_record(&header).expect("in memory");
     for s in outcomes {
         let mut row = vec![s.index.to_string()];
         row.extend(s.values.iter().map(|v| orbitlash::units::exact(*v)));
-        for p in &s.pairs {
-            row.extend([
-                orbitlash::units::exact(p.min_backlash_um),
-                orbitlash::units::exact(p.min_margin_um),
-                orbitlash::units::exact(p.t_min_s),
-                p.orbit_number.to_string(),
-                orbitlash::units::exact(p.orbit_phase_deg),
-                (p.violated as u8).to_string(),
-                (p.interference as u8).to_string(),
-            ]);
+        row.resize(1 + id.dispersed.len(), String::new());
+        for (k, (_, allowed)) in id.pairs.iter().enumerate() {
+            match s.pairs.get(k) {
+                Some(p) => {
+                    let (violated, interference) =
+                        orbitlash::margins::PairOutcome::flags_from_values(p.min_backlash_um, *allowed);
+                    row.extend([
+                        orbitlash::units::exact(p.min_backlash_um),
+                        orbitlash::units::exact(p.min_margin_um),
+                        orbitlash::units::exact(p.t_min_s),
+                        p.orbit_number.to_string(),
+                        orbitlash::units::exact(p.orbit_phase_deg),
+                        (violated as u8).to_string(),
+                        ((interference || p.interference) as u8).to_string(),
+                    ]);
+                }
+                None => row.extend(std::iter::repeat_n(String::new(), 7)),
+            }
         }
+        row.push(s.invalid.clone().unwrap_or_default());
         w.write_record(&row).expect("in memory");
     }
     String::from_utf8(w.into_inner().expect("in memory")).expect("utf-8")
@@ -464,33 +549,44 @@ pub struct MergeArgs {
     /// Write the merged report as JSON (the same as the unsharded run's).
     #[arg(long, value_name = "FILE.json")]
     json: Option<PathBuf>,
+    /// Also write every sample as CSV (the same as the unsharded run's).
+    #[arg(long, value_name = "FILE.csv")]
+    csv: Option<PathBuf>,
+    /// Also write the plots into this folder (it must exist), as `margins --plots`.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
 }
+
+/// The largest shard file read (a shard of 10⁷ samples with a few dispersions and pairs
+/// is about 3 GB; anything larger is not a shard).
+const MAX_SHARD_BYTES: u64 = 4 << 30;
 
 pub fn merge_shards(a: MergeArgs) -> Result<Outcome> {
     let inputs: Vec<&Path> = a.shards.iter().map(PathBuf::as_path).collect();
-    let policy = OutputPolicy::reading(&inputs);
-    if let Some(p) = &a.json {
-        check_output(p, &policy)?;
-    }
     let mut shards = Vec::new();
     for p in &a.shards {
-        orbitlash::io::output::check_input(p)?;
-        let text = std::fs::read_to_string(p)
-            .map_err(|e| anyhow::anyhow!("reading {}: {e}", p.display()))?;
-        let shard: Shard = serde_json::from_str(&text).map_err(|e| MergeError::NotAShard {
-            file: p.display().to_string(),
-            why: e.to_string(),
-        })?;
+        let text = orbitlash::io::output::check_input(p)
+            .and_then(|()| {
+                let len = std::fs::metadata(p)?.len();
+                if len > MAX_SHARD_BYTES {
+                    return Err(std::io::Error::other(format!(
+                        "{len} bytes is larger than any shard file"
+                    )));
+                }
+                std::fs::read_to_string(p)
+            })
+            .with_context(|| format!("cannot read the shard {}", p.display()))?;
+        let shard = read_shard(&text, &p.display().to_string())?;
         shards.push((p.display().to_string(), shard));
     }
     let (id, outcomes) = merge(&shards)?;
-    let rep = report(&id, &outcomes);
-    let mut o = format_report(&rep);
-    if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&rep)? + "\n";
-        write_file(p, &policy, text.as_bytes())?;
-        outln!(o, "json: {}", p.display());
-    }
-    print_out(&o)?;
-    Ok(Outcome::from_pass(rep.verdict == "pass"))
+    let mut outs = Outputs::new(OutputPolicy::reading(&inputs));
+    plan_outputs(
+        &mut outs,
+        a.json.as_deref(),
+        a.csv.as_deref(),
+        a.plots.as_deref(),
+        id.pairs.iter().map(|(n, _)| n.as_str()),
+    )?;
+    finish(&outs, &id, &outcomes, a.json.as_deref(), a.csv.as_deref(), a.plots.as_deref())
 }

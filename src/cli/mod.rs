@@ -12,6 +12,7 @@ mod backlash;
 mod bench;
 mod check;
 mod diagnose;
+mod estimate;
 mod export;
 mod margins;
 mod params;
@@ -199,6 +200,46 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
         path: path.map(Path::to_path_buf),
         sets: changes,
     })
+}
+
+/// The margins plan of a loaded scenario: its `[[dispersion]]` entries checked (errors
+/// with the file's line), and no `--set` on a number they disperse (the dispersion
+/// would silently replace it in every sample).
+pub fn plan(
+    loaded: &Loaded,
+    sampling: orbitlash::dispersion::Sampling,
+    samples: u64,
+    seed: u64,
+) -> Result<orbitlash::dispersion::Plan> {
+    use orbitlash::dispersion::{Plan, PlanError};
+    let plan = Plan::new(
+        &loaded.model,
+        &loaded.model.spec().dispersion,
+        sampling,
+        samples,
+        seed,
+    )
+    .map_err(|e| match e {
+        PlanError::Spec(e) => {
+            anyhow::Error::new(scenario_toml::located(&loaded.toml, &loaded.file, e))
+        }
+        other => anyhow::Error::new(other),
+    })?;
+    for (key, _) in &loaded.sets {
+        let id = loaded
+            .model
+            .param(key)
+            .map_err(|e| anyhow::anyhow!("--set {key}: {e}"))?;
+        if let Some((k, d)) = plan.dispersion_of(&id) {
+            anyhow::bail!(
+                "--set {key}: `{}` is dispersed by dispersion[{k}] (path `{}`), which gives it a value in every sample; \
+remove the --set, or change the dispersion (its mean, mode or median defaults to the nominal value)",
+                id.canonical_path(),
+                d.path
+            );
+        }
+    }
+    Ok(plan)
 }
 
 /// Validates a user-given orbit count.

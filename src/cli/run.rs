@@ -12,7 +12,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use orbitlash::io::atomic::AtomicFile;
 use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
-use orbitlash::io::output::{OutputError, OutputPolicy, available_bytes, check_output, resolved};
+use orbitlash::io::output::{OutputError, OutputPolicy, Outputs, available_bytes};
 use orbitlash::orbit::EnvironmentModel;
 use orbitlash::scenario::Scenario;
 use orbitlash::sim::{MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run};
@@ -71,7 +71,7 @@ pub struct RunArgs {
     #[arg(long, value_enum, default_value = "random", requires = "sample")]
     sampling: super::margins::SamplingArg,
     /// The margins run's number of samples (with --sample --sampling lhs).
-    #[arg(long, requires = "sample")]
+    #[arg(long, requires = "sample", value_parser = super::margins::samples_arg)]
     samples: Option<u64>,
     /// No progress bar.
     #[arg(long, short)]
@@ -115,22 +115,23 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             .map_err(|m| anyhow!("--orbits {}: {m}", orbitlash::units::num(o)))?;
     }
     let period_s = sc.period_s();
-    let mut steady = None;
     if a.steady_state {
-        let (state, line) = periodic_start(&sc)?;
+        orbitlash::steady::check_repeats(&sc.thermal)
+            .map_err(|e| anyhow!("--steady-state: {e}"))?;
         sc = sc
             .with_orbits(1.0)
             .map_err(|m| anyhow!("--steady-state: {m}"))?;
-        steady = Some((state, line));
     }
     let t_end_s = sc.run.duration_s;
     for w in sc.warnings() {
-        eprintln!("warning: {}: {w}", loaded.file);
+        eprintln!("warning: {}: {}", loaded.file, orbitlash::units::shown(&w.to_string()));
     }
 
-    // Open every output before the run, so a bad path fails now. No output may be an
-    // input (the scenario file), a device, a FIFO or a link (`io::output`).
+    // Every output is checked before the run, so a bad path fails now: none may be an
+    // input (the scenario file), a device, a FIFO or a link (`io::output`), nor another
+    // output of this run.
     let inputs = loaded.inputs();
+    let mut outs = Outputs::new(OutputPolicy::reading(&inputs));
     let (log_path, log_policy) = match (&a.out, a.no_log) {
         (_, true) => (None, OutputPolicy::reading(&inputs)),
         (Some(p), false) => (Some(p.clone()), OutputPolicy::reading(&inputs)),
@@ -139,39 +140,32 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             OutputPolicy::default_in_logs(&inputs),
         ),
     };
-    if let (Some(l), Some(c)) = (&log_path, &a.csv)
-        && resolved(l) == resolved(c)
-    {
-        anyhow::bail!(
-            "--csv {} and the log {} are the same file",
-            c.display(),
-            l.display()
-        );
+    if let Some(l) = &log_path {
+        if a.out.is_none() {
+            outs.folder("the default log folder", l.parent().expect("logs/<name>"), true)?;
+        }
+        outs.file(if a.out.is_some() { "--out" } else { "the log" }, l)?;
     }
     if let Some(c) = &a.csv {
-        check_output(c, &OutputPolicy::reading(&inputs))?;
+        outs.file("--csv", c)?;
     }
     // The JSON summary is written after the run, but its path is checked now.
     let json_out = a.json.clone();
     if let Some(j) = &json_out {
-        check_output(j, &OutputPolicy::reading(&inputs))?;
-        for other in [log_path.as_ref(), a.csv.as_ref()].into_iter().flatten() {
-            if resolved(other) == resolved(j) {
-                anyhow::bail!(
-                    "--json {} and {} are the same file",
-                    j.display(),
-                    other.display()
-                );
-            }
-        }
-    }
-    if let Some(l) = &log_path {
-        check_output(l, &log_policy)?;
+        outs.file("--json", j)?;
     }
     bounded(&a, &sc, log_path.as_deref(), loaded.toml.len())?;
+    if a.steady_state {
+        super::estimate::steady(&sc, a.force)?;
+    }
     if a.dry_run {
         return Ok(Outcome::Pass);
     }
+    let steady = if a.steady_state {
+        Some(periodic_start(&sc)?)
+    } else {
+        None
+    };
 
     let log = match &log_path {
         Some(p) => Some(McapLog::create(
@@ -362,7 +356,7 @@ shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --forc
             est.steps,
             t_end_s,
             if est.wall_s.is_finite() {
-                format!(", about {} of computing", duration(est.wall_s))
+                format!(", about {} of computing", super::estimate::duration(est.wall_s))
             } else {
                 String::new()
             }
@@ -429,7 +423,7 @@ log less often (--log-every 60s), skip the log (--no-log) or shorten the run",
             "estimate: about {:.3e} steps, {} of computing{}{}",
             est.steps,
             if est.wall_s.is_finite() {
-                duration(est.wall_s)
+                super::estimate::duration(est.wall_s)
             } else {
                 "an unknown time".into()
             },
@@ -445,15 +439,6 @@ fn size(bytes: f64) -> String {
         b if b >= 1e9 => format!("{:.1} GB", b / 1e9),
         b if b >= 1e6 => format!("{:.1} MB", b / 1e6),
         b => format!("{:.0} kB", b / 1e3),
-    }
-}
-
-fn duration(s: f64) -> String {
-    match s {
-        s if s >= 86400.0 => format!("{:.1} days", s / 86400.0),
-        s if s >= 3600.0 => format!("{:.1} h", s / 3600.0),
-        s if s >= 60.0 => format!("{:.1} min", s / 60.0),
-        s => format!("{s:.1} s"),
     }
 }
 
@@ -730,7 +715,7 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
 /// Writes sample `k`'s dispersed values into the loaded model (as `margins` drew them)
 /// and records them with the `--set` changes; returns a line for the summary.
 fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> Result<String> {
-    use orbitlash::dispersion::{Plan, Sampling};
+    use orbitlash::dispersion::Sampling;
     let sampling: Sampling = a.sampling.into();
     let n = match (sampling, a.samples) {
         (_, Some(n)) => n,
@@ -744,18 +729,14 @@ fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> 
     if k >= n {
         anyhow::bail!("--sample {k} is not below --samples {n}");
     }
-    let dispersions = loaded.model.spec().dispersion.clone();
-    if dispersions.is_empty() {
+    if loaded.model.spec().dispersion.is_empty() {
         anyhow::bail!(
             "{} has no [[dispersion]]: there is no sample {k} to replay",
             loaded.file
         );
     }
-    let plan = Plan::new(&loaded.model, &dispersions, sampling, n, seed)
-        .map_err(|e| orbitlash::io::scenario_toml::located(&loaded.toml, &loaded.file, e))?;
-    let values = plan
-        .apply(&mut loaded.model, k)
-        .map_err(|e| anyhow!("sample {k}: {e}"))?;
+    let plan = super::plan(loaded, sampling, n, seed)?;
+    let values = plan.apply(&mut loaded.model, k)?;
     loaded.scenario = loaded.model.scenario().clone();
     let mut line = format!("sample {k} of seed {seed}:");
     for (d, v) in plan.dispersions.iter().zip(values) {

@@ -101,17 +101,187 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// The absolute path `path` stands for: its folder resolved through links, then its
-/// file name. Two outputs of one command must not resolve to the same path.
+/// The absolute path `path` stands for: its longest existing ancestor resolved through
+/// links, then the rest of it with `.` and `..` applied. Two outputs of one command
+/// must not resolve to the same path.
 pub fn resolved(path: &Path) -> PathBuf {
-    let file = path.file_name().map(PathBuf::from).unwrap_or_default();
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
+    use std::path::Component;
+    let abs = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    // the file name itself is never followed (a link there is refused, not resolved)
+    let (dir, file) = match (abs.parent(), abs.file_name()) {
+        (Some(d), Some(f)) => (d.to_path_buf(), Some(f.to_owned())),
+        _ => (abs.clone(), None),
     };
-    match std::fs::canonicalize(&parent) {
-        Ok(p) => p.join(file),
-        Err(_) => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+    let mut base = dir.clone();
+    let mut rest: Vec<std::ffi::OsString> = Vec::new();
+    let resolved_base = loop {
+        if let Ok(p) = std::fs::canonicalize(&base) {
+            break p;
+        }
+        match (base.file_name(), base.parent()) {
+            (Some(f), Some(p)) => {
+                rest.push(f.to_owned());
+                base = p.to_path_buf();
+            }
+            _ => break base,
+        }
+    };
+    let mut out = resolved_base;
+    for part in rest.iter().rev().map(Path::new).chain(file.as_deref().map(Path::new)) {
+        for c in part.components() {
+            match c {
+                Component::ParentDir => {
+                    out.pop();
+                }
+                Component::CurDir => {}
+                other => out.push(other.as_os_str()),
+            }
+        }
+    }
+    out
+}
+
+/// Every output one command will write, planned before any work starts: each is
+/// checked against the inputs ([`check_output`]) and against every other output of the
+/// command (the same path by any spelling, or an existing file under two names), so no
+/// output replaces an input or another output. Files that go into an output folder
+/// (`--plots DIR`, `--out DIR`) are planned by name too.
+#[derive(Debug, Clone, Default)]
+pub struct Outputs {
+    policy: OutputPolicy,
+    planned: Vec<Planned>,
+    /// Folders the command creates when missing (`diagnose --out`).
+    created: Vec<PathBuf>,
+}
+
+#[derive(Debug, Clone)]
+struct Planned {
+    /// What the user called it: `--json`, `--plots (mesh-sensitivity.svg)`.
+    label: String,
+    path: PathBuf,
+    resolved: PathBuf,
+}
+
+impl Outputs {
+    /// The outputs of a command that reads `policy.inputs`.
+    pub fn new(policy: OutputPolicy) -> Outputs {
+        Outputs {
+            policy,
+            planned: Vec::new(),
+            created: Vec::new(),
+        }
+    }
+
+    pub fn policy(&self) -> &OutputPolicy {
+        &self.policy
+    }
+
+    /// The planned output files, in the order they were planned.
+    pub fn paths(&self) -> impl Iterator<Item = &Path> {
+        self.planned.iter().map(|p| p.path.as_path())
+    }
+
+    /// Plans the output `path`, called `label` in messages (e.g. `--json`).
+    pub fn file(&mut self, label: &str, path: &Path) -> Result<(), OutputError> {
+        let in_created = path
+            .parent()
+            .is_some_and(|d| self.created.iter().any(|c| resolved(c) == resolved(d)) && !d.exists());
+        if in_created {
+            // its folder does not exist yet: nothing there to replace, only the name
+            let policy = OutputPolicy {
+                create_parents: true,
+                ..self.policy.clone()
+            };
+            check_output(path, &policy)?;
+        } else {
+            check_output(path, &self.policy)?;
+        }
+        let r = resolved(path);
+        for p in &self.planned {
+            if p.resolved == r || same_file(&p.path, path) {
+                return Err(OutputError::refused(
+                    path,
+                    format!(
+                        "{label} and {} would write the same file; give them different paths",
+                        p.label
+                    ),
+                ));
+            }
+        }
+        self.planned.push(Planned {
+            label: label.to_string(),
+            path: path.to_path_buf(),
+            resolved: r,
+        });
+        Ok(())
+    }
+
+    /// Plans the folder `dir` (called `label`) that output files will be put in. It
+    /// must be a folder; with `create`, a missing one is created by [`Outputs::create_folders`]
+    /// (its parent must exist).
+    pub fn folder(&mut self, label: &str, dir: &Path, create: bool) -> Result<(), OutputError> {
+        let refuse = |why: String| OutputError::refused(dir, format!("{label}: {why}"));
+        match std::fs::metadata(dir) {
+            Ok(m) if m.is_dir() => Ok(()),
+            Ok(m) => Err(refuse(format!("it is {}, not a directory", kind_of(&m)))),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                if std::fs::symlink_metadata(dir).is_ok() {
+                    return Err(refuse("it is a broken symbolic link".into()));
+                }
+                if !create {
+                    return Err(refuse("no such directory (create it first)".into()));
+                }
+                let parent = match dir.parent() {
+                    Some(p) if !p.as_os_str().is_empty() => p,
+                    _ => Path::new("."),
+                };
+                if parent.is_dir() {
+                    self.created.push(dir.to_path_buf());
+                    Ok(())
+                } else {
+                    Err(refuse(format!("no such directory: {}", parent.display())))
+                }
+            }
+            Err(e) => Err(OutputError::io(dir, e)),
+        }
+    }
+
+    /// Creates the planned folders that are missing.
+    pub fn create_folders(&self) -> Result<(), OutputError> {
+        for d in &self.created {
+            if !d.is_dir() {
+                std::fs::create_dir(d).map_err(|e| OutputError::io(d, e))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes planned files whole, all or none: each goes to a temporary sibling, and
+    /// only when every one was written are they renamed into place (a failure leaves
+    /// no new file under any final name). Each path must have been planned.
+    pub fn write_all(&self, files: &[(&Path, &[u8])]) -> Result<(), OutputError> {
+        use std::io::Write as _;
+        self.create_folders()?;
+        let mut open = Vec::new();
+        for (path, bytes) in files {
+            assert!(
+                self.planned.iter().any(|p| p.path == *path),
+                "{} was not planned",
+                path.display()
+            );
+            let policy = OutputPolicy {
+                create_parents: false,
+                ..self.policy.clone()
+            };
+            let mut f = super::atomic::AtomicFile::create(path, &policy)?;
+            f.write_all(bytes).map_err(|e| OutputError::io(path, e))?;
+            f.flush().map_err(|e| OutputError::io(path, e))?;
+            open.push(f);
+        }
+        for f in open {
+            f.commit()?;
+        }
+        Ok(())
     }
 }
 
