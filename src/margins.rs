@@ -67,10 +67,7 @@ impl PairOutcome {
     /// The flags that follow from the smallest backlash and the minimum allowed:
     /// (violated, interference). A lost mesh (NaN) is both.
     pub fn flags_from_values(min_backlash_um: f64, allowed_um: f64) -> (bool, bool) {
-        (
-            !(min_backlash_um >= allowed_um),
-            !(min_backlash_um > 0.0),
-        )
+        (!(min_backlash_um >= allowed_um), !(min_backlash_um > 0.0))
     }
 }
 
@@ -577,7 +574,11 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
         if o.values.iter().any(|v| !v.is_finite()) {
             return Err(sample("a dispersed value is not a finite number".into()));
         }
-        let expected_pairs = if o.invalid.is_some() { 0 } else { r.pairs.len() };
+        let expected_pairs = if o.invalid.is_some() {
+            0
+        } else {
+            r.pairs.len()
+        };
         if o.pairs.len() != expected_pairs {
             return Err(sample(format!(
                 "{} gear pair results for {expected_pairs} gear pairs",

@@ -8,10 +8,10 @@ use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use orbitlash::diagnose::{self, Diagnosis, Options, Verdict};
-use orbitlash::io::output::{OutputPolicy, check_output, resolved};
+use orbitlash::io::output::{OutputPolicy, Outputs};
 use orbitlash::io::recording::Recording;
 
-use super::{Outcome, load_with, print_out, write_file};
+use super::{Outcome, load_with, print_out};
 
 #[derive(Args, Debug)]
 pub struct DiagnoseArgs {
@@ -39,24 +39,26 @@ pub struct DiagnoseArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Run even when the estimate exceeds the limits (5e7 steps for one run of the model
+    /// over the recording, 1e9 in all).
+    #[arg(long)]
+    force: bool,
 }
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
     let mut inputs = loaded.inputs();
     inputs.push(&a.recording);
-    let policy = OutputPolicy::reading(&inputs);
+    // The outputs' places are checked before anything is read or run: the recording's
+    // columns name the residual plots, so those are checked once it is read.
+    let mut outs = Outputs::new(OutputPolicy::reading(&inputs));
     if let Some(p) = &a.json {
-        check_output(p, &policy)?;
+        outs.file("--json", p)?;
     }
     if let Some(dir) = &a.out {
-        for r in &inputs {
-            if resolved(dir) == resolved(r) {
-                bail!("--out {}: is an input of this command", dir.display());
-            }
-        }
-        if dir.exists() && !dir.is_dir() {
-            bail!("--out {}: exists and is not a directory", dir.display());
+        outs.folder("--out", dir, true)?;
+        for name in ["corrected.toml", "diagnose.mcap"] {
+            outs.file(&format!("--out ({name})"), &dir.join(name))?;
         }
     }
     let rec = match Recording::read(&a.recording) {
@@ -67,6 +69,35 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
             None => return Err(e.into()),
         },
     };
+    rec.match_sensors(&loaded.scenario.sensors)?;
+    if rec.columns.is_empty() {
+        bail!(
+            "{}: no column besides the time is a sensor of {} (its sensors: {}): there is nothing to compare",
+            rec.file,
+            loaded.file,
+            loaded
+                .scenario
+                .sensors
+                .iter()
+                .map(|s| s.column.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    if let Some(dir) = &a.out {
+        for c in &rec.columns {
+            let name = residual_plot_name(c);
+            outs.file(&format!("--out ({name})"), &dir.join(&name))?;
+        }
+    }
+    let span_s = rec.time_s.last().copied().unwrap_or(0.0);
+    diagnose::check_time_base(&rec, &loaded.scenario)?;
+    super::estimate::diagnose(
+        &loaded.scenario,
+        span_s,
+        diagnose::expected_runs(&loaded.model),
+        a.force,
+    )?;
     let opts = Options {
         holdout_orbits: a.holdout_orbits,
         ..Options::default()
@@ -96,62 +127,144 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     if let Some(b) = bar {
         b.finish_and_clear();
     }
+    for n in &d.warnings {
+        eprintln!("warning: {n}");
+    }
     let mut o = format_report(&d, &loaded.file, &rec.file);
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&d)? + "\n";
-        write_file(p, &policy, text.as_bytes())?;
-        outln!(o, "json: {}", p.display());
+        files.push((
+            p.clone(),
+            (serde_json::to_string_pretty(&d)? + "\n").into_bytes(),
+        ));
     }
     if let Some(dir) = &a.out {
-        for f in write_out(dir, &policy, &d, &loaded)? {
-            outln!(o, "wrote: {}", f.display());
-        }
+        files.extend(out_files(dir, &d, &loaded, &rec.file, span_s)?);
+    }
+    let refs: Vec<(&Path, &[u8])> = files
+        .iter()
+        .map(|(p, b)| (p.as_path(), b.as_slice()))
+        .collect();
+    outs.write_all(&refs)?;
+    if let Some(p) = &a.json {
+        outln!(o, "json: {}", p.display());
+    }
+    for (p, _) in files.iter().filter(|(p, _)| Some(p) != a.json.as_ref()) {
+        outln!(o, "wrote: {}", p.display());
     }
     print_out(&o)?;
     Ok(Outcome::Pass)
 }
 
-/// `--out DIR`: corrected scenario, side-by-side MCAP, residual plots.
-fn write_out(
+fn residual_plot_name(channel: &str) -> String {
+    format!("residuals-{channel}.svg")
+}
+
+/// The corrected scenario's name: the original's with `-corrected` (so that running it
+/// writes its own default log).
+fn corrected_name(name: &str) -> String {
+    const SUFFIX: &str = "-corrected";
+    let keep = orbitlash::scenario::MAX_NAME_LEN - SUFFIX.len();
+    let mut base: String = name.chars().take(keep).collect();
+    while base.len() > keep {
+        base.pop();
+    }
+    base + SUFFIX
+}
+
+/// `--out DIR`: corrected scenario, side-by-side MCAP, residual plots, as
+/// (path, bytes).
+fn out_files(
     dir: &Path,
-    policy: &OutputPolicy,
     d: &Diagnosis,
     loaded: &super::Loaded,
-) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("--out {}: cannot create it", dir.display()))?;
-    let mut written = Vec::new();
-    // The corrected scenario (the original when nothing was accepted).
-    let spec = d
-        .corrected
-        .as_ref()
-        .map_or(loaded.model.spec(), |m| m.spec());
-    let mut toml_text = format!(
-        "# {} corrected by `orbitlash diagnose` (verdict: {}).\n",
-        loaded.file,
-        d.verdict.as_str()
-    );
+    recording: &str,
+    span_s: f64,
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let mut files = Vec::new();
+    // The corrected scenario: the user's file edited (comments and spellings kept),
+    // the accepted effects added as commented elements, its own name, and a run as long
+    // as the recording.
+    let from = loaded.model.spec();
+    let mut to = d.corrected.as_ref().map_or(from, |m| m.spec()).clone();
+    to.scenario.name = corrected_name(&from.scenario.name);
+    to.run.orbits = None;
+    to.run.duration_days = None;
+    to.run.duration_s = Some(span_s);
+    let mut header = vec![
+        format!(
+            "{} corrected by `orbitlash diagnose` against {} (verdict: {}).",
+            loaded.file,
+            recording,
+            d.verdict.as_str()
+        ),
+        format!(
+            "Its name is {}; [run] lasts as long as the recording ({} s).",
+            to.scenario.name,
+            orbitlash::units::exact(span_s)
+        ),
+    ];
     for f in &d.findings {
-        toml_text += &format!("# added: {} {}\n", f.effect, finding_target(f));
-        for (k, v) in &f.set {
-            toml_text += &format!("#   {k} = {v}\n");
-        }
+        header.push(format!("added: {} on {}", f.effect, finding_target(f)));
     }
-    toml_text += "# [run] lasts as long as the recording.\n";
-    toml_text += &toml::to_string(&spec).context("cannot write the corrected scenario as TOML")?;
-    let p = dir.join("corrected.toml");
-    write_file(&p, policy, toml_text.as_bytes())?;
-    written.push(p);
-    let p = dir.join("diagnose.mcap");
-    orbitlash::io::diagnose_out::write_mcap(&p, policy, d)?;
-    written.push(p);
+    if d.findings.is_empty() {
+        header.push("no effect was accepted: the model is the original's".into());
+    }
+    let keys = orbitlash::spec::keys::element_keys(&to);
+    let comment = |section: &str, i: usize| {
+        let key = element_key(&keys, section, i)?;
+        let prefix = format!("{section}.{}.", orbitlash::spec::keys::quote_key(&key));
+        let f = d
+            .findings
+            .iter()
+            .find(|f| f.set.keys().any(|k| k.starts_with(&prefix)))?;
+        let mut c = format!(
+            "added by `orbitlash diagnose`: {} ({}) on {}; ΔBIC {:.0}, held-out χ² lower by {:.0}",
+            f.effect,
+            f.kind,
+            finding_target(f),
+            f.delta_bic,
+            f.heldout_chi2_drop
+        );
+        for (k, v) in &f.parameters {
+            c += &format!("\nfitted {k} = {}", sig(*v));
+            if let Some(Some(se)) = f.std_errors.get(k) {
+                c += &format!(" ± {}", sig(*se));
+            }
+        }
+        Some(c)
+    };
+    let text = orbitlash::io::scenario_toml::edited(&loaded.toml, from, &to, &header, &comment)?;
+    files.push((dir.join("corrected.toml"), text.into_bytes()));
+    let mcap = orbitlash::io::diagnose_out::mcap_bytes(d).map_err(|e| {
+        anyhow::anyhow!("cannot write {}: {e}", dir.join("diagnose.mcap").display())
+    })?;
+    files.push((dir.join("diagnose.mcap"), mcap));
     for (c, name) in d.series.channels.iter().enumerate() {
         let svg = orbitlash::io::svg::residuals(&d.series, c);
-        let p = dir.join(format!("residuals-{name}.svg"));
-        write_file(&p, policy, svg.as_bytes())?;
-        written.push(p);
+        files.push((dir.join(residual_plot_name(name)), svg.into_bytes()));
     }
-    Ok(written)
+    Ok(files)
+}
+
+/// The key of element `i` of array `section` (`heater`, `sun`, …).
+fn element_key(k: &orbitlash::spec::keys::ElementKeys, section: &str, i: usize) -> Option<String> {
+    let list = match section {
+        "node" => &k.node,
+        "boundary" => &k.boundary,
+        "conductor" => &k.conductor,
+        "radiation" => &k.radiation,
+        "sun" => &k.sun,
+        "albedo" => &k.albedo,
+        "earth_ir" => &k.earth_ir,
+        "dissipation" => &k.dissipation,
+        "heater" => &k.heater,
+        "mode" => &k.mode,
+        "sensor" => &k.sensor,
+        "gear_pair" => &k.gear_pair,
+        _ => return None,
+    };
+    list.get(i).cloned()
 }
 
 fn finding_target(f: &diagnose::Finding) -> String {

@@ -35,7 +35,11 @@ pub fn steady_orbits(sc: &Scenario) -> f64 {
     let net = &sc.thermal.network;
     let n = net.nodes.len();
     let temps: Vec<f64> = net.nodes.iter().map(|x| x.initial_temperature_k).collect();
-    let boundary: Vec<f64> = net.boundaries.iter().map(|b| b.temperature_k.at(0.0)).collect();
+    let boundary: Vec<f64> = net
+        .boundaries
+        .iter()
+        .map(|b| b.temperature_k.at(0.0))
+        .collect();
     let tau = orbitlash::thermal::analysis::time_constants(net, &temps, &boundary).slowest_s;
     let marching = o.warmup_orbits as f64
         + (tau / sc.period_s()).max(0.0) * (100.0 / o.tolerance_k).ln()

@@ -122,7 +122,13 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     }
     // Every output, checked against the inputs and each other before anything runs.
     let mut outs = Outputs::new(OutputPolicy::reading(&loaded.inputs()));
-    plan_outputs(&mut outs, a.json.as_deref(), a.csv.as_deref(), a.plots.as_deref(), sc.gears.iter().map(|g| g.name.as_str()))?;
+    plan_outputs(
+        &mut outs,
+        a.json.as_deref(),
+        a.csv.as_deref(),
+        a.plots.as_deref(),
+        sc.gears.iter().map(|g| g.name.as_str()),
+    )?;
     let spec = loaded.model.spec();
     if spec.dispersion.is_empty() {
         bail!(
@@ -166,7 +172,11 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         let p = a.json.as_deref().expect("--shard requires --json");
         let text = serde_json::to_string(&shard)? + "\n";
         outs.write_all(&[(p, text.as_bytes())])?;
-        let invalid = shard.outcomes.iter().filter(|o| o.invalid.is_some()).count();
+        let invalid = shard
+            .outcomes
+            .iter()
+            .filter(|o| o.invalid.is_some())
+            .count();
         print_out(&format!(
             "shard {i}/{n}: samples {} … {} of {} written to {}{} (merge the shards with `orbitlash merge`)\n",
             range.start,
@@ -181,7 +191,14 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         ))?;
         return Ok(Outcome::Pass);
     }
-    finish(&outs, &id, &outcomes, a.json.as_deref(), a.csv.as_deref(), a.plots.as_deref())
+    finish(
+        &outs,
+        &id,
+        &outcomes,
+        a.json.as_deref(),
+        a.csv.as_deref(),
+        a.plots.as_deref(),
+    )
 }
 
 /// Plans the outputs of `margins` or `merge`: the report, the samples and the plots of
@@ -231,16 +248,19 @@ fn finish(
             .iter()
             .find_map(|o| o.invalid.as_ref().map(|w| (o.index, w.clone())));
         match first {
-            Some((k, why)) => bail!(
-                "no sample could be run, so there is nothing to judge (sample {k}: {why})"
-            ),
+            Some((k, why)) => {
+                bail!("no sample could be run, so there is nothing to judge (sample {k}: {why})")
+            }
             None => bail!("no sample and no gear pair: there is nothing to judge"),
         }
     };
     let mut o = format_report(&rep);
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if let Some(p) = json {
-        files.push((p.to_path_buf(), (serde_json::to_string_pretty(&rep)? + "\n").into_bytes()));
+        files.push((
+            p.to_path_buf(),
+            (serde_json::to_string_pretty(&rep)? + "\n").into_bytes(),
+        ));
     }
     if let Some(p) = csv {
         files.push((p.to_path_buf(), samples_csv(id, outcomes).into_bytes()));
@@ -248,7 +268,10 @@ fn finish(
     if let Some(dir) = plots {
         files.extend(plots_of(dir, &rep, outcomes));
     }
-    let refs: Vec<(&Path, &[u8])> = files.iter().map(|(p, b)| (p.as_path(), b.as_slice())).collect();
+    let refs: Vec<(&Path, &[u8])> = files
+        .iter()
+        .map(|(p, b)| (p.as_path(), b.as_slice()))
+        .collect();
     outs.write_all(&refs)?;
     if let Some(p) = json {
         outln!(o, "json: {}", p.display());
@@ -256,7 +279,10 @@ fn finish(
     if let Some(p) = csv {
         outln!(o, "csv: {}", p.display());
     }
-    for (p, _) in files.iter().filter(|(p, _)| plots.is_some_and(|d| p.starts_with(d))) {
+    for (p, _) in files
+        .iter()
+        .filter(|(p, _)| plots.is_some_and(|d| p.starts_with(d)))
+    {
         outln!(o, "plot: {}", p.display());
     }
     print_out(&o)?;
@@ -367,7 +393,11 @@ pub fn format_report(r: &Report) -> String {
             outln!(o, "  sample {}: {}", s.index, s.reason);
         }
         if r.invalid.len() > 5 {
-            outln!(o, "  … and {} more (all of them in --json)", r.invalid.len() - 5);
+            outln!(
+                o,
+                "  … and {} more (all of them in --json)",
+                r.invalid.len() - 5
+            );
         }
     }
     for p in &r.pairs {
@@ -521,7 +551,10 @@ fn samples_csv(id: &RunIdentity, outcomes: &[SampleOutcome]) -> String {
             match s.pairs.get(k) {
                 Some(p) => {
                     let (violated, interference) =
-                        orbitlash::margins::PairOutcome::flags_from_values(p.min_backlash_um, *allowed);
+                        orbitlash::margins::PairOutcome::flags_from_values(
+                            p.min_backlash_um,
+                            *allowed,
+                        );
                     row.extend([
                         orbitlash::units::exact(p.min_backlash_um),
                         orbitlash::units::exact(p.min_margin_um),
@@ -588,5 +621,12 @@ pub fn merge_shards(a: MergeArgs) -> Result<Outcome> {
         a.plots.as_deref(),
         id.pairs.iter().map(|(n, _)| n.as_str()),
     )?;
-    finish(&outs, &id, &outcomes, a.json.as_deref(), a.csv.as_deref(), a.plots.as_deref())
+    finish(
+        &outs,
+        &id,
+        &outcomes,
+        a.json.as_deref(),
+        a.csv.as_deref(),
+        a.plots.as_deref(),
+    )
 }

@@ -262,20 +262,6 @@ pub fn default_log_path(name: &str) -> Result<PathBuf> {
 }
 
 /// Writes a report to stdout; a closed pipe (`| head`) is not an error.
-/// Writes `bytes` to `path` atomically (after the output checks of `policy`).
-pub fn write_file(
-    path: &Path,
-    policy: &orbitlash::io::output::OutputPolicy,
-    bytes: &[u8],
-) -> Result<()> {
-    use std::io::Write as _;
-    let mut f = orbitlash::io::atomic::AtomicFile::create(path, policy)?;
-    f.write_all(bytes)
-        .map_err(|e| orbitlash::io::output::OutputError::io(path, e))?;
-    f.commit()?;
-    Ok(())
-}
-
 pub fn print_out(text: &str) -> Result<()> {
     use std::io::Write;
     let mut out = std::io::stdout().lock();

@@ -124,7 +124,11 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     }
     let t_end_s = sc.run.duration_s;
     for w in sc.warnings() {
-        eprintln!("warning: {}: {}", loaded.file, orbitlash::units::shown(&w.to_string()));
+        eprintln!(
+            "warning: {}: {}",
+            loaded.file,
+            orbitlash::units::shown(&w.to_string())
+        );
     }
 
     // Every output is checked before the run, so a bad path fails now: none may be an
@@ -142,7 +146,11 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     };
     if let Some(l) = &log_path {
         if a.out.is_none() {
-            outs.folder("the default log folder", l.parent().expect("logs/<name>"), true)?;
+            outs.folder(
+                "the default log folder",
+                l.parent().expect("logs/<name>"),
+                true,
+            )?;
         }
         outs.file(if a.out.is_some() { "--out" } else { "the log" }, l)?;
     }
@@ -356,7 +364,10 @@ shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --forc
             est.steps,
             t_end_s,
             if est.wall_s.is_finite() {
-                format!(", about {} of computing", super::estimate::duration(est.wall_s))
+                format!(
+                    ", about {} of computing",
+                    super::estimate::duration(est.wall_s)
+                )
             } else {
                 String::new()
             }

@@ -182,6 +182,12 @@ impl Observations {
                 }
             })
             .collect();
+        if channels.is_empty() {
+            return Err(DiagnoseError::Recording(format!(
+                "{}: no column besides the time is a sensor of the scenario: there is nothing to compare",
+                rec.file
+            )));
+        }
         for (c, v) in channels.iter().zip(&rec.values) {
             if v.iter().all(|x| x.is_none()) {
                 return Err(DiagnoseError::Recording(format!(
@@ -190,6 +196,8 @@ impl Observations {
                 )));
             }
         }
+        check_temperatures(rec, sc, &sensor_of)?;
+        check_time_base(rec, sc)?;
         let period = sc.period_s();
         let t_last = *rec.time_s.last().unwrap();
         let mut gaps: Vec<f64> = rec.time_s.windows(2).map(|w| w[1] - w[0]).collect();
@@ -199,6 +207,7 @@ impl Observations {
             1.5 * median(&mut gaps)
         };
         let split = Split::new(period, t_last, slack, holdout).map_err(DiagnoseError::Options)?;
+        check_split_holds_data(rec, &channels, &split)?;
         let env = &sc.thermal.environment;
         let mut eclipses = Vec::new();
         let mut t = 0.0;
@@ -274,8 +283,134 @@ impl Observations {
     }
 }
 
+/// Temperatures a thermometer cannot read: below absolute zero, or above the
+/// 10 000 K every model output stays within (a wrong unit or a corrupt cell). Refused
+/// with the row's line (CSV) or message number (MCAP) and the column.
+fn check_temperatures(
+    rec: &Recording,
+    sc: &Scenario,
+    sensor_of: &[usize],
+) -> Result<(), DiagnoseError> {
+    use crate::sensor::ColumnUnit;
+    for (c, &k) in sensor_of.iter().enumerate() {
+        let (offset, unit) = match sc.sensors[k].unit() {
+            ColumnUnit::Celsius => (crate::constants::ZERO_CELSIUS_K, "°C"),
+            ColumnUnit::Kelvin => (0.0, "K"),
+            _ => continue,
+        };
+        for (j, v) in rec.values[c].iter().enumerate() {
+            let Some(v) = *v else { continue };
+            let t_k = v + offset;
+            let why = if t_k < 0.0 {
+                "below absolute zero"
+            } else if t_k > crate::sim::MAX_TEMPERATURE_K {
+                "above 10 000 K"
+            } else {
+                continue;
+            };
+            return Err(DiagnoseError::Recording(format!(
+                "{}:{}: `{}` = {} {unit} is {why}: not a temperature a sensor can read (a wrong unit, a scale factor or a corrupt cell?)",
+                rec.file,
+                rec.rows_at.get(j).copied().unwrap_or(j as u64 + 1),
+                crate::units::shown(&rec.columns[c]),
+                crate::units::num(v)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a recording whose time steps cannot resolve the orbit: a median spacing of
+/// more than a quarter of the period (eclipses would fall between samples). The usual
+/// cause is a time column in milliseconds (or another unit) instead of seconds.
+pub fn check_time_base(rec: &Recording, sc: &Scenario) -> Result<(), DiagnoseError> {
+    let period = sc.period_s();
+    let mut gaps: Vec<f64> = rec.time_s.windows(2).map(|w| w[1] - w[0]).collect();
+    if gaps.is_empty() {
+        return Ok(());
+    }
+    let step = median(&mut gaps);
+    if step > 0.25 * period {
+        return Err(DiagnoseError::Recording(format!(
+            "{}: time_s steps by {} s (the median), more than a quarter of the orbit period ({:.1} s): \
+the samples cannot resolve sunlight and eclipse. Is the time column in milliseconds? It must be seconds from the scenario's t = 0",
+            rec.file,
+            crate::units::num(step),
+            period
+        )));
+    }
+    Ok(())
+}
+
+/// The fewest samples per channel each part of the split must hold.
+pub const MIN_PART_SAMPLES: usize = 10;
+
+/// Refuses a split whose training or held-out orbits hold too few samples of a
+/// channel: at least [`MIN_PART_SAMPLES`], and for the held-out orbits at least a
+/// quarter of what the training orbits' cadence would put there (a recording that
+/// stops, or jumps far ahead, leaves held-out orbits nearly empty and would give a
+/// verdict on nothing).
+fn check_split_holds_data(
+    rec: &Recording,
+    channels: &[Channel],
+    split: &Split,
+) -> Result<(), DiagnoseError> {
+    if !split.can_validate() {
+        return Ok(());
+    }
+    for (c, ch) in channels.iter().enumerate() {
+        let (mut train, mut held) = (0usize, 0usize);
+        for (t, v) in rec.time_s.iter().zip(&rec.values[c]) {
+            if v.is_none() {
+                continue;
+            }
+            match split.part(*t) {
+                Part::Train => train += 1,
+                Part::Holdout => held += 1,
+                Part::Tail => {}
+            }
+        }
+        let expected = train as f64 * split.holdout_orbits as f64 / split.train_orbits as f64;
+        let need = (MIN_PART_SAMPLES as f64).max((0.25 * expected).ceil());
+        let gap = rec
+            .time_s
+            .windows(2)
+            .map(|w| (w[1] - w[0], w[0], w[1]))
+            .fold((0.0, 0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
+        let gap_note = if gap.0 > split.period_s {
+            format!(
+                "; the recording has no sample from t = {} s to {} s",
+                crate::units::num(gap.1),
+                crate::units::num(gap.2)
+            )
+        } else {
+            String::new()
+        };
+        if (train as f64) < MIN_PART_SAMPLES as f64 {
+            return Err(DiagnoseError::Recording(format!(
+                "{}: the fitted orbits 1–{} hold {train} samples of `{}`; at least {MIN_PART_SAMPLES} are needed{gap_note}",
+                rec.file, split.train_orbits, ch.name
+            )));
+        }
+        if (held as f64) < need {
+            return Err(DiagnoseError::Recording(format!(
+                "{}: the held-out orbits {}–{} hold {held} samples of `{}`, against about {expected:.0} at the cadence of the fitted orbits; \
+at least {need:.0} are needed to check a fit on them{gap_note}. Hold out fewer orbits (--holdout-orbits N) or cut the recording where its data end",
+                rec.file,
+                split.train_orbits + 1,
+                split.orbits,
+                ch.name
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn phase_at(eclipses: &[(f64, f64)], t: f64, width: f64) -> Phase {
-    for &(a, b) in eclipses {
+    // eclipses are in time order: only the last one starting at or before t can hold
+    // t or have just ended (O(log n) per sample, so a long recording stays linear)
+    let k = eclipses.partition_point(|&(a, _)| a <= t);
+    for &(a, b) in &eclipses[k.saturating_sub(1)..k] {
         if t >= a && t < b {
             return if t - a < width {
                 Phase::EclipseEntry

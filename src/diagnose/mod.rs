@@ -25,6 +25,7 @@
 //! Pure: no files, no terminal. The CLI (`cli/diagnose.rs`) reads and writes.
 
 pub mod data;
+pub use data::check_time_base;
 pub mod effects;
 pub mod lm;
 
@@ -64,6 +65,58 @@ pub enum DiagnoseError {
 /// The smallest noise assumed for a channel (K or µm): a recording can resolve no
 /// better, and the model itself is computed to a tolerance of this order.
 pub const NOISE_FLOOR: f64 = 1e-3;
+
+/// How much a channel varies beyond its noise: the larger of the recording's spread
+/// less the noise variance, and the baseline model's spread, over the samples `part`
+/// admits.
+fn signal_rms(
+    obs: &data::Observations,
+    c: usize,
+    model: &[f64],
+    noise: f64,
+    part: impl Fn(usize) -> bool,
+) -> f64 {
+    let spread = |x: &mut dyn Iterator<Item = f64>| {
+        let v: Vec<f64> = x.collect();
+        if v.len() < 2 {
+            return 0.0;
+        }
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        v.iter().map(|y| (y - m) * (y - m)).sum::<f64>() / (v.len() - 1) as f64
+    };
+    let recorded = spread(
+        &mut obs.values[c]
+            .iter()
+            .enumerate()
+            .filter(|(j, v)| part(*j) && v.is_some())
+            .map(|(_, v)| v.unwrap()),
+    );
+    let modelled = spread(
+        &mut model
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| part(*j))
+            .map(|(_, v)| *v),
+    );
+    (recorded - noise * noise)
+        .max(0.0)
+        .sqrt()
+        .max(modelled.sqrt())
+}
+
+/// About how many runs of the model a diagnosis takes (for the estimate before it
+/// starts): a handful per candidate to rank it, and a few fits of tens of runs each.
+/// Candidates grow with the elements the vocabulary can attach to.
+pub fn expected_runs(model: &Model) -> f64 {
+    let sc = model.scenario();
+    let net = &sc.thermal.network;
+    let targets = net.nodes.len()
+        + net.conductors.len()
+        + net.radiators.len()
+        + net.loads.len()
+        + sc.sensors.len();
+    (10 * targets + 500) as f64
+}
 
 /// Settings of a diagnosis.
 #[derive(Debug, Clone)]
@@ -244,6 +297,9 @@ pub struct Diagnosis {
     pub split: data::Split,
     pub candidates: Vec<CandidateReport>,
     pub notes: Vec<String>,
+    /// Reasons to doubt the verdict (a channel whose noise is far larger than its
+    /// signal); also printed on standard error.
+    pub warnings: Vec<String>,
     /// Wall time of the whole analysis, s, and of the candidate search per candidate.
     pub time_s: f64,
     pub time_per_candidate_s: f64,
@@ -533,6 +589,20 @@ pub fn diagnose(
         }
         noise.push(sigma.max(NOISE_FLOOR));
     }
+    let mut warnings = Vec::new();
+    for (c, ch) in obs.channels.iter().enumerate() {
+        let signal = signal_rms(&obs, c, &base_pred[ch.sensor], noise[c], fit_part);
+        if noise[c] > 3.0 * signal && noise[c] > 1.0 {
+            warnings.push(format!(
+                "channel `{}`: its noise ({:.3} {u}) is far larger than its signal ({:.3} {u} rms, recorded and modelled): \
+the verdict rests on noise; check the channel's unit and scaling",
+                ch.name,
+                noise[c],
+                signal,
+                u = ch.unit
+            ));
+        }
+    }
     let names: Vec<String> = obs.channels.iter().map(|c| c.name.clone()).collect();
     let cmap = |v: &[f64]| ChannelMap(names.iter().cloned().zip(v.iter().copied()).collect());
     let base_rms = obs.rms(&base_res, Part::Train);
@@ -603,6 +673,7 @@ pub fn diagnose(
         split: obs.split.clone(),
         candidates: Vec::new(),
         notes,
+        warnings,
         time_s: 0.0,
         time_per_candidate_s: 0.0,
         series: Series::default(),

@@ -6,24 +6,18 @@
 //! Protobuf with the schemas stored in the file, as the run logs, so Foxglove's Plot
 //! panel and Rerun's importer read them (`tools/check_mcap.py`).
 
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-
 use crate::diagnose::Diagnosis;
+use std::collections::BTreeMap;
 
-use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
 use super::mcap_log::ns;
 use super::protobuf::Encoder;
 
-/// Writes the side-by-side file (atomically: complete or not at all).
-pub fn write_mcap(
-    path: &Path,
-    policy: &OutputPolicy,
-    d: &Diagnosis,
-) -> Result<PathBuf, OutputError> {
-    let err = |e: mcap::McapError| OutputError::mcap(path, e);
-    let file = AtomicFile::create(path, policy)?;
+/// The side-by-side file's bytes (the caller writes them with the command's other
+/// outputs, all or none).
+pub fn mcap_bytes(d: &Diagnosis) -> Result<Vec<u8>, mcap::McapError> {
+    let err = |e: mcap::McapError| e;
+    let file = std::io::Cursor::new(Vec::new());
     let mut w = mcap::WriteOptions::new()
         .library(format!("orbitlash {}", env!("CARGO_PKG_VERSION")))
         .profile("")
@@ -113,5 +107,5 @@ pub fn write_mcap(
         }
     }
     w.finish().map_err(err)?;
-    w.into_inner().commit()
+    Ok(w.into_inner().into_inner())
 }

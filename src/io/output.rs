@@ -127,7 +127,12 @@ pub fn resolved(path: &Path) -> PathBuf {
         }
     };
     let mut out = resolved_base;
-    for part in rest.iter().rev().map(Path::new).chain(file.as_deref().map(Path::new)) {
+    for part in rest
+        .iter()
+        .rev()
+        .map(Path::new)
+        .chain(file.as_deref().map(Path::new))
+    {
         for c in part.components() {
             match c {
                 Component::ParentDir => {
@@ -183,9 +188,9 @@ impl Outputs {
 
     /// Plans the output `path`, called `label` in messages (e.g. `--json`).
     pub fn file(&mut self, label: &str, path: &Path) -> Result<(), OutputError> {
-        let in_created = path
-            .parent()
-            .is_some_and(|d| self.created.iter().any(|c| resolved(c) == resolved(d)) && !d.exists());
+        let in_created = path.parent().is_some_and(|d| {
+            self.created.iter().any(|c| resolved(c) == resolved(d)) && !d.exists()
+        });
         if in_created {
             // its folder does not exist yet: nothing there to replace, only the name
             let policy = OutputPolicy {

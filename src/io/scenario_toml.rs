@@ -237,3 +237,222 @@ fn locate(text: &str, path: &KeyPath) -> Option<usize> {
     }
     best
 }
+
+/// Why scenario text could not be edited.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot write the edited scenario: {0}")]
+pub struct EditError(String);
+
+/// `text` (a scenario file whose spec is `from`) edited to describe `to`, keeping the
+/// user's comments, order and number spellings wherever the value is unchanged: only
+/// values that differ are rewritten, keys `to` lacks are removed, keys and array
+/// elements it adds are inserted (new elements after the last of their kind).
+/// `comment(section, index)` gives the comment put above an added element (its lines
+/// without `#`), `header` the lines put at the top of the file.
+pub fn edited(
+    text: &str,
+    from: &ScenarioSpec,
+    to: &ScenarioSpec,
+    header: &[String],
+    comment: &dyn Fn(&str, usize) -> Option<String>,
+) -> Result<String, EditError> {
+    let err = |e: &dyn std::fmt::Display| EditError(e.to_string());
+    let mut doc: toml_edit::DocumentMut = text.parse().map_err(|e| err(&e))?;
+    let a = toml::Value::try_from(from).map_err(|e| err(&e))?;
+    let b = toml::Value::try_from(to).map_err(|e| err(&e))?;
+    let (Some(a), Some(b)) = (a.as_table(), b.as_table()) else {
+        return Err(EditError("a scenario is a table".into()));
+    };
+    let mut next = max_position(doc.as_table()) + 1;
+    edit_table(doc.as_table_mut(), a, b, "", comment, &mut next)?;
+    let mut top = String::new();
+    for h in header {
+        top.push_str(&format!("# {h}\n"));
+    }
+    Ok(top + &doc.to_string())
+}
+
+/// The largest document position of `t` and the tables under it.
+fn max_position(t: &toml_edit::Table) -> isize {
+    let mut m = t.position().unwrap_or(0);
+    for (_, item) in t.iter() {
+        match item {
+            toml_edit::Item::Table(sub) => m = m.max(max_position(sub)),
+            toml_edit::Item::ArrayOfTables(aot) => {
+                for sub in aot.iter() {
+                    m = m.max(max_position(sub));
+                }
+            }
+            _ => {}
+        }
+    }
+    m
+}
+
+/// Places a new table (and its sub-tables) at the end of the document, in order.
+fn place_last(t: &mut toml_edit::Table, next: &mut isize) {
+    t.set_position(Some(*next));
+    *next += 1;
+    for (_, item) in t.iter_mut() {
+        if let toml_edit::Item::Table(sub) = item {
+            place_last(sub, next);
+        }
+    }
+}
+
+fn edit_table(
+    t: &mut dyn toml_edit::TableLike,
+    a: &toml::Table,
+    b: &toml::Table,
+    section: &str,
+    comment: &dyn Fn(&str, usize) -> Option<String>,
+    next: &mut isize,
+) -> Result<(), EditError> {
+    use toml_edit::Item;
+    for key in a.keys() {
+        if !b.contains_key(key) {
+            t.remove(key);
+        }
+    }
+    for (key, bv) in b {
+        let av = a.get(key);
+        if av == Some(bv) {
+            continue;
+        }
+        let here = if section.is_empty() {
+            key.clone()
+        } else {
+            format!("{section}.{key}")
+        };
+        match (av, t.get_mut(key)) {
+            (Some(av), Some(item)) => edit_item(item, av, bv, &here, comment, next)?,
+            _ => {
+                // a key the user did not write
+                let item = match new_item(bv)? {
+                    Item::ArrayOfTables(mut aot) => {
+                        for (i, el) in aot.iter_mut().enumerate() {
+                            annotate(el, comment(&here, i));
+                            place_last(el, next);
+                        }
+                        Item::ArrayOfTables(aot)
+                    }
+                    Item::Table(mut sub) => {
+                        place_last(&mut sub, next);
+                        Item::Table(sub)
+                    }
+                    other => other,
+                };
+                t.insert(key, item);
+            }
+        }
+    }
+    Ok(())
+}
+
+fn edit_item(
+    item: &mut toml_edit::Item,
+    a: &toml::Value,
+    b: &toml::Value,
+    section: &str,
+    comment: &dyn Fn(&str, usize) -> Option<String>,
+    next: &mut isize,
+) -> Result<(), EditError> {
+    use toml_edit::Item;
+    match (a, b, &mut *item) {
+        (toml::Value::Table(ta), toml::Value::Table(tb), it) if it.is_table_like() => edit_table(
+            it.as_table_like_mut().expect("table-like"),
+            ta,
+            tb,
+            section,
+            comment,
+            next,
+        ),
+        (toml::Value::Array(xa), toml::Value::Array(xb), Item::ArrayOfTables(aot))
+            if xb.iter().all(toml::Value::is_table) =>
+        {
+            // element by element, then the new ones appended; removed ones dropped
+            while aot.len() > xb.len() {
+                aot.remove(aot.len() - 1);
+            }
+            for (i, eb) in xb.iter().enumerate() {
+                let ea = xa.get(i);
+                match (ea, aot.get_mut(i)) {
+                    (Some(ea), Some(t)) => {
+                        if ea != eb {
+                            edit_table(
+                                t,
+                                ea.as_table().expect("a table"),
+                                eb.as_table().expect("a table"),
+                                section,
+                                comment,
+                                next,
+                            )?;
+                        }
+                    }
+                    _ => {
+                        let mut t = table_of(eb)?;
+                        annotate(&mut t, comment(section, i));
+                        place_last(&mut t, next);
+                        aot.push(t);
+                    }
+                }
+            }
+            Ok(())
+        }
+        (_, _, Item::Value(v)) => {
+            // a changed value: the key's comments kept
+            let decor = v.decor().clone();
+            let mut nv = edit_value(b)?;
+            *nv.decor_mut() = decor;
+            *v = nv;
+            Ok(())
+        }
+        _ => {
+            *item = new_item(b)?;
+            Ok(())
+        }
+    }
+}
+
+/// Puts `comment` (lines without `#`) above a new table.
+fn annotate(t: &mut toml_edit::Table, comment: Option<String>) {
+    if let Some(c) = comment {
+        let lines: String = c.lines().map(|l| format!("# {l}\n")).collect();
+        t.decor_mut().set_prefix(format!("\n{lines}"));
+    }
+}
+
+/// A value as TOML text parsed back by `toml_edit` (its spelling: `toml`'s).
+fn new_item(v: &toml::Value) -> Result<toml_edit::Item, EditError> {
+    let mut wrapper = toml::Table::new();
+    wrapper.insert("x".into(), v.clone());
+    let text = toml::to_string(&wrapper).map_err(|e| EditError(e.to_string()))?;
+    let mut doc: toml_edit::DocumentMut = text
+        .parse()
+        .map_err(|e: toml_edit::TomlError| EditError(e.to_string()))?;
+    doc.as_table_mut()
+        .remove("x")
+        .ok_or_else(|| EditError("a value did not survive TOML".into()))
+}
+
+fn edit_value(v: &toml::Value) -> Result<toml_edit::Value, EditError> {
+    match new_item(v)? {
+        toml_edit::Item::Value(v) => Ok(v),
+        toml_edit::Item::Table(t) => Ok(toml_edit::Value::InlineTable(t.into_inline_table())),
+        _ => Err(EditError("an array of tables where a value was".into())),
+    }
+}
+
+fn table_of(v: &toml::Value) -> Result<toml_edit::Table, EditError> {
+    match new_item(&toml::Value::Array(vec![v.clone()]))? {
+        toml_edit::Item::ArrayOfTables(aot) => aot
+            .get(0)
+            .cloned()
+            .ok_or_else(|| EditError("an empty element".into())),
+        toml_edit::Item::Value(toml_edit::Value::Array(a)) => match a.get(0) {
+            Some(toml_edit::Value::InlineTable(t)) => Ok(t.clone().into_table()),
+            _ => Err(EditError("an element that is not a table".into())),
+        },
+        _ => Err(EditError("an element that is not a table".into())),
+    }
+}
