@@ -368,10 +368,51 @@ fn gear_pair(k: usize, p: &GearPair, n: usize) -> Result<(), Invalid> {
 }
 
 impl Scenario {
+    /// Every name (scenario, nodes, boundaries, loads, heaters, modes, gear pairs,
+    /// sensor columns) by the one rule of [`crate::scenario::check_name`], and a
+    /// description without control characters.
+    fn check_names(&self) -> Result<(), Invalid> {
+        let net = &self.thermal.network;
+        let named = |what: &str, i: usize, name: &str| {
+            crate::scenario::check_name(name).map_err(|m| bad(format!("{what}[{i}].name"), m))
+        };
+        named("scenario", 0, &self.name)?;
+        for (i, x) in net.nodes.iter().enumerate() {
+            named("network.nodes", i, &x.name)?;
+        }
+        for (i, x) in net.boundaries.iter().enumerate() {
+            named("network.boundaries", i, &x.name)?;
+        }
+        for (i, x) in net.loads.iter().enumerate() {
+            named("network.loads", i, &x.name)?;
+        }
+        for (i, x) in net.heaters.iter().enumerate() {
+            named("network.heaters", i, &x.name)?;
+        }
+        for (i, x) in self.thermal.modes.iter().enumerate() {
+            named("modes", i, &x.name)?;
+        }
+        for (i, x) in self.gears.iter().enumerate() {
+            named("gears", i, &x.name)?;
+        }
+        for (i, x) in self.sensors.iter().enumerate() {
+            crate::scenario::check_name(&x.column)
+                .map_err(|m| bad(format!("sensors[{i}].column"), m))?;
+        }
+        if self
+            .description
+            .chars()
+            .any(|c| c.is_control() && c != '\n' && c != '\t')
+        {
+            return Err(bad("description", "holds control characters"));
+        }
+        Ok(())
+    }
+
     /// Checks every invariant of the scenario: its thermal model, gear pairs, run
     /// control, solver settings and sensors.
     pub fn validate(&self) -> Result<(), Invalid> {
-        crate::scenario::check_name(&self.name).map_err(|m| bad("name", m))?;
+        self.check_names()?;
         self.thermal.validate()?;
         let n = self.thermal.network.nodes.len();
         for (k, p) in self.gears.iter().enumerate() {

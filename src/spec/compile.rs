@@ -253,8 +253,7 @@ const SPACE: &str = "space";
 pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let cx = &Cx;
     let keys = element_keys(&raw);
-    let meta_p = KeyPath::new("scenario");
-    valid_name(cx, &meta_p.key("name"), &raw.scenario.name)?;
+    check_names(cx, &raw)?;
 
     // Orbit.
     let op = KeyPath::new("orbit");
@@ -565,7 +564,6 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let mut modes = Vec::new();
     for (i, m) in raw.mode.into_iter().enumerate() {
         let p = KeyPath::new("mode").elem(i, &keys.mode[i]);
-        valid_name(cx, &KeyPath::new("mode").at(i).key("name"), &m.name)?;
         if ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
             return Err(cx.err(
                 &KeyPath::new("mode").at(i).key("name"),
@@ -648,7 +646,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         };
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &KeyPath::new("sun").at(i).key("name"), s.name)?,
+                s.name,
                 "sun",
                 &s.node,
                 i,
@@ -688,7 +686,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         )?;
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &KeyPath::new("albedo").at(i).key("name"), s.name)?,
+                s.name,
                 "albedo",
                 &s.node,
                 i,
@@ -712,7 +710,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         )?;
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &KeyPath::new("earth_ir").at(i).key("name"), s.name)?,
+                s.name,
                 "earth_ir",
                 &s.node,
                 i,
@@ -745,7 +743,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         };
         loads.push(Load {
             name: load_name(
-                optional_name(cx, &KeyPath::new("dissipation").at(i).key("name"), s.name)?,
+                s.name,
                 "dissipation",
                 &s.node,
                 i,
@@ -769,7 +767,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         let off_k = cx.temperature(&p.key("off_k"), h.off_k)?;
         check::heater_band(&p.key("off_k"), on_k, off_k)?;
         heaters.push(Heater {
-            name: optional_name(cx, &KeyPath::new("heater").at(i).key("name"), h.name)?
+            name: h.name
                 .unwrap_or_else(|| format!("heater.{}", h.node)),
             node,
             sensor_node,
@@ -914,27 +912,73 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     })
 }
 
-/// A name that may become a file name, a log field and a key path
-/// ([`crate::scenario::check_name`]).
-fn valid_name(cx: &Cx, p: &KeyPath, name: &str) -> Result<(), SpecError> {
-    crate::scenario::check_name(name).map_err(|m| cx.err(p, m))
-}
-
-/// An optional user-given name, checked like node names.
-fn optional_name(cx: &Cx, p: &KeyPath, name: Option<String>) -> Result<Option<String>, SpecError> {
-    if let Some(n) = &name {
-        valid_name(cx, p, n)?;
+/// Every name a scenario gives (scenario, nodes, boundaries, conductors, radiative
+/// couplings, loads, heaters, modes, gear pairs, sensor columns), checked by the one
+/// rule [`crate::scenario::check_name`]: names become file names (the default log,
+/// `diagnose`'s `residuals-<column>.svg`), log fields, CSV headers, key paths and
+/// terminal text. The description, free text, may hold no control characters (no
+/// escape sequences reach a terminal).
+fn check_names(cx: &Cx, raw: &ScenarioSpec) -> Result<(), SpecError> {
+    let named = |section: &'static str, i: usize| KeyPath::new(section).at(i).key("name");
+    let mut all: Vec<(KeyPath, &str)> = vec![(KeyPath::new("scenario").key("name"), &raw.scenario.name)];
+    all.extend(raw.node.iter().enumerate().map(|(i, x)| (named("node", i), x.name.as_str())));
+    all.extend(raw.boundary.iter().enumerate().map(|(i, x)| (named("boundary", i), x.name.as_str())));
+    all.extend(raw.mode.iter().enumerate().map(|(i, x)| (named("mode", i), x.name.as_str())));
+    let optional = [
+        ("conductor", raw.conductor.iter().map(|x| x.name.as_deref()).collect::<Vec<_>>()),
+        ("radiation", raw.radiation.iter().map(|x| x.name.as_deref()).collect()),
+        ("sun", raw.sun.iter().map(|x| x.name.as_deref()).collect()),
+        ("albedo", raw.albedo.iter().map(|x| x.name.as_deref()).collect()),
+        ("earth_ir", raw.earth_ir.iter().map(|x| x.name.as_deref()).collect()),
+        ("dissipation", raw.dissipation.iter().map(|x| x.name.as_deref()).collect()),
+        ("heater", raw.heater.iter().map(|x| x.name.as_deref()).collect()),
+        ("gear_pair", raw.gear_pair.iter().map(|x| x.name.as_deref()).collect()),
+    ];
+    for (section, names) in optional {
+        for (i, n) in names.into_iter().enumerate() {
+            if let Some(n) = n {
+                all.push((named(section, i), n));
+            }
+        }
     }
-    Ok(name)
+    all.extend(
+        raw.sensor
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (KeyPath::new("sensor").at(i).key("column"), x.column.as_str())),
+    );
+    for (p, name) in all {
+        crate::scenario::check_name(name).map_err(|m| cx.err(&p, m))?;
+    }
+    let d = &raw.scenario.description;
+    if let Some(c) = d.chars().find(|c| c.is_control() && *c != '\n' && *c != '\t') {
+        return Err(cx.err(
+            &KeyPath::new("scenario").key("description"),
+            format!(
+                "holds the control character {}: a description is plain text",
+                c.escape_unicode()
+            ),
+        ));
+    }
+    if d.chars().count() > MAX_DESCRIPTION_LEN {
+        return Err(cx.err(
+            &KeyPath::new("scenario").key("description"),
+            format!("is longer than {MAX_DESCRIPTION_LEN} characters"),
+        ));
+    }
+    Ok(())
 }
 
+/// Longest scenario description.
+pub const MAX_DESCRIPTION_LEN: usize = 2000;
+
+/// A node name not yet taken (its form is checked by [`check_names`]).
 fn check_name(
     cx: &Cx,
     p: &KeyPath,
     name: &str,
     names: &HashMap<String, NodeRef>,
 ) -> Result<(), SpecError> {
-    valid_name(cx, p, name)?;
     if names.contains_key(name) {
         return Err(cx.err(p, format!("node `{name}` is defined twice")));
     }
@@ -1347,7 +1391,7 @@ fn gear_pair(
     };
     let [pinion, wheel]: [Gear; 2] = built.try_into().map_err(|_| cx.err(p, "two gears"))?;
     let pair = GearPair {
-        name: optional_name(cx, &KeyPath::new("gear_pair").at(index).key("name"), g.name)?
+        name: g.name
             .unwrap_or_else(|| {
                 if index == 0 {
                     "mesh".into()
