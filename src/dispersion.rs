@@ -329,7 +329,7 @@ impl Plan {
                 return Err(PlanError::Spec(err(
                     at.key("path"),
                     format!(
-                        "`{}` is `{}`, which dispersion[{j}] (`{}`) already disperses; one number has one distribution",
+                        "`{}` names the same number ({}) as dispersion[{j}] (`{}`): one number has one distribution",
                         d.path,
                         id.canonical_path(),
                         x.path

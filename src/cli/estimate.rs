@@ -142,6 +142,7 @@ pub fn diagnose(sc: &Scenario, span_s: f64, runs: f64, force: bool) -> Result<()
 
 pub fn duration(s: f64) -> String {
     match s {
+        s if s >= 3.15576e9 => format!("{} years", orbitlash::units::num(s / 3.15576e7)),
         s if s >= 86400.0 => format!("{:.1} days", s / 86400.0),
         s if s >= 3600.0 => format!("{:.1} h", s / 3600.0),
         s if s >= 60.0 => format!("{:.1} min", s / 60.0),

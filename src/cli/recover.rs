@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::Args;
 
-use orbitlash::io::mcap_read::keep_valid_messages;
+use orbitlash::io::mcap_read::{drop_undecodable, keep_valid_messages};
 use orbitlash::io::mcap_scan::{recover as write_recovered, scan};
 use orbitlash::io::output::OutputPolicy;
 
@@ -48,6 +48,18 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
         .with_context(|| format!("cannot read {}", a.log.display()))?;
     let mut s = scan(&bytes).with_context(|| format!("{} cannot be recovered", a.log.display()))?;
     keep_valid_messages(&mut s);
+    // A log that ends properly may still hold damaged messages (a flipped byte).
+    let damaged = drop_undecodable(&mut s);
+    if let Some(first) = damaged.first() {
+        eprintln!(
+            "{}: {} message(s) are damaged (their chunk fails its CRC, or they do not decode with their schema) and are left out (first: message {} on {} at t = {:.3} s)",
+            a.log.display(),
+            damaged.len(),
+            first.number,
+            orbitlash::units::shown(&first.topic),
+            first.t_s
+        );
+    }
     if s.complete {
         return print_out(&format!(
             "{} is a complete log (run_end: {}); nothing to recover\n",
@@ -71,13 +83,19 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
         ),
     };
     let r = write_recovered(&s, &out, &policy)?;
+    let how = if damaged.is_empty() {
+        format!(
+            "{} of {} bytes were whole; the rest was cut off",
+            r.recovered_bytes, r.file_bytes
+        )
+    } else {
+        format!("{} damaged messages left out", damaged.len())
+    };
     print_out(&format!(
-        "recovered {} messages up to t = {:.3} s from {} ({} of {} bytes were whole; the rest was cut off{})\nwrote {}\n",
+        "recovered {} messages up to t = {:.3} s from {} ({how}{})\nwrote {}\n",
         r.messages,
         r.t_end_s,
         a.log.display(),
-        r.recovered_bytes,
-        r.file_bytes,
         match &r.original_status {
             Some(s) => format!("; the run had ended: {s}"),
             None => String::new(),

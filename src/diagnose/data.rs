@@ -325,6 +325,15 @@ fn check_temperatures(
 /// cause is a time column in milliseconds (or another unit) instead of seconds.
 pub fn check_time_base(rec: &Recording, sc: &Scenario) -> Result<(), DiagnoseError> {
     let period = sc.period_s();
+    let last = rec.time_s.last().copied().unwrap_or(0.0);
+    if last > crate::scenario::MAX_DURATION_S {
+        return Err(DiagnoseError::Recording(format!(
+            "{}: the recording ends at t = {} s, later than any run can last ({:.0e} s, 31.7 years): is the time column in seconds from the scenario's t = 0?",
+            rec.file,
+            crate::units::num(last),
+            crate::scenario::MAX_DURATION_S
+        )));
+    }
     let mut gaps: Vec<f64> = rec.time_s.windows(2).map(|w| w[1] - w[0]).collect();
     if gaps.is_empty() {
         return Ok(());

@@ -416,7 +416,8 @@ impl McapLog {
             .profile("")
             .compression(None)
             .chunk_size(Some(1 << 16))
-            .calculate_chunk_crcs(false)
+            // a CRC per chunk lets readers (and `recover`) tell a flipped byte
+            .calculate_chunk_crcs(true)
             .create(file)
             .map_err(|e| out_err(path, e))?;
         Ok(McapLog {

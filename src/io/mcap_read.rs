@@ -156,6 +156,61 @@ pub fn keep_valid_messages(scan: &mut super::mcap_scan::Scan<'_>) {
     });
 }
 
+/// A message of a scanned log that does not decode with its schema.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Undecodable {
+    /// 1-based position among the log's messages.
+    pub number: usize,
+    pub topic: String,
+    pub t_s: f64,
+}
+
+/// Drops every message of `scan` that does not decode with its channel's schema or
+/// whose chunk fails its CRC, finished chunks included (a flipped byte inside a log
+/// that otherwise ends properly), and returns them. A scan that loses any is no longer complete.
+pub fn drop_undecodable(scan: &mut super::mcap_scan::Scan<'_>) -> Vec<Undecodable> {
+    let mut types: HashMap<u16, Option<MessageDescriptor>> = HashMap::new();
+    let mut flat = Vec::new();
+    let mut bad = Vec::new();
+    let (schemas, channels) = (&scan.schemas, &scan.channels);
+    let mut keep = Vec::with_capacity(scan.messages.len());
+    for (k, m) in scan.messages.iter().enumerate() {
+        let ok = !m.damaged
+            && channels.get(&m.header.channel_id).is_some_and(|ch| {
+                schemas.get(&ch.schema_id).is_some_and(|schema| {
+                    let ty = types
+                        .entry(ch.id)
+                        .or_insert_with(|| message_type(&schema.data, &schema.name).ok());
+                    flat.clear();
+                    ty.as_ref().is_some_and(|ty| {
+                        if schema.name.starts_with("foxglove.") {
+                            DynamicMessage::decode(ty.clone(), m.data).is_ok()
+                        } else {
+                            flatten_message(ty, m.data, &ch.topic, &mut flat).is_ok()
+                        }
+                    })
+                })
+            });
+        if !ok {
+            bad.push(Undecodable {
+                number: k + 1,
+                topic: channels.get(&m.header.channel_id).map_or_else(
+                    || format!("channel {}", m.header.channel_id),
+                    |c| c.topic.clone(),
+                ),
+                t_s: m.header.log_time as f64 * 1e-9,
+            });
+        }
+        keep.push(ok);
+    }
+    if !bad.is_empty() {
+        let mut it = keep.into_iter();
+        scan.messages.retain(|_| it.next().unwrap_or(false));
+        scan.complete = false;
+    }
+    bad
+}
+
 /// How much of a cut-off log was read (see `mcap_scan`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Truncation {
@@ -182,6 +237,15 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
         message: e.to_string(),
     })?;
     keep_valid_messages(&mut scan);
+    if let Some(&at) = scan.damaged_chunks.first() {
+        return Err(LogReadError::Mcap {
+            file,
+            message: format!(
+                "the chunk at byte {at} does not match its CRC ({} damaged chunk(s)): the file changed after it was written; `orbitlash recover` writes a copy without them",
+                scan.damaged_chunks.len()
+            ),
+        });
+    }
     if scan.messages.is_empty() && !scan.data_complete {
         return Err(LogReadError::Mcap {
             file,

@@ -28,6 +28,9 @@ pub struct ScannedMessage<'a> {
     /// a chunk cut off are only as good as the bytes after the cut, which a power loss
     /// may have left as zeros: check them before use ([`Scan::keep_valid`]).
     pub verified: bool,
+    /// Its chunk fails its CRC: some byte of the chunk changed after it was written
+    /// (a flipped bit); the message may decode and still be wrong.
+    pub damaged: bool,
 }
 
 /// Everything a scan recovered.
@@ -48,6 +51,8 @@ pub struct Scan<'a> {
     pub file_bytes: usize,
     /// Where the first record not in a finished chunk starts.
     first_unverified_offset: usize,
+    /// File offsets of the chunks whose CRC does not match their bytes.
+    pub damaged_chunks: Vec<usize>,
 }
 
 impl Scan<'_> {
@@ -164,7 +169,17 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
                     unreachable!("an uncompressed chunk borrows the file")
                 };
                 let offset = data.as_ptr() as usize - bytes.as_ptr() as usize;
+                // a CRC of 0 means none was computed
+                let damaged = header.uncompressed_crc != 0
+                    && crc32fast::hash(data) != header.uncompressed_crc;
+                let before = s.messages.len();
                 inner_records(bytes, offset, offset + data.len(), true, &mut s)?;
+                if damaged {
+                    s.damaged_chunks.push(at);
+                    for m in &mut s.messages[before..] {
+                        m.damaged = true;
+                    }
+                }
             }
             other => keep(other, end, true, &mut s),
         }
@@ -263,6 +278,7 @@ fn keep<'a>(record: Record<'a>, end: usize, verified: bool, s: &mut Scan<'a>) {
                 data,
                 end_offset: end,
                 verified,
+                damaged: false,
             });
         }
         Record::Metadata(m) => s.metadata.push(m),
@@ -308,7 +324,7 @@ pub fn recover(
         .profile("")
         .compression(None)
         .chunk_size(Some(1 << 16))
-        .calculate_chunk_crcs(false)
+        .calculate_chunk_crcs(true)
         .create(file)
         .map_err(err)?;
     for sc in scan.schemas.values() {

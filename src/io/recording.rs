@@ -65,6 +65,24 @@ impl Recording {
         if bytes.starts_with(mcap::MAGIC) {
             return read_mcap(&bytes, &file);
         }
+        let named_mcap = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
+        if named_mcap || std::str::from_utf8(&bytes[..bytes.len().min(4096)]).is_err() {
+            // not text: say what it is not, rather than where the text breaks
+            let bad = std::str::from_utf8(&bytes).err().map(|e| e.valid_up_to());
+            return Err(RecordingError::File {
+                file,
+                message: match (named_mcap, bad) {
+                    (true, _) => "is not an MCAP file (it does not start with the MCAP magic bytes); a recording is an MCAP or a CSV file".into(),
+                    (false, Some(at)) => format!(
+                        "is neither CSV text nor an MCAP file (byte {} is not UTF-8 text, and it does not start with the MCAP magic bytes)",
+                        at + 1
+                    ),
+                    (false, None) => "is not CSV text".into(),
+                },
+            });
+        }
         Recording::from_csv(&bytes, &file)
     }
 
@@ -120,6 +138,21 @@ impl Recording {
             });
         }
         let names: Vec<String> = header.iter().map(str::to_string).collect();
+        if names.len() == 1 {
+            // one column: another delimiter?
+            for (d, what) in [(';', "semicolons"), ('\t', "tabs"), ('|', "bars")] {
+                if names[0].contains(d) {
+                    return Err(at(
+                        header_line,
+                        0,
+                        format!(
+                            "the header is one column that holds {what} ({}): the fields seem separated by {what}; a recording separates them by commas",
+                            crate::units::shown(&names[0])
+                        ),
+                    ));
+                }
+            }
+        }
         for (k, name) in names.iter().enumerate() {
             if name.is_empty() {
                 return Err(at(header_line, k + 1, "a column has no name".into()));
@@ -128,7 +161,7 @@ impl Recording {
                 return Err(at(
                     header_line,
                     k + 1,
-                    format!("column `{name}` appears twice"),
+                    format!("column `{}` appears twice", crate::units::shown(name)),
                 ));
             }
         }
@@ -138,7 +171,7 @@ impl Recording {
                 0,
                 format!(
                     "no `{TIME_COLUMN}` column (the header is {}): a recording gives its time in seconds since t = 0 of the scenario",
-                    names.join(",")
+                    crate::units::shown(&names.join(","))
                 ),
             ));
         };
@@ -241,8 +274,9 @@ impl Recording {
                     RecordingError::File {
                         file: self.file.clone(),
                         message: format!(
-                            "channel `{c}` is not a sensor of the scenario ({}); add a [[sensor]] with column = \"{c}\"",
-                            if known.is_empty() {
+                            "channel `{c}` is not a sensor of the scenario ({known}); add a [[sensor]] with column = \"{c}\"",
+                            c = crate::units::shown(c),
+                            known = if known.is_empty() {
                                 "it has none".to_string()
                             } else {
                                 format!("its sensors: {}", known.join(", "))

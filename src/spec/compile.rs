@@ -645,12 +645,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             })?,
         };
         loads.push(Load {
-            name: load_name(
-                s.name,
-                "sun",
-                &s.node,
-                i,
-            ),
+            name: load_name(s.name, "sun", &s.node, i),
             node,
             kind: LoadKind::Sun {
                 absorptivity_area_m2: aa,
@@ -685,12 +680,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             s.view_factor,
         )?;
         loads.push(Load {
-            name: load_name(
-                s.name,
-                "albedo",
-                &s.node,
-                i,
-            ),
+            name: load_name(s.name, "albedo", &s.node, i),
             node,
             kind: LoadKind::Albedo {
                 absorptivity_area_m2: aa,
@@ -709,12 +699,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             s.view_factor,
         )?;
         loads.push(Load {
-            name: load_name(
-                s.name,
-                "earth_ir",
-                &s.node,
-                i,
-            ),
+            name: load_name(s.name, "earth_ir", &s.node, i),
             node,
             kind: LoadKind::EarthIr {
                 emissivity_area_m2: ea,
@@ -742,12 +727,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             })?),
         };
         loads.push(Load {
-            name: load_name(
-                s.name,
-                "dissipation",
-                &s.node,
-                i,
-            ),
+            name: load_name(s.name, "dissipation", &s.node, i),
             node,
             kind: LoadKind::Dissipation {
                 power_w: power,
@@ -767,8 +747,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         let off_k = cx.temperature(&p.key("off_k"), h.off_k)?;
         check::heater_band(&p.key("off_k"), on_k, off_k)?;
         heaters.push(Heater {
-            name: h.name
-                .unwrap_or_else(|| format!("heater.{}", h.node)),
+            name: h.name.unwrap_or_else(|| format!("heater.{}", h.node)),
             node,
             sensor_node,
             power_w: cx.positive_up_to(&p.key("power_w"), h.power_w, MAX_POWER_W, "W")?,
@@ -920,19 +899,59 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
 /// escape sequences reach a terminal).
 fn check_names(cx: &Cx, raw: &ScenarioSpec) -> Result<(), SpecError> {
     let named = |section: &'static str, i: usize| KeyPath::new(section).at(i).key("name");
-    let mut all: Vec<(KeyPath, &str)> = vec![(KeyPath::new("scenario").key("name"), &raw.scenario.name)];
-    all.extend(raw.node.iter().enumerate().map(|(i, x)| (named("node", i), x.name.as_str())));
-    all.extend(raw.boundary.iter().enumerate().map(|(i, x)| (named("boundary", i), x.name.as_str())));
-    all.extend(raw.mode.iter().enumerate().map(|(i, x)| (named("mode", i), x.name.as_str())));
+    let mut all: Vec<(KeyPath, &str)> =
+        vec![(KeyPath::new("scenario").key("name"), &raw.scenario.name)];
+    all.extend(
+        raw.node
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (named("node", i), x.name.as_str())),
+    );
+    all.extend(
+        raw.boundary
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (named("boundary", i), x.name.as_str())),
+    );
+    all.extend(
+        raw.mode
+            .iter()
+            .enumerate()
+            .map(|(i, x)| (named("mode", i), x.name.as_str())),
+    );
     let optional = [
-        ("conductor", raw.conductor.iter().map(|x| x.name.as_deref()).collect::<Vec<_>>()),
-        ("radiation", raw.radiation.iter().map(|x| x.name.as_deref()).collect()),
+        (
+            "conductor",
+            raw.conductor
+                .iter()
+                .map(|x| x.name.as_deref())
+                .collect::<Vec<_>>(),
+        ),
+        (
+            "radiation",
+            raw.radiation.iter().map(|x| x.name.as_deref()).collect(),
+        ),
         ("sun", raw.sun.iter().map(|x| x.name.as_deref()).collect()),
-        ("albedo", raw.albedo.iter().map(|x| x.name.as_deref()).collect()),
-        ("earth_ir", raw.earth_ir.iter().map(|x| x.name.as_deref()).collect()),
-        ("dissipation", raw.dissipation.iter().map(|x| x.name.as_deref()).collect()),
-        ("heater", raw.heater.iter().map(|x| x.name.as_deref()).collect()),
-        ("gear_pair", raw.gear_pair.iter().map(|x| x.name.as_deref()).collect()),
+        (
+            "albedo",
+            raw.albedo.iter().map(|x| x.name.as_deref()).collect(),
+        ),
+        (
+            "earth_ir",
+            raw.earth_ir.iter().map(|x| x.name.as_deref()).collect(),
+        ),
+        (
+            "dissipation",
+            raw.dissipation.iter().map(|x| x.name.as_deref()).collect(),
+        ),
+        (
+            "heater",
+            raw.heater.iter().map(|x| x.name.as_deref()).collect(),
+        ),
+        (
+            "gear_pair",
+            raw.gear_pair.iter().map(|x| x.name.as_deref()).collect(),
+        ),
     ];
     for (section, names) in optional {
         for (i, n) in names.into_iter().enumerate() {
@@ -941,17 +960,20 @@ fn check_names(cx: &Cx, raw: &ScenarioSpec) -> Result<(), SpecError> {
             }
         }
     }
-    all.extend(
-        raw.sensor
-            .iter()
-            .enumerate()
-            .map(|(i, x)| (KeyPath::new("sensor").at(i).key("column"), x.column.as_str())),
-    );
+    all.extend(raw.sensor.iter().enumerate().map(|(i, x)| {
+        (
+            KeyPath::new("sensor").at(i).key("column"),
+            x.column.as_str(),
+        )
+    }));
     for (p, name) in all {
         crate::scenario::check_name(name).map_err(|m| cx.err(&p, m))?;
     }
     let d = &raw.scenario.description;
-    if let Some(c) = d.chars().find(|c| c.is_control() && *c != '\n' && *c != '\t') {
+    if let Some(c) = d
+        .chars()
+        .find(|c| c.is_control() && *c != '\n' && *c != '\t')
+    {
         return Err(cx.err(
             &KeyPath::new("scenario").key("description"),
             format!(
@@ -1391,14 +1413,13 @@ fn gear_pair(
     };
     let [pinion, wheel]: [Gear; 2] = built.try_into().map_err(|_| cx.err(p, "two gears"))?;
     let pair = GearPair {
-        name: g.name
-            .unwrap_or_else(|| {
-                if index == 0 {
-                    "mesh".into()
-                } else {
-                    format!("mesh{index}")
-                }
-            }),
+        name: g.name.unwrap_or_else(|| {
+            if index == 0 {
+                "mesh".into()
+            } else {
+                format!("mesh{index}")
+            }
+        }),
         module_m,
         pressure_angle_rad: alpha0,
         face_width_m: cx.positive(&p.key("face_width_mm"), g.face_width_mm)? * 1e-3,
