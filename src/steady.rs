@@ -68,7 +68,7 @@ pub enum SteadyError {
     #[error(transparent)]
     Run(#[from] SimError),
     #[error(
-        "a periodic orbit needs an environment that repeats every orbit; this one changes at t = {0} s (a table or a mode window)"
+        "a periodic orbit needs an environment that repeats every orbit, and this scenario has a time table or a mode window (its first point at t = {0} s): no two orbits are alike"
     )]
     NotPeriodic(f64),
     #[error(

@@ -41,6 +41,16 @@ pub fn exact(v: f64) -> String {
     }
 }
 
+/// `v` with `decimals` digits after the point, or in exponent form (4 significant
+/// digits) when it has more than nine digits before it: no 300-digit numbers.
+pub fn fixed(v: f64, decimals: usize) -> String {
+    if v.is_finite() && v.abs() >= 1e9 {
+        num(v)
+    } else {
+        format!("{v:.decimals$}")
+    }
+}
+
 /// `v` followed by `unit`, plural unless v is 1: "1 orbit", "6 orbits", "1e300 orbits".
 pub fn count(v: f64, unit: &str) -> String {
     if v == 1.0 {

@@ -11,7 +11,8 @@ use crate::scenario::{
 use crate::sensor::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
 use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K};
 use crate::spec::compile::{
-    MAX_AREA_M2, MAX_CONDUCTANCE_W_PER_K, MAX_PERIOD_S, MAX_POWER_W, MIN_CAPACITANCE_J_PER_K,
+    MAX_AREA_M2, MAX_CAPACITANCE_J_PER_K, MAX_CONDUCTANCE_W_PER_K, MAX_PERIOD_S, MAX_POWER_W,
+    MIN_CAPACITANCE_J_PER_K,
     MIN_PERIOD_S,
 };
 use crate::thermal::{LoadKind, NodeRef, ThermalModel, When};
@@ -141,14 +142,12 @@ impl ThermalModel {
         }
         for (i, nd) in net.nodes.iter().enumerate() {
             let w = format!("network.nodes[{i}] ({})", nd.name);
-            if !(nd.capacitance_j_per_k.is_finite()
-                && nd.capacitance_j_per_k >= MIN_CAPACITANCE_J_PER_K)
-            {
+            if !(MIN_CAPACITANCE_J_PER_K..=MAX_CAPACITANCE_J_PER_K).contains(&nd.capacitance_j_per_k) {
                 return Err(bad(
                     w,
                     format!(
-                        "capacitance {} J/K below {MIN_CAPACITANCE_J_PER_K} J/K or not finite",
-                        nd.capacitance_j_per_k
+                        "capacitance {} J/K outside {MIN_CAPACITANCE_J_PER_K} … {MAX_CAPACITANCE_J_PER_K:e} J/K",
+                        crate::units::num(nd.capacitance_j_per_k)
                     ),
                 ));
             }

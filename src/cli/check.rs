@@ -102,7 +102,7 @@ pub fn check(a: CheckArgs) -> Result<()> {
         table.add_row(vec![
             n.name.clone(),
             "C =".to_string(),
-            format!("{:.3} J/K", n.capacitance_j_per_k),
+            format!("{} J/K", orbitlash::units::fixed(n.capacitance_j_per_k, 3)),
             "tau =".to_string(),
             format!("{t:.2} s"),
         ]);

@@ -627,7 +627,7 @@ fn format_summary(
     let e = &stats.energy;
     outln!(o, "\nenergy balance over the run:");
     let mut table = table::new(&["", "", ""], &[Align::Left, Align::Right, Align::Left]);
-    let joules = |v: f64| format!("{v:.1}");
+    let joules = |v: f64| orbitlash::units::fixed(v, 1);
     table.add_row(vec![
         "absorbed (sun, albedo, IR)".to_string(),
         joules(e.absorbed_j),

@@ -235,6 +235,10 @@ impl Cx {
 /// Smallest node capacitance, J/K: a microgram of metal. Below it a node is numerically
 /// indistinguishable from an infinitely fast one and only costs conditioning.
 pub const MIN_CAPACITANCE_J_PER_K: f64 = 1e-6;
+/// Largest capacitance of a node: a thousand tonnes of steel (≈ 5e8 J/K) with a wide
+/// margin; beyond it a node is a boundary (fixed temperature), and energy sums lose
+/// every digit.
+pub const MAX_CAPACITANCE_J_PER_K: f64 = 1e12;
 /// Largest conductance, W/K (a square metre of bonded joint conducts ~1e4 W/K): beyond it
 /// two nodes are one, and the Newton systems lose their precision (tested to 1e12).
 pub const MAX_CONDUCTANCE_W_PER_K: f64 = 1e9;
@@ -1201,7 +1205,7 @@ fn gear_pair(
         let tip = cx.positive(&gp.key("tip_radius_mm"), raw.tip_radius_mm)? * 1e-3;
         let root = cx.positive(&gp.key("root_radius_mm"), raw.root_radius_mm)? * 1e-3;
         let bore = cx.positive(&gp.key("bore_radius_mm"), raw.bore_radius_mm)? * 1e-3;
-        let mm = |x: f64| format!("{:.6} mm", x * 1e3);
+        let mm = |x: f64| format!("{} mm", crate::units::fixed(x * 1e3, 6));
         if bore >= r_b {
             return Err(cx.err(
                 &gp.key("bore_radius_mm"),
@@ -1480,7 +1484,7 @@ pub(crate) mod check {
     }
 
     pub fn capacitance(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        let c = Cx.positive(path, v)?;
+        let c = Cx.positive_up_to(path, v, MAX_CAPACITANCE_J_PER_K, "J/K")?;
         Cx.at_least(path, c, MIN_CAPACITANCE_J_PER_K, "J/K")
     }
 

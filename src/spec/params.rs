@@ -137,7 +137,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("node".into(), key.as_str().into(); {
-            at!("capacitance_j_per_k".into(); f(&path, Slot::Value(&mut n.capacitance_j_per_k), m("J/K", "≥ 1e-6")));
+            at!("capacitance_j_per_k".into(); f(&path, Slot::Value(&mut n.capacitance_j_per_k), m("J/K", "1e-6 … 1e12")));
             at!("initial_temperature_k".into(); f(&path, Slot::Value(&mut n.initial_temperature_k), m("K", "0 … 5000")));
             at!("radius_mm".into(); f(&path, Slot::Optional(&mut n.radius_mm, Default::Absent), m("mm", "> 0, on the gear's bore … base circle")));
         });
