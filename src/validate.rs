@@ -12,8 +12,7 @@ use crate::sensor::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
 use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K};
 use crate::spec::compile::{
     MAX_AREA_M2, MAX_CAPACITANCE_J_PER_K, MAX_CONDUCTANCE_W_PER_K, MAX_PERIOD_S, MAX_POWER_W,
-    MIN_CAPACITANCE_J_PER_K,
-    MIN_PERIOD_S,
+    MIN_CAPACITANCE_J_PER_K, MIN_PERIOD_S,
 };
 use crate::thermal::{LoadKind, NodeRef, ThermalModel, When};
 
@@ -142,7 +141,9 @@ impl ThermalModel {
         }
         for (i, nd) in net.nodes.iter().enumerate() {
             let w = format!("network.nodes[{i}] ({})", nd.name);
-            if !(MIN_CAPACITANCE_J_PER_K..=MAX_CAPACITANCE_J_PER_K).contains(&nd.capacitance_j_per_k) {
+            if !(MIN_CAPACITANCE_J_PER_K..=MAX_CAPACITANCE_J_PER_K)
+                .contains(&nd.capacitance_j_per_k)
+            {
                 return Err(bad(
                     w,
                     format!(

@@ -19,8 +19,11 @@ fn reference() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml")
 }
 
+/// The shipped example recording (made by the independent generator of `tests/cases`:
+/// a 4 W housing heater the reference model leaves out), so these tests need only the
+/// clone.
 fn heater() -> PathBuf {
-    common::shared("cases/heater/recording.csv")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/recordings/heater-housing.csv")
 }
 
 /// (time, value) pairs of field `field` (1-based, doubles) of every message on `topic`.
@@ -96,8 +99,36 @@ fn cli_diagnose_heater_report_json_and_out_folder() {
     assert!(f["delta_bic"].as_f64().unwrap() < 0.0);
     assert!(f["heldout_rmse"]["housing_c"].as_f64().unwrap() < 0.3);
 
-    // The corrected scenario runs as it is …
+    // The corrected scenario is the user's file edited: its comments and number
+    // spellings kept, its own name, the recording's length, the finding as a
+    // commented element …
     let corrected = out.join("corrected.toml");
+    let text = std::fs::read_to_string(&corrected).unwrap();
+    let original = std::fs::read_to_string(reference()).unwrap();
+    for line in original.lines().filter(|l| l.trim_start().starts_with('#')) {
+        assert!(text.contains(line), "comment lost: {line}");
+    }
+    assert!(
+        text.contains("youngs_modulus_pa = 197e9"),
+        "a number respelled"
+    );
+    assert!(text.contains("name = \"reference-hinge-corrected\""));
+    assert!(!text.contains("orbits = 6"));
+    assert!(
+        text.contains("duration_s = 68100"),
+        "the recording's length"
+    );
+    assert!(
+        text.contains(
+            "# added by `orbitlash diagnose`: heater_thermostat (physics) on node housing"
+        )
+    );
+    let heater_at = text.find("[[heater]]").unwrap();
+    assert!(
+        heater_at > text.find("[[sensor]]").unwrap(),
+        "additions go last"
+    );
+    // … and runs as it is …
     common::bin()
         .arg("run")
         .arg(&corrected)

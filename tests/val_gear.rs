@@ -331,7 +331,7 @@ fn val_cases_null_backlash_matches_independent_implementation() {
             Ok(())
         }
     }
-    let rec = Recording::read(&common::shared("cases/null/recording.csv")).unwrap();
+    let rec = Recording::read(&shared_or_return!("cases/null/recording.csv")).unwrap();
     let time = &rec.time_s;
     let meas = rec.channel("backlash_um").unwrap();
     let sc = reference();

@@ -60,7 +60,7 @@ fn val_reference_mechanism_orbit6_extremes() {
 fn val_cases_null_recording_matches_within_noise() {
     // The null case carries no concealed effect: only thermistor noise of 0.15 K,
     // so the residual of every temperature channel must look like that noise.
-    let rec = Recording::read(&common::shared("cases/null/recording.csv")).unwrap();
+    let rec = Recording::read(&shared_or_return!("cases/null/recording.csv")).unwrap();
     let time = &rec.time_s;
     let t_end = *time.last().unwrap();
     let sc = reference();

@@ -231,14 +231,19 @@ pub fn tornado(title: &str, rows: &[(String, f64)]) -> String {
         let x = mid + r.min(0.0) * (x1 - x0) / 2.0;
         let _ = writeln!(
             o,
-            "<rect class=\"bar\" x=\"{x:.2}\" y=\"{y:.2}\" width=\"{:.2}\" height=\"{:.2}\" fill=\"{}\"/><text x=\"{}\" y=\"{:.2}\" text-anchor=\"end\">{} ({:+.2})</text>",
+            "<rect class=\"bar\" x=\"{x:.2}\" y=\"{y:.2}\" width=\"{:.2}\" height=\"{:.2}\" fill=\"{}\"/><text x=\"{}\" y=\"{:.2}\" text-anchor=\"end\">{} ({})</text>",
             r.abs() * (x1 - x0) / 2.0,
             row_h - 8.0,
             if r < 0.0 { "#c55" } else { "#58b" },
             left - 8.0,
             y + row_h / 2.0,
             esc(label),
-            r
+            // a constant input or output has no rank correlation: no bar, no number
+            if rho.is_finite() {
+                format!("{rho:+.2}")
+            } else {
+                "no variation".to_string()
+            }
         );
     }
     o.push_str("</svg>\n");
