@@ -204,7 +204,7 @@ pub fn truncated_std_normal(a: f64, b: f64, u: f64) -> f64 {
         let ln_phi = -0.5 * x * x - 0.5 * (2.0 * std::f64::consts::PI).ln();
         let slope = -(ln_phi - ln_upper_tail(x)).exp();
         let mut next = x - f / slope;
-        if !(next > lo && next < hi) || !next.is_finite() {
+        if !(next > lo && next < hi && next.is_finite()) {
             next = 0.5 * (lo + hi);
         }
         if (next - x).abs() <= 1e-15 * x.abs().max(1.0) || hi - lo <= 1e-15 * hi.abs() {
@@ -279,29 +279,6 @@ impl Plan {
                 .get(&d.path)
                 .map_err(|e| err(at.key("path"), e.to_string()))?;
             let distribution = distribution(d, nominal, &at)?;
-            // Within the parameter's range: the model itself says.
-            let mut probe = model.clone();
-            for v in distribution.extremes() {
-                probe.set_param(&id, v).map_err(|e| {
-                    let why = match e {
-                        ModelError::Param(e) => e.to_string(),
-                        ModelError::Invalid(e) => format!("`{}`: {}", e.key, e.message),
-                    };
-                    let tail = match distribution {
-                        Distribution::Normal { .. } | Distribution::LogNormal { .. } => {
-                            format!(" (at its {TAIL:e} tail; truncated_normal bounds it)")
-                        }
-                        _ => String::new(),
-                    };
-                    err(
-                        at.clone(),
-                        format!(
-                            "{} reaches {v}{tail}, which `{}` cannot take: {why}",
-                            d.distribution, d.path
-                        ),
-                    )
-                })?;
-            }
             let dimension = match &d.group {
                 Some(g) => match groups.iter().position(|x| x == g) {
                     Some(k) => dispersions
@@ -343,6 +320,55 @@ impl Plan {
                 group: d.group.clone(),
                 dimension,
             });
+        }
+        // Within each parameter's range: the model itself says. A value refused beside
+        // the other numbers' nominal values (a heater's on_k above the nominal off_k)
+        // may be possible beside their dispersed ones: it is tried again with the other
+        // dispersed numbers at their lower, then at their upper extremes. Combinations
+        // the model refuses at run time are reported as invalid samples.
+        for (i, (d, x)) in specs.iter().zip(&dispersions).enumerate() {
+            let at = KeyPath::new("dispersion").at(i);
+            for v in x.distribution.extremes() {
+                let mut probe = model.clone();
+                let Err(e) = probe.set_param(&x.id, v) else {
+                    continue;
+                };
+                let possible = [false, true].iter().any(|&upper| {
+                    let mut probe = model.clone();
+                    let mut values: Vec<(&ParamId, f64)> = dispersions
+                        .iter()
+                        .enumerate()
+                        .filter(|(j, _)| *j != i)
+                        .filter_map(|(_, o)| {
+                            let ex = o.distribution.extremes();
+                            let pick = if upper { ex.last() } else { ex.first() };
+                            pick.map(|&w| (&o.id, w))
+                        })
+                        .collect();
+                    values.push((&x.id, v));
+                    set_in_any_order(&mut probe, &values).is_ok()
+                });
+                if possible {
+                    continue;
+                }
+                let why = match e {
+                    ModelError::Param(e) => e.to_string(),
+                    ModelError::Invalid(e) => format!("`{}`: {}", e.key, e.message),
+                };
+                let tail = match x.distribution {
+                    Distribution::Normal { .. } | Distribution::LogNormal { .. } => {
+                        format!(" (at its {TAIL:e} tail; truncated_normal bounds it)")
+                    }
+                    _ => String::new(),
+                };
+                return Err(PlanError::Spec(err(
+                    at,
+                    format!(
+                        "{} reaches {v}{tail}, which `{}` cannot take: {why}",
+                        d.distribution, d.path
+                    ),
+                )));
+            }
         }
         let strata = match sampling {
             Sampling::Random => Vec::new(),
@@ -410,32 +436,44 @@ impl Plan {
             index: k,
             samples: self.samples,
         })?;
-        // A value may be refused beside the nominal value of another number and
-        // accepted beside its sampled one (heater on_k above the nominal off_k, off_k
-        // raised by the same sample): values refused are tried again after the others,
-        // until none goes in; then the first refusal is the sample's error.
-        let mut pending: Vec<usize> = (0..values.len()).collect();
-        loop {
-            let mut refused = Vec::new();
-            let mut first_error = None;
-            for &i in &pending {
-                if let Err(e) = model.set_param(&self.dispersions[i].id, values[i]) {
-                    refused.push(i);
-                    first_error.get_or_insert((i, e));
-                }
+        let pairs: Vec<(&ParamId, f64)> = self
+            .dispersions
+            .iter()
+            .zip(&values)
+            .map(|(d, v)| (&d.id, *v))
+            .collect();
+        set_in_any_order(model, &pairs).map_err(|(i, source)| SampleError::Model {
+            index: k,
+            path: self.dispersions[i].path.clone(),
+            value: values[i],
+            source,
+        })?;
+        Ok(values)
+    }
+}
+
+/// Writes `values` into `model`. A value may be refused beside the current value of
+/// another number and accepted beside its new one (a heater's on_k above the old
+/// off_k, off_k raised too): values refused are tried again after the others, until
+/// none goes in; then the first refusal (its index in `values`) is the error.
+fn set_in_any_order(
+    model: &mut Model,
+    values: &[(&ParamId, f64)],
+) -> Result<(), (usize, ModelError)> {
+    let mut pending: Vec<usize> = (0..values.len()).collect();
+    loop {
+        let mut refused = Vec::new();
+        let mut first_error = None;
+        for &i in &pending {
+            if let Err(e) = model.set_param(values[i].0, values[i].1) {
+                refused.push(i);
+                first_error.get_or_insert((i, e));
             }
-            match first_error {
-                None => return Ok(values),
-                Some((i, source)) if refused.len() == pending.len() => {
-                    return Err(SampleError::Model {
-                        index: k,
-                        path: self.dispersions[i].path.clone(),
-                        value: values[i],
-                        source,
-                    });
-                }
-                Some(_) => pending = refused,
-            }
+        }
+        match first_error {
+            None => return Ok(()),
+            Some(e) if refused.len() == pending.len() => return Err(e),
+            Some(_) => pending = refused,
         }
     }
 }

@@ -67,7 +67,12 @@ impl PairOutcome {
     /// The flags that follow from the smallest backlash and the minimum allowed:
     /// (violated, interference). A lost mesh (NaN) is both.
     pub fn flags_from_values(min_backlash_um: f64, allowed_um: f64) -> (bool, bool) {
-        (!(min_backlash_um >= allowed_um), !(min_backlash_um > 0.0))
+        // NaN (a lost mesh) is below everything
+        let lost = min_backlash_um.is_nan();
+        (
+            lost || min_backlash_um < allowed_um,
+            lost || min_backlash_um <= 0.0,
+        )
     }
 }
 

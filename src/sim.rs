@@ -1149,10 +1149,13 @@ pub fn estimate_run<O: Observer>(
         start: std::time::Instant,
         steps: u64,
         stop: &'a AtomicBool,
+        /// End time of every pilot step (at most 20 000).
+        times: Vec<f64>,
     }
     impl Observer for Budget<'_> {
-        fn on_step(&mut self, _: &StepView<'_>) -> ObserverResult {
+        fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
             self.steps += 1;
+            self.times.push(step.t1_s());
             if self.steps >= 20_000 || self.start.elapsed().as_secs_f64() > 0.25 {
                 self.stop.store(true, Ordering::Relaxed);
             }
@@ -1165,6 +1168,7 @@ pub fn estimate_run<O: Observer>(
         start: std::time::Instant::now(),
         steps: 0,
         stop: &stop,
+        times: Vec::with_capacity(20_000),
     };
     let pilot_end = pilot_end_s.min(t_end_s);
     match simulate(
@@ -1177,8 +1181,20 @@ pub fn estimate_run<O: Observer>(
     ) {
         Ok(stats) if stats.t_end_s > 0.0 && stats.steps > 0 => {
             let wall = budget.start.elapsed().as_secs_f64();
-            let scale = t_end_s / stats.t_end_s;
-            let steps = (stats.steps as f64 * scale).max(lower);
+            let n = budget.times.len();
+            let steps = if stats.t_end_s < pilot_end && n >= 8 {
+                // Stopped early (the step or time budget): the rest goes at the pace of
+                // the pilot's last quarter, so a thermostat that starts chattering
+                // during the pilot counts at its chattering pace.
+                let t_q = budget.times[n - n / 4 - 1];
+                let span = (stats.t_end_s - t_q).max(f64::MIN_POSITIVE);
+                let pace = (n / 4) as f64 / span;
+                let average = stats.steps as f64 / stats.t_end_s;
+                stats.steps as f64 + (t_end_s - stats.t_end_s) * pace.max(average)
+            } else {
+                stats.steps as f64 * (t_end_s / stats.t_end_s)
+            }
+            .max(lower);
             RunEstimate {
                 steps,
                 wall_s: wall / stats.steps as f64 * steps,

@@ -290,3 +290,96 @@ fn cli_check_lists_dispersions_and_refuses_bad_ones() {
     assert_eq!(run("good.toml"), run("plain.toml"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+// ---- truncated normal far in a tail (issue 16, item 4) -------------------------------
+
+/// ln Φ̄(z) = ln P(Z > z), written out here independently of the crate: for z ≥ 8 the
+/// asymptotic series of the Mills ratio R(z) = Φ̄(z)/φ(z) ≈ (1/z)(1 − 1/z² + 3/z⁴ −
+/// 15/z⁶ + 105/z⁸ − 945/z¹⁰) (relative error < 1e-8 there), below it Simpson's rule
+/// on φ up to 8 plus that tail; for z < −8, ln(1 − Φ̄(−z)).
+fn ln_upper_ref(z: f64) -> f64 {
+    let ln_phi = |t: f64| -0.5 * t * t - 0.5 * (2.0 * std::f64::consts::PI).ln();
+    let asym = |t: f64| {
+        let x = 1.0 / (t * t);
+        (1.0 / t)
+            * (1.0 - x + 3.0 * x * x - 15.0 * x.powi(3) + 105.0 * x.powi(4) - 945.0 * x.powi(5))
+    };
+    if z >= 8.0 {
+        return ln_phi(z) + asym(z).ln();
+    }
+    if z < -8.0 {
+        return (-ln_upper_ref(-z).exp()).ln_1p();
+    }
+    let n = 200_000;
+    let h = (8.0 - z) / n as f64;
+    let f = |t: f64| ln_phi(t).exp();
+    let mut s = f(z) + f(8.0);
+    for k in 1..n {
+        s += f(z + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    (s * h / 3.0 + (ln_phi(8.0) + asym(8.0).ln()).exp()).ln()
+}
+
+/// The CDF of the standard normal truncated to [a, b] at z, from [`ln_upper_ref`].
+fn truncated_cdf_ref(a: f64, b: f64, z: f64) -> f64 {
+    if b <= 0.0 {
+        // the lower tail, by symmetry
+        return 1.0 - truncated_cdf_ref(-b, -a, -z);
+    }
+    let (la, lb, lz) = (ln_upper_ref(a), ln_upper_ref(b), ln_upper_ref(z));
+    (1.0 - (lz - la).exp()) / (1.0 - (lb - la).exp())
+}
+
+/// Its mean: (φ(a) − φ(b)) / (Φ̄(a) − Φ̄(b)).
+fn truncated_mean_ref(a: f64, b: f64) -> f64 {
+    if b <= 0.0 {
+        return -truncated_mean_ref(-b, -a);
+    }
+    let ln_phi = |t: f64| -0.5 * t * t - 0.5 * (2.0 * std::f64::consts::PI).ln();
+    let (la, lb) = (ln_upper_ref(a), ln_upper_ref(b));
+    // scaled by φ(a) to keep 40σ tails finite
+    (1.0 - (ln_phi(b) - ln_phi(a)).exp()) / ((la - ln_phi(a)).exp() - (lb - ln_phi(a)).exp())
+}
+
+#[test]
+fn val_closed_form_truncated_normal_tails_to_40_sigma() {
+    for (mean, sd, min, max) in [
+        (20.0, 1.0, 30.0, 40.0),  // the reported case: 10σ … 20σ above the mean
+        (0.0, 1.0, 40.0, 41.0),   // 40σ out
+        (0.0, 1.0, -41.0, -40.0), // the lower tail
+        (5.0, 2.0, -75.0, -1.0),  // both bounds below the mean: 3σ … 40σ
+        (0.0, 2.0, 1.0, 3.0),     // a moderate one-sided interval
+        (0.0, 1.0, -1.0, 2.0),    // around the mean
+        (0.0, 1.0, 6.0, 1e3),     // a far upper bound
+    ] {
+        let d = Distribution::TruncatedNormal { mean, sd, min, max };
+        let (a, b) = ((min - mean) / sd, (max - mean) / sd);
+        // quantiles: the closed-form CDF of each quantile is its level
+        for u in [1e-6, 0.001, 0.1, 0.5, 0.9, 0.999, 1.0 - 1e-6] {
+            let x = d.quantile(u);
+            assert!((min..=max).contains(&x), "{x} outside {min} … {max}");
+            let f = truncated_cdf_ref(a, b, (x - mean) / sd);
+            assert!(
+                (f - u).abs() < 2e-6,
+                "[{min}, {max}] of N({mean}, {sd}²): quantile({u}) = {x} has CDF {f}"
+            );
+        }
+        // the mean over 20 000 equal strata against the closed form, and no pile-up on
+        // a bound
+        let n = 20_000;
+        let xs: Vec<f64> = (0..n)
+            .map(|k| d.quantile((k as f64 + 0.5) / n as f64))
+            .collect();
+        let m = xs.iter().sum::<f64>() / n as f64;
+        let want = mean + sd * truncated_mean_ref(a, b);
+        assert!(
+            (m - want).abs() < 1e-4 * sd,
+            "[{min}, {max}] of N({mean}, {sd}²): mean {m}, closed form {want}"
+        );
+        let on_bounds = xs.iter().filter(|&&x| x == min || x == max).count();
+        assert!(
+            on_bounds <= 2,
+            "{on_bounds} samples on a bound of [{min}, {max}]"
+        );
+    }
+}

@@ -592,7 +592,7 @@ pub fn diagnose(
     let mut warnings = Vec::new();
     for (c, ch) in obs.channels.iter().enumerate() {
         let signal = signal_rms(&obs, c, &base_pred[ch.sensor], noise[c], fit_part);
-        if noise[c] > 3.0 * signal && noise[c] > 1.0 {
+        if noise[c] > 2.0 * signal && noise[c] > 1.0 {
             warnings.push(format!(
                 "channel `{}`: its noise ({:.3} {u}) is far larger than its signal ({:.3} {u} rms, recorded and modelled): \
 the verdict rests on noise; check the channel's unit and scaling",
