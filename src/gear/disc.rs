@@ -46,17 +46,62 @@ pub struct DiscDisplacement {
 /// log-piecewise temperature between nodes. Exact for a linear strain law; 8-point
 /// Gauss–Legendre per piece otherwise.
 pub fn strain_moment_m2(radii_m: &[f64], temps_k: &[f64], law: &StrainLaw, t_ref_k: f64) -> f64 {
+    let mut segments = [Segment::default(); crate::gear::MAX_GEAR_NODES];
+    let n = radii_m.len().min(segments.len());
+    segments[..n - 1].copy_from_slice(&Segment::of(&radii_m[..n])[..n - 1]);
+    strain_moment_with(radii_m, &segments[..n - 1], temps_k, law, t_ref_k)
+}
+
+/// What [`strain_moment_m2`] computes from the radii alone, per segment (r_k, r_k+1):
+/// cached per gear, the same expressions, so the moment is the same to the last bit.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Segment {
+    /// ln(r2/r1)
+    pub l: f64,
+    /// r2² − r1²
+    pub area2: f64,
+    /// r2²/2 − (r2² − r1²)/(4 ln(r2/r1)): the weight of the temperature change across
+    /// the segment for a linear strain law.
+    pub linear: f64,
+}
+
+impl Segment {
+    /// The segments of `radii_m` (at most `MAX_GEAR_NODES` radii), in a fixed array.
+    pub fn of(radii_m: &[f64]) -> [Segment; crate::gear::MAX_GEAR_NODES] {
+        let mut out = [Segment::default(); crate::gear::MAX_GEAR_NODES];
+        for (k, w) in radii_m.windows(2).enumerate().take(out.len()) {
+            let (r1, r2) = (w[0], w[1]);
+            let l = (r2 / r1).ln();
+            let area2 = r2 * r2 - r1 * r1;
+            out[k] = Segment {
+                l,
+                area2,
+                linear: 0.5 * r2 * r2 - area2 / (4.0 * l),
+            };
+        }
+        out
+    }
+}
+
+/// [`strain_moment_m2`] with the segments' constants given (`segments[k]` for radii k,
+/// k + 1).
+pub fn strain_moment_with(
+    radii_m: &[f64],
+    segments: &[Segment],
+    temps_k: &[f64],
+    law: &StrainLaw,
+    t_ref_k: f64,
+) -> f64 {
     debug_assert_eq!(radii_m.len(), temps_k.len());
     let mut total = 0.0;
     for k in 0..radii_m.len() - 1 {
         let (r1, r2) = (radii_m[k], radii_m[k + 1]);
         let (t1, t2) = (temps_k[k], temps_k[k + 1]);
-        let l = (r2 / r1).ln();
-        let area2 = r2 * r2 - r1 * r1;
+        let Segment { l, area2, linear } = segments[k];
         total += match law.linear_alpha() {
             Some(alpha) => {
                 let (d1, d2) = (t1 - t_ref_k, t2 - t_ref_k);
-                alpha * (d1 * 0.5 * area2 + (d2 - d1) * (0.5 * r2 * r2 - area2 / (4.0 * l)))
+                alpha * (d1 * 0.5 * area2 + (d2 - d1) * linear)
             }
             None => {
                 let half = 0.5 * (r2 - r1);
@@ -86,9 +131,21 @@ pub fn base_circle_displacement(
     t_ref_k: f64,
     shaft_temp_k: f64,
 ) -> DiscDisplacement {
+    let i = strain_moment_m2(radii_m, temps_k, &material.strain, t_ref_k);
+    displacement_of_moment(radii_m, i, material, fit, t_ref_k, shaft_temp_k)
+}
+
+/// [`base_circle_displacement`] from the strain moment `i` = ∫ ε r dr over the disc.
+pub fn displacement_of_moment(
+    radii_m: &[f64],
+    i: f64,
+    material: &DiscMaterial,
+    fit: &BoreFit,
+    t_ref_k: f64,
+    shaft_temp_k: f64,
+) -> DiscDisplacement {
     let ra = radii_m[0];
     let rb = *radii_m.last().expect("nodes");
-    let i = strain_moment_m2(radii_m, temps_k, &material.strain, t_ref_k);
     let nu = material.poisson;
     let free_b = 2.0 * rb * i / (rb * rb - ra * ra);
     match fit {

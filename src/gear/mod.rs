@@ -13,7 +13,7 @@ pub mod paper;
 pub mod strain;
 
 use backlash::{FlankGeometry, MeshError};
-use disc::{BoreFit, DiscMaterial, base_circle_displacement};
+use disc::{BoreFit, DiscMaterial};
 use strain::StrainLaw;
 
 /// Most nodes along one gear's radius (checked by the scenario reader).
@@ -80,9 +80,26 @@ pub struct GearPair {
     pub coating: Coating,
     pub min_backlash_m: f64,
     pub gears: [Gear; 2],
-    /// Nominal backlash minus the paper model's value at ΔT = 0 (see `paper`),
-    /// computed on first use.
-    pub paper_offset_m: std::sync::OnceLock<f64>,
+    /// What does not change with temperature (base radii and thicknesses at assembly,
+    /// the paper model's constants), computed on first use. Pairs are built by
+    /// `spec::compile`, and rebuilt on any change, never edited in place.
+    pub constants: std::sync::OnceLock<PairConstants>,
+    /// Also evaluate the paper's model (eqs. 16–22) at every instant, for reports that
+    /// compare it; `margins`, which judges the exact backlash only, switches it off
+    /// (the paper's value is then NaN).
+    pub paper_model: bool,
+}
+
+/// A pair's temperature-independent quantities, each computed by the same expression
+/// as where it is used, so caching them changes no bit.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PairConstants {
+    /// Per gear, uncoated at assembly.
+    pub base_radius_m: [f64; 2],
+    pub base_thickness_m: [f64; 2],
+    /// Per gear, the segments of its radial profile (`disc::Segment`).
+    pub segments: [[disc::Segment; MAX_GEAR_NODES]; 2],
+    pub paper: paper::Constants,
 }
 
 /// One gear after deformation.
@@ -133,12 +150,33 @@ impl Gear {
 }
 
 impl GearPair {
+    /// The pair's constants (computed on first use).
+    pub fn constants(&self) -> &PairConstants {
+        self.constants.get_or_init(|| {
+            let (m, a0) = (self.module_m, self.pressure_angle_rad);
+            PairConstants {
+                base_radius_m: [
+                    self.gears[0].base_radius_m(m, a0),
+                    self.gears[1].base_radius_m(m, a0),
+                ],
+                base_thickness_m: [
+                    self.gears[0].base_thickness_m(m, a0),
+                    self.gears[1].base_thickness_m(m, a0),
+                ],
+                segments: [
+                    disc::Segment::of(&self.gears[0].node_radii_m),
+                    disc::Segment::of(&self.gears[1].node_radii_m),
+                ],
+                paper: paper::Constants::of(self),
+            }
+        })
+    }
+
     /// Gear `k` deformed by its radial profile at node temperatures `temps_k`.
     #[inline(always)]
     fn deform(&self, k: usize, temps_k: &[f64]) -> DeformedGear {
         let t_ref = self.reference_temperature_k;
-        let m = self.module_m;
-        let a0 = self.pressure_angle_rad;
+        let constants = self.constants();
         let mut profile = [0.0f64; MAX_GEAR_NODES];
         let g = &self.gears[k];
         let n = g.nodes.len();
@@ -147,9 +185,16 @@ impl GearPair {
             *t = temps_k[i];
         }
         let shaft_t = g.shaft_node.map_or(t_ref, |i| temps_k[i]);
+        let i = disc::strain_moment_with(
+            &g.node_radii_m,
+            &constants.segments[k][..n - 1],
+            temps,
+            &g.material.strain,
+            t_ref,
+        );
         let d =
-            base_circle_displacement(&g.node_radii_m, temps, &g.material, &g.fit, t_ref, shaft_t);
-        let rb0 = g.base_radius_m(m, a0);
+            disc::displacement_of_moment(&g.node_radii_m, i, &g.material, &g.fit, t_ref, shaft_t);
+        let rb0 = constants.base_radius_m[k];
         // The rim's hoop strain u/r at the base-circle node (whose radius may differ
         // from r_b by the rounding of the scenario file).
         let hoop = d.base_circle_m / g.node_radii_m[n - 1];
@@ -163,7 +208,7 @@ impl GearPair {
             base_displacement_m: rb0 * hoop,
             base_radius_m: rb,
             base_pitch_m: std::f64::consts::TAU * rb / g.teeth as f64,
-            base_thickness_m: g.base_thickness_m(m, a0) * scale + 2.0 * coating,
+            base_thickness_m: constants.base_thickness_m[k] * scale + 2.0 * coating,
             tip_radius_m: g.tip_radius_m * scale,
             coating_m: coating,
             bore_pressure_pa: d.bore_pressure_pa,
@@ -187,7 +232,11 @@ impl GearPair {
             tip_radius_m: deformed[k].tip_radius_m,
         };
         let b = backlash::backlash(&flank(0), &flank(1), a)?;
-        let paper = paper::backlash_m(self, temps_k, a);
+        let paper = if self.paper_model {
+            paper::backlash_m(self, temps_k, a)
+        } else {
+            f64::NAN
+        };
         Ok(MeshState {
             gears: deformed,
             center_distance_m: a,

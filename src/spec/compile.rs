@@ -1433,7 +1433,8 @@ fn gear_pair(
         coating,
         min_backlash_m: cx.non_negative(&p.key("min_backlash_um"), g.min_backlash_um)? * 1e-6,
         gears: [pinion, wheel],
-        paper_offset_m: Default::default(),
+        constants: Default::default(),
+        paper_model: true,
     };
     // The assembled pair must mesh with positive backlash.
     let nominal = pair.nominal_backlash_m();
