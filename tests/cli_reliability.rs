@@ -951,3 +951,29 @@ fn cli_reference_hinge_margins_is_shipped_and_passes() {
         stdout(&out)
     );
 }
+
+#[test]
+fn cli_bench_margins_compares_thread_counts() {
+    let dir = tmpdir("rel-bench");
+    std::fs::write(dir.join("m.toml"), margins_text()).unwrap();
+    let out = run_in(
+        &dir,
+        &[
+            "bench",
+            "--margins",
+            "m.toml",
+            "--samples",
+            "24",
+            "--margins-horizon",
+            "0.3",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let so = stdout(&out);
+    assert!(
+        so.contains("1 thread:") && so.contains("parallel efficiency"),
+        "{so}"
+    );
+    assert!(so.contains("yes, bit for bit"), "{so}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -50,6 +50,19 @@ pub struct BenchArgs {
     /// candidate.
     #[arg(long, value_name = "RECORDING", conflicts_with_all = ["scaling", "emit_network"])]
     diagnose: Option<PathBuf>,
+    /// Instead: the wall time of `margins` on the scenario (its [[dispersion]] entries)
+    /// with one thread and with every core, the parallel efficiency, and that both give
+    /// the same report. Horizon: --margins-horizon.
+    #[arg(long, conflicts_with_all = ["scaling", "diagnose", "emit_network"])]
+    margins: bool,
+    /// With --margins: samples per timed run, 1 … 1000000.
+    #[arg(long, default_value_t = 1000, requires = "margins",
+          value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+    samples: u64,
+    /// With --margins: `steady` (one period of each sample's periodic orbit), `mission`
+    /// (the scenario's run) or a number of orbits.
+    #[arg(long, default_value = "steady", requires = "margins")]
+    margins_horizon: String,
     /// Print a synthetic network as a scenario file (e.g. `lattice:2000`) and exit.
     #[arg(long, value_name = "SHAPE:NODES", conflicts_with = "scaling")]
     emit_network: Option<String>,
@@ -227,6 +240,9 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     }
     if let Some(rec) = &a.diagnose {
         return bench_diagnose(&a, rec);
+    }
+    if a.margins {
+        return bench_margins(&a);
     }
     if let Some(spec) = &a.emit_network {
         use orbitlash::thermal::synthetic::{network, to_toml};
@@ -501,6 +517,81 @@ pub fn bench(a: BenchArgs) -> Result<()> {
 }
 
 /// `bench --diagnose`: whole diagnoses of one recording.
+/// `bench --margins`: margins with 1 thread and with every core.
+fn bench_margins(a: &BenchArgs) -> Result<()> {
+    use orbitlash::dispersion::Sampling;
+    use orbitlash::margins::{Horizon, run_samples};
+    let loaded = load(a.scenario.as_deref())?;
+    if loaded.model.spec().dispersion.is_empty() {
+        anyhow::bail!("{} has no [[dispersion]]: nothing to sample", loaded.file);
+    }
+    let horizon = match a.margins_horizon.as_str() {
+        "steady" => {
+            orbitlash::steady::check_repeats(&loaded.scenario.thermal)
+                .map_err(|e| anyhow::anyhow!("--margins-horizon steady: {e}"))?;
+            Horizon::SteadyState
+        }
+        "mission" => Horizon::Mission,
+        other => Horizon::Orbits(super::orbits_arg(other).map_err(|e| {
+            anyhow::anyhow!(
+                "--margins-horizon {other}: steady, mission or a number of orbits ({e})"
+            )
+        })?),
+    };
+    super::estimate::margins(&loaded.scenario, horizon, a.samples, false)?;
+    let plan = super::plan(&loaded, Sampling::Random, a.samples, 1)?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let timed = |threads: usize| -> Result<(f64, Vec<orbitlash::margins::SampleOutcome>)> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()?;
+        let done = std::sync::atomic::AtomicU64::new(0);
+        let t0 = Instant::now();
+        let out = pool.install(|| run_samples(&loaded.model, &plan, 0..a.samples, horizon, &done));
+        Ok((t0.elapsed().as_secs_f64(), out))
+    };
+    let (t1, one) = timed(1)?;
+    let (tn, all) = timed(cores)?;
+    let same = one == all;
+    let mut o = String::new();
+    outln!(
+        o,
+        "margins on {}: {} samples, {}, {} dispersed numbers",
+        loaded.file,
+        a.samples,
+        match horizon {
+            Horizon::SteadyState => "one period of each sample's periodic orbit".to_string(),
+            Horizon::Mission => format!(
+                "the scenario's run ({:.1} days) each",
+                loaded.scenario.run.duration_s / 86400.0
+            ),
+            Horizon::Orbits(n) => format!("{} each", orbitlash::units::count(n, "orbit")),
+        },
+        plan.dispersions.len()
+    );
+    outln!(
+        o,
+        "  1 thread:   {t1:.3} s ({:.2} ms per sample)",
+        t1 * 1e3 / a.samples as f64
+    );
+    outln!(
+        o,
+        "  {cores} threads: {tn:.3} s ({:.2} ms per sample); parallel efficiency {:.0} %",
+        tn * 1e3 / a.samples as f64,
+        100.0 * t1 / (cores as f64 * tn)
+    );
+    outln!(
+        o,
+        "  the same samples for 1 and {cores} threads: {}",
+        if same { "yes, bit for bit" } else { "NO" }
+    );
+    print_out(&o)?;
+    if !same {
+        anyhow::bail!("the thread count changed a result");
+    }
+    Ok(())
+}
+
 fn bench_diagnose(a: &BenchArgs, recording: &std::path::Path) -> Result<()> {
     use orbitlash::diagnose::{Options, diagnose};
     let loaded = load(a.scenario.as_deref())?;

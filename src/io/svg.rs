@@ -21,10 +21,15 @@ fn esc(s: &str) -> String {
 }
 
 fn header(o: &mut String, title: &str) {
+    header_w(o, title, W);
+}
+
+/// The SVG header of a figure `w` wide.
+fn header_w(o: &mut String, title: &str, w: f64) {
     let _ = write!(
         o,
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{H}\" viewBox=\"0 0 {W} {H}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"{W}\" height=\"{H}\" fill=\"white\"/>\n<text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{}</text>\n",
-        W / 2.0,
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{H}\" viewBox=\"0 0 {w} {H}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"{w}\" height=\"{H}\" fill=\"white\"/>\n<text x=\"{}\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">{}</text>\n",
+        w / 2.0,
         esc(title)
     );
 }
@@ -201,9 +206,17 @@ pub fn distribution(
 /// Tornado chart: one horizontal bar per `(label, ρ)`, largest |ρ| on top, ρ in −1 … 1.
 pub fn tornado(title: &str, rows: &[(String, f64)]) -> String {
     let mut o = String::new();
-    header(&mut o, title);
-    let left = 330.0;
-    let (x0, x1) = (left, W - RIGHT);
+    // the labels (key path and ρ) fit left of the bars: about 6.8 px per character of
+    // the 12 px sans-serif, and the figure widens with them
+    let longest = rows
+        .iter()
+        .map(|(l, _)| l.chars().count() + 16)
+        .max()
+        .unwrap_or(0) as f64;
+    let left = (12.0 + 6.8 * longest).max(330.0);
+    let width = left + (W - RIGHT - 330.0) + RIGHT;
+    header_w(&mut o, title, width);
+    let (x0, x1) = (left, width - RIGHT);
     let mid = (x0 + x1) / 2.0;
     let row_h = ((H - TOP - BOTTOM) / rows.len().max(1) as f64).min(40.0);
     let _ = writeln!(
