@@ -85,7 +85,13 @@ fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error
 /// Runs sample `k` of `plan` on a copy of `nominal`. A sample whose values the model
 /// refuses, or whose run fails, is an outcome too (`invalid`), so that one bad
 /// combination of tolerances does not lose the other samples.
-pub fn run_sample(nominal: &Model, plan: &Plan, k: u64, horizon: Horizon) -> SampleOutcome {
+pub fn run_sample(
+    nominal: &Model,
+    plan: &Plan,
+    k: u64,
+    horizon: Horizon,
+    max_steps: u64,
+) -> SampleOutcome {
     let invalid = |values: Vec<f64>, why: String| SampleOutcome {
         index: k,
         values,
@@ -127,18 +133,27 @@ pub fn run_sample(nominal: &Model, plan: &Plan, k: u64, horizon: Horizon) -> Sam
                 &mut setup,
                 &state,
                 period,
-                crate::steady::SteadyOptions::default(),
+                crate::steady::SteadyOptions {
+                    max_steps,
+                    ..crate::steady::SteadyOptions::default()
+                },
             ) {
                 Ok(p) => state = p.state,
-                Err(e) => return invalid(values, format!("periodic orbit: {e}")),
+                Err(e) => return invalid(values, format!("periodic orbit: {}", chain(&e))),
             }
             state.t_s + period
         }
     };
     let mut mesh = MeshStats::last(env.mean_period_s());
-    let run: Result<RunStats, SimError> = setup.run(&mut state, t_end, &mut mesh, Stop::default());
+    let mut budget = crate::sim::StepBudget::new(max_steps);
+    let run: Result<RunStats, SimError> = setup.run(
+        &mut state,
+        t_end,
+        &mut (&mut mesh, &mut budget),
+        Stop::default(),
+    );
     if let Err(e) = run {
-        return invalid(values, format!("the run failed: {e}"));
+        return invalid(values, format!("the run failed: {}", chain(&e)));
     }
     let pairs = gears
         .iter()
@@ -168,19 +183,36 @@ pub fn run_sample(nominal: &Model, plan: &Plan, k: u64, horizon: Horizon) -> Sam
     }
 }
 
+/// An error and its causes, each once (a cause its message already quotes is left out).
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut out = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !out.ends_with(&text) {
+            out = format!("{out}: {text}");
+        }
+        cause = c.source();
+    }
+    out
+}
+
 /// Runs samples `range` in parallel; results in index order. `done` counts finished
-/// samples (for a progress bar).
+/// samples (for a progress bar). A sample that takes more than `max_steps` solver
+/// steps (its run and, at steady state, its periodic search each) is stopped and
+/// reported invalid (`u64::MAX`: no limit).
 pub fn run_samples(
     nominal: &Model,
     plan: &Plan,
     range: Range<u64>,
     horizon: Horizon,
+    max_steps: u64,
     done: &AtomicU64,
 ) -> Vec<SampleOutcome> {
     range
         .into_par_iter()
         .map(|k| {
-            let r = run_sample(nominal, plan, k, horizon);
+            let r = run_sample(nominal, plan, k, horizon, max_steps);
             done.fetch_add(1, Ordering::Relaxed);
             r
         })
@@ -551,6 +583,29 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
             "shard {i}/{n} is not a shard I/N with 0 ≤ I < N ≤ {MAX_SHARDS}"
         )));
     }
+    // Names reach file names (plots) and the terminal: the scenario's own rule; text
+    // shown (dispersion paths, reasons) holds no control characters.
+    let named = std::iter::once(("the scenario name", r.scenario.as_str())).chain(
+        r.pairs
+            .iter()
+            .map(|(p, _)| ("a gear pair name", p.as_str())),
+    );
+    for (what, name) in named {
+        crate::scenario::check_name(name).map_err(|m| bad(format!("{what} {m}")))?;
+    }
+    let texts = r
+        .dispersed
+        .iter()
+        .chain(s.outcomes.iter().filter_map(|o| o.invalid.as_ref()))
+        .chain(r.sets.iter().map(|(k, _)| k));
+    if texts.clone().any(|t| t.chars().any(char::is_control)) {
+        return Err(bad(
+            "a dispersion path, a --set key or a reason holds control characters".into(),
+        ));
+    }
+    if r.sets.iter().any(|(_, v)| !v.is_finite()) {
+        return Err(bad("a --set value is not a finite number".into()));
+    }
     let range = shard_range(r.samples, i, n);
     if (s.range.0, s.range.1) != (range.start, range.end) {
         return Err(bad(format!(
@@ -565,8 +620,14 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
             range.end - range.start
         )));
     }
-    if r.pairs.is_empty() || r.pairs.iter().any(|(_, a)| !a.is_finite()) {
-        return Err(bad("its run has no gear pair with a finite minimum".into()));
+    if r.pairs.is_empty()
+        || r.pairs
+            .iter()
+            .any(|(_, a)| !(0.0..=MAX_BACKLASH_UM).contains(a))
+    {
+        return Err(bad(format!(
+            "its run needs gear pairs with a minimum backlash within 0 … {MAX_BACKLASH_UM} µm"
+        )));
     }
     for (j, o) in s.outcomes.iter().enumerate() {
         let at = range.start + j as u64;
@@ -599,6 +660,21 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
             )));
         }
         for (p, (name, allowed)) in o.pairs.iter().zip(&r.pairs) {
+            // the sizes a run can give (a 1 m backlash, a run of 1e9 s); NaN: a lost mesh
+            let plausible = |v: f64, max: f64| v.is_nan() || v.abs() <= max;
+            if !(plausible(p.min_backlash_um, MAX_BACKLASH_UM)
+                && plausible(p.min_margin_um, 2.0 * MAX_BACKLASH_UM)
+                && p.t_min_s.abs() <= 2.0 * crate::scenario::MAX_DURATION_S
+                && (0.0..=360.0).contains(&p.orbit_phase_deg))
+            {
+                return Err(sample(format!(
+                    "{name}: a value no run can give (min_backlash_um {}, min_margin_um {}, t_min_s {}, orbit_phase_deg {})",
+                    crate::units::num(p.min_backlash_um),
+                    crate::units::num(p.min_margin_um),
+                    crate::units::num(p.t_min_s),
+                    crate::units::num(p.orbit_phase_deg)
+                )));
+            }
             let (violated, interference) =
                 PairOutcome::flags_from_values(p.min_backlash_um, *allowed);
             if p.violated != violated || p.interference != interference {
@@ -629,6 +705,9 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
     Ok(())
 }
 
+/// The largest backlash a shard may hold, µm (a metre: far beyond any gear).
+pub const MAX_BACKLASH_UM: f64 = 1e6;
+
 /// The most shards a run may be split into.
 pub const MAX_SHARDS: u64 = 100_000;
 
@@ -656,6 +735,8 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
             ("the sampling", r.sampling != id.sampling),
             ("the horizon", r.horizon != id.horizon),
             ("the dispersions", r.dispersed != id.dispersed),
+            ("the scenario's name", r.scenario != id.scenario),
+            ("the gear pairs", r.pairs != id.pairs),
         ]
         .into_iter()
         .find(|(_, d)| *d);
@@ -673,42 +754,50 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
             why: format!("the run has {} samples", id.samples),
         });
     }
-    let mut owner: Vec<Option<usize>> = vec![None; id.samples as usize];
-    let mut all: Vec<Option<SampleOutcome>> = vec![None; id.samples as usize];
-    for (k, (file, s)) in shards.iter().enumerate() {
-        for o in &s.outcomes {
-            let i = o.index as usize;
-            if i >= owner.len() {
-                return Err(MergeError::NotAShard {
-                    file: file.clone(),
-                    why: format!("sample {} beyond the run's {}", o.index, id.samples),
-                });
-            }
-            if let Some(j) = owner[i] {
-                return Err(MergeError::Duplicate {
-                    index: o.index,
-                    a: shards[j].0.clone(),
-                    b: file.clone(),
-                });
-            }
-            owner[i] = Some(k);
-            all[i] = Some(o.clone());
+    // Each shard holds exactly its range (checked): order the shards by range and
+    // walk them, so gaps and overlaps are found from the ranges, before anything is
+    // gathered (no slot per sample of a run that may not be there).
+    let mut order: Vec<usize> = (0..shards.len()).collect();
+    order.sort_by_key(|&k| (shards[k].1.range.0, shards[k].1.range.1));
+    let mut next = 0u64;
+    let mut missing = 0u64;
+    let mut first_gap: Option<(u64, u64)> = None;
+    let mut last_owner: Option<usize> = None;
+    for &k in &order {
+        let (a, b) = shards[k].1.range;
+        if a < next {
+            return Err(MergeError::Duplicate {
+                index: a,
+                a: shards[last_owner.expect("an earlier shard")].0.clone(),
+                b: shards[k].0.clone(),
+            });
+        }
+        if a > next {
+            missing += a - next;
+            first_gap.get_or_insert((next, a - 1));
+        }
+        next = next.max(b);
+        if b > a {
+            last_owner = Some(k);
         }
     }
-    if let Some(from) = all.iter().position(Option::is_none) {
-        let to = all[from..]
-            .iter()
-            .position(Option::is_some)
-            .map_or(all.len(), |p| from + p)
-            - 1;
+    if next < id.samples {
+        missing += id.samples - next;
+        first_gap.get_or_insert((next, id.samples - 1));
+    }
+    if let Some((from, to)) = first_gap {
         return Err(MergeError::Gap {
-            from: from as u64,
-            to: to as u64,
-            count: all.iter().filter(|o| o.is_none()).count() as u64,
+            from,
+            to,
+            count: missing,
             total: id.samples,
         });
     }
-    Ok((id.clone(), all.into_iter().flatten().collect()))
+    let all = order
+        .iter()
+        .flat_map(|&k| shards[k].1.outcomes.iter().cloned())
+        .collect();
+    Ok((id.clone(), all))
 }
 
 /// The report of `all` (every sample of the run, in index order). Statistics are over

@@ -165,6 +165,40 @@ pub trait Observer {
 
 impl Observer for () {}
 
+/// A budget of solver steps shared by the runs it watches: a run that would take more
+/// stops with an error (a thermostat chattering on a fast node, far more steps than
+/// the estimate said), instead of running without bound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepBudget {
+    pub left: u64,
+    pub total: u64,
+}
+
+impl StepBudget {
+    pub fn new(total: u64) -> StepBudget {
+        StepBudget { left: total, total }
+    }
+
+    /// No limit.
+    pub fn unlimited() -> StepBudget {
+        StepBudget::new(u64::MAX)
+    }
+}
+
+impl Observer for StepBudget {
+    fn on_step(&mut self, _: &StepView<'_>) -> ObserverResult {
+        if self.left == 0 {
+            return Err(format!(
+                "more than {} solver steps, its budget (far more than the estimate): a thermostat switching many times a minute?",
+                self.total
+            )
+            .into());
+        }
+        self.left -= 1;
+        Ok(())
+    }
+}
+
 impl<O: Observer + ?Sized> Observer for &mut O {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
         (**self).on_start(r)

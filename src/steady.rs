@@ -34,6 +34,8 @@ pub struct SteadyOptions {
     pub max_orbits: u64,
     /// Above this many nodes, march only (a dense monodromy costs one orbit per node).
     pub max_newton_nodes: usize,
+    /// Most solver steps of the whole search (a chattering thermostat); u64::MAX: none.
+    pub max_steps: u64,
 }
 
 impl Default for SteadyOptions {
@@ -45,6 +47,7 @@ impl Default for SteadyOptions {
             max_newton_iterations: 8,
             max_orbits: 20_000,
             max_newton_nodes: 200,
+            max_steps: u64::MAX,
         }
     }
 }
@@ -98,10 +101,11 @@ fn one_orbit(
     period: f64,
     x: &[f64],
     heaters: &[bool],
+    budget: &mut crate::sim::StepBudget,
 ) -> Result<(Vec<f64>, Vec<bool>), SimError> {
     let mut s = setup.state_at(t0, x.to_vec());
     s.heaters_on.copy_from_slice(heaters);
-    setup.run(&mut s, t0 + period, &mut (), Stop::default())?;
+    setup.run(&mut s, t0 + period, budget, Stop::default())?;
     Ok((s.temperatures_k, s.heaters_on))
 }
 
@@ -120,6 +124,7 @@ pub fn periodic_orbit(
     opts: SteadyOptions,
 ) -> Result<Periodic, SteadyError> {
     check_repeats(setup.model())?;
+    let mut budget = crate::sim::StepBudget::new(opts.max_steps);
     let t0 = start.t_s;
     let mut x = start.temperatures_k.clone();
     let mut heaters = start.heaters_on.clone();
@@ -128,7 +133,7 @@ pub fn periodic_orbit(
     // warm-up: march towards the orbit
     let mut moves = Vec::new();
     for _ in 0..opts.warmup_orbits.max(2) {
-        let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;
+        let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
         moves.push(max_diff(&y, &x));
         x = y;
@@ -152,7 +157,7 @@ pub fn periodic_orbit(
     if newton && n <= opts.max_newton_nodes && last_move > opts.tolerance_k {
         let mut best = (last_move, x.clone(), heaters.clone());
         for _ in 0..opts.max_newton_iterations {
-            let (fx, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;
+            let (fx, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
             orbits += 1;
             let r = max_diff(&fx, &x);
             if r <= opts.tolerance_k {
@@ -176,7 +181,7 @@ pub fn periodic_orbit(
             for c in 0..n {
                 let mut xp = x.clone();
                 xp[c] += dx;
-                let (fp, _) = one_orbit(setup, t0, period_s, &xp, &heaters)?;
+                let (fp, _) = one_orbit(setup, t0, period_s, &xp, &heaters, &mut budget)?;
                 orbits += 1;
                 for rrow in 0..n {
                     j[(rrow, c)] = (fp[rrow] - fx[rrow]) / dx;
@@ -200,7 +205,7 @@ pub fn periodic_orbit(
     }
     // marching
     loop {
-        let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters)?;
+        let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
         let r = max_diff(&y, &x);
         x = y;

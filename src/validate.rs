@@ -406,6 +406,9 @@ impl Scenario {
         {
             return Err(bad("description", "holds control characters"));
         }
+        if self.description.chars().count() > crate::spec::compile::MAX_DESCRIPTION_LEN {
+            return Err(bad("description", "is too long"));
+        }
         Ok(())
     }
 

@@ -438,12 +438,10 @@ fn edit_shard(dir: &Path, name: &str, f: impl Fn(&mut serde_json::Value)) {
 fn cli_merge_trusts_no_shard() {
     let dir = tmpdir("rel-merge");
     shards(&dir);
-    let p = |v: &mut serde_json::Value| v["outcomes"][3]["pairs"][0].clone();
     // a smallest backlash of -50 µm with its flags left false: refused, naming it
     edit_shard(&dir, "bad-flags.json", |v| {
         v["outcomes"][3]["pairs"][0]["min_backlash_um"] = (-50.0).into();
     });
-    let _ = p;
     refused_in(
         &dir,
         "flags",
@@ -472,12 +470,30 @@ fn cli_merge_trusts_no_shard() {
             "samples u64::MAX",
             Box::new(|v: &mut serde_json::Value| v["run"]["samples"] = u64::MAX.into())
                 as Box<dyn Fn(&mut serde_json::Value)>,
-            "samples",
+            "18446744073709551615 samples, outside 1 … 10000000",
         ),
         (
             "samples 1e12",
             Box::new(|v: &mut serde_json::Value| v["run"]["samples"] = 1_000_000_000_000u64.into()),
-            "samples",
+            "1000000000000 samples, outside",
+        ),
+        (
+            "a pair that leaves the plots folder",
+            Box::new(|v: &mut serde_json::Value| v["run"]["pairs"][0][0] = "../escaped".into()),
+            "gear pair name",
+        ),
+        (
+            "an escape in the scenario name",
+            Box::new(|v: &mut serde_json::Value| v["run"]["scenario"] = "a\u{1b}[31mb".into()),
+            "scenario name",
+        ),
+        (
+            "a 300-digit backlash",
+            Box::new(|v: &mut serde_json::Value| {
+                v["outcomes"][2]["pairs"][0]["min_backlash_um"] = 1e300.into();
+                v["outcomes"][2]["pairs"][0]["min_margin_um"] = 1e300.into();
+            }),
+            "a value no run can give",
         ),
         (
             "an outcome missing",
@@ -670,12 +686,15 @@ fn cli_costs_are_estimated_before_anything_runs() {
         &["run", "c.toml", "--steady-state", "--no-log", "--quiet"],
         &["periodic search would take", "--force"],
     );
+    let chatter_m = std::fs::read_to_string(dir.join("c.toml")).unwrap()
+        + "\n[[dispersion]]\npath = \"environment.beta_deg\"\ndistribution = \"uniform\"\nmin = 10.0\nmax = 30.0\n";
+    std::fs::write(dir.join("cm.toml"), chatter_m).unwrap();
     refused_in(
         &dir,
         "margins steady chatter",
         &[
             "margins",
-            "c.toml",
+            "cm.toml",
             "--samples",
             "60",
             "--seed",
@@ -683,7 +702,43 @@ fn cli_costs_are_estimated_before_anything_runs() {
             "--steady-state",
             "--quiet",
         ],
-        &["c.toml has no [[dispersion]]"],
+        &["each sample would take", "--force"],
+    );
+    // a thermostat that chatters only in some samples: those are stopped at their step
+    // budget and reported, and the run ends
+    let dispersed = reference_text()
+        + "\n[[heater]]\nname = \"h\"\nnode = \"gear1.r0\"\npower_w = 50.0\non_k = 293.0\noff_k = 300.0\n\n[[dispersion]]\npath = \"heater.h.off_k\"\ndistribution = \"cases\"\nvalues = [300.0, 293.001]\n";
+    std::fs::write(dir.join("cd.toml"), dispersed).unwrap();
+    let out = run_in(
+        &dir,
+        &[
+            "margins",
+            "cd.toml",
+            "--samples",
+            "8",
+            "--seed",
+            "2",
+            "--orbits",
+            "1",
+            "--quiet",
+            "--json",
+            "cd.json",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("cd.json")).unwrap()).unwrap();
+    let invalid = r["invalid"].as_array().unwrap();
+    assert!(
+        !invalid.is_empty() && r["valid_samples"].as_u64().unwrap() < 8,
+        "{r}"
+    );
+    assert!(
+        invalid[0]["reason"]
+            .as_str()
+            .unwrap()
+            .contains("solver steps, its budget"),
+        "{invalid:?}"
     );
     // a dry run checks outputs and cost, and stops before the periodic search
     let out = run_in(
@@ -719,6 +774,18 @@ fn cli_costs_are_estimated_before_anything_runs() {
         "ms",
         &["diagnose", "m.toml", "--recording", "ms.csv", "--quiet"],
         &["ms.csv", "milliseconds"],
+    );
+    // milliseconds at 1 Hz: steps of 1000 "s"
+    let mut hz = String::from("time_s,housing_c\n");
+    for k in 0..2000 {
+        hz += &format!("{},{:.2}\n", k * 1000, 10.0 * ((k as f64) / 300.0).sin());
+    }
+    std::fs::write(dir.join("hz.csv"), hz).unwrap();
+    refused_in(
+        &dir,
+        "ms at 1 Hz",
+        &["diagnose", "m.toml", "--recording", "hz.csv", "--quiet"],
+        &["hz.csv", "steps by 1000 s", "milliseconds"],
     );
     let last = text.lines().last().unwrap();
     std::fs::write(
@@ -975,5 +1042,190 @@ fn cli_bench_margins_compares_thread_counts() {
         "{so}"
     );
     assert!(so.contains("yes, bit for bit"), "{so}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// Review fixes: merge and gear pairs, outputs where folders go, --set in corrected.toml
+// and check, replay indices.
+#[test]
+fn cli_merge_outputs_and_sets_review_cases() {
+    let dir = tmpdir("rel-review");
+    shards(&dir);
+    // a shard whose run has another gear pair: another run, not a panic or a lost pair
+    edit_shard(&dir, "two-pairs.json", |v| {
+        let allowed = v["run"]["pairs"][0][1].clone();
+        v["run"]["pairs"]
+            .as_array_mut()
+            .unwrap()
+            .push(serde_json::json!(["mesh2", allowed]));
+        for o in v["outcomes"].as_array_mut().unwrap() {
+            let p = o["pairs"][0].clone();
+            o["pairs"].as_array_mut().unwrap().push(p);
+        }
+    });
+    std::fs::create_dir(dir.join("plots")).unwrap();
+    for order in [["two-pairs.json", "s1.json"], ["s1.json", "two-pairs.json"]] {
+        refused_in(
+            &dir,
+            "pairs differ",
+            &["merge", order[0], order[1], "--plots", "plots"],
+            &["from another run", "the gear pairs differs"],
+        );
+    }
+    // --csv with --shard is refused; merge writes the CSV the unsharded run writes
+    refused_in(
+        &dir,
+        "shard csv",
+        &[
+            "margins",
+            "m.toml",
+            "--samples",
+            "60",
+            "--seed",
+            "4",
+            "--orbits",
+            "0.5",
+            "--quiet",
+            "--shard",
+            "0/2",
+            "--json",
+            "x.json",
+            "--csv",
+            "x.csv",
+        ],
+        &["--csv with --shard", "orbitlash merge"],
+    );
+    let out = run_in(
+        &dir,
+        &["merge", "s0.json", "s1.json", "--csv", "merged.csv"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let out = run_in(
+        &dir,
+        &[
+            "margins",
+            "m.toml",
+            "--samples",
+            "60",
+            "--seed",
+            "4",
+            "--orbits",
+            "0.5",
+            "--quiet",
+            "--csv",
+            "whole.csv",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(
+        std::fs::read(dir.join("merged.csv")).unwrap(),
+        std::fs::read(dir.join("whole.csv")).unwrap()
+    );
+    // a replay index beyond any run is refused, naming --sample
+    refused_in(
+        &dir,
+        "huge sample",
+        &[
+            "run",
+            "m.toml",
+            "--no-log",
+            "--sample",
+            "18446744073709551615",
+            "--seed",
+            "1",
+        ],
+        &["--sample 18446744073709551615", "at most 10000000 samples"],
+    );
+    // `check` samples nothing: a --set on a dispersed number is the value checked
+    let out = run_in(
+        &dir,
+        &["check", "m.toml", "--set", "environment.beta_deg=60"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // a named output where --out is to make its folder; the default log folder
+    let rec = example("heater-housing.csv");
+    let rec = rec.to_str().unwrap();
+    refused_in(
+        &dir,
+        "json = out folder",
+        &[
+            "diagnose",
+            "m.toml",
+            "--recording",
+            rec,
+            "--quiet",
+            "--json",
+            "newE",
+            "--out",
+            "newE",
+        ],
+        &["newE", "--json"],
+    );
+    assert!(!dir.join("newE").exists());
+    let fresh = tmpdir("rel-review-logs");
+    std::fs::write(fresh.join("m.toml"), margins_text()).unwrap();
+    refused_in(
+        &fresh,
+        "csv = logs",
+        &["run", "m.toml", "--csv", "logs"],
+        &["logs", "--csv", "folder"],
+    );
+    assert!(!fresh.join("logs").exists());
+    // corrected.toml is the diagnosed model: its --set values are written in
+    let out = run_in(
+        &dir,
+        &[
+            "diagnose",
+            "m.toml",
+            "--recording",
+            rec,
+            "--quiet",
+            "--set",
+            "conductor.housing-bus.conductance_w_per_k=0.031",
+            "--out",
+            "D",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = std::fs::read_to_string(dir.join("D/corrected.toml")).unwrap();
+    assert!(
+        text.contains("# --set conductor.housing-bus.conductance_w_per_k=0.031"),
+        "{text}"
+    );
+    assert!(
+        text.contains("conductance_w_per_k = 0.031"),
+        "the --set value is not in the file"
+    );
+    // a scenario that writes its heaters inline keeps them inline, the finding added
+    let text = format!(
+        "heater = [{{ name = \"idle\", node = \"motor\", power_w = 0.5, on_k = 150.0, off_k = 151.0 }}]\n{}",
+        reference_text()
+    );
+    std::fs::write(dir.join("inline.toml"), text).unwrap();
+    let out = run_in(
+        &dir,
+        &[
+            "diagnose",
+            "inline.toml",
+            "--recording",
+            rec,
+            "--quiet",
+            "--out",
+            "I",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = std::fs::read_to_string(dir.join("I/corrected.toml")).unwrap();
+    let first = text
+        .lines()
+        .find(|l| l.starts_with("heater = ["))
+        .expect("still inline");
+    assert!(
+        first.contains("idle") && first.contains("diagnose.heater.housing"),
+        "{first}"
+    );
+    let out = run_in(&dir, &["run", "I/corrected.toml", "--no-log", "--quiet"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let _ = std::fs::remove_dir_all(&fresh);
     let _ = std::fs::remove_dir_all(&dir);
 }

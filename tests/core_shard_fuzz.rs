@@ -26,7 +26,14 @@ fn shard_texts() -> [String; 2] {
     let id = RunIdentity::new(&text, &[], model.scenario(), &plan, horizon);
     std::array::from_fn(|i| {
         let range = shard_range(24, i as u64, 2);
-        let outcomes = run_samples(&model, &plan, range.clone(), horizon, &AtomicU64::new(0));
+        let outcomes = run_samples(
+            &model,
+            &plan,
+            range.clone(),
+            horizon,
+            u64::MAX,
+            &AtomicU64::new(0),
+        );
         serde_json::to_string(&Shard {
             format: SHARD_FORMAT.into(),
             run: id.clone(),
@@ -55,8 +62,74 @@ const EXTREMES: [&str; 14] = [
     "[]",
 ];
 
+/// A mutation at the level of the JSON: a shard that parses and may be consistent in
+/// itself but differs from its partner (other pairs, names, minimums, sizes).
+fn mutate_json(text: &str, rng: &mut ChaCha8Rng) -> String {
+    let mut v: serde_json::Value = serde_json::from_str(text).unwrap();
+    let pick = |rng: &mut ChaCha8Rng, n: usize| (rng.next_u64() % n.max(1) as u64) as usize;
+    let outcomes = v["outcomes"].as_array().map_or(0, Vec::len);
+    match rng.next_u64() % 9 {
+        0 => {
+            // another gear pair, in the header and in every outcome
+            v["run"]["pairs"]
+                .as_array_mut()
+                .unwrap()
+                .push(serde_json::json!(["mesh2", 5.0]));
+            for o in v["outcomes"].as_array_mut().unwrap() {
+                if let Some(p) = o["pairs"].as_array_mut()
+                    && let Some(first) = p.first().cloned()
+                {
+                    p.push(first);
+                }
+            }
+        }
+        1 => v["run"]["pairs"] = serde_json::json!([]),
+        2 => {
+            let names = [
+                "../x", "", "a b", "a\u{7}b", "mesh", "m/esh", "..", "ok-name",
+            ];
+            v["run"]["pairs"][0][0] = names[pick(rng, names.len())].into();
+        }
+        3 => {
+            let names = ["../x", "", "r\u{1b}[0m", "other", "reference-hinge"];
+            v["run"]["scenario"] = names[pick(rng, names.len())].into();
+        }
+        4 => v["run"]["pairs"][0][1] = [-1.0, 0.0, 1e7, 5.0, 20.0][pick(rng, 5)].into(),
+        5 => {
+            let k = pick(rng, outcomes);
+            v["outcomes"][k]["invalid"] = ["bad", "x\u{1b}y"][pick(rng, 2)].into();
+            v["outcomes"][k]["pairs"] = serde_json::json!([]);
+        }
+        6 => {
+            v["run"]["dispersed"]
+                .as_array_mut()
+                .unwrap()
+                .push("extra".into());
+        }
+        7 => {
+            v["run"]["sets"] = serde_json::json!([["node.housing.capacitance_j_per_k", 130.0]]);
+        }
+        _ => {
+            let k = pick(rng, outcomes);
+            let field = [
+                "min_backlash_um",
+                "min_margin_um",
+                "t_min_s",
+                "orbit_phase_deg",
+                "orbit_number",
+            ][pick(rng, 5)];
+            v["outcomes"][k]["pairs"][0][field] =
+                [-1e300, -50.0, 0.0, 1e12, 400.0][pick(rng, 5)].into();
+        }
+    }
+    v.to_string()
+}
+
 /// One mutation of `text`.
 fn mutate(text: &str, rng: &mut ChaCha8Rng) -> String {
+    if rng.next_u64().is_multiple_of(4) {
+        return mutate_json(text, rng);
+    }
     let mut b = text.as_bytes().to_vec();
     let n = b.len();
     let pick = |rng: &mut ChaCha8Rng, n: usize| (rng.next_u64() % n.max(1) as u64) as usize;
@@ -117,12 +190,25 @@ fn core_shard_reader_survives_mutation_fuzz() {
 
     let mut rng = ChaCha8Rng::seed_from_u64(16);
     let (mut read, mut refused) = (0, 0);
+    let sa = read_shard(&a, "a.json").unwrap();
     for case in 0..20_000 {
-        let m = mutate(&a, &mut rng);
-        let sb = sb.clone();
+        // either shard mutated, merged in either order
+        let second = rng.next_u64().is_multiple_of(2);
+        let m = mutate(if second { &b } else { &a }, &mut rng);
+        let other = if second { sa.clone() } else { sb.clone() };
+        let flip = rng.next_u64().is_multiple_of(2);
         let r = std::panic::catch_unwind(move || match read_shard(&m, "m.json") {
             Ok(s) => {
-                if let Ok((id, all)) = merge(&[("m.json".into(), s), ("b.json".into(), sb)]) {
+                let mut pair = vec![("m.json".to_string(), s), ("o.json".to_string(), other)];
+                if flip {
+                    pair.reverse();
+                }
+                if let Ok((id, all)) = merge(&pair) {
+                    // what merged is one run: every outcome has a result per pair of it
+                    assert!(
+                        all.iter()
+                            .all(|o| o.invalid.is_some() || o.pairs.len() == id.pairs.len())
+                    );
                     let _ = report(&id, &all);
                 }
                 true

@@ -83,7 +83,7 @@ fn core_samples_depend_only_on_seed_and_index() {
             .build()
             .unwrap();
         let done = AtomicU64::new(0);
-        pool.install(|| run_samples(&model, &plan, range, Horizon::Orbits(0.6), &done))
+        pool.install(|| run_samples(&model, &plan, range, Horizon::Orbits(0.6), u64::MAX, &done))
     };
     let one = run(1, 0..8);
     let two = run(2, 0..8);

@@ -193,8 +193,8 @@ fn val_second_method_margin_samples_on_the_periodic_orbit() {
         Model::new(orbitlash::io::scenario_toml::parse_spec(&text, "s.toml").unwrap()).unwrap();
     let plan = Plan::new(&model, &model.spec().dispersion, Sampling::Random, 4, 3).unwrap();
     for k in 0..4 {
-        let s = run_sample(&model, &plan, k, Horizon::SteadyState);
-        let m = run_sample(&model, &plan, k, Horizon::Orbits(40.0));
+        let s = run_sample(&model, &plan, k, Horizon::SteadyState, u64::MAX);
+        let m = run_sample(&model, &plan, k, Horizon::Orbits(40.0), u64::MAX);
         let (a, b) = (s.pairs[0].min_backlash_um, m.pairs[0].min_backlash_um);
         assert!(
             (a - b).abs() <= 0.01,

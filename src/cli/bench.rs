@@ -516,7 +516,6 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     print_out(&o)
 }
 
-/// `bench --diagnose`: whole diagnoses of one recording.
 /// `bench --margins`: margins with 1 thread and with every core.
 fn bench_margins(a: &BenchArgs) -> Result<()> {
     use orbitlash::dispersion::Sampling;
@@ -538,8 +537,14 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
             )
         })?),
     };
-    super::estimate::margins(&loaded.scenario, horizon, a.samples, false)?;
-    let plan = super::plan(&loaded, Sampling::Random, a.samples, 1)?;
+    let max_steps = super::estimate::margins(&loaded.scenario, horizon, a.samples, false)?;
+    let plan = super::plan(
+        &loaded,
+        Sampling::Random,
+        a.samples,
+        1,
+        super::SetsOnDispersed::Refused,
+    )?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let timed = |threads: usize| -> Result<(f64, Vec<orbitlash::margins::SampleOutcome>)> {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -547,12 +552,22 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
             .build()?;
         let done = std::sync::atomic::AtomicU64::new(0);
         let t0 = Instant::now();
-        let out = pool.install(|| run_samples(&loaded.model, &plan, 0..a.samples, horizon, &done));
+        let out = pool.install(|| {
+            run_samples(
+                &loaded.model,
+                &plan,
+                0..a.samples,
+                horizon,
+                max_steps,
+                &done,
+            )
+        });
         Ok((t0.elapsed().as_secs_f64(), out))
     };
     let (t1, one) = timed(1)?;
     let (tn, all) = timed(cores)?;
-    let same = one == all;
+    // bit for bit: compare the serialised outcomes (NaN = NaN, −0 ≠ 0)
+    let same = serde_json::to_string(&one)? == serde_json::to_string(&all)?;
     let mut o = String::new();
     outln!(
         o,
@@ -592,6 +607,7 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
+/// `bench --diagnose`: whole diagnoses of one recording.
 fn bench_diagnose(a: &BenchArgs, recording: &std::path::Path) -> Result<()> {
     use orbitlash::diagnose::{Options, diagnose};
     let loaded = load(a.scenario.as_deref())?;

@@ -25,7 +25,13 @@ pub fn check(a: CheckArgs) -> Result<()> {
     let mut o = String::new();
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
     // Dispersions are checked here too, before any margin run would start.
-    let plan = super::plan(&loaded, Sampling::Random, 1, 0)?;
+    let plan = super::plan(
+        &loaded,
+        Sampling::Random,
+        1,
+        0,
+        super::SetsOnDispersed::Allowed,
+    )?;
     let sc = &loaded.scenario;
     let env = &sc.thermal.environment;
     let net = &sc.thermal.network;

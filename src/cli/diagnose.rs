@@ -91,7 +91,9 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         }
     }
     let span_s = rec.time_s.last().copied().unwrap_or(0.0);
-    diagnose::check_time_base(&rec, &loaded.scenario)?;
+    // The recording against the model (values, time base, the held-out split), before
+    // the cost estimate: what cannot be judged is refused first.
+    diagnose::data::Observations::new(&rec, &loaded.scenario, a.holdout_orbits)?;
     super::estimate::diagnose(
         &loaded.scenario,
         span_s,
@@ -185,8 +187,14 @@ fn out_files(
     // The corrected scenario: the user's file edited (comments and spellings kept),
     // the accepted effects added as commented elements, its own name, and a run as long
     // as the recording.
-    let from = loaded.model.spec();
-    let mut to = d.corrected.as_ref().map_or(from, |m| m.spec()).clone();
+    // The file as the user wrote it (without the --set changes, which the corrected
+    // model carries and which are therefore written into it).
+    let from = &orbitlash::io::scenario_toml::parse_spec(&loaded.toml, &loaded.file)?;
+    let mut to = d
+        .corrected
+        .as_ref()
+        .map_or(loaded.model.spec(), |m| m.spec())
+        .clone();
     to.scenario.name = corrected_name(&from.scenario.name);
     to.run.orbits = None;
     to.run.duration_days = None;
@@ -204,6 +212,12 @@ fn out_files(
             orbitlash::units::exact(span_s)
         ),
     ];
+    for (k, v) in &loaded.sets {
+        header.push(format!(
+            "--set {k}={} of the diagnosed model is written in",
+            orbitlash::units::exact(*v)
+        ));
+    }
     for f in &d.findings {
         header.push(format!("added: {} on {}", f.effect, finding_target(f)));
     }

@@ -87,8 +87,11 @@ pub fn steady(sc: &Scenario, force: bool) -> Result<()> {
     )
 }
 
-/// `margins`: `samples` runs over `horizon`, spread over the cores.
-pub fn margins(sc: &Scenario, horizon: Horizon, samples: u64, force: bool) -> Result<()> {
+/// `margins`: `samples` runs over `horizon`, spread over the cores. Returns each
+/// sample's step budget: 20 × the nominal sample's estimate (and at least 1e5), so a
+/// sample whose dispersed values make a thermostat chatter stops and is reported
+/// instead of running without bound; none with `force`.
+pub fn margins(sc: &Scenario, horizon: Horizon, samples: u64, force: bool) -> Result<u64> {
     let per = match horizon {
         Horizon::Orbits(n) => run_cost(sc, n * sc.period_s()),
         Horizon::Mission => run_cost(sc, sc.run.duration_s),
@@ -116,7 +119,12 @@ pub fn margins(sc: &Scenario, horizon: Horizon, samples: u64, force: bool) -> Re
         MAX_TOTAL_STEPS,
         force,
         "run fewer samples, shard them over a cluster (--shard I/N), or shorten the horizon",
-    )
+    )?;
+    Ok(if force {
+        u64::MAX
+    } else {
+        (20.0 * per.steps).max(1e5).min(u64::MAX as f64) as u64
+    })
 }
 
 /// `diagnose`: about `runs` runs of the scenario over `span_s` of recording.

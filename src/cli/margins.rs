@@ -136,7 +136,13 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
             loaded.file
         );
     }
-    let plan = super::plan(&loaded, a.sampling.into(), a.samples, a.seed)?;
+    let plan = super::plan(
+        &loaded,
+        a.sampling.into(),
+        a.samples,
+        a.seed,
+        super::SetsOnDispersed::Refused,
+    )?;
     let horizon = match (a.orbits, a.steady_state) {
         (Some(n), _) => {
             // the bounds of `run --orbits`
@@ -157,10 +163,18 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         Some((i, n)) => shard_range(plan.samples, i, n),
         None => 0..plan.samples,
     };
-    super::estimate::margins(sc, horizon, range.end - range.start, a.force)?;
+    let max_steps = super::estimate::margins(sc, horizon, range.end - range.start, a.force)?;
     let id = RunIdentity::new(&loaded.toml, &loaded.sets, sc, &plan, horizon);
     let done = AtomicU64::new(0);
-    let outcomes = run_with_progress(&loaded.model, &plan, range.clone(), horizon, &done, a.quiet);
+    let outcomes = run_with_progress(
+        &loaded.model,
+        &plan,
+        range.clone(),
+        horizon,
+        max_steps,
+        &done,
+        a.quiet,
+    );
     if let Some((i, n)) = a.shard {
         let shard = Shard {
             format: SHARD_FORMAT.into(),
@@ -294,6 +308,7 @@ fn run_with_progress(
     plan: &Plan,
     range: std::ops::Range<u64>,
     horizon: Horizon,
+    max_steps: u64,
     done: &AtomicU64,
     quiet: bool,
 ) -> Vec<SampleOutcome> {
@@ -318,7 +333,7 @@ fn run_with_progress(
                 }
             });
         }
-        let r = run_samples(model, plan, range, horizon, done);
+        let r = run_samples(model, plan, range, horizon, max_steps, done);
         finished.store(true, Ordering::Relaxed);
         r
     });

@@ -202,14 +202,25 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
     })
 }
 
+/// What a plan's `--set` changes may touch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SetsOnDispersed {
+    /// Samples are drawn (`margins`, `run --sample`): a `--set` on a dispersed number
+    /// would be replaced in every sample, so it is refused.
+    Refused,
+    /// Nothing is sampled (`check`): a `--set` is the nominal value a user checks.
+    Allowed,
+}
+
 /// The margins plan of a loaded scenario: its `[[dispersion]]` entries checked (errors
-/// with the file's line), and no `--set` on a number they disperse (the dispersion
-/// would silently replace it in every sample).
+/// with the file's line), and (`SetsOnDispersed::Refused`) no `--set` on a number they
+/// disperse (the dispersion would silently replace it in every sample).
 pub fn plan(
     loaded: &Loaded,
     sampling: orbitlash::dispersion::Sampling,
     samples: u64,
     seed: u64,
+    sets: SetsOnDispersed,
 ) -> Result<orbitlash::dispersion::Plan> {
     use orbitlash::dispersion::{Plan, PlanError};
     let plan = Plan::new(
@@ -225,7 +236,12 @@ pub fn plan(
         }
         other => anyhow::Error::new(other),
     })?;
-    for (key, _) in &loaded.sets {
+    let checked = if sets == SetsOnDispersed::Refused {
+        &loaded.sets[..]
+    } else {
+        &[]
+    };
+    for (key, _) in checked {
         let id = loaded
             .model
             .param(key)

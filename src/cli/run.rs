@@ -728,6 +728,13 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
 fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> Result<String> {
     use orbitlash::dispersion::Sampling;
     let sampling: Sampling = a.sampling.into();
+    let max = orbitlash::dispersion::MAX_SAMPLES;
+    if k >= max {
+        anyhow::bail!(
+            "--sample {k}: a margins run has at most {max} samples, numbered 0 … {}",
+            max - 1
+        );
+    }
     let n = match (sampling, a.samples) {
         (_, Some(n)) => n,
         (Sampling::Random, None) => k + 1,
@@ -746,7 +753,7 @@ fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> 
             loaded.file
         );
     }
-    let plan = super::plan(loaded, sampling, n, seed)?;
+    let plan = super::plan(loaded, sampling, n, seed, super::SetsOnDispersed::Refused)?;
     let values = plan.apply(&mut loaded.model, k)?;
     loaded.scenario = loaded.model.scenario().clone();
     let mut line = format!("sample {k} of seed {seed}:");

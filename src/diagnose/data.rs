@@ -321,8 +321,10 @@ fn check_temperatures(
 }
 
 /// Refuses a recording whose time steps cannot resolve the orbit: a median spacing of
-/// more than a quarter of the period (eclipses would fall between samples). The usual
-/// cause is a time column in milliseconds (or another unit) instead of seconds.
+/// more than a twelfth of the period (fewer than about four samples per eclipse). The
+/// usual cause is a time column in milliseconds (or another unit) instead of seconds;
+/// this catches it for cadences up to about 2 Hz (faster ones come out as recordings
+/// of thousands of orbits, which the cost estimate bounds).
 pub fn check_time_base(rec: &Recording, sc: &Scenario) -> Result<(), DiagnoseError> {
     let period = sc.period_s();
     let last = rec.time_s.last().copied().unwrap_or(0.0);
@@ -339,9 +341,9 @@ pub fn check_time_base(rec: &Recording, sc: &Scenario) -> Result<(), DiagnoseErr
         return Ok(());
     }
     let step = median(&mut gaps);
-    if step > 0.25 * period {
+    if step > period / 12.0 {
         return Err(DiagnoseError::Recording(format!(
-            "{}: time_s steps by {} s (the median), more than a quarter of the orbit period ({:.1} s): \
+            "{}: time_s steps by {} s (the median), more than a twelfth of the orbit period ({:.1} s): \
 the samples cannot resolve sunlight and eclipse. Is the time column in milliseconds? It must be seconds from the scenario's t = 0",
             rec.file,
             crate::units::num(step),

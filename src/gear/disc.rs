@@ -46,10 +46,11 @@ pub struct DiscDisplacement {
 /// log-piecewise temperature between nodes. Exact for a linear strain law; 8-point
 /// Gauss–Legendre per piece otherwise.
 pub fn strain_moment_m2(radii_m: &[f64], temps_k: &[f64], law: &StrainLaw, t_ref_k: f64) -> f64 {
-    let mut segments = [Segment::default(); crate::gear::MAX_GEAR_NODES];
-    let n = radii_m.len().min(segments.len());
-    segments[..n - 1].copy_from_slice(&Segment::of(&radii_m[..n])[..n - 1]);
-    strain_moment_with(radii_m, &segments[..n - 1], temps_k, law, t_ref_k)
+    let segments: Vec<Segment> = radii_m
+        .windows(2)
+        .map(|w| Segment::between(w[0], w[1]))
+        .collect();
+    strain_moment_with(radii_m, &segments, temps_k, law, t_ref_k)
 }
 
 /// What [`strain_moment_m2`] computes from the radii alone, per segment (r_k, r_k+1):
@@ -70,16 +71,20 @@ impl Segment {
     pub fn of(radii_m: &[f64]) -> [Segment; crate::gear::MAX_GEAR_NODES] {
         let mut out = [Segment::default(); crate::gear::MAX_GEAR_NODES];
         for (k, w) in radii_m.windows(2).enumerate().take(out.len()) {
-            let (r1, r2) = (w[0], w[1]);
-            let l = (r2 / r1).ln();
-            let area2 = r2 * r2 - r1 * r1;
-            out[k] = Segment {
-                l,
-                area2,
-                linear: 0.5 * r2 * r2 - area2 / (4.0 * l),
-            };
+            out[k] = Segment::between(w[0], w[1]);
         }
         out
+    }
+
+    /// The segment from radius `r1` to `r2`.
+    pub fn between(r1: f64, r2: f64) -> Segment {
+        let l = (r2 / r1).ln();
+        let area2 = r2 * r2 - r1 * r1;
+        Segment {
+            l,
+            area2,
+            linear: 0.5 * r2 * r2 - area2 / (4.0 * l),
+        }
     }
 }
 

@@ -202,6 +202,19 @@ impl Outputs {
             check_output(path, &self.policy)?;
         }
         let r = resolved(path);
+        // a file where a planned folder is to be made, or inside a file's path
+        for d in &self.created {
+            let rd = resolved(d);
+            if rd == r || rd.starts_with(&r) {
+                return Err(OutputError::refused(
+                    path,
+                    format!(
+                        "{label} would be a file where the folder {} is to be made",
+                        d.display()
+                    ),
+                ));
+            }
+        }
         for p in &self.planned {
             if p.resolved == r || same_file(&p.path, path) {
                 return Err(OutputError::refused(
@@ -241,6 +254,18 @@ impl Outputs {
                     _ => Path::new("."),
                 };
                 if parent.is_dir() {
+                    let rd = resolved(dir);
+                    if let Some(p) = self
+                        .planned
+                        .iter()
+                        .find(|p| p.resolved == rd || rd.starts_with(&p.resolved))
+                    {
+                        return Err(refuse(format!(
+                            "{} would write a file there ({})",
+                            p.label,
+                            p.path.display()
+                        )));
+                    }
                     self.created.push(dir.to_path_buf());
                     Ok(())
                 } else {

@@ -439,7 +439,9 @@ fn edit_value(v: &toml::Value) -> Result<toml_edit::Value, EditError> {
     match new_item(v)? {
         toml_edit::Item::Value(v) => Ok(v),
         toml_edit::Item::Table(t) => Ok(toml_edit::Value::InlineTable(t.into_inline_table())),
-        _ => Err(EditError("an array of tables where a value was".into())),
+        // the user wrote the array inline (`heater = [{ … }]`): it stays inline
+        toml_edit::Item::ArrayOfTables(aot) => Ok(toml_edit::Value::Array(aot.into_array())),
+        _ => Err(EditError("a value TOML cannot hold inline".into())),
     }
 }
 
