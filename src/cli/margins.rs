@@ -122,13 +122,12 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     }
     // Every output, checked against the inputs and each other before anything runs.
     let mut outs = Outputs::new(OutputPolicy::reading(&loaded.inputs()));
-    plan_outputs(
-        &mut outs,
-        a.json.as_deref(),
-        a.csv.as_deref(),
-        a.plots.as_deref(),
-        sc.gears.iter().map(|g| g.name.as_str()),
-    )?;
+    let files = ReportFiles {
+        json: a.json.as_deref(),
+        csv: a.csv.as_deref(),
+        plots: a.plots.as_deref(),
+    };
+    files.plan(&mut outs, sc.gears.iter().map(|g| g.name.as_str()))?;
     let spec = loaded.model.spec();
     if spec.dispersion.is_empty() {
         bail!(
@@ -205,40 +204,37 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         ))?;
         return Ok(Outcome::Pass);
     }
-    finish(
-        &outs,
-        &id,
-        &outcomes,
-        a.json.as_deref(),
-        a.csv.as_deref(),
-        a.plots.as_deref(),
-    )
+    finish(&outs, &id, &outcomes, files)
 }
 
-/// Plans the outputs of `margins` or `merge`: the report, the samples and the plots of
-/// each gear pair (`<pair>-min-backlash.svg`, `<pair>-sensitivity.svg`).
-fn plan_outputs<'a>(
-    outs: &mut Outputs,
-    json: Option<&Path>,
-    csv: Option<&Path>,
-    plots: Option<&Path>,
-    pairs: impl Iterator<Item = &'a str>,
-) -> Result<()> {
-    if let Some(p) = json {
-        outs.file("--json", p)?;
-    }
-    if let Some(p) = csv {
-        outs.file("--csv", p)?;
-    }
-    if let Some(dir) = plots {
-        outs.folder("--plots", dir, false)?;
-        for pair in pairs {
-            for name in plot_names(pair) {
-                outs.file(&format!("--plots ({name})"), &dir.join(name))?;
+/// Where `margins` or `merge` write the report, the samples and the plots.
+#[derive(Clone, Copy)]
+struct ReportFiles<'a> {
+    json: Option<&'a Path>,
+    csv: Option<&'a Path>,
+    plots: Option<&'a Path>,
+}
+
+impl ReportFiles<'_> {
+    /// Plans them: the report, the samples and the plots of each gear pair
+    /// (`<pair>-min-backlash.svg`, `<pair>-sensitivity.svg`).
+    fn plan<'p>(&self, outs: &mut Outputs, pairs: impl Iterator<Item = &'p str>) -> Result<()> {
+        if let Some(p) = self.json {
+            outs.file("--json", p)?;
+        }
+        if let Some(p) = self.csv {
+            outs.file("--csv", p)?;
+        }
+        if let Some(dir) = self.plots {
+            outs.folder("--plots", dir, false)?;
+            for pair in pairs {
+                for name in plot_names(pair) {
+                    outs.file(&format!("--plots ({name})"), &dir.join(name))?;
+                }
             }
         }
+        Ok(())
     }
-    Ok(())
 }
 
 fn plot_names(pair: &str) -> [String; 2] {
@@ -253,10 +249,9 @@ fn finish(
     outs: &Outputs,
     id: &RunIdentity,
     outcomes: &[SampleOutcome],
-    json: Option<&Path>,
-    csv: Option<&Path>,
-    plots: Option<&Path>,
+    files_to: ReportFiles<'_>,
 ) -> Result<Outcome> {
+    let ReportFiles { json, csv, plots } = files_to;
     let Some(rep) = report(id, outcomes) else {
         let first = outcomes
             .iter()
@@ -629,19 +624,11 @@ pub fn merge_shards(a: MergeArgs) -> Result<Outcome> {
     }
     let (id, outcomes) = merge(&shards)?;
     let mut outs = Outputs::new(OutputPolicy::reading(&inputs));
-    plan_outputs(
-        &mut outs,
-        a.json.as_deref(),
-        a.csv.as_deref(),
-        a.plots.as_deref(),
-        id.pairs.iter().map(|(n, _)| n.as_str()),
-    )?;
-    finish(
-        &outs,
-        &id,
-        &outcomes,
-        a.json.as_deref(),
-        a.csv.as_deref(),
-        a.plots.as_deref(),
-    )
+    let files = ReportFiles {
+        json: a.json.as_deref(),
+        csv: a.csv.as_deref(),
+        plots: a.plots.as_deref(),
+    };
+    files.plan(&mut outs, id.pairs.iter().map(|(n, _)| n.as_str()))?;
+    finish(&outs, &id, &outcomes, files)
 }
