@@ -45,6 +45,22 @@
 //! reads or writes files; `cli` maps commands to the pipeline. See
 //! `docs/ARCHITECTURE.md` for the module map and invariants.
 
+/// An error and its causes on one line, each once (a cause its message already quotes
+/// is left out): how library errors that end up as text (a margins sample's reason, a
+/// failed diagnose candidate) are written.
+pub(crate) fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut out = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let text = c.to_string();
+        if !out.ends_with(&text) {
+            out = format!("{out}: {text}");
+        }
+        cause = c.source();
+    }
+    out
+}
+
 pub mod constants;
 pub mod diagnose;
 pub mod dispersion;

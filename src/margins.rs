@@ -139,7 +139,12 @@ pub fn run_sample(
                 },
             ) {
                 Ok(p) => state = p.state,
-                Err(e) => return invalid(values, format!("periodic orbit: {}", chain(&e))),
+                Err(e) => {
+                    return invalid(
+                        values,
+                        format!("periodic orbit: {}", crate::error_chain(&e)),
+                    );
+                }
             }
             state.t_s + period
         }
@@ -153,7 +158,10 @@ pub fn run_sample(
         Stop::default(),
     );
     if let Err(e) = run {
-        return invalid(values, format!("the run failed: {}", chain(&e)));
+        return invalid(
+            values,
+            format!("the run failed: {}", crate::error_chain(&e)),
+        );
     }
     let pairs = gears
         .iter()
@@ -181,20 +189,6 @@ pub fn run_sample(
         pairs,
         invalid: None,
     }
-}
-
-/// An error and its causes, each once (a cause its message already quotes is left out).
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut out = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        let text = c.to_string();
-        if !out.ends_with(&text) {
-            out = format!("{out}: {text}");
-        }
-        cause = c.source();
-    }
-    out
 }
 
 /// Runs samples `range` in parallel; results in index order. `done` counts finished
@@ -593,12 +587,12 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
     for (what, name) in named {
         crate::scenario::check_name(name).map_err(|m| bad(format!("{what} {m}")))?;
     }
-    let texts = r
+    let mut texts = r
         .dispersed
         .iter()
         .chain(s.outcomes.iter().filter_map(|o| o.invalid.as_ref()))
         .chain(r.sets.iter().map(|(k, _)| k));
-    if texts.clone().any(|t| t.chars().any(char::is_control)) {
+    if texts.any(|t| t.chars().any(char::is_control)) {
         return Err(bad(
             "a dispersion path, a --set key or a reason holds control characters".into(),
         ));

@@ -4,7 +4,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::Args;
 
 use orbitlash::diagnose::{self, Diagnosis, Options, Verdict};
@@ -69,21 +69,9 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
             None => return Err(e.into()),
         },
     };
-    rec.match_sensors(&loaded.scenario.sensors)?;
-    if rec.columns.is_empty() {
-        bail!(
-            "{}: no column besides the time is a sensor of {} (its sensors: {}): there is nothing to compare",
-            rec.file,
-            loaded.file,
-            loaded
-                .scenario
-                .sensors
-                .iter()
-                .map(|s| s.column.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
+    // The recording against the model (channels, values, time base, the held-out
+    // split), before the cost estimate: what cannot be judged is refused first.
+    diagnose::data::Observations::new(&rec, &loaded.scenario, a.holdout_orbits)?;
     if let Some(dir) = &a.out {
         for c in &rec.columns {
             let name = residual_plot_name(c);
@@ -91,9 +79,6 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         }
     }
     let span_s = rec.time_s.last().copied().unwrap_or(0.0);
-    // The recording against the model (values, time base, the held-out split), before
-    // the cost estimate: what cannot be judged is refused first.
-    diagnose::data::Observations::new(&rec, &loaded.scenario, a.holdout_orbits)?;
     super::estimate::diagnose(
         &loaded.scenario,
         span_s,
@@ -226,8 +211,8 @@ fn out_files(
     }
     let keys = orbitlash::spec::keys::element_keys(&to);
     let comment = |section: &str, i: usize| {
-        let key = element_key(&keys, section, i)?;
-        let prefix = format!("{section}.{}.", orbitlash::spec::keys::quote_key(&key));
+        let key = keys.section(section)?.get(i)?;
+        let prefix = format!("{section}.{}.", orbitlash::spec::keys::quote_key(key));
         let f = d
             .findings
             .iter()
@@ -259,26 +244,6 @@ fn out_files(
         files.push((dir.join(residual_plot_name(name)), svg.into_bytes()));
     }
     Ok(files)
-}
-
-/// The key of element `i` of array `section` (`heater`, `sun`, …).
-fn element_key(k: &orbitlash::spec::keys::ElementKeys, section: &str, i: usize) -> Option<String> {
-    let list = match section {
-        "node" => &k.node,
-        "boundary" => &k.boundary,
-        "conductor" => &k.conductor,
-        "radiation" => &k.radiation,
-        "sun" => &k.sun,
-        "albedo" => &k.albedo,
-        "earth_ir" => &k.earth_ir,
-        "dissipation" => &k.dissipation,
-        "heater" => &k.heater,
-        "mode" => &k.mode,
-        "sensor" => &k.sensor,
-        "gear_pair" => &k.gear_pair,
-        _ => return None,
-    };
-    list.get(i).cloned()
 }
 
 fn finding_target(f: &diagnose::Finding) -> String {

@@ -55,6 +55,15 @@ pub fn steady_orbits(sc: &Scenario) -> f64 {
     orbits.min(o.max_orbits as f64).max(1.0)
 }
 
+/// The periodic search of `sc` and the period reported after it.
+fn steady_cost(sc: &Scenario) -> RunEstimate {
+    let mut orbit = run_cost(sc, sc.period_s());
+    let orbits = steady_orbits(sc) + 1.0;
+    orbit.steps *= orbits;
+    orbit.wall_s *= orbits;
+    orbit
+}
+
 /// Refuses `steps` over `limit` unless `force`; says what a long job will take.
 fn judge(what: &str, steps: f64, wall_s: f64, limit: f64, force: bool, hint: &str) -> Result<()> {
     let time = if wall_s.is_finite() {
@@ -75,12 +84,11 @@ fn judge(what: &str, steps: f64, wall_s: f64, limit: f64, force: bool, hint: &st
 
 /// `run --steady-state`: the periodic search and the reported period.
 pub fn steady(sc: &Scenario, force: bool) -> Result<()> {
-    let orbit = run_cost(sc, sc.period_s());
-    let orbits = steady_orbits(sc) + 1.0;
+    let cost = steady_cost(sc);
     judge(
         "the periodic search",
-        orbit.steps * orbits,
-        orbit.wall_s * orbits,
+        cost.steps,
+        cost.wall_s,
         MAX_STEPS,
         force,
         "loosen solver.tolerance_k or raise solver.max_step_s, or widen a chattering heater's band (on_k … off_k)",
@@ -95,13 +103,7 @@ pub fn margins(sc: &Scenario, horizon: Horizon, samples: u64, force: bool) -> Re
     let per = match horizon {
         Horizon::Orbits(n) => run_cost(sc, n * sc.period_s()),
         Horizon::Mission => run_cost(sc, sc.run.duration_s),
-        Horizon::SteadyState => {
-            let mut orbit = run_cost(sc, sc.period_s());
-            let orbits = steady_orbits(sc) + 1.0;
-            orbit.steps *= orbits;
-            orbit.wall_s *= orbits;
-            orbit
-        }
+        Horizon::SteadyState => steady_cost(sc),
     };
     judge(
         "each sample",

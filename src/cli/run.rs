@@ -1,6 +1,6 @@
 //! `orbitlash run`: simulate, observe, summarise.
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -9,7 +9,6 @@ use anyhow::{Result, anyhow};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use orbitlash::io::atomic::AtomicFile;
 use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::{OutputError, OutputPolicy, Outputs, available_bytes};
@@ -299,11 +298,8 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     }
     if let Some(p) = &json_out {
         let summary = RunSummary::new(&sc, &stats, window, &mesh, wall_s);
-        let mut f = AtomicFile::create(p, &OutputPolicy::reading(&inputs))?;
         let text = serde_json::to_string_pretty(&summary)? + "\n";
-        f.write_all(text.as_bytes())
-            .map_err(|e| OutputError::io(p, e))?;
-        f.commit()?;
+        outs.write_all(&[(p.as_path(), text.as_bytes())])?;
         outln!(o, "json: {}", p.display());
     }
     if let Some(p) = &a.csv {

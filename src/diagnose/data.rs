@@ -184,8 +184,13 @@ impl Observations {
             .collect();
         if channels.is_empty() {
             return Err(DiagnoseError::Recording(format!(
-                "{}: no column besides the time is a sensor of the scenario: there is nothing to compare",
-                rec.file
+                "{}: no column besides the time is a sensor of the scenario (its sensors: {}): there is nothing to compare",
+                rec.file,
+                sc.sensors
+                    .iter()
+                    .map(|s| s.column.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )));
         }
         for (c, v) in channels.iter().zip(&rec.values) {
@@ -369,6 +374,23 @@ fn check_split_holds_data(
     if !split.can_validate() {
         return Ok(());
     }
+    // where the recording has its longest stretch without a sample (for the messages)
+    let gap_note = || {
+        let gap = rec
+            .time_s
+            .windows(2)
+            .map(|w| (w[1] - w[0], w[0], w[1]))
+            .fold((0.0, 0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
+        if gap.0 > split.period_s {
+            format!(
+                "; the recording has no sample from t = {} s to {} s",
+                crate::units::num(gap.1),
+                crate::units::num(gap.2)
+            )
+        } else {
+            String::new()
+        }
+    };
     for (c, ch) in channels.iter().enumerate() {
         let (mut train, mut held) = (0usize, 0usize);
         for (t, v) in rec.time_s.iter().zip(&rec.values[c]) {
@@ -383,34 +405,24 @@ fn check_split_holds_data(
         }
         let expected = train as f64 * split.holdout_orbits as f64 / split.train_orbits as f64;
         let need = (MIN_PART_SAMPLES as f64).max((0.25 * expected).ceil());
-        let gap = rec
-            .time_s
-            .windows(2)
-            .map(|w| (w[1] - w[0], w[0], w[1]))
-            .fold((0.0, 0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
-        let gap_note = if gap.0 > split.period_s {
-            format!(
-                "; the recording has no sample from t = {} s to {} s",
-                crate::units::num(gap.1),
-                crate::units::num(gap.2)
-            )
-        } else {
-            String::new()
-        };
         if (train as f64) < MIN_PART_SAMPLES as f64 {
             return Err(DiagnoseError::Recording(format!(
-                "{}: the fitted orbits 1–{} hold {train} samples of `{}`; at least {MIN_PART_SAMPLES} are needed{gap_note}",
-                rec.file, split.train_orbits, ch.name
+                "{}: the fitted orbits 1–{} hold {train} samples of `{}`; at least {MIN_PART_SAMPLES} are needed{}",
+                rec.file,
+                split.train_orbits,
+                ch.name,
+                gap_note()
             )));
         }
         if (held as f64) < need {
             return Err(DiagnoseError::Recording(format!(
                 "{}: the held-out orbits {}–{} hold {held} samples of `{}`, against about {expected:.0} at the cadence of the fitted orbits; \
-at least {need:.0} are needed to check a fit on them{gap_note}. Hold out fewer orbits (--holdout-orbits N) or cut the recording where its data end",
+at least {need:.0} are needed to check a fit on them{}. Hold out fewer orbits (--holdout-orbits N) or cut the recording where its data end",
                 rec.file,
                 split.train_orbits + 1,
                 split.orbits,
-                ch.name
+                ch.name,
+                gap_note()
             )));
         }
     }

@@ -25,7 +25,6 @@
 //! Pure: no files, no terminal. The CLI (`cli/diagnose.rs`) reads and writes.
 
 pub mod data;
-pub use data::check_time_base;
 pub mod effects;
 pub mod lm;
 
@@ -503,7 +502,7 @@ impl Problem<'_> {
     fn predict(&self, m: &Model, times: &Arc<[f64]>) -> Result<Vec<Vec<f64>>, String> {
         predict(m, times, &[], self.max_steps)
             .map(|p| p.0)
-            .map_err(|e| chain(&e))
+            .map_err(|e| crate::error_chain(&e))
     }
 }
 
@@ -1191,18 +1190,4 @@ fn heater_hints(
         hints.heater_on_k[n] = Some(data::median(&mut v));
     }
     hints
-}
-
-/// An error and its causes on one line.
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        let t = c.to_string();
-        if !s.ends_with(&t) {
-            s = format!("{s}: {t}");
-        }
-        cause = c.source();
-    }
-    s
 }

@@ -155,8 +155,8 @@ pub fn resolved(path: &Path) -> PathBuf {
 pub struct Outputs {
     policy: OutputPolicy,
     planned: Vec<Planned>,
-    /// Folders the command creates when missing (`diagnose --out`).
-    created: Vec<PathBuf>,
+    /// Folders the command creates when missing (`diagnose --out`): (path, resolved).
+    created: Vec<(PathBuf, PathBuf)>,
 }
 
 #[derive(Debug, Clone)]
@@ -177,19 +177,13 @@ impl Outputs {
         }
     }
 
-    pub fn policy(&self) -> &OutputPolicy {
-        &self.policy
-    }
-
-    /// The planned output files, in the order they were planned.
-    pub fn paths(&self) -> impl Iterator<Item = &Path> {
-        self.planned.iter().map(|p| p.path.as_path())
-    }
-
     /// Plans the output `path`, called `label` in messages (e.g. `--json`).
     pub fn file(&mut self, label: &str, path: &Path) -> Result<(), OutputError> {
         let in_created = path.parent().is_some_and(|d| {
-            self.created.iter().any(|c| resolved(c) == resolved(d)) && !d.exists()
+            !d.exists() && {
+                let rd = resolved(d);
+                self.created.iter().any(|(_, c)| *c == rd)
+            }
         });
         if in_created {
             // its folder does not exist yet: nothing there to replace, only the name
@@ -203,9 +197,8 @@ impl Outputs {
         }
         let r = resolved(path);
         // a file where a planned folder is to be made, or inside a file's path
-        for d in &self.created {
-            let rd = resolved(d);
-            if rd == r || rd.starts_with(&r) {
+        for (d, rd) in &self.created {
+            if *rd == r || rd.starts_with(&r) {
                 return Err(OutputError::refused(
                     path,
                     format!(
@@ -266,7 +259,7 @@ impl Outputs {
                             p.path.display()
                         )));
                     }
-                    self.created.push(dir.to_path_buf());
+                    self.created.push((dir.to_path_buf(), rd));
                     Ok(())
                 } else {
                     Err(refuse(format!("no such directory: {}", parent.display())))
@@ -278,7 +271,7 @@ impl Outputs {
 
     /// Creates the planned folders that are missing.
     pub fn create_folders(&self) -> Result<(), OutputError> {
-        for d in &self.created {
+        for (d, _) in &self.created {
             if !d.is_dir() {
                 std::fs::create_dir(d).map_err(|e| OutputError::io(d, e))?;
             }

@@ -263,8 +263,11 @@ pub fn edited(
     let (Some(a), Some(b)) = (a.as_table(), b.as_table()) else {
         return Err(EditError("a scenario is a table".into()));
     };
-    let mut next = max_position(doc.as_table()) + 1;
-    edit_table(doc.as_table_mut(), a, b, "", comment, &mut next)?;
+    let mut editor = Editor {
+        comment,
+        next: max_position(doc.as_table()) + 1,
+    };
+    editor.table(doc.as_table_mut(), a, b, "")?;
     let mut top = String::new();
     for h in header {
         top.push_str(&format!("# {h}\n"));
@@ -289,136 +292,132 @@ fn max_position(t: &toml_edit::Table) -> isize {
     m
 }
 
-/// Places a new table (and its sub-tables) at the end of the document, in order.
-fn place_last(t: &mut toml_edit::Table, next: &mut isize) {
-    t.set_position(Some(*next));
-    *next += 1;
-    for (_, item) in t.iter_mut() {
-        if let toml_edit::Item::Table(sub) = item {
-            place_last(sub, next);
-        }
-    }
+/// The edit's state: the comments put above added elements, and the next document
+/// position (added tables go to the end, in order).
+struct Editor<'c> {
+    comment: &'c dyn Fn(&str, usize) -> Option<String>,
+    next: isize,
 }
 
-fn edit_table(
-    t: &mut dyn toml_edit::TableLike,
-    a: &toml::Table,
-    b: &toml::Table,
-    section: &str,
-    comment: &dyn Fn(&str, usize) -> Option<String>,
-    next: &mut isize,
-) -> Result<(), EditError> {
-    use toml_edit::Item;
-    for key in a.keys() {
-        if !b.contains_key(key) {
-            t.remove(key);
-        }
-    }
-    for (key, bv) in b {
-        let av = a.get(key);
-        if av == Some(bv) {
-            continue;
-        }
-        let here = if section.is_empty() {
-            key.clone()
-        } else {
-            format!("{section}.{key}")
-        };
-        match (av, t.get_mut(key)) {
-            (Some(av), Some(item)) => edit_item(item, av, bv, &here, comment, next)?,
-            _ => {
-                // a key the user did not write
-                let item = match new_item(bv)? {
-                    Item::ArrayOfTables(mut aot) => {
-                        for (i, el) in aot.iter_mut().enumerate() {
-                            annotate(el, comment(&here, i));
-                            place_last(el, next);
-                        }
-                        Item::ArrayOfTables(aot)
-                    }
-                    Item::Table(mut sub) => {
-                        place_last(&mut sub, next);
-                        Item::Table(sub)
-                    }
-                    other => other,
-                };
-                t.insert(key, item);
+impl Editor<'_> {
+    /// Places a new table (and its sub-tables) at the end of the document, in order.
+    fn place_last(&mut self, t: &mut toml_edit::Table) {
+        t.set_position(Some(self.next));
+        self.next += 1;
+        for (_, item) in t.iter_mut() {
+            if let toml_edit::Item::Table(sub) = item {
+                self.place_last(sub);
             }
         }
     }
-    Ok(())
-}
 
-fn edit_item(
-    item: &mut toml_edit::Item,
-    a: &toml::Value,
-    b: &toml::Value,
-    section: &str,
-    comment: &dyn Fn(&str, usize) -> Option<String>,
-    next: &mut isize,
-) -> Result<(), EditError> {
-    use toml_edit::Item;
-    match (a, b, &mut *item) {
-        (toml::Value::Table(ta), toml::Value::Table(tb), it) if it.is_table_like() => edit_table(
-            it.as_table_like_mut().expect("table-like"),
-            ta,
-            tb,
-            section,
-            comment,
-            next,
-        ),
-        (toml::Value::Array(xa), toml::Value::Array(xb), Item::ArrayOfTables(aot))
-            if xb.iter().all(toml::Value::is_table) =>
-        {
-            // element by element, then the new ones appended; removed ones dropped
-            while aot.len() > xb.len() {
-                aot.remove(aot.len() - 1);
+    /// A new element `i` of the array of tables `section`: its comment above it, at the
+    /// end of the document.
+    fn added(&mut self, t: &mut toml_edit::Table, section: &str, i: usize) {
+        if let Some(c) = (self.comment)(section, i) {
+            let lines: String = c.lines().map(|l| format!("# {l}\n")).collect();
+            t.decor_mut().set_prefix(format!("\n{lines}"));
+        }
+        self.place_last(t);
+    }
+
+    fn table(
+        &mut self,
+        t: &mut dyn toml_edit::TableLike,
+        a: &toml::Table,
+        b: &toml::Table,
+        section: &str,
+    ) -> Result<(), EditError> {
+        use toml_edit::Item;
+        for key in a.keys() {
+            if !b.contains_key(key) {
+                t.remove(key);
             }
-            for (i, eb) in xb.iter().enumerate() {
-                let ea = xa.get(i);
-                match (ea, aot.get_mut(i)) {
-                    (Some(ea), Some(t)) => {
-                        if ea != eb {
-                            edit_table(
-                                t,
-                                ea.as_table().expect("a table"),
-                                eb.as_table().expect("a table"),
-                                section,
-                                comment,
-                                next,
-                            )?;
+        }
+        for (key, bv) in b {
+            let av = a.get(key);
+            if av == Some(bv) {
+                continue;
+            }
+            let here = if section.is_empty() {
+                key.clone()
+            } else {
+                format!("{section}.{key}")
+            };
+            match (av, t.get_mut(key)) {
+                (Some(av), Some(item)) => self.item(item, av, bv, &here)?,
+                _ => {
+                    // a key the user did not write
+                    let item = match new_item(bv)? {
+                        Item::ArrayOfTables(mut aot) => {
+                            for (i, el) in aot.iter_mut().enumerate() {
+                                self.added(el, &here, i);
+                            }
+                            Item::ArrayOfTables(aot)
                         }
-                    }
-                    _ => {
-                        let mut t = table_of(eb)?;
-                        annotate(&mut t, comment(section, i));
-                        place_last(&mut t, next);
-                        aot.push(t);
-                    }
+                        Item::Table(mut sub) => {
+                            self.place_last(&mut sub);
+                            Item::Table(sub)
+                        }
+                        other => other,
+                    };
+                    t.insert(key, item);
                 }
             }
-            Ok(())
         }
-        (_, _, Item::Value(v)) => {
-            // a changed value: the key's comments kept
-            let decor = v.decor().clone();
-            let mut nv = edit_value(b)?;
-            *nv.decor_mut() = decor;
-            *v = nv;
-            Ok(())
-        }
-        _ => {
-            *item = new_item(b)?;
-            Ok(())
-        }
+        Ok(())
     }
-}
 
-/// Puts `comment` (lines without `#`) above a new table.
-fn annotate(t: &mut toml_edit::Table, comment: Option<String>) {
-    if let Some(c) = comment {
-        let lines: String = c.lines().map(|l| format!("# {l}\n")).collect();
-        t.decor_mut().set_prefix(format!("\n{lines}"));
+    fn item(
+        &mut self,
+        item: &mut toml_edit::Item,
+        a: &toml::Value,
+        b: &toml::Value,
+        section: &str,
+    ) -> Result<(), EditError> {
+        use toml_edit::Item;
+        match (a, b, &mut *item) {
+            (toml::Value::Table(ta), toml::Value::Table(tb), it) if it.is_table_like() => {
+                self.table(it.as_table_like_mut().expect("table-like"), ta, tb, section)
+            }
+            (toml::Value::Array(xa), toml::Value::Array(xb), Item::ArrayOfTables(aot))
+                if xb.iter().all(toml::Value::is_table) =>
+            {
+                // element by element, then the new ones appended; removed ones dropped
+                while aot.len() > xb.len() {
+                    aot.remove(aot.len() - 1);
+                }
+                for (i, eb) in xb.iter().enumerate() {
+                    match (xa.get(i), aot.get_mut(i)) {
+                        (Some(ea), Some(t)) if ea != eb => self.table(
+                            t,
+                            ea.as_table().expect("a table"),
+                            eb.as_table().expect("a table"),
+                            section,
+                        )?,
+                        (Some(_), Some(_)) => {}
+                        _ => {
+                            let mut t = table_of(eb)?;
+                            self.added(&mut t, section, i);
+                            aot.push(t);
+                        }
+                    }
+                }
+                Ok(())
+            }
+            (_, _, Item::Value(v)) => {
+                // a changed value: the key's comments kept
+                let decor = v.decor().clone();
+                let mut nv = edit_value(b)?;
+                *nv.decor_mut() = decor;
+                *v = nv;
+                Ok(())
+            }
+            _ => {
+                *item = new_item(b)?;
+                Ok(())
+            }
+        }
     }
 }
 

@@ -184,6 +184,27 @@ pub struct ElementKeys {
     pub gear_pair: Vec<String>,
 }
 
+impl ElementKeys {
+    /// The keys of the array of tables `section` (`heater`, `sun`, …), if it is one.
+    pub fn section(&self, section: &str) -> Option<&[String]> {
+        Some(match section {
+            "node" => &self.node,
+            "boundary" => &self.boundary,
+            "conductor" => &self.conductor,
+            "radiation" => &self.radiation,
+            "sun" => &self.sun,
+            "albedo" => &self.albedo,
+            "earth_ir" => &self.earth_ir,
+            "dissipation" => &self.dissipation,
+            "heater" => &self.heater,
+            "mode" => &self.mode,
+            "sensor" => &self.sensor,
+            "gear_pair" => &self.gear_pair,
+            _ => return None,
+        })
+    }
+}
+
 /// Makes keys unique within their array: the second `a` becomes `a-2`, and so on.
 fn unique(keys: impl Iterator<Item = String>) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();

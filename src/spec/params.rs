@@ -660,19 +660,10 @@ fn unknown(text: &str, spec: &ScenarioSpec) -> ParamError {
     // name the elements of the section asked for, to help with typos
     let keys = element_keys(spec);
     let hint = canonical(text).ok().and_then(|c| {
+        // sensors are named by their column, which the error already quotes
         let list = match c.first()?.as_str() {
-            "node" => &keys.node,
-            "boundary" => &keys.boundary,
-            "conductor" => &keys.conductor,
-            "radiation" => &keys.radiation,
-            "sun" => &keys.sun,
-            "albedo" => &keys.albedo,
-            "earth_ir" => &keys.earth_ir,
-            "dissipation" => &keys.dissipation,
-            "heater" => &keys.heater,
-            "mode" => &keys.mode,
-            "gear_pair" => &keys.gear_pair,
-            _ => return None,
+            "sensor" => return None,
+            section => keys.section(section)?,
         };
         let known: Vec<String> = list.iter().map(|k| quote_key(k)).collect();
         Some(format!(" ({}: {})", c[0], known.join(", ")))
