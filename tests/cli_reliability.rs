@@ -825,6 +825,22 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
         &["diagnose", "s.toml", "--recording", "r.csv", "--quiet"],
         &["r.csv", "neither CSV text nor an MCAP file"],
     );
+    // a CSV whose multi-byte character straddles the 4 kB looked at first is text
+    let mut head = String::from("# ");
+    while head.len() < 4095 {
+        head.push('x');
+    }
+    head.push_str("°C\n");
+    std::fs::write(
+        dir.join("deg.csv"),
+        head + &std::fs::read_to_string(example("null.csv")).unwrap(),
+    )
+    .unwrap();
+    let out = run_in(
+        &dir,
+        &["diagnose", "s.toml", "--recording", "deg.csv", "--quiet"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     // a semicolon CSV names its delimiter
     let text = std::fs::read_to_string(example("null.csv")).unwrap();
     std::fs::write(dir.join("semi.csv"), text.replace(',', ";")).unwrap();

@@ -68,7 +68,12 @@ impl Recording {
         let named_mcap = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
-        if named_mcap || std::str::from_utf8(&bytes[..bytes.len().min(4096)]).is_err() {
+        // the first 4 kB must be text; a character cut by that limit is not an error
+        let not_text = matches!(
+            std::str::from_utf8(&bytes[..bytes.len().min(4096)]),
+            Err(e) if e.error_len().is_some()
+        );
+        if named_mcap || not_text {
             // not text: say what it is not, rather than where the text breaks
             let bad = std::str::from_utf8(&bytes).err().map(|e| e.valid_up_to());
             return Err(RecordingError::File {
