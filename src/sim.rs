@@ -140,9 +140,8 @@ impl StepView<'_> {
     }
     /// All node temperatures at `t_s` within the step.
     pub fn temperatures_at(&self, t_s: f64, out_k: &mut [f64]) {
-        for (i, o) in out_k.iter_mut().enumerate() {
-            *o = self.temperature_at(i, t_s);
-        }
+        let d = self.data;
+        d.temperatures_at_fraction(((t_s - d.t0_s) / d.h_s).clamp(0.0, 1.0), out_k);
     }
 }
 

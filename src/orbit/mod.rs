@@ -393,6 +393,120 @@ impl CircularEnvironment {
     }
 }
 
+impl CircularEnvironment {
+    /// The shadow crossing the slow way (the reference of the predicted search): the
+    /// shadow function scanned in 1° steps of orbit angle from just after `t_s`, the
+    /// first step that changes sign refined to adjacent floats.
+    pub fn next_shadow_crossing_by_scan(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
+        let dt = self.orbit.period_s() / 360.0;
+        let mut a = t_s + 1e-9 * dt;
+        let mut ga = self.shadow(a);
+        while a < until_s {
+            let b = (a + dt).min(until_s);
+            let gb = self.shadow(b);
+            if (ga >= 0.0) != (gb >= 0.0) {
+                let entering = ga >= 0.0;
+                return Some((self.refine_crossing(a, ga, b, gb, entering), entering));
+            }
+            a = b;
+            ga = gb;
+        }
+        None
+    }
+
+    /// The predicted search of [`EnvironmentModel::next_shadow_crossing`] for a
+    /// drifting β: `Some(answer)` when its checks hold, `None` to scan instead.
+    fn next_shadow_crossing_predicted(
+        &self,
+        t_s: f64,
+        until_s: f64,
+    ) -> Option<Option<(f64, bool)>> {
+        let dt = self.orbit.period_s() / 360.0;
+        let a = t_s + 1e-9 * dt;
+        if a >= until_s {
+            return Some(None);
+        }
+        let ga = self.shadow(a);
+        let sunlit = ga >= 0.0;
+        let (t_pred, entering) =
+            self.next_shadow_crossing_constant_beta(self.beta_rad.at(a), a, f64::INFINITY)?;
+        if entering != sunlit {
+            return None;
+        }
+        // β moves the crossing by seconds over an orbit: the bracket grows until it
+        // holds the crossing, and stays clear of the start by more than its width.
+        let mut w = 0.05 * dt;
+        for _ in 0..6 {
+            let lo = t_pred - w;
+            if lo <= a + 2.0 * w {
+                return None;
+            }
+            if lo >= until_s {
+                // No crossing before `until_s` when the sign there is still the start's.
+                let gu = self.shadow(until_s);
+                let mid = self.shadow(0.5 * (a + until_s));
+                return ((gu >= 0.0) == sunlit && (mid >= 0.0) == sunlit).then_some(None);
+            }
+            let g_lo = self.shadow(lo);
+            let g_mid = self.shadow(0.5 * (a + lo));
+            if (g_lo >= 0.0) != sunlit || (g_mid >= 0.0) != sunlit {
+                return None;
+            }
+            let hi = (t_pred + w).min(until_s);
+            let g_hi = self.shadow(hi);
+            if (g_hi >= 0.0) != sunlit {
+                let t = self.refine_crossing(lo, g_lo, hi, g_hi, entering);
+                return Some(Some((t, entering)));
+            }
+            if hi >= until_s {
+                return None;
+            }
+            w *= 4.0;
+        }
+        None
+    }
+
+    /// The sign change of the shadow function between `lo` (on the side it leaves:
+    /// sunlit when `entering`) and `hi`, narrowed to adjacent floats by the Illinois
+    /// method (bisection when a secant point falls outside): the later of the two.
+    /// With one sign change in the bracket the answer does not depend on the bracket.
+    fn refine_crossing(
+        &self,
+        mut lo: f64,
+        mut g_lo: f64,
+        mut hi: f64,
+        mut g_hi: f64,
+        entering: bool,
+    ) -> f64 {
+        let mut last_side = 0i8;
+        for _ in 0..400 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            let x = lo - g_lo * (hi - lo) / (g_hi - g_lo);
+            let x = if x > lo && x < hi { x } else { mid };
+            let gx = self.shadow(x);
+            if (gx >= 0.0) == entering {
+                lo = x;
+                g_lo = gx;
+                if last_side == -1 {
+                    g_hi *= 0.5;
+                }
+                last_side = -1;
+            } else {
+                hi = x;
+                g_hi = gx;
+                if last_side == 1 {
+                    g_lo *= 0.5;
+                }
+                last_side = 1;
+            }
+        }
+        hi
+    }
+}
+
 /// The circular orbit about a spherical Earth, with β and solar flux along a mission
 /// profile.
 impl EnvironmentModel for CircularEnvironment {
@@ -410,38 +524,20 @@ impl EnvironmentModel for CircularEnvironment {
         self.shadow(t_s) >= 0.0
     }
 
-    /// Found by the closed form when β is constant, else by scanning the shadow
-    /// function in 1° steps of orbit angle and refining by bisection to round-off.
+    /// Found by the closed form when β is constant. With β drifting: the closed form
+    /// at the current β predicts the crossing, a bracket around the prediction is
+    /// checked (no sign change from `t_s` to the bracket, one across it), and the
+    /// crossing is refined to adjacent floating-point times. When any check fails, the
+    /// shadow function is scanned in 1° steps of orbit angle instead. Both give the
+    /// same bits: the refinement ends at the one sign change between adjacent floats.
     fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
         if let Profile::Constant(beta) = self.beta_rad {
             return self.next_shadow_crossing_constant_beta(beta, t_s, until_s);
         }
-        let dt = self.orbit.period_s() / 360.0;
-        let mut a = t_s + 1e-9 * dt;
-        let mut ga = self.shadow(a);
-        while a < until_s {
-            let b = (a + dt).min(until_s);
-            let gb = self.shadow(b);
-            if (ga >= 0.0) != (gb >= 0.0) {
-                let entering = ga >= 0.0;
-                let (mut lo, mut hi) = (a, b);
-                for _ in 0..200 {
-                    let mid = 0.5 * (lo + hi);
-                    if mid <= lo || mid >= hi {
-                        break;
-                    }
-                    if (self.shadow(mid) >= 0.0) == entering {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                return Some((hi, entering));
-            }
-            a = b;
-            ga = gb;
+        match self.next_shadow_crossing_predicted(t_s, until_s) {
+            Some(found) => found,
+            None => self.next_shadow_crossing_by_scan(t_s, until_s),
         }
-        None
     }
 
     fn next_load_kink(&self, t_s: f64, kinks: &[LoadKink]) -> f64 {
@@ -543,6 +639,80 @@ mod tests {
             earth_ir_w_per_m2: 237.0,
             space_sink_k: 3.0,
         }
+    }
+
+    /// The slow reference of the shadow search as it was: 1° scan, then plain
+    /// bisection to adjacent floats.
+    fn crossing_by_bisection(
+        env: &CircularEnvironment,
+        t_s: f64,
+        until_s: f64,
+    ) -> Option<(f64, bool)> {
+        let dt = env.orbit.period_s() / 360.0;
+        let mut a = t_s + 1e-9 * dt;
+        let mut ga = env.shadow(a);
+        while a < until_s {
+            let b = (a + dt).min(until_s);
+            let gb = env.shadow(b);
+            if (ga >= 0.0) != (gb >= 0.0) {
+                let entering = ga >= 0.0;
+                let (mut lo, mut hi) = (a, b);
+                loop {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        return Some((hi, entering));
+                    }
+                    if (env.shadow(mid) >= 0.0) == entering {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+            }
+            a = b;
+            ga = gb;
+        }
+        None
+    }
+
+    #[test]
+    fn val_second_method_drifting_beta_crossings_match_scan_and_bisection_bit_for_bit() {
+        // β from 0 to 67.9° (eclipses stop at 68.0°) over 90 days, and back: the
+        // predicted search must give the scan-and-bisect answer to the last bit, from
+        // any start (including starts on a crossing and short horizons).
+        let mut env = reference();
+        let day = 86400.0;
+        env.beta_rad = Profile::Table {
+            time_s: vec![0.0, 90.0 * day, 120.0 * day],
+            value: vec![0.0, 67.9f64.to_radians(), -30f64.to_radians()],
+        };
+        let period = env.orbit.period_s();
+        let mut t = 0.0;
+        let (mut checked, mut predicted) = (0, 0);
+        let mut x = 0.123_f64;
+        while t < 120.0 * day {
+            for until in [t + period, t + 0.05 * period, t + 3.0 * period] {
+                let want = crossing_by_bisection(&env, t, until);
+                assert_eq!(
+                    env.next_shadow_crossing(t, until),
+                    want,
+                    "t = {t}, until = {until}"
+                );
+                assert_eq!(env.next_shadow_crossing_by_scan(t, until), want);
+                checked += 1;
+                predicted += usize::from(env.next_shadow_crossing_predicted(t, until).is_some());
+                if let Some((tc, _)) = want {
+                    // starting exactly on the crossing finds the next one
+                    let again = crossing_by_bisection(&env, tc, tc + period);
+                    assert_eq!(env.next_shadow_crossing(tc, tc + period), again);
+                }
+            }
+            x = (x * 7.13 + 0.37).fract();
+            t += (0.3 + x) * 20.0 * period;
+        }
+        assert!(checked > 300, "{checked}");
+        // the fast path answers nearly always (it falls back near β = 67.9°)
+        assert!(predicted * 10 > checked * 9, "{predicted} of {checked}");
     }
 
     #[test]

@@ -139,6 +139,30 @@ impl StepData {
         }
     }
 
+    /// Every node's temperature at fraction `s` ∈ [0, 1] of the step, K: the same
+    /// numbers as [`StepData::temperature_at_fraction`] node by node, with the basis
+    /// of the interpolants evaluated once.
+    pub fn temperatures_at_fraction(&self, s: f64, out_k: &mut [f64]) {
+        let (s2, h) = (s * s, self.h_s);
+        let s3 = s2 * s;
+        let (h00, h10, h01, h11) = (
+            2.0 * s3 - 3.0 * s2 + 1.0,
+            (s3 - 2.0 * s2 + s) * h,
+            -2.0 * s3 + 3.0 * s2,
+            (s3 - s2) * h,
+        );
+        let n = out_k.len();
+        let (y0, y1) = (&self.temps0_k[..n], &self.temps1_k[..n]);
+        let (d0, d1) = (&self.rates0_k_per_s[..n], &self.rates1_k_per_s[..n]);
+        for i in 0..n {
+            out_k[i] = if self.quadratic[i] {
+                quadratic(y0[i], self.temps_gamma_k[i], y1[i], s)
+            } else {
+                h00 * y0[i] + h10 * d0[i] + h01 * y1[i] + h11 * d1[i]
+            };
+        }
+    }
+
     /// Node `i`'s interpolant as a polynomial in the fraction s of the step:
     /// `[a0, a1, a2, a3]` with T(s) = a0 + a1 s + a2 s² + a3 s³ (a3 = 0 for a quadratic).
     pub fn polynomial(&self, i: usize) -> [f64; 4] {
