@@ -157,6 +157,22 @@ impl<'a> Probe<'a> {
         mesh_or_nan(&self.gears[k], temps_k)
     }
 
+    /// The mesh state of gear pair `k` at temperatures `temps_k + dt_s · rates_k_per_s`
+    /// (a point along a tangent of the temperature path).
+    pub fn mesh_along(
+        &self,
+        k: usize,
+        temps_k: &[f64],
+        rates_k_per_s: &[f64],
+        dt_s: f64,
+    ) -> MeshState {
+        let mut w = self.work.borrow_mut();
+        w.temps_k.clear();
+        w.temps_k
+            .extend(temps_k.iter().zip(rates_k_per_s).map(|(t, r)| t + dt_s * r));
+        mesh_or_nan(&self.gears[k], &w.temps_k)
+    }
+
     /// The mesh state of gear pair `k` at `t_s` within `step`.
     pub fn mesh_at(&self, step: &StepView<'_>, k: usize, t_s: f64) -> MeshState {
         let mut w = self.work.borrow_mut();

@@ -264,8 +264,16 @@ impl PairStats {
 
 /// Backlash extremes of every gear pair over the whole run (`run_pairs`) and over its
 /// last `window_s` (`pairs`), from the same evaluations. Each step is evaluated at its
-/// end and at three interior points of the solver's interpolant; an interior minimum
-/// is refined by golden-section search, so minima between long steps are not missed.
+/// ends. Where the backlash may turn inside the step, it is also evaluated at three
+/// interior points of the solver's interpolant, and an interior minimum is refined by
+/// golden-section search, so minima between long steps are not missed.
+///
+/// "May turn" is decided from the backlash and its rate at both ends (the rate along
+/// the temperature path's tangent, by a one-sided difference over a thousandth of the
+/// step; the end rate is reused as the next step's start rate when the path's tangent
+/// there is the same): unless both rates have the sign of the change over the step, by
+/// a clear margin, and their cubic has no interior extremum, the step is probed. A
+/// step skipped is monotone, so its extremes are at its ends, which are seen anyway.
 #[derive(Debug, Clone, Default)]
 pub struct MeshStats {
     window_s: f64,
@@ -274,13 +282,43 @@ pub struct MeshStats {
     pub run_pairs: Vec<PairStats>,
     /// Exact backlash at the end of the previous step, per pair.
     last_m: Vec<f64>,
+    /// Exact, closed-form and paper backlash there, per pair.
+    last_tracked_m: Vec<[f64; 3]>,
+    /// The previous step's end: its time, the temperature path's tangent there
+    /// (K/s per node) and each pair's rates of the tracked backlash along it (m/s;
+    /// NaN: unknown).
+    edge_t_s: f64,
+    edge_rates_k_per_s: Vec<f64>,
+    edge_slope_m_per_s: Vec<[f64; 3]>,
+    /// This step's start tangent (scratch).
+    start_rates_k_per_s: Vec<f64>,
+    /// Steps probed and skipped (for the record and the tests).
+    pub probed_steps: u64,
+    pub skipped_steps: u64,
+    /// Probe every step (the reference the skipping is tested against).
+    always_probe: bool,
 }
+
+/// The difference step of the backlash rate, as a fraction of the solver step.
+const SLOPE_STEP_FRACTION: f64 = 1e-3;
+/// A step is skipped only when each end's rate, times the step, is at least this
+/// fraction of the change over the step.
+const SLOPE_MARGIN: f64 = 0.05;
 
 impl MeshStats {
     pub fn last(window_s: f64) -> MeshStats {
         MeshStats {
             window_s,
             ..Default::default()
+        }
+    }
+
+    /// The same statistics with every step probed: slower, and the reference that
+    /// skipping monotone steps must reproduce bit for bit.
+    pub fn probing_every_step(self) -> MeshStats {
+        MeshStats {
+            always_probe: true,
+            ..self
         }
     }
 
@@ -302,6 +340,9 @@ impl Observer for MeshStats {
         self.pairs = r.gears.iter().map(|g| PairStats::new(&g.name)).collect();
         self.run_pairs = self.pairs.clone();
         self.last_m = r.mesh.iter().map(|m| m.backlash_exact_m).collect();
+        self.edge_t_s = f64::NAN;
+        self.last_tracked_m = r.mesh.iter().map(tracked).collect();
+        self.edge_slope_m_per_s = vec![[f64::NAN; 3]; r.mesh.len()];
         for k in 0..self.pairs.len() {
             self.see(k, r.t_start_s, &r.mesh[k]);
         }
@@ -311,6 +352,29 @@ impl Observer for MeshStats {
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
         let (t0, t1) = (step.t0_s(), step.t1_s());
         let h = t1 - t0;
+        let d = step.data;
+        let n = d.temps1_k.len();
+        // The path's tangents at the step's ends: the solver's rates unless a node
+        // is interpolated by its quadratic.
+        let plain = !d.quadratic.contains(&true);
+        let mut scratch = std::mem::take(&mut self.start_rates_k_per_s);
+        let start_rates: &[f64] = if plain {
+            &d.rates0_k_per_s
+        } else {
+            scratch.clear();
+            scratch.extend((0..n).map(|i| d.rate_at_edge(i, false)));
+            &scratch
+        };
+        let same_start = t0 == self.edge_t_s && start_rates == &self.edge_rates_k_per_s[..];
+        self.edge_rates_k_per_s.clear();
+        if plain {
+            self.edge_rates_k_per_s.extend_from_slice(&d.rates1_k_per_s);
+        } else {
+            self.edge_rates_k_per_s
+                .extend((0..n).map(|i| d.rate_at_edge(i, true)));
+        }
+        self.edge_t_s = t1;
+        let dt = SLOPE_STEP_FRACTION * h;
         for k in 0..step.mesh.len() {
             let at = |t: f64| step.probe.mesh_at(step, k, t);
             // The window's first instant, when this step straddles it.
@@ -318,6 +382,35 @@ impl Observer for MeshStats {
                 let m = at(self.start_s);
                 self.pairs[k].see(self.start_s, &m);
             }
+            let (b0, b1) = (self.last_tracked_m[k], tracked(&step.mesh[k]));
+            self.last_tracked_m[k] = b1;
+            let slope0 = if same_start {
+                self.edge_slope_m_per_s[k]
+            } else {
+                let m = step.probe.mesh_along(k, &d.temps0_k, start_rates, dt);
+                let ahead = tracked(&m);
+                std::array::from_fn(|q| (ahead[q] - b0[q]) / dt)
+            };
+            let back = tracked(&step.probe.mesh_along(
+                k,
+                &d.temps1_k,
+                &self.edge_rates_k_per_s,
+                -dt,
+            ));
+            let slope1: [f64; 3] = std::array::from_fn(|q| (b1[q] - back[q]) / dt);
+            self.edge_slope_m_per_s[k] = slope1;
+            // The paper model's values are NaN throughout when it is off.
+            let skip = (0..3).all(|q| {
+                (q == 2 && b0[q].is_nan() && b1[q].is_nan())
+                    || monotone(b0[q], b1[q], slope0[q], slope1[q], h)
+            });
+            if skip && !self.always_probe {
+                self.skipped_steps += 1;
+                self.see(k, t1, &step.mesh[k]);
+                self.last_m[k] = b1[0];
+                continue;
+            }
+            self.probed_steps += 1;
             let ts = [t0, t0 + 0.25 * h, t0 + 0.5 * h, t0 + 0.75 * h];
             let mut values = [self.last_m[k], 0.0, 0.0, 0.0, step.mesh[k].backlash_exact_m];
             for i in 1..4 {
@@ -347,6 +440,7 @@ impl Observer for MeshStats {
                 }
             }
         }
+        self.start_rates_k_per_s = scratch;
         Ok(())
     }
 
@@ -365,6 +459,30 @@ impl Observer for MeshStats {
         }
         Ok(())
     }
+}
+
+/// The backlash values whose extremes are kept: exact, closed form, paper.
+fn tracked(m: &MeshState) -> [f64; 3] {
+    [
+        m.backlash_exact_m,
+        m.backlash_closed_form_m,
+        m.backlash_paper_m,
+    ]
+}
+
+/// Whether the cubic through backlash values `b0`, `b1` and rates `slope0`, `slope1`
+/// (per second) at the ends of a step of `h_s` is clearly monotone: both end slopes
+/// have the sign of the change, each at least [`SLOPE_MARGIN`] of it, and no interior
+/// extremum.
+fn monotone(b0: f64, b1: f64, slope0: f64, slope1: f64, h_s: f64) -> bool {
+    let change = b1 - b0;
+    let clear = |slope: f64| slope * h_s * change.signum() >= SLOPE_MARGIN * change.abs();
+    [b0, b1, slope0, slope1].iter().all(|v| v.is_finite())
+        && change != 0.0
+        && clear(slope0)
+        && clear(slope1)
+        && crate::thermal::solver::hermite_interior_extrema_at(b0, b1, slope0, slope1, h_s)
+            == [None, None]
 }
 
 /// The summary of a run for scripts (`orbitlash run --json`): stable keys, SI units in

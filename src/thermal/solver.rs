@@ -163,6 +163,20 @@ impl StepData {
         }
     }
 
+    /// dT/dt of node `i`'s interpolant at the start (`end` false) or the end of the
+    /// step, K/s: the solver's rates for a cubic Hermite node, the quadratic's slope
+    /// for a node marked `quadratic`.
+    pub fn rate_at_edge(&self, i: usize, end: bool) -> f64 {
+        if self.quadratic[i] {
+            let [_, a1, a2, _] = self.polynomial(i);
+            (if end { a1 + 2.0 * a2 } else { a1 }) / self.h_s
+        } else if end {
+            self.rates1_k_per_s[i]
+        } else {
+            self.rates0_k_per_s[i]
+        }
+    }
+
     /// Node `i`'s interpolant as a polynomial in the fraction s of the step:
     /// `[a0, a1, a2, a3]` with T(s) = a0 + a1 s + a2 s² + a3 s³ (a3 = 0 for a quadratic).
     pub fn polynomial(&self, i: usize) -> [f64; 4] {
