@@ -15,7 +15,7 @@ use crate::dispersion::Plan;
 use crate::model::Model;
 use crate::orbit::EnvironmentModel;
 use crate::sim::{RunStats, Setup, SimError, Stop};
-use crate::summary::MeshStats;
+use crate::summary::{MeshStats, PassFail};
 
 /// How long each sample runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -332,7 +332,7 @@ pub struct Report {
     pub scenario: String,
     /// "pass" when every pair's 95/95 lower bound of the smallest backlash is at or
     /// above its minimum allowed and no sample interfered; else "fail".
-    pub verdict: &'static str,
+    pub verdict: PassFail,
     pub seed: u64,
     pub samples: u64,
     /// Samples that ran (the statistics are over these); `samples` minus `invalid`.
@@ -354,7 +354,8 @@ pub struct InvalidSample {
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct PairReport {
     pub name: String,
-    pub verdict: &'static str,
+    /// "pass" or "fail".
+    pub verdict: PassFail,
     /// Why, in words.
     pub reason: String,
     pub min_backlash_allowed_um: f64,
@@ -894,7 +895,7 @@ pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
                 .collect();
             let (verdict, reason) = if !invalid.is_empty() {
                 (
-                    "fail",
+                    PassFail::Fail,
                     format!(
                         "{} of {} samples could not be run (first: sample {}: {}); the tolerances allow combinations the model cannot take, so 95/95 cannot be shown",
                         invalid.len(),
@@ -905,25 +906,25 @@ pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
                 )
             } else if interference > 0 {
                 (
-                    "fail",
+                    PassFail::Fail,
                     format!("{interference} of {n} samples interfere or lose the mesh"),
                 )
             } else {
                 match tolerance {
                     None => (
-                        "fail",
+                        PassFail::Fail,
                         format!(
                             "{n} samples cannot show 95/95: a one-sided Wilks bound needs at least {needed}"
                         ),
                     ),
                     Some(t) if t >= allowed_um => (
-                        "pass",
+                        PassFail::Pass,
                         format!(
                             "95/95 lower bound of the smallest backlash {t:.3} µm ≥ {allowed_um:.1} µm minimum"
                         ),
                     ),
                     Some(t) => (
-                        "fail",
+                        PassFail::Fail,
                         format!(
                             "95/95 lower bound of the smallest backlash {t:.3} µm < {allowed_um:.1} µm minimum"
                         ),
@@ -949,11 +950,7 @@ pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
         .collect();
     Some(Report {
         scenario: id.scenario.clone(),
-        verdict: if pairs.iter().all(|p| p.verdict == "pass") {
-            "pass"
-        } else {
-            "fail"
-        },
+        verdict: PassFail::all(pairs.iter().map(|p| p.verdict.passes())),
         seed: id.seed,
         samples: all.len() as u64,
         valid_samples: n,

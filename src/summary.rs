@@ -186,8 +186,42 @@ pub struct PairStats {
     pub t_first_invalid_s: f64,
 }
 
-/// Whether a gear pair kept its minimum backlash.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The verdict of a whole analysis (a run, a margins report, a pair's margin):
+/// serialised as "pass" / "fail", and what decides the exit status.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PassFail {
+    Pass,
+    Fail,
+}
+
+impl PassFail {
+    /// Pass when every one of `passes` is true (an empty list passes).
+    pub fn all(passes: impl IntoIterator<Item = bool>) -> PassFail {
+        if passes.into_iter().all(|p| p) {
+            PassFail::Pass
+        } else {
+            PassFail::Fail
+        }
+    }
+
+    pub fn passes(self) -> bool {
+        self == PassFail::Pass
+    }
+
+    /// "pass" or "fail", as serialised.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PassFail::Pass => "pass",
+            PassFail::Fail => "fail",
+        }
+    }
+}
+
+/// Whether a gear pair kept its minimum backlash. Serialised as "pass",
+/// "margin_violated", "interference" or "no_valid_mesh".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum PairVerdict {
     /// The exact backlash stayed at or above the minimum allowed.
     Pass,
@@ -491,7 +525,7 @@ fn monotone(b0: f64, b1: f64, slope0: f64, slope1: f64, h_s: f64) -> bool {
 pub struct RunSummary {
     pub scenario: String,
     /// "pass" when every gear pair kept its minimum backlash, else "fail".
-    pub verdict: &'static str,
+    pub verdict: PassFail,
     pub t_start_s: f64,
     pub t_end_s: f64,
     pub orbits: f64,
@@ -525,7 +559,7 @@ pub struct NodeSummary {
 pub struct PairSummary {
     pub name: String,
     /// "pass", "margin_violated", "interference" or "no_valid_mesh".
-    pub verdict: &'static str,
+    pub verdict: PairVerdict,
     pub min_backlash_allowed_um: f64,
     /// Over the whole run.
     pub min_backlash_um: f64,
@@ -572,15 +606,6 @@ pub struct SolverSummary {
     pub wall_time_s: f64,
 }
 
-fn verdict_name(v: PairVerdict) -> &'static str {
-    match v {
-        PairVerdict::Pass => "pass",
-        PairVerdict::MarginViolated => "margin_violated",
-        PairVerdict::Interference => "interference",
-        PairVerdict::NoValidMesh => "no_valid_mesh",
-    }
-}
-
 impl RunSummary {
     /// The summary of a run of `scenario` from its statistics and observers.
     pub fn new(
@@ -597,7 +622,7 @@ impl RunSummary {
             .zip(mesh.run_pairs.iter().zip(&mesh.pairs))
             .map(|(g, (r, w))| PairSummary {
                 name: g.name.clone(),
-                verdict: verdict_name(r.verdict()),
+                verdict: r.verdict(),
                 min_backlash_allowed_um: um(g.min_backlash_m),
                 min_backlash_um: um(r.min_exact_m),
                 t_min_backlash_s: r.t_min_s,
@@ -619,11 +644,7 @@ impl RunSummary {
         let net = &scenario.thermal.network;
         RunSummary {
             scenario: scenario.name.clone(),
-            verdict: if pairs.iter().all(|p| p.verdict == "pass") {
-                "pass"
-            } else {
-                "fail"
-            },
+            verdict: PassFail::all(pairs.iter().map(|p| p.verdict.passes())),
             t_start_s: stats.t_start_s,
             t_end_s: stats.t_end_s,
             orbits: (stats.t_end_s - stats.t_start_s) / scenario.period_s(),

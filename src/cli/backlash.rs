@@ -8,6 +8,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 
 use orbitlash::gear::{CenterDistance, DeformedGear, GearPair, MeshState};
+use orbitlash::summary::PassFail;
 use orbitlash::units::{c_to_k, k_to_c};
 
 use super::table::{self, Align};
@@ -238,7 +239,7 @@ struct BacklashReport<'a> {
 struct PairReport<'a> {
     name: &'a str,
     /// "pass" or "fail".
-    verdict: &'static str,
+    verdict: PassFail,
     min_margin_um: f64,
     min_backlash_um: f64,
     cases: Vec<CaseReport<'a>>,
@@ -283,7 +284,7 @@ fn to_json<'a>(
                 let (_, w, pass) = worst(states);
                 PairReport {
                     name: &pair.name,
-                    verdict: if pass { "pass" } else { "fail" },
+                    verdict: PassFail::all([pass]),
                     min_margin_um: w.margin_m * 1e6,
                     min_backlash_um: pair.min_backlash_m * 1e6,
                     cases: states

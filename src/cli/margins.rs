@@ -295,7 +295,7 @@ fn finish(
         outln!(o, "plot: {}", p.display());
     }
     print_out(&o)?;
-    Ok(Outcome::from_pass(rep.verdict == "pass"))
+    Ok(Outcome::from_pass(rep.verdict.passes()))
 }
 
 fn run_with_progress(
@@ -379,7 +379,13 @@ fn plots_of(dir: &Path, rep: &Report, outcomes: &[SampleOutcome]) -> Vec<(PathBu
 pub fn format_report(r: &Report) -> String {
     let mut o = String::new();
     for p in &r.pairs {
-        outln!(o, "{} {}: {}", p.verdict.to_uppercase(), p.name, p.reason);
+        outln!(
+            o,
+            "{} {}: {}",
+            p.verdict.as_str().to_uppercase(),
+            p.name,
+            p.reason
+        );
     }
     outln!(
         o,
