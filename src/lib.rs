@@ -69,6 +69,7 @@ pub mod io;
 pub mod margins;
 pub mod model;
 pub mod orbit;
+pub mod quantity;
 pub mod sample;
 pub mod scenario;
 pub mod sensor;

@@ -5,6 +5,7 @@
 //! everything that depends on the changed value (a view factor on the altitude, a run
 //! length in orbits on the period, a tooth thickness on its thinning) follows.
 
+use crate::quantity::{self as q, Quantity};
 use crate::scenario::Scenario;
 use crate::spec::keys::{ElementKeys, element_keys};
 use crate::spec::params::{self, Param, ParamError};
@@ -348,17 +349,17 @@ impl Model {
         let net = &mut sc.thermal.network;
         match &id.target {
             Target::NodeCapacitance(i) => {
-                let c = check::capacitance(path, value)?;
+                let c = check::value(&q::CAPACITANCE_J_PER_K, path, value)?;
                 self.spec.node[*i].capacitance_j_per_k = value;
                 net.nodes[*i].capacitance_j_per_k = c;
             }
             Target::NodeInitial(i) => {
-                let t = check::temperature(path, value)?;
+                let t = check::value(&q::TEMPERATURE_K, path, value)?;
                 self.spec.node[*i].initial_temperature_k = value;
                 net.nodes[*i].initial_temperature_k = t;
             }
             Target::Conductance(i) => {
-                let g = check::conductance(path, value)?;
+                let g = check::value(&q::CONDUCTANCE_W_PER_K, path, value)?;
                 self.spec.conductor[*i].conductance_w_per_k = value;
                 net.conductors[*i].conductance_w_per_k = g;
             }
@@ -369,7 +370,7 @@ impl Model {
                     *part,
                     value,
                     (&mut r.emissivity_area_m2, &mut r.emissivity, &mut r.area_m2),
-                    "emissivity",
+                    &q::EMISSIVITY,
                 )?;
                 net.radiators[*i].emissivity_area_m2 = product;
             }
@@ -383,7 +384,7 @@ impl Model {
                                 &mut l.absorptivity,
                                 &mut l.area_m2,
                             ),
-                            "absorptivity",
+                            &q::ABSORPTIVITY,
                             *i,
                         )
                     }
@@ -395,7 +396,7 @@ impl Model {
                                 &mut l.absorptivity,
                                 &mut l.area_m2,
                             ),
-                            "absorptivity",
+                            &q::ABSORPTIVITY,
                             self.spec.sun.len() + *i,
                         )
                     }
@@ -403,7 +404,7 @@ impl Model {
                         let l = &mut self.spec.earth_ir[*i];
                         (
                             (&mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2),
-                            "emissivity",
+                            &q::EMISSIVITY,
                             self.spec.sun.len() + self.spec.albedo.len() + *i,
                         )
                     }
@@ -425,7 +426,7 @@ impl Model {
                 }
             }
             Target::ViewFactor(section, i) => {
-                let f = check::view_factor(path, value)?;
+                let f = check::value(&q::VIEW_FACTOR, path, value)?;
                 let at = match section {
                     LoadSection::Albedo => {
                         self.spec.albedo[*i].view_factor = Some(value);
@@ -443,13 +444,18 @@ impl Model {
                 }
             }
             Target::HeaterPower(i) => {
-                let p = check::heater_power(path, value)?;
+                let p = check::value(&q::HEATER_POWER_W, path, value)?;
                 self.spec.heater[*i].power_w = value;
                 net.heaters[*i].power_w = p;
             }
             Target::HeaterOn(i) | Target::HeaterOff(i) => {
-                let t = check::temperature(path, value)?;
                 let on = matches!(id.target, Target::HeaterOn(_));
+                let quantity = if on {
+                    &q::HEATER_ON_K
+                } else {
+                    &q::HEATER_OFF_K
+                };
+                let t = check::value(quantity, path, value)?;
                 let h = &self.spec.heater[*i];
                 let (on_k, off_k) = if on { (t, h.off_k) } else { (h.on_k, t) };
                 let off_path = KeyPath::new("heater")
@@ -466,17 +472,17 @@ impl Model {
                 }
             }
             Target::Albedo => {
-                let a = check::albedo(path, value)?;
+                let a = check::value(&q::ALBEDO, path, value)?;
                 self.spec.environment.albedo = Some(value);
                 sc.thermal.environment.circular_mut().albedo = a;
             }
             Target::EarthIr => {
-                let q = check::earth_ir(path, value)?;
+                let q = check::value(&q::EARTH_IR_W_PER_M2, path, value)?;
                 self.spec.environment.earth_ir_w_per_m2 = Some(value);
                 sc.thermal.environment.circular_mut().earth_ir_w_per_m2 = q;
             }
             Target::Sink => {
-                let t = check::sink(path, value)?;
+                let t = check::value(&q::SPACE_SINK_K, path, value)?;
                 self.spec.environment.space_sink_k = Some(value);
                 sc.thermal.environment.circular_mut().space_sink_k = t;
                 // the built-in boundary `space` sits at the sink temperature
@@ -485,7 +491,7 @@ impl Model {
             Target::BetaConstant
                 if matches!(self.spec.environment.beta_deg, ProfileSpec::Constant(_)) =>
             {
-                let b = check::beta_deg(path, value)?;
+                let b = check::value(&q::BETA_DEG, path, value)?;
                 self.spec.environment.beta_deg = ProfileSpec::Constant(value);
                 sc.thermal.environment.circular_mut().beta_rad =
                     crate::orbit::Profile::Constant(b.to_radians());
@@ -496,7 +502,7 @@ impl Model {
                     Some(ProfileSpec::Table(_))
                 ) =>
             {
-                let s = check::solar_flux(path, value)?;
+                let s = check::value(&q::SOLAR_FLUX_W_PER_M2, path, value)?;
                 self.spec.environment.solar_flux_w_per_m2 = Some(ProfileSpec::Constant(value));
                 sc.thermal.environment.circular_mut().solar_flux_w_per_m2 =
                     crate::orbit::Profile::Constant(s);
@@ -556,13 +562,17 @@ fn area_product(
     part: Part3,
     value: f64,
     (product, fraction, area): (&mut Option<f64>, &mut Option<f64>, &mut Option<f64>),
-    what: &str,
+    fraction_q: &Quantity,
 ) -> Result<f64, ModelError> {
     use crate::spec::check;
     let (p, x, a) = match part {
-        Part3::Product => (check::area(path, value)?, None, None),
-        Part3::Fraction => (0.0, Some(check::fraction(path, value, what)?), *area),
-        Part3::Area => (0.0, *fraction, Some(check::area(path, value)?)),
+        Part3::Product => (check::value(&q::AREA_PRODUCT_M2, path, value)?, None, None),
+        Part3::Fraction => (0.0, Some(check::value(fraction_q, path, value)?), *area),
+        Part3::Area => (
+            0.0,
+            *fraction,
+            Some(check::value(&q::AREA_M2, path, value)?),
+        ),
     };
     Ok(match part {
         Part3::Product => {

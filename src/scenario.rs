@@ -35,8 +35,7 @@ pub const MAX_DURATION_S: f64 = 1e9;
 /// Shortest run, s.
 pub const MIN_DURATION_S: f64 = 1.0;
 
-/// Shortest interval between CSV rows, s.
-pub const MIN_OUTPUT_INTERVAL_S: f64 = 1e-3;
+pub use crate::quantity::MIN_OUTPUT_INTERVAL_S;
 
 /// Longest name of a scenario, node, boundary, load, heater, mode or gear pair.
 pub const MAX_NAME_LEN: usize = 100;

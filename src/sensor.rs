@@ -42,10 +42,7 @@ pub enum ColumnUnit {
     Micrometre,
 }
 
-/// Longest sensor time constant, s (a day: longer is no longer a sensor lag).
-pub const MAX_SENSOR_TAU_S: f64 = 86_400.0;
-/// Largest sensor offset, K.
-pub const MAX_SENSOR_OFFSET_K: f64 = 100.0;
+pub use crate::quantity::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
 
 impl Sensor {
     /// A sensor reading `target` directly (no offset, no lag).

@@ -33,8 +33,8 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {
-            tolerance_k: 0.002,
-            max_step_s: 300.0,
+            tolerance_k: crate::quantity::TOLERANCE_K.default_value(),
+            max_step_s: crate::quantity::MAX_STEP_S.default_value(),
             adaptive: true,
             linear: LinearSolver::Auto,
         }
@@ -44,16 +44,7 @@ impl Default for SolverSettings {
 /// Steps shorter than this are not attempted, s.
 pub const MIN_STEP_S: f64 = 1e-7;
 
-/// Tightest local error per step a scenario may ask for, K: the Newton iterations stop
-/// at 1 % of it, which stays well above the round-off of temperatures near 300 K
-/// (~1e-13 K) and of the stage sums.
-pub const MIN_TOLERANCE_K: f64 = 1e-6;
-/// Loosest, K: beyond it the step controller no longer tracks an orbit's transients.
-pub const MAX_TOLERANCE_K: f64 = 10.0;
-/// Smallest `max_step_s`, s: no node of a lumped spacecraft network needs shorter steps
-/// to be resolved (gear rims and thin films settle in ≳ 0.1 s), and a millisecond step
-/// over an orbit is already 6 million steps.
-pub const MIN_MAX_STEP_S: f64 = 1e-3;
+pub use crate::quantity::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EventKind {

@@ -5,11 +5,12 @@
 
 use crate::gear::GearPair;
 use crate::orbit::{CircularEnvironment, Environment, EnvironmentModel, Profile};
+use crate::quantity::{self as q, Quantity};
 use crate::scenario::{
     MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, Scenario, SensorTarget,
 };
 use crate::sensor::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
-use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K};
+use crate::sim::MIN_MAX_STEP_S;
 use crate::spec::compile::{
     MAX_AREA_M2, MAX_CAPACITANCE_J_PER_K, MAX_CONDUCTANCE_W_PER_K, MAX_PERIOD_S, MAX_POWER_W,
     MIN_CAPACITANCE_J_PER_K, MIN_PERIOD_S,
@@ -37,6 +38,13 @@ fn within(what: &str, v: f64, lo: f64, hi: f64) -> Result<(), Invalid> {
     } else {
         Err(bad(what, format!("{v} is not within {lo} … {hi}")))
     }
+}
+
+/// `v` within the closed range of quantity `q` (the compiler's check, with its open
+/// ends, is the precise one).
+fn within_q(what: &str, v: f64, q: &Quantity) -> Result<(), Invalid> {
+    let (lo, _, hi, _) = q.interval().expect("a quantity with a range");
+    within(what, v, lo, hi)
 }
 
 fn temperature(what: &str, v: f64) -> Result<(), Invalid> {
@@ -108,23 +116,22 @@ fn circular(e: &CircularEnvironment) -> Result<(), Invalid> {
         MIN_PERIOD_S,
         MAX_PERIOD_S,
     )?;
-    let half_pi = std::f64::consts::FRAC_PI_2;
+    let (lo, _, hi, _) = q::BETA_DEG.interval().expect("β has a range");
     profile("environment.beta_rad", &e.beta_rad, &|w, v| {
-        within(w, v, -half_pi, half_pi)
+        within(w, v, lo.to_radians(), hi.to_radians())
     })?;
     profile(
         "environment.solar_flux_w_per_m2",
         &e.solar_flux_w_per_m2,
-        &|w, v| within(w, v, 0.0, 1e5),
+        &|w, v| within_q(w, v, &q::SOLAR_FLUX_W_PER_M2),
     )?;
-    within("environment.albedo", e.albedo, 0.0, 1.0)?;
-    within(
+    within_q("environment.albedo", e.albedo, &q::ALBEDO)?;
+    within_q(
         "environment.earth_ir_w_per_m2",
         e.earth_ir_w_per_m2,
-        0.0,
-        1e4,
+        &q::EARTH_IR_W_PER_M2,
     )?;
-    within("environment.space_sink_k", e.space_sink_k, 0.0, 5000.0)
+    within_q("environment.space_sink_k", e.space_sink_k, &q::SPACE_SINK_K)
 }
 
 impl ThermalModel {
@@ -236,17 +243,17 @@ impl ThermalModel {
                     view_factor,
                 } => {
                     area(*absorptivity_area_m2)?;
-                    within(&w, *view_factor, 0.0, 1.0)?;
+                    within_q(&w, *view_factor, &q::VIEW_FACTOR)?;
                 }
                 LoadKind::EarthIr {
                     emissivity_area_m2,
                     view_factor,
                 } => {
                     area(*emissivity_area_m2)?;
-                    within(&w, *view_factor, 0.0, 1.0)?;
+                    within_q(&w, *view_factor, &q::VIEW_FACTOR)?;
                 }
                 LoadKind::Dissipation { power_w, when } => {
-                    profile(&w, power_w, &|ww, v| within(ww, v, 0.0, MAX_POWER_W))?;
+                    profile(&w, power_w, &|ww, v| within_q(ww, v, &q::POWER_W))?;
                     if let When::Mode(m) = when
                         && *m >= self.modes.len()
                     {
@@ -435,11 +442,10 @@ impl Scenario {
                 format!("below {MIN_OUTPUT_INTERVAL_S} s"),
             ));
         }
-        within(
+        within_q(
             "solver.tolerance_k",
             self.solver.tolerance_k,
-            MIN_TOLERANCE_K,
-            MAX_TOLERANCE_K,
+            &q::TOLERANCE_K,
         )?;
         if !(self.solver.max_step_s.is_finite() && self.solver.max_step_s >= MIN_MAX_STEP_S) {
             return Err(bad(

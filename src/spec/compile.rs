@@ -6,21 +6,17 @@ use std::collections::HashMap;
 
 use super::keys::{KeyPath, element_keys};
 use super::*;
-use crate::constants::{
-    EARTH_ALBEDO, EARTH_IR_W_PER_M2, EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2,
-    SPACE_SINK_K,
-};
+use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M};
 use crate::gear::disc::{BoreFit, DiscMaterial};
 use crate::gear::involute::{inv, shifted_tooth_thickness};
 use crate::gear::strain::StrainLaw;
 use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
 use crate::orbit::{CircularEnvironment, Incidence, Orbit, Profile};
+use crate::quantity::{self as q, Quantity, Rule};
 use crate::scenario::{
-    DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, RunControl,
-    Scenario, Sensor, SensorTarget,
+    DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, RunControl, Scenario, Sensor, SensorTarget,
 };
-use crate::sensor::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
-use crate::sim::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K, SolverSettings};
+use crate::sim::SolverSettings;
 use crate::thermal::iteration::{
     DENSE_MAX_NODES, LinearSolver, SPARSE_MAX_FLOPS, direct_fill_estimate,
 };
@@ -105,6 +101,22 @@ impl Cx {
             Ok(v)
         } else {
             Err(self.err(path, format!("must be ≥ 0 (got {})", num(v))))
+        }
+    }
+
+    /// `v` checked by the rule of quantity `q` (see [`crate::quantity`]), with its
+    /// error text.
+    fn quantity(&self, q: &Quantity, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        match q.rule {
+            Rule::Within { lo, hi, what } => self.within(path, v, lo, hi, what),
+            Rule::PositiveUpTo { hi } => self.positive_up_to(path, v, hi, q.unit),
+            Rule::PositiveAtLeast { lo, hi } => {
+                let v = self.positive_up_to(path, v, hi, q.unit)?;
+                self.at_least(path, v, lo, q.unit)
+            }
+            Rule::AtLeast { lo } => self.at_least(path, v, lo, q.unit),
+            Rule::Temperature => self.temperature(path, v),
+            Rule::InContext => self.finite(path, v),
         }
     }
 
@@ -201,22 +213,20 @@ impl Cx {
         }
     }
 
-    /// `product` or both `a` and `b` (their product), never both forms.
+    /// `product` or both `a` and `b` (their product; `a` a `fraction`), never both forms.
     fn product(
         &self,
         path: &KeyPath,
         product: (Option<f64>, &'static str),
         a: (Option<f64>, &'static str),
         b: (Option<f64>, &'static str),
-        a_max: f64,
+        fraction: &Quantity,
     ) -> Result<f64, SpecError> {
         match (product.0, a.0, b.0) {
-            (Some(p), None, None) => {
-                self.positive_up_to(&path.key(product.1), p, MAX_AREA_M2, "m²")
-            }
+            (Some(p), None, None) => self.quantity(&q::AREA_PRODUCT_M2, &path.key(product.1), p),
             (None, Some(x), Some(y)) => {
-                let x = self.within(&path.key(a.1), x, 0.0, a_max, a.1)?;
-                let y = self.positive_up_to(&path.key(b.1), y, MAX_AREA_M2, "m²")?;
+                let x = self.quantity(fraction, &path.key(a.1), x)?;
+                let y = self.quantity(&q::AREA_M2, &path.key(b.1), y)?;
                 Ok(x * y)
             }
             _ => Err(self.err(
@@ -232,20 +242,10 @@ impl Cx {
 
 // ---------------------------------------------------------------- validation
 
-/// Smallest node capacitance, J/K: a microgram of metal. Below it a node is numerically
-/// indistinguishable from an infinitely fast one and only costs conditioning.
-pub const MIN_CAPACITANCE_J_PER_K: f64 = 1e-6;
-/// Largest capacitance of a node: a thousand tonnes of steel (≈ 5e8 J/K) with a wide
-/// margin; beyond it a node is a boundary (fixed temperature), and energy sums lose
-/// every digit.
-pub const MAX_CAPACITANCE_J_PER_K: f64 = 1e12;
-/// Largest conductance, W/K (a square metre of bonded joint conducts ~1e4 W/K): beyond it
-/// two nodes are one, and the Newton systems lose their precision (tested to 1e12).
-pub const MAX_CONDUCTANCE_W_PER_K: f64 = 1e9;
-/// Largest dissipation or heater power, W.
-pub const MAX_POWER_W: f64 = 1e6;
-/// Largest area (or area product) of a face, a radiative link or a load, m².
-pub const MAX_AREA_M2: f64 = 1e4;
+pub use crate::quantity::{
+    MAX_AREA_M2, MAX_CAPACITANCE_J_PER_K, MAX_CONDUCTANCE_W_PER_K, MAX_POWER_W,
+    MIN_CAPACITANCE_J_PER_K,
+};
 
 /// Orbital periods the model accepts, s: 10 minutes … 30 days.
 pub const MIN_PERIOD_S: f64 = 600.0;
@@ -314,39 +314,34 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let ep = KeyPath::new("environment");
     let e = raw.environment;
     let beta_deg = cx.profile(&ep.key("beta_deg"), e.beta_deg, &|p, v| {
-        cx.within(p, v, -90.0, 90.0, "beta angle (deg)")
+        cx.quantity(&q::BETA_DEG, p, v)
     })?;
     let solar_flux = cx.profile(
         &ep.key("solar_flux_w_per_m2"),
-        e.solar_flux_w_per_m2
-            .unwrap_or(ProfileSpec::Constant(SOLAR_CONSTANT_W_PER_M2)),
-        &|p, v| cx.within(p, v, 0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)"),
+        e.solar_flux_w_per_m2.unwrap_or(ProfileSpec::Constant(
+            q::SOLAR_FLUX_W_PER_M2.default_value(),
+        )),
+        &|p, v| cx.quantity(&q::SOLAR_FLUX_W_PER_M2, p, v),
     )?;
-    let space_sink_k = e.space_sink_k.unwrap_or(SPACE_SINK_K);
-    cx.within(
+    let space_sink_k = cx.quantity(
+        &q::SPACE_SINK_K,
         &ep.key("space_sink_k"),
-        space_sink_k,
-        0.0,
-        5000.0,
-        "sink temperature (K)",
+        e.space_sink_k.unwrap_or(q::SPACE_SINK_K.default_value()),
     )?;
     let environment = CircularEnvironment {
         orbit,
         beta_rad: beta_deg.map(f64::to_radians),
         solar_flux_w_per_m2: solar_flux,
-        albedo: cx.within(
+        albedo: cx.quantity(
+            &q::ALBEDO,
             &ep.key("albedo"),
-            e.albedo.unwrap_or(EARTH_ALBEDO),
-            0.0,
-            1.0,
-            "albedo",
+            e.albedo.unwrap_or(q::ALBEDO.default_value()),
         )?,
-        earth_ir_w_per_m2: cx.within(
+        earth_ir_w_per_m2: cx.quantity(
+            &q::EARTH_IR_W_PER_M2,
             &ep.key("earth_ir_w_per_m2"),
-            e.earth_ir_w_per_m2.unwrap_or(EARTH_IR_W_PER_M2),
-            0.0,
-            1e4,
-            "planetary infrared flux (W/m²)",
+            e.earth_ir_w_per_m2
+                .unwrap_or(q::EARTH_IR_W_PER_M2.default_value()),
         )?,
         space_sink_k,
     };
@@ -388,11 +383,12 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     };
     let run = RunControl {
         duration_s,
-        output_interval_s: cx.at_least(
+        output_interval_s: cx.quantity(
+            &q::OUTPUT_INTERVAL_S,
             &rp.key("output_interval_s"),
-            raw.run.output_interval_s.unwrap_or(30.0),
-            MIN_OUTPUT_INTERVAL_S,
-            "s",
+            raw.run
+                .output_interval_s
+                .unwrap_or(q::OUTPUT_INTERVAL_S.default_value()),
         )?,
     };
 
@@ -408,18 +404,15 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     }
     let defaults = SolverSettings::default();
     let solver = SolverSettings {
-        tolerance_k: cx.within(
+        tolerance_k: cx.quantity(
+            &q::TOLERANCE_K,
             &sp.key("tolerance_k"),
             raw.solver.tolerance_k.unwrap_or(defaults.tolerance_k),
-            MIN_TOLERANCE_K,
-            MAX_TOLERANCE_K,
-            "the local error per step (K)",
         )?,
-        max_step_s: cx.at_least(
+        max_step_s: cx.quantity(
+            &q::MAX_STEP_S,
             &sp.key("max_step_s"),
             raw.solver.max_step_s.unwrap_or(defaults.max_step_s),
-            MIN_MAX_STEP_S,
-            "s",
         )?,
         adaptive: raw.solver.adaptive.unwrap_or(defaults.adaptive),
         linear: match raw.solver.linear.as_deref() {
@@ -444,12 +437,16 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         let p = np.elem(i, &keys.node[i]);
         check_name(cx, &np.at(i).key("name"), &n.name, &names)?;
         let node = DiffusionNode {
-            capacitance_j_per_k: check::capacitance(
+            capacitance_j_per_k: cx.quantity(
+                &q::CAPACITANCE_J_PER_K,
                 &p.key("capacitance_j_per_k"),
                 n.capacitance_j_per_k,
             )?,
-            initial_temperature_k: cx
-                .temperature(&p.key("initial_temperature_k"), n.initial_temperature_k)?,
+            initial_temperature_k: cx.quantity(
+                &q::TEMPERATURE_K,
+                &p.key("initial_temperature_k"),
+                n.initial_temperature_k,
+            )?,
             radius_m: match n.radius_mm {
                 Some(r) => Some(cx.positive(&p.key("radius_mm"), r)? * 1e-3),
                 None => None,
@@ -481,7 +478,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         }
         check_name(cx, &bp.at(i).key("name"), &b.name, &names)?;
         let t = cx.profile(&p.key("temperature_k"), b.temperature_k, &|pp, v| {
-            cx.temperature(pp, v)
+            cx.quantity(&q::TEMPERATURE_K, pp, v)
         })?;
         names.insert(b.name.clone(), NodeRef::Boundary(boundaries.len()));
         boundaries.push(BoundaryNode {
@@ -540,7 +537,8 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         conductors.push(Conductor {
             a,
             b,
-            conductance_w_per_k: check::conductance(
+            conductance_w_per_k: check::value(
+                &q::CONDUCTANCE_W_PER_K,
                 &p.key("conductance_w_per_k"),
                 c.conductance_w_per_k,
             )?,
@@ -555,7 +553,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             (r.emissivity_area_m2, "emissivity_area_m2"),
             (r.emissivity, "emissivity"),
             (r.area_m2, "area_m2"),
-            1.0,
+            &q::EMISSIVITY,
         )?;
         radiators.push(Radiator {
             a,
@@ -634,7 +632,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             (s.absorptivity_area_m2, "absorptivity_area_m2"),
             (s.absorptivity, "absorptivity"),
             (s.area_m2, "area_m2"),
-            1.0,
+            &q::ABSORPTIVITY,
         )?;
         let incidence = match s.incidence.as_deref() {
             None => Incidence::Tracking,
@@ -660,16 +658,14 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     // Earth-facing loads: an area product and a view factor, (R/(R+h))² by default.
     let earth_face = |p: &KeyPath,
                       product: (Option<f64>, &'static str),
-                      a: (Option<f64>, &'static str),
+                      a: (Option<f64>, &'static str, &Quantity),
                       area: Option<f64>,
                       vf: Option<f64>| {
-        let aa = cx.product(p, product, a, (area, "area_m2"), 1.0)?;
-        let vf = cx.within(
+        let aa = cx.product(p, product, (a.0, a.1), (area, "area_m2"), a.2)?;
+        let vf = cx.quantity(
+            &q::VIEW_FACTOR,
             &p.key("view_factor"),
             vf.unwrap_or(view_factor_default),
-            0.0,
-            1.0,
-            "view factor",
         )?;
         Ok::<_, SpecError>((aa, vf))
     };
@@ -679,7 +675,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         let (aa, vf) = earth_face(
             &p,
             (s.absorptivity_area_m2, "absorptivity_area_m2"),
-            (s.absorptivity, "absorptivity"),
+            (s.absorptivity, "absorptivity", &q::ABSORPTIVITY),
             s.area_m2,
             s.view_factor,
         )?;
@@ -698,7 +694,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         let (ea, vf) = earth_face(
             &p,
             (s.emissivity_area_m2, "emissivity_area_m2"),
-            (s.emissivity, "emissivity"),
+            (s.emissivity, "emissivity", &q::EMISSIVITY),
             s.area_m2,
             s.view_factor,
         )?;
@@ -715,7 +711,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         let p = KeyPath::new("dissipation").elem(i, &keys.dissipation[i]);
         let node = diffusion(&p.key("node"), &s.node)?;
         let power = cx.profile(&p.key("power_w"), s.power_w, &|pp, v| {
-            cx.within(pp, v, 0.0, MAX_POWER_W, "power (W)")
+            cx.quantity(&q::POWER_W, pp, v)
         })?;
         let when = match s.when.as_deref() {
             None | Some("always") => When::Always,
@@ -747,14 +743,14 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             Some(s) => diffusion(&p.key("sensor_node"), s)?,
             None => node,
         };
-        let on_k = cx.temperature(&p.key("on_k"), h.on_k)?;
-        let off_k = cx.temperature(&p.key("off_k"), h.off_k)?;
+        let on_k = cx.quantity(&q::HEATER_ON_K, &p.key("on_k"), h.on_k)?;
+        let off_k = cx.quantity(&q::HEATER_OFF_K, &p.key("off_k"), h.off_k)?;
         check::heater_band(&p.key("off_k"), on_k, off_k)?;
         heaters.push(Heater {
             name: h.name.unwrap_or_else(|| format!("heater.{}", h.node)),
             node,
             sensor_node,
-            power_w: cx.positive_up_to(&p.key("power_w"), h.power_w, MAX_POWER_W, "W")?,
+            power_w: cx.quantity(&q::HEATER_POWER_W, &p.key("power_w"), h.power_w)?,
             on_k,
             off_k,
         });
@@ -828,11 +824,11 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
         };
         let tau_s = match s.tau_s {
-            Some(v) => check::sensor_tau(&p.key("tau_s"), v)?,
+            Some(v) => cx.quantity(&q::SENSOR_TAU_S, &p.key("tau_s"), v)?,
             None => 0.0,
         };
         let offset_k = match s.offset_k {
-            Some(v) => check::sensor_offset(&p.key("offset_k"), v)?,
+            Some(v) => cx.quantity(&q::SENSOR_OFFSET_K, &p.key("offset_k"), v)?,
             None => 0.0,
         };
         sensors.push(Sensor {
@@ -1470,49 +1466,9 @@ fn gear_pair(
 pub(crate) mod check {
     use super::*;
 
-    pub fn sensor_tau(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(path, v, 0.0, MAX_SENSOR_TAU_S, "a sensor time constant (s)")
-    }
-
-    pub fn sensor_offset(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(
-            path,
-            v,
-            -MAX_SENSOR_OFFSET_K,
-            MAX_SENSOR_OFFSET_K,
-            "a sensor offset (K)",
-        )
-    }
-
-    pub fn capacitance(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        let c = Cx.positive_up_to(path, v, MAX_CAPACITANCE_J_PER_K, "J/K")?;
-        Cx.at_least(path, c, MIN_CAPACITANCE_J_PER_K, "J/K")
-    }
-
-    pub fn temperature(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.temperature(path, v)
-    }
-
-    pub fn conductance(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.positive_up_to(path, v, MAX_CONDUCTANCE_W_PER_K, "W/K")
-    }
-
-    /// An area or an area product, m².
-    pub fn area(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.positive_up_to(path, v, MAX_AREA_M2, "m²")
-    }
-
-    /// An absorptivity or emissivity named `what`.
-    pub fn fraction(path: &KeyPath, v: f64, what: &str) -> Result<f64, SpecError> {
-        Cx.within(path, v, 0.0, 1.0, what)
-    }
-
-    pub fn view_factor(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(path, v, 0.0, 1.0, "view factor")
-    }
-
-    pub fn heater_power(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.positive_up_to(path, v, MAX_POWER_W, "W")
+    /// `v` checked as a value of quantity `q`, with the compiler's error text.
+    pub fn value(q: &Quantity, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
+        Cx.quantity(q, path, v)
     }
 
     /// A heater's band: `on_k < off_k` (the error is at `off_k`).
@@ -1524,26 +1480,6 @@ pub(crate) mod check {
             ));
         }
         Ok(())
-    }
-
-    pub fn albedo(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(path, v, 0.0, 1.0, "albedo")
-    }
-
-    pub fn earth_ir(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(path, v, 0.0, 1e4, "planetary infrared flux (W/m²)")
-    }
-
-    pub fn sink(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(path, v, 0.0, 5000.0, "sink temperature (K)")
-    }
-
-    pub fn beta_deg(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(path, v, -90.0, 90.0, "beta angle (deg)")
-    }
-
-    pub fn solar_flux(path: &KeyPath, v: f64) -> Result<f64, SpecError> {
-        Cx.within(path, v, 0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)")
     }
 
     /// Gear pair `index` of `spec` compiled again against the nodes of `network` (its

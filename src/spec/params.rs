@@ -8,10 +8,8 @@ use std::borrow::Cow;
 
 use super::keys::{ElementKeys, Part, element_keys, parse_path, quote_key};
 use super::*;
-use crate::constants::{
-    EARTH_ALBEDO, EARTH_IR_W_PER_M2, EARTH_MU_M3_PER_S2, EARTH_RADIUS_M, SOLAR_CONSTANT_W_PER_M2,
-    SPACE_SINK_K,
-};
+use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M};
+use crate::quantity::{self as q, Quantity};
 
 /// How a number is stored in the spec.
 pub enum Slot<'a> {
@@ -34,15 +32,39 @@ pub enum Default {
     Absent,
 }
 
-/// Unit and valid range of a value, for `orbitlash params` and `scenarios/README.md`.
+/// Unit and valid range of a value, for `orbitlash params` and `scenarios/README.md`:
+/// those of its quantity in the table ([`crate::quantity`]), or for numbers checked
+/// only in context (gear geometry, table times, windows), written here.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Meta {
     pub unit: &'static str,
     pub range: &'static str,
+    pub quantity: Option<&'static Quantity>,
 }
 
 const fn m(unit: &'static str, range: &'static str) -> Meta {
-    Meta { unit, range }
+    Meta {
+        unit,
+        range,
+        quantity: None,
+    }
+}
+
+/// A number of quantity `q`: its unit and range.
+const fn of(q: &'static Quantity) -> Meta {
+    Meta {
+        unit: q.unit,
+        range: q.range,
+        quantity: Some(q),
+    }
+}
+
+/// An optional number of quantity `q`, absent standing for its default.
+const fn default_of(q: &'static Quantity) -> Default {
+    match q.default {
+        Some(v) => Default::Value(v),
+        None => Default::Absent,
+    }
 }
 
 /// One addressable value: its key path, its value (what an absent optional value
@@ -55,6 +77,8 @@ pub struct Param {
     pub range: &'static str,
     /// Given in the scenario (false: a default).
     pub given: bool,
+    /// Its kind in the table of quantities (None: checked only in context).
+    pub quantity: Option<&'static Quantity>,
 }
 
 /// A key path that does not lead to a number of the scenario, or a value that is not
@@ -98,21 +122,21 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
     let e = &mut spec.environment;
     if section("environment") {
         at!("environment".into(); {
-            at!("beta_deg".into(); profile(&mut path, &mut e.beta_deg, m("deg", "−90 … 90"), f));
+            at!("beta_deg".into(); profile(&mut path, &mut e.beta_deg, of(&q::BETA_DEG), f));
             match &mut e.solar_flux_w_per_m2 {
-                Some(p) => at!("solar_flux_w_per_m2".into(); profile(&mut path, p, m("W/m²", "0 … 1e5"), f)),
+                Some(p) => at!("solar_flux_w_per_m2".into(); profile(&mut path, p, of(&q::SOLAR_FLUX_W_PER_M2), f)),
                 None => {
                     // absent: the solar constant, settable as a number
                     let mut value = None;
-                    at!("solar_flux_w_per_m2".into(); f(&path, Slot::Optional(&mut value, Default::Value(SOLAR_CONSTANT_W_PER_M2)), m("W/m²", "0 … 1e5")));
+                    at!("solar_flux_w_per_m2".into(); f(&path, Slot::Optional(&mut value, default_of(&q::SOLAR_FLUX_W_PER_M2)), of(&q::SOLAR_FLUX_W_PER_M2)));
                     if let Some(v) = value {
                         e.solar_flux_w_per_m2 = Some(ProfileSpec::Constant(v));
                     }
                 }
             }
-            at!("space_sink_k".into(); f(&path, Slot::Optional(&mut e.space_sink_k, Default::Value(SPACE_SINK_K)), m("K", "0 … 5000")));
-            at!("albedo".into(); f(&path, Slot::Optional(&mut e.albedo, Default::Value(EARTH_ALBEDO)), m("", "0 … 1")));
-            at!("earth_ir_w_per_m2".into(); f(&path, Slot::Optional(&mut e.earth_ir_w_per_m2, Default::Value(EARTH_IR_W_PER_M2)), m("W/m²", "0 … 1e4")));
+            at!("space_sink_k".into(); f(&path, Slot::Optional(&mut e.space_sink_k, default_of(&q::SPACE_SINK_K)), of(&q::SPACE_SINK_K)));
+            at!("albedo".into(); f(&path, Slot::Optional(&mut e.albedo, default_of(&q::ALBEDO)), of(&q::ALBEDO)));
+            at!("earth_ir_w_per_m2".into(); f(&path, Slot::Optional(&mut e.earth_ir_w_per_m2, default_of(&q::EARTH_IR_W_PER_M2)), of(&q::EARTH_IR_W_PER_M2)));
         });
     }
     let r = &mut spec.run;
@@ -122,14 +146,14 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             at!("orbits".into(); f(&path, Slot::Optional(&mut r.orbits, Default::Absent), Meta { unit: "orbits", ..duration }));
             at!("duration_s".into(); f(&path, Slot::Optional(&mut r.duration_s, Default::Absent), Meta { unit: "s", ..duration }));
             at!("duration_days".into(); f(&path, Slot::Optional(&mut r.duration_days, Default::Absent), Meta { unit: "days", ..duration }));
-            at!("output_interval_s".into(); f(&path, Slot::Optional(&mut r.output_interval_s, Default::Value(30.0)), m("s", "≥ 0.001")));
+            at!("output_interval_s".into(); f(&path, Slot::Optional(&mut r.output_interval_s, default_of(&q::OUTPUT_INTERVAL_S)), of(&q::OUTPUT_INTERVAL_S)));
         });
     }
     let s = &mut spec.solver;
     if section("solver") {
         at!("solver".into(); {
-            at!("tolerance_k".into(); f(&path, Slot::Optional(&mut s.tolerance_k, Default::Value(0.002)), m("K", "1e-6 … 10")));
-            at!("max_step_s".into(); f(&path, Slot::Optional(&mut s.max_step_s, Default::Value(300.0)), m("s", "≥ 0.001")));
+            at!("tolerance_k".into(); f(&path, Slot::Optional(&mut s.tolerance_k, default_of(&q::TOLERANCE_K)), of(&q::TOLERANCE_K)));
+            at!("max_step_s".into(); f(&path, Slot::Optional(&mut s.max_step_s, default_of(&q::MAX_STEP_S)), of(&q::MAX_STEP_S)));
         });
     }
     for (n, key) in spec.node.iter_mut().zip(&keys.node) {
@@ -137,8 +161,8 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("node".into(), key.as_str().into(); {
-            at!("capacitance_j_per_k".into(); f(&path, Slot::Value(&mut n.capacitance_j_per_k), m("J/K", "1e-6 … 1e12")));
-            at!("initial_temperature_k".into(); f(&path, Slot::Value(&mut n.initial_temperature_k), m("K", "0 … 5000")));
+            at!("capacitance_j_per_k".into(); f(&path, Slot::Value(&mut n.capacitance_j_per_k), of(&q::CAPACITANCE_J_PER_K)));
+            at!("initial_temperature_k".into(); f(&path, Slot::Value(&mut n.initial_temperature_k), of(&q::TEMPERATURE_K)));
             at!("radius_mm".into(); f(&path, Slot::Optional(&mut n.radius_mm, Default::Absent), m("mm", "> 0, on the gear's bore … base circle")));
         });
     }
@@ -147,7 +171,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("boundary".into(), key.as_str().into(); {
-            at!("temperature_k".into(); profile(&mut path, &mut b.temperature_k, m("K", "0 … 5000"), f));
+            at!("temperature_k".into(); profile(&mut path, &mut b.temperature_k, of(&q::TEMPERATURE_K), f));
         });
     }
     for (c, key) in spec.conductor.iter_mut().zip(&keys.conductor) {
@@ -155,7 +179,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("conductor".into(), key.as_str().into(); {
-            at!("conductance_w_per_k".into(); f(&path, Slot::Value(&mut c.conductance_w_per_k), m("W/K", "0 < G ≤ 1e9")));
+            at!("conductance_w_per_k".into(); f(&path, Slot::Value(&mut c.conductance_w_per_k), of(&q::CONDUCTANCE_W_PER_K)));
         });
     }
     for (r, key) in spec.radiation.iter_mut().zip(&keys.radiation) {
@@ -163,7 +187,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("radiation".into(), key.as_str().into(); {
-            area_product(&mut path, &mut r.emissivity_area_m2, &mut r.emissivity, &mut r.area_m2, ("emissivity_area_m2", "emissivity"), f);
+            area_product(&mut path, &mut r.emissivity_area_m2, &mut r.emissivity, &mut r.area_m2, ("emissivity_area_m2", "emissivity", &q::EMISSIVITY), f);
         });
     }
     for (l, key) in spec.sun.iter_mut().zip(&keys.sun) {
@@ -171,7 +195,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("sun".into(), key.as_str().into(); {
-            area_product(&mut path, &mut l.absorptivity_area_m2, &mut l.absorptivity, &mut l.area_m2, ("absorptivity_area_m2", "absorptivity"), f);
+            area_product(&mut path, &mut l.absorptivity_area_m2, &mut l.absorptivity, &mut l.area_m2, ("absorptivity_area_m2", "absorptivity", &q::ABSORPTIVITY), f);
         });
     }
     for (l, key) in spec.albedo.iter_mut().zip(&keys.albedo) {
@@ -179,8 +203,8 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("albedo".into(), key.as_str().into(); {
-            area_product(&mut path, &mut l.absorptivity_area_m2, &mut l.absorptivity, &mut l.area_m2, ("absorptivity_area_m2", "absorptivity"), f);
-            at!("view_factor".into(); f(&path, Slot::Optional(&mut l.view_factor, Default::EarthViewFactor), m("", "0 … 1")));
+            area_product(&mut path, &mut l.absorptivity_area_m2, &mut l.absorptivity, &mut l.area_m2, ("absorptivity_area_m2", "absorptivity", &q::ABSORPTIVITY), f);
+            at!("view_factor".into(); f(&path, Slot::Optional(&mut l.view_factor, Default::EarthViewFactor), of(&q::VIEW_FACTOR)));
         });
     }
     for (l, key) in spec.earth_ir.iter_mut().zip(&keys.earth_ir) {
@@ -188,8 +212,8 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("earth_ir".into(), key.as_str().into(); {
-            area_product(&mut path, &mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2, ("emissivity_area_m2", "emissivity"), f);
-            at!("view_factor".into(); f(&path, Slot::Optional(&mut l.view_factor, Default::EarthViewFactor), m("", "0 … 1")));
+            area_product(&mut path, &mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2, ("emissivity_area_m2", "emissivity", &q::EMISSIVITY), f);
+            at!("view_factor".into(); f(&path, Slot::Optional(&mut l.view_factor, Default::EarthViewFactor), of(&q::VIEW_FACTOR)));
         });
     }
     for (d, key) in spec.dissipation.iter_mut().zip(&keys.dissipation) {
@@ -197,7 +221,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("dissipation".into(), key.as_str().into(); {
-            at!("power_w".into(); profile(&mut path, &mut d.power_w, m("W", "0 … 1e6"), f));
+            at!("power_w".into(); profile(&mut path, &mut d.power_w, of(&q::POWER_W), f));
         });
     }
     for (h, key) in spec.heater.iter_mut().zip(&keys.heater) {
@@ -205,9 +229,9 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             continue;
         }
         at!("heater".into(), key.as_str().into(); {
-            at!("power_w".into(); f(&path, Slot::Value(&mut h.power_w), m("W", "0 < P ≤ 1e6")));
-            at!("on_k".into(); f(&path, Slot::Value(&mut h.on_k), m("K", "0 … 5000, below off_k")));
-            at!("off_k".into(); f(&path, Slot::Value(&mut h.off_k), m("K", "0 … 5000, above on_k")));
+            at!("power_w".into(); f(&path, Slot::Value(&mut h.power_w), of(&q::HEATER_POWER_W)));
+            at!("on_k".into(); f(&path, Slot::Value(&mut h.on_k), of(&q::HEATER_ON_K)));
+            at!("off_k".into(); f(&path, Slot::Value(&mut h.off_k), of(&q::HEATER_OFF_K)));
         });
     }
     for (md, key) in spec.mode.iter_mut().zip(&keys.mode) {
@@ -232,8 +256,8 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
         }
         if sn.node.is_some() {
             at!("sensor".into(), key.as_str().into(); {
-                at!("tau_s".into(); f(&path, Slot::Optional(&mut sn.tau_s, Default::Value(0.0)), m("s", "0 … 86 400")));
-                at!("offset_k".into(); f(&path, Slot::Optional(&mut sn.offset_k, Default::Value(0.0)), m("K", "−100 … 100")));
+                at!("tau_s".into(); f(&path, Slot::Optional(&mut sn.tau_s, default_of(&q::SENSOR_TAU_S)), of(&q::SENSOR_TAU_S)));
+                at!("offset_k".into(); f(&path, Slot::Optional(&mut sn.offset_k, default_of(&q::SENSOR_OFFSET_K)), of(&q::SENSOR_OFFSET_K)));
             });
         }
     }
@@ -245,13 +269,14 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
     }
 }
 
-/// A value that is either a product (`emissivity_area_m2`) or a fraction times an area.
+/// A value that is either a product (`emissivity_area_m2`) or a fraction (of quantity
+/// `fraction_q`) times an area.
 fn area_product<'k>(
     path: &mut Vec<Cow<'k, str>>,
     product: &mut Option<f64>,
     fraction: &mut Option<f64>,
     area: &mut Option<f64>,
-    (product_key, fraction_key): (&'k str, &'k str),
+    (product_key, fraction_key, fraction_q): (&'k str, &'k str, &'static Quantity),
     f: &mut Visit<'_>,
 ) {
     let n = path.len();
@@ -259,22 +284,18 @@ fn area_product<'k>(
     f(
         path,
         Slot::Optional(product, Default::Absent),
-        m("m²", "0 < … ≤ 1e4"),
+        of(&q::AREA_PRODUCT_M2),
     );
     path.truncate(n);
     path.push(fraction_key.into());
     f(
         path,
         Slot::Optional(fraction, Default::Absent),
-        m("", "0 … 1"),
+        of(fraction_q),
     );
     path.truncate(n);
     path.push("area_m2".into());
-    f(
-        path,
-        Slot::Optional(area, Default::Absent),
-        m("m²", "0 < A ≤ 1e4"),
-    );
+    f(path, Slot::Optional(area, Default::Absent), of(&q::AREA_M2));
     path.truncate(n);
 }
 
@@ -651,6 +672,7 @@ pub fn params(spec: &ScenarioSpec) -> Vec<Param> {
             unit: meta.unit,
             range: meta.range,
             given,
+            quantity: meta.quantity,
         });
     });
     out

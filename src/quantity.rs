@@ -1,0 +1,279 @@
+//! The table of quantities: each kind of number a scenario holds, defined once — its
+//! unit, its valid range (as a rule the code checks and as the text `orbitlash params`
+//! shows), its default. The TOML reader and `--set` (both through `spec::compile`),
+//! the fast writes of `Model::set_param`, `Scenario::validate`, `orbitlash params` and
+//! `SolverSettings::default()` read these definitions; none of them writes a bound or
+//! a default of its own for a number listed here.
+//!
+//! Adding a key: a field in the spec (`spec/mod.rs`), one line in `spec::params`' walk
+//! naming its quantity, and the compiler reading it through [`Quantity`]'s check
+//! (`spec::compile::check::value`). A new kind of number is one constant here.
+//!
+//! This module depends on nothing else in the crate: the run layer (`sim`) and the spec
+//! layer both read it.
+
+/// How a value is checked. Every rule first requires a finite number.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rule {
+    /// `lo ≤ v ≤ hi`; the error names the quantity: "`what` must be within lo … hi".
+    Within {
+        lo: f64,
+        hi: f64,
+        what: &'static str,
+    },
+    /// `0 < v ≤ hi` (a physically sensible upper bound, named with the unit).
+    PositiveUpTo { hi: f64 },
+    /// `0 < v ≤ hi` and `v ≥ lo`.
+    PositiveAtLeast { lo: f64, hi: f64 },
+    /// `v ≥ lo`.
+    AtLeast { lo: f64 },
+    /// A temperature in kelvin, `0 < v < 5000` (the error reminds of °C + 273.15).
+    Temperature,
+    /// Checked by the compiler against other values (a radius on its gear, increasing
+    /// table times, mode windows, a run length in orbits): the range text says how.
+    InContext,
+}
+
+/// One kind of number.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Quantity {
+    /// As shown after values (`orbitlash params`), e.g. "W/m²"; "" for a pure number.
+    pub unit: &'static str,
+    /// The valid range as `orbitlash params` and `scenarios/README.md` show it.
+    pub range: &'static str,
+    /// What an absent value stands for (None: required, or a default that depends on
+    /// the scenario, such as the Earth view factor).
+    pub default: Option<f64>,
+    pub rule: Rule,
+}
+
+impl Quantity {
+    /// The closed interval the rule accepts, with whether each end is itself
+    /// accepted: `(lo, lo_included, hi, hi_included)`. None for [`Rule::InContext`].
+    pub fn interval(&self) -> Option<(f64, bool, f64, bool)> {
+        match self.rule {
+            Rule::Within { lo, hi, .. } => Some((lo, true, hi, true)),
+            Rule::PositiveUpTo { hi } => Some((0.0, false, hi, true)),
+            Rule::PositiveAtLeast { lo, hi } => Some((lo, true, hi, true)),
+            Rule::AtLeast { lo } => Some((lo, true, f64::INFINITY, true)),
+            Rule::Temperature => Some((0.0, false, MAX_TEMPERATURE_K, false)),
+            Rule::InContext => None,
+        }
+    }
+
+    /// Whether `v` is accepted (the compiler's check gives the error text).
+    pub fn accepts(&self, v: f64) -> bool {
+        v.is_finite()
+            && self.interval().is_none_or(|(lo, lo_in, hi, hi_in)| {
+                (v > lo || (lo_in && v == lo)) && (v < hi || (hi_in && v == hi))
+            })
+    }
+
+    /// The default; panics for a quantity without one (a programming error).
+    pub const fn default_value(&self) -> f64 {
+        match self.default {
+            Some(v) => v,
+            None => panic!("this quantity has no default"),
+        }
+    }
+}
+
+/// Highest temperature a scenario may give, K (exclusive).
+pub const MAX_TEMPERATURE_K: f64 = 5000.0;
+/// Smallest node capacitance, J/K: a microgram of metal. Below it a node is numerically
+/// indistinguishable from an infinitely fast one and only costs conditioning.
+pub const MIN_CAPACITANCE_J_PER_K: f64 = 1e-6;
+/// Largest capacitance of a node: a thousand tonnes of steel (≈ 5e8 J/K) with a wide
+/// margin; beyond it a node is a boundary (fixed temperature), and energy sums lose
+/// every digit.
+pub const MAX_CAPACITANCE_J_PER_K: f64 = 1e12;
+/// Largest conductance, W/K (a square metre of bonded joint conducts ~1e4 W/K): beyond it
+/// two nodes are one, and the Newton systems lose their precision (tested to 1e12).
+pub const MAX_CONDUCTANCE_W_PER_K: f64 = 1e9;
+/// Largest dissipation or heater power, W.
+pub const MAX_POWER_W: f64 = 1e6;
+/// Largest area (or area product) of a face, a radiative link or a load, m².
+pub const MAX_AREA_M2: f64 = 1e4;
+/// Tightest local error per step a scenario may ask for, K: the Newton iterations stop
+/// at 1 % of it, which stays well above the round-off of temperatures near 300 K
+/// (~1e-13 K) and of the stage sums.
+pub const MIN_TOLERANCE_K: f64 = 1e-6;
+/// Loosest, K: beyond it the step controller no longer tracks an orbit's transients.
+pub const MAX_TOLERANCE_K: f64 = 10.0;
+/// Smallest `max_step_s`, s: no node of a lumped spacecraft network needs shorter steps
+/// to be resolved (gear rims and thin films settle in ≳ 0.1 s), and a millisecond step
+/// over an orbit is already 6 million steps.
+pub const MIN_MAX_STEP_S: f64 = 1e-3;
+/// Shortest interval between CSV rows, s.
+pub const MIN_OUTPUT_INTERVAL_S: f64 = 1e-3;
+/// Longest sensor time constant, s (a day: longer is no longer a sensor lag).
+pub const MAX_SENSOR_TAU_S: f64 = 86_400.0;
+/// Largest sensor offset, K.
+pub const MAX_SENSOR_OFFSET_K: f64 = 100.0;
+
+const fn q(unit: &'static str, range: &'static str, default: Option<f64>, rule: Rule) -> Quantity {
+    Quantity {
+        unit,
+        range,
+        default,
+        rule,
+    }
+}
+
+const fn within(lo: f64, hi: f64, what: &'static str) -> Rule {
+    Rule::Within { lo, hi, what }
+}
+
+// ---------------------------------------------------------------- thermal network
+
+pub const TEMPERATURE_K: Quantity = q("K", "0 … 5000", None, Rule::Temperature);
+pub const CAPACITANCE_J_PER_K: Quantity = q(
+    "J/K",
+    "1e-6 … 1e12",
+    None,
+    Rule::PositiveAtLeast {
+        lo: MIN_CAPACITANCE_J_PER_K,
+        hi: MAX_CAPACITANCE_J_PER_K,
+    },
+);
+pub const CONDUCTANCE_W_PER_K: Quantity = q(
+    "W/K",
+    "0 < G ≤ 1e9",
+    None,
+    Rule::PositiveUpTo {
+        hi: MAX_CONDUCTANCE_W_PER_K,
+    },
+);
+/// An emissivity or absorptivity times its area, m².
+pub const AREA_PRODUCT_M2: Quantity = q(
+    "m²",
+    "0 < … ≤ 1e4",
+    None,
+    Rule::PositiveUpTo { hi: MAX_AREA_M2 },
+);
+pub const AREA_M2: Quantity = q(
+    "m²",
+    "0 < A ≤ 1e4",
+    None,
+    Rule::PositiveUpTo { hi: MAX_AREA_M2 },
+);
+pub const ABSORPTIVITY: Quantity = q("", "0 … 1", None, within(0.0, 1.0, "absorptivity"));
+pub const EMISSIVITY: Quantity = q("", "0 … 1", None, within(0.0, 1.0, "emissivity"));
+/// An Earth-facing load's view factor of the Earth (default: the orbit's (R/(R+h))²).
+pub const VIEW_FACTOR: Quantity = q("", "0 … 1", None, within(0.0, 1.0, "view factor"));
+/// A dissipation's power (constant or table value), W.
+pub const POWER_W: Quantity = q("W", "0 … 1e6", None, within(0.0, MAX_POWER_W, "power (W)"));
+pub const HEATER_POWER_W: Quantity = q(
+    "W",
+    "0 < P ≤ 1e6",
+    None,
+    Rule::PositiveUpTo { hi: MAX_POWER_W },
+);
+pub const HEATER_ON_K: Quantity = q("K", "0 … 5000, below off_k", None, Rule::Temperature);
+pub const HEATER_OFF_K: Quantity = q("K", "0 … 5000, above on_k", None, Rule::Temperature);
+
+// ---------------------------------------------------------------- environment
+
+pub const BETA_DEG: Quantity = q(
+    "deg",
+    "−90 … 90",
+    None,
+    within(-90.0, 90.0, "beta angle (deg)"),
+);
+pub const SOLAR_FLUX_W_PER_M2: Quantity = q(
+    "W/m²",
+    "0 … 1e5",
+    Some(crate::constants::SOLAR_CONSTANT_W_PER_M2),
+    within(0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)"),
+);
+pub const SPACE_SINK_K: Quantity = q(
+    "K",
+    "0 … 5000",
+    Some(crate::constants::SPACE_SINK_K),
+    within(0.0, 5000.0, "sink temperature (K)"),
+);
+pub const ALBEDO: Quantity = q(
+    "",
+    "0 … 1",
+    Some(crate::constants::EARTH_ALBEDO),
+    within(0.0, 1.0, "albedo"),
+);
+pub const EARTH_IR_W_PER_M2: Quantity = q(
+    "W/m²",
+    "0 … 1e4",
+    Some(crate::constants::EARTH_IR_W_PER_M2),
+    within(0.0, 1e4, "planetary infrared flux (W/m²)"),
+);
+
+// ---------------------------------------------------------------- run and solver
+
+pub const OUTPUT_INTERVAL_S: Quantity = q(
+    "s",
+    "≥ 0.001",
+    Some(30.0),
+    Rule::AtLeast {
+        lo: MIN_OUTPUT_INTERVAL_S,
+    },
+);
+pub const TOLERANCE_K: Quantity = q(
+    "K",
+    "1e-6 … 10",
+    Some(0.002),
+    within(
+        MIN_TOLERANCE_K,
+        MAX_TOLERANCE_K,
+        "the local error per step (K)",
+    ),
+);
+pub const MAX_STEP_S: Quantity = q(
+    "s",
+    "≥ 0.001",
+    Some(300.0),
+    Rule::AtLeast { lo: MIN_MAX_STEP_S },
+);
+
+// ---------------------------------------------------------------- sensors
+
+pub const SENSOR_TAU_S: Quantity = q(
+    "s",
+    "0 … 86 400",
+    Some(0.0),
+    within(0.0, MAX_SENSOR_TAU_S, "a sensor time constant (s)"),
+);
+pub const SENSOR_OFFSET_K: Quantity = q(
+    "K",
+    "−100 … 100",
+    Some(0.0),
+    within(
+        -MAX_SENSOR_OFFSET_K,
+        MAX_SENSOR_OFFSET_K,
+        "a sensor offset (K)",
+    ),
+);
+
+/// Every quantity above with a checkable rule, by name (for the generated tests and
+/// the documentation).
+pub const TABLE: &[(&str, &Quantity)] = &[
+    ("TEMPERATURE_K", &TEMPERATURE_K),
+    ("CAPACITANCE_J_PER_K", &CAPACITANCE_J_PER_K),
+    ("CONDUCTANCE_W_PER_K", &CONDUCTANCE_W_PER_K),
+    ("AREA_PRODUCT_M2", &AREA_PRODUCT_M2),
+    ("AREA_M2", &AREA_M2),
+    ("ABSORPTIVITY", &ABSORPTIVITY),
+    ("EMISSIVITY", &EMISSIVITY),
+    ("VIEW_FACTOR", &VIEW_FACTOR),
+    ("POWER_W", &POWER_W),
+    ("HEATER_POWER_W", &HEATER_POWER_W),
+    ("HEATER_ON_K", &HEATER_ON_K),
+    ("HEATER_OFF_K", &HEATER_OFF_K),
+    ("BETA_DEG", &BETA_DEG),
+    ("SOLAR_FLUX_W_PER_M2", &SOLAR_FLUX_W_PER_M2),
+    ("SPACE_SINK_K", &SPACE_SINK_K),
+    ("ALBEDO", &ALBEDO),
+    ("EARTH_IR_W_PER_M2", &EARTH_IR_W_PER_M2),
+    ("OUTPUT_INTERVAL_S", &OUTPUT_INTERVAL_S),
+    ("TOLERANCE_K", &TOLERANCE_K),
+    ("MAX_STEP_S", &MAX_STEP_S),
+    ("SENSOR_TAU_S", &SENSOR_TAU_S),
+    ("SENSOR_OFFSET_K", &SENSOR_OFFSET_K),
+];
