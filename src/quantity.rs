@@ -21,6 +21,10 @@ pub enum Rule {
         hi: f64,
         what: &'static str,
     },
+    /// `v > 0`.
+    Positive,
+    /// `v ≥ 0`.
+    NonNegative,
     /// `0 < v ≤ hi` (a physically sensible upper bound, named with the unit).
     PositiveUpTo { hi: f64 },
     /// `0 < v ≤ hi` and `v ≥ lo`.
@@ -53,6 +57,8 @@ impl Quantity {
     pub fn interval(&self) -> Option<(f64, bool, f64, bool)> {
         match self.rule {
             Rule::Within { lo, hi, .. } => Some((lo, true, hi, true)),
+            Rule::Positive => Some((0.0, false, f64::INFINITY, true)),
+            Rule::NonNegative => Some((0.0, true, f64::INFINITY, true)),
             Rule::PositiveUpTo { hi } => Some((0.0, false, hi, true)),
             Rule::PositiveAtLeast { lo, hi } => Some((lo, true, hi, true)),
             Rule::AtLeast { lo } => Some((lo, true, f64::INFINITY, true)),
@@ -205,6 +211,60 @@ pub const EARTH_IR_W_PER_M2: Quantity = q(
     within(0.0, 1e4, "planetary infrared flux (W/m²)"),
 );
 
+// ---------------------------------------------------------------- orbit
+
+pub const EARTH_RADIUS_M: Quantity = q(
+    "m",
+    "1e5 … 1e8",
+    Some(crate::constants::EARTH_RADIUS_M),
+    within(1e5, 1e8, "the central body's radius (m)"),
+);
+pub const MU_M3_PER_S2: Quantity = q(
+    "m³/s²",
+    "1e9 … 1e17, period 10 min … 30 days",
+    Some(crate::constants::EARTH_MU_M3_PER_S2),
+    within(1e9, 1e17, "gravitational parameter (m³/s²; Earth 3.986e14)"),
+);
+pub const ORBIT_ANGLE_AT_START_DEG: Quantity = q(
+    "deg",
+    "any (reduced modulo 360°)",
+    Some(0.0),
+    Rule::InContext,
+);
+
+// ---------------------------------------------------------------- gear pairs
+
+pub const MODULE_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
+pub const FACE_WIDTH_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
+pub const MIN_BACKLASH_UM: Quantity = q("µm", "≥ 0", None, Rule::NonNegative);
+pub const COATING_THICKNESS_UM: Quantity = q("µm", "≥ 0", None, Rule::NonNegative);
+/// A linear expansion coefficient (a material's α, a coating's).
+pub const EXPANSION_PER_K: Quantity = q(
+    "1/K",
+    "−1e-3 … 1e-3",
+    None,
+    within(-1e-3, 1e-3, "expansion coefficient (1/K)"),
+);
+pub const DALPHA_DT_PER_K2: Quantity = q(
+    "1/K²",
+    "−1e-5 … 1e-5",
+    None,
+    within(-1e-5, 1e-5, "dα/dT (1/K²)"),
+);
+pub const PROFILE_SHIFT: Quantity = q("", "−2 … 2", Some(0.0), within(-2.0, 2.0, "profile shift"));
+pub const ROOT_RADIUS_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
+/// Positive, then checked against the gear's base and root radii.
+pub const TIP_RADIUS_MM: Quantity = q("mm", "above the base and root radii", None, Rule::Positive);
+pub const BORE_RADIUS_MM: Quantity = q("mm", "below the base and root radii", None, Rule::Positive);
+/// A diffusion node's radius on its gear: positive, then checked against the bore and
+/// base circles.
+pub const NODE_RADIUS_MM: Quantity = q(
+    "mm",
+    "> 0, on the gear's bore … base circle",
+    None,
+    Rule::Positive,
+);
+
 // ---------------------------------------------------------------- run and solver
 
 pub const OUTPUT_INTERVAL_S: Quantity = q(
@@ -251,8 +311,8 @@ pub const SENSOR_OFFSET_K: Quantity = q(
     ),
 );
 
-/// Every quantity above with a checkable rule, by name (for the generated tests and
-/// the documentation).
+/// Every quantity above with a range, by name (for the generated test and the
+/// documentation).
 pub const TABLE: &[(&str, &Quantity)] = &[
     ("TEMPERATURE_K", &TEMPERATURE_K),
     ("CAPACITANCE_J_PER_K", &CAPACITANCE_J_PER_K),
@@ -271,6 +331,19 @@ pub const TABLE: &[(&str, &Quantity)] = &[
     ("SPACE_SINK_K", &SPACE_SINK_K),
     ("ALBEDO", &ALBEDO),
     ("EARTH_IR_W_PER_M2", &EARTH_IR_W_PER_M2),
+    ("EARTH_RADIUS_M", &EARTH_RADIUS_M),
+    ("MU_M3_PER_S2", &MU_M3_PER_S2),
+    ("MODULE_MM", &MODULE_MM),
+    ("FACE_WIDTH_MM", &FACE_WIDTH_MM),
+    ("MIN_BACKLASH_UM", &MIN_BACKLASH_UM),
+    ("COATING_THICKNESS_UM", &COATING_THICKNESS_UM),
+    ("EXPANSION_PER_K", &EXPANSION_PER_K),
+    ("DALPHA_DT_PER_K2", &DALPHA_DT_PER_K2),
+    ("PROFILE_SHIFT", &PROFILE_SHIFT),
+    ("ROOT_RADIUS_MM", &ROOT_RADIUS_MM),
+    ("TIP_RADIUS_MM", &TIP_RADIUS_MM),
+    ("BORE_RADIUS_MM", &BORE_RADIUS_MM),
+    ("NODE_RADIUS_MM", &NODE_RADIUS_MM),
     ("OUTPUT_INTERVAL_S", &OUTPUT_INTERVAL_S),
     ("TOLERANCE_K", &TOLERANCE_K),
     ("MAX_STEP_S", &MAX_STEP_S),

@@ -122,6 +122,8 @@ fn core_every_quantity_bound_agrees_across_toml_set_set_param_and_dispersion() {
     let r = &mut split.radiation[0];
     r.emissivity = Some(0.5);
     r.area_m2 = Some(2.0 * r.emissivity_area_m2.take().unwrap());
+    // and the pinion's steel with a dα/dT
+    split.gear_pair[0].pinion.material.dalpha_dt_per_k2 = Some(1e-9);
     let split_text = edited(&reference, &spec, &split, &[], &|_, _| None).unwrap();
     for (file, text) in [
         ("scenarios/reference-hinge.toml", reference.clone()),
@@ -129,7 +131,7 @@ fn core_every_quantity_bound_agrees_across_toml_set_set_param_and_dispersion() {
             "scenarios/hinge-90-day-drift.toml",
             read("scenarios/hinge-90-day-drift.toml"),
         ),
-        ("reference-hinge with ε × A", split_text),
+        ("reference-hinge with ε × A and a dα/dT", split_text),
     ] {
         let (n, q) = check_scenario(file, &text);
         checked += n;

@@ -6,7 +6,6 @@ use std::collections::HashMap;
 
 use super::keys::{KeyPath, element_keys};
 use super::*;
-use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M};
 use crate::gear::disc::{BoreFit, DiscMaterial};
 use crate::gear::involute::{inv, shifted_tooth_thickness};
 use crate::gear::strain::StrainLaw;
@@ -109,6 +108,8 @@ impl Cx {
     fn quantity(&self, q: &Quantity, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
         match q.rule {
             Rule::Within { lo, hi, what } => self.within(path, v, lo, hi, what),
+            Rule::Positive => self.positive(path, v),
+            Rule::NonNegative => self.non_negative(path, v),
             Rule::PositiveUpTo { hi } => self.positive_up_to(path, v, hi, q.unit),
             Rule::PositiveAtLeast { lo, hi } => {
                 let v = self.positive_up_to(path, v, hi, q.unit)?;
@@ -261,12 +262,12 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
 
     // Orbit.
     let op = KeyPath::new("orbit");
-    let earth_radius_m = cx.within(
+    let earth_radius_m = cx.quantity(
+        &q::EARTH_RADIUS_M,
         &op.key("earth_radius_m"),
-        raw.orbit.earth_radius_m.unwrap_or(EARTH_RADIUS_M),
-        1e5,
-        1e8,
-        "the central body's radius (m)",
+        raw.orbit
+            .earth_radius_m
+            .unwrap_or(q::EARTH_RADIUS_M.default_value()),
     )?;
     let altitude_m = cx.finite(&op.key("altitude_m"), raw.orbit.altitude_m)?;
     if !(100e3..=100_000e3).contains(&altitude_m) {
@@ -278,19 +279,22 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let orbit = Orbit {
         altitude_m,
         earth_radius_m,
-        mu_m3_per_s2: cx.within(
+        mu_m3_per_s2: cx.quantity(
+            &q::MU_M3_PER_S2,
             &op.key("mu_m3_per_s2"),
-            raw.orbit.mu_m3_per_s2.unwrap_or(EARTH_MU_M3_PER_S2),
-            1e9,
-            1e17,
-            "gravitational parameter (m³/s²; Earth 3.986e14)",
+            raw.orbit
+                .mu_m3_per_s2
+                .unwrap_or(q::MU_M3_PER_S2.default_value()),
         )?,
         // Reduced modulo 360° exactly (fmod is exact) before the conversion, so that a
         // large angle keeps its fraction of a turn.
         orbit_angle_at_start_rad: cx
-            .finite(
+            .quantity(
+                &q::ORBIT_ANGLE_AT_START_DEG,
                 &op.key("orbit_angle_at_start_deg"),
-                raw.orbit.orbit_angle_at_start_deg.unwrap_or(0.0),
+                raw.orbit
+                    .orbit_angle_at_start_deg
+                    .unwrap_or(q::ORBIT_ANGLE_AT_START_DEG.default_value()),
             )?
             .rem_euclid(360.0)
             .to_radians(),
@@ -448,7 +452,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
                 n.initial_temperature_k,
             )?,
             radius_m: match n.radius_mm {
-                Some(r) => Some(cx.positive(&p.key("radius_mm"), r)? * 1e-3),
+                Some(r) => Some(cx.quantity(&q::NODE_RADIUS_MM, &p.key("radius_mm"), r)? * 1e-3),
                 None => None,
             },
             name: n.name,
@@ -1061,14 +1065,12 @@ fn strain_law_unchecked(cx: &Cx, p: &KeyPath, keys: StrainKeys) -> Result<Strain
         }
         return Ok(StrainLaw::AlphaPolynomial { coefficients });
     }
-    let alpha_ok = |v: f64, key: &'static str| {
-        cx.within(&p.key(key), v, -1e-3, 1e-3, "expansion coefficient (1/K)")
-    };
+    let alpha_ok = |v: f64, key: &'static str| cx.quantity(&q::EXPANSION_PER_K, &p.key(key), v);
     match (alpha, dalpha, poly, table) {
         (Some(a), None, None, None) => Ok(StrainLaw::Linear { alpha_per_k: alpha_ok(a, "alpha_per_k")? }),
         (Some(a), Some(d), None, None) => Ok(StrainLaw::Quadratic {
             alpha_per_k: alpha_ok(a, "alpha_per_k")?,
-            dalpha_dt_per_k2: cx.within(&p.key("dalpha_dt_per_k2"), d, -1e-5, 1e-5, "dα/dT (1/K²)")?,
+            dalpha_dt_per_k2: cx.quantity(&q::DALPHA_DT_PER_K2, &p.key("dalpha_dt_per_k2"), d)?,
         }),
         (None, None, Some(poly), None) => {
             let pp = p.key("strain_polynomial");
@@ -1147,7 +1149,7 @@ fn gear_pair(
     nodes: &[DiffusionNode],
     diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
 ) -> Result<GearPair, SpecError> {
-    let module_m = cx.positive(&p.key("module_mm"), g.module_mm)? * 1e-3;
+    let module_m = cx.quantity(&q::MODULE_MM, &p.key("module_mm"), g.module_mm)? * 1e-3;
     let alpha0_deg = cx.finite(&p.key("pressure_angle_deg"), g.pressure_angle_deg)?;
     if !(10.0..=35.0).contains(&alpha0_deg) {
         return Err(cx.err(
@@ -1156,16 +1158,22 @@ fn gear_pair(
         ));
     }
     let alpha0 = alpha0_deg.to_radians();
-    let t_ref = cx.temperature(&p.key("reference_temperature_k"), g.reference_temperature_k)?;
+    let t_ref = cx.quantity(
+        &q::TEMPERATURE_K,
+        &p.key("reference_temperature_k"),
+        g.reference_temperature_k,
+    )?;
     let cp = p.key("coating");
     let coating = Coating {
-        thickness_m: cx.non_negative(&cp.key("thickness_um"), g.coating.thickness_um)? * 1e-6,
-        alpha_per_k: cx.within(
+        thickness_m: cx.quantity(
+            &q::COATING_THICKNESS_UM,
+            &cp.key("thickness_um"),
+            g.coating.thickness_um,
+        )? * 1e-6,
+        alpha_per_k: cx.quantity(
+            &q::EXPANSION_PER_K,
             &cp.key("alpha_per_k"),
             g.coating.alpha_per_k,
-            -1e-3,
-            1e-3,
-            "expansion coefficient (1/K)",
         )?,
         poisson: {
             let v = cx.finite(&cp.key("poisson"), g.coating.poisson)?;
@@ -1189,18 +1197,28 @@ fn gear_pair(
             ));
         }
         let teeth = teeth as u32;
-        let shift = cx.within(
+        let shift = cx.quantity(
+            &q::PROFILE_SHIFT,
             &gp.key("profile_shift"),
             raw.profile_shift,
-            -2.0,
-            2.0,
-            "profile shift",
         )?;
         let r_ref = module_m * teeth as f64 / 2.0;
         let r_b = r_ref * alpha0.cos();
-        let tip = cx.positive(&gp.key("tip_radius_mm"), raw.tip_radius_mm)? * 1e-3;
-        let root = cx.positive(&gp.key("root_radius_mm"), raw.root_radius_mm)? * 1e-3;
-        let bore = cx.positive(&gp.key("bore_radius_mm"), raw.bore_radius_mm)? * 1e-3;
+        let tip = cx.quantity(
+            &q::TIP_RADIUS_MM,
+            &gp.key("tip_radius_mm"),
+            raw.tip_radius_mm,
+        )? * 1e-3;
+        let root = cx.quantity(
+            &q::ROOT_RADIUS_MM,
+            &gp.key("root_radius_mm"),
+            raw.root_radius_mm,
+        )? * 1e-3;
+        let bore = cx.quantity(
+            &q::BORE_RADIUS_MM,
+            &gp.key("bore_radius_mm"),
+            raw.bore_radius_mm,
+        )? * 1e-3;
         let mm = |x: f64| format!("{} mm", crate::units::fixed(x * 1e3, 6));
         if bore >= r_b {
             return Err(cx.err(
@@ -1422,12 +1440,17 @@ fn gear_pair(
         }),
         module_m,
         pressure_angle_rad: alpha0,
-        face_width_m: cx.positive(&p.key("face_width_mm"), g.face_width_mm)? * 1e-3,
+        face_width_m: cx.quantity(&q::FACE_WIDTH_MM, &p.key("face_width_mm"), g.face_width_mm)?
+            * 1e-3,
         center_distance_m: cx.positive(&p.key("center_distance_mm"), g.center_distance_mm)? * 1e-3,
         center,
         reference_temperature_k: t_ref,
         coating,
-        min_backlash_m: cx.non_negative(&p.key("min_backlash_um"), g.min_backlash_um)? * 1e-6,
+        min_backlash_m: cx.quantity(
+            &q::MIN_BACKLASH_UM,
+            &p.key("min_backlash_um"),
+            g.min_backlash_um,
+        )? * 1e-6,
         gears: [pinion, wheel],
         constants: Default::default(),
         paper_model: true,

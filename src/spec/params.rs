@@ -8,7 +8,6 @@ use std::borrow::Cow;
 
 use super::keys::{ElementKeys, Part, element_keys, parse_path, quote_key};
 use super::*;
-use crate::constants::{EARTH_MU_M3_PER_S2, EARTH_RADIUS_M};
 use crate::quantity::{self as q, Quantity};
 
 /// How a number is stored in the spec.
@@ -114,9 +113,9 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
     if section("orbit") {
         at!("orbit".into(); {
             at!("altitude_m".into(); f(&path, Slot::Value(&mut o.altitude_m), m("m", "100 km … 100 000 km")));
-            at!("earth_radius_m".into(); f(&path, Slot::Optional(&mut o.earth_radius_m, Default::Value(EARTH_RADIUS_M)), m("m", "1e5 … 1e8")));
-            at!("mu_m3_per_s2".into(); f(&path, Slot::Optional(&mut o.mu_m3_per_s2, Default::Value(EARTH_MU_M3_PER_S2)), m("m³/s²", "1e9 … 1e17, period 10 min … 30 days")));
-            at!("orbit_angle_at_start_deg".into(); f(&path, Slot::Optional(&mut o.orbit_angle_at_start_deg, Default::Value(0.0)), m("deg", "any (reduced modulo 360°)")));
+            at!("earth_radius_m".into(); f(&path, Slot::Optional(&mut o.earth_radius_m, default_of(&q::EARTH_RADIUS_M)), of(&q::EARTH_RADIUS_M)));
+            at!("mu_m3_per_s2".into(); f(&path, Slot::Optional(&mut o.mu_m3_per_s2, default_of(&q::MU_M3_PER_S2)), of(&q::MU_M3_PER_S2)));
+            at!("orbit_angle_at_start_deg".into(); f(&path, Slot::Optional(&mut o.orbit_angle_at_start_deg, default_of(&q::ORBIT_ANGLE_AT_START_DEG)), of(&q::ORBIT_ANGLE_AT_START_DEG)));
         });
     }
     let e = &mut spec.environment;
@@ -163,7 +162,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
         at!("node".into(), key.as_str().into(); {
             at!("capacitance_j_per_k".into(); f(&path, Slot::Value(&mut n.capacitance_j_per_k), of(&q::CAPACITANCE_J_PER_K)));
             at!("initial_temperature_k".into(); f(&path, Slot::Value(&mut n.initial_temperature_k), of(&q::TEMPERATURE_K)));
-            at!("radius_mm".into(); f(&path, Slot::Optional(&mut n.radius_mm, Default::Absent), m("mm", "> 0, on the gear's bore … base circle")));
+            at!("radius_mm".into(); f(&path, Slot::Optional(&mut n.radius_mm, Default::Absent), of(&q::NODE_RADIUS_MM)));
         });
     }
     for (b, key) in spec.boundary.iter_mut().zip(&keys.boundary) {
@@ -347,14 +346,14 @@ fn strain(
     f(
         path,
         Slot::Optional(alpha, Default::Absent),
-        m("1/K", "−1e-3 … 1e-3"),
+        of(&q::EXPANSION_PER_K),
     );
     path.truncate(n);
     path.push("dalpha_dt_per_k2".into());
     f(
         path,
         Slot::Optional(dalpha, Default::Absent),
-        m("1/K²", "−1e-5 … 1e-5"),
+        of(&q::DALPHA_DT_PER_K2),
     );
     path.truncate(n);
     let law = m("", "thermal strain within ±0.1 over 20 … 1000 K");
@@ -425,7 +424,7 @@ fn gear_pair(path: &mut Vec<Cow<'_, str>>, g: &mut GearPairSpec, f: &mut Visit<'
         path,
         "module_mm",
         Slot::Value(&mut g.module_mm),
-        m("mm", "> 0"),
+        of(&q::MODULE_MM),
     );
     one(
         path,
@@ -437,7 +436,7 @@ fn gear_pair(path: &mut Vec<Cow<'_, str>>, g: &mut GearPairSpec, f: &mut Visit<'
         path,
         "face_width_mm",
         Slot::Value(&mut g.face_width_mm),
-        m("mm", "> 0"),
+        of(&q::FACE_WIDTH_MM),
     );
     one(
         path,
@@ -449,25 +448,25 @@ fn gear_pair(path: &mut Vec<Cow<'_, str>>, g: &mut GearPairSpec, f: &mut Visit<'
         path,
         "reference_temperature_k",
         Slot::Value(&mut g.reference_temperature_k),
-        m("K", "0 … 5000"),
+        of(&q::TEMPERATURE_K),
     );
     one(
         path,
         "min_backlash_um",
         Slot::Value(&mut g.min_backlash_um),
-        m("µm", "≥ 0"),
+        of(&q::MIN_BACKLASH_UM),
     );
     one(
         path,
         "coating.thickness_um",
         Slot::Value(&mut g.coating.thickness_um),
-        m("µm", "≥ 0"),
+        of(&q::COATING_THICKNESS_UM),
     );
     one(
         path,
         "coating.alpha_per_k",
         Slot::Value(&mut g.coating.alpha_per_k),
-        m("1/K", "−1e-3 … 1e-3"),
+        of(&q::EXPANSION_PER_K),
     );
     one(
         path,
@@ -509,27 +508,27 @@ fn gear_pair(path: &mut Vec<Cow<'_, str>>, g: &mut GearPairSpec, f: &mut Visit<'
         one(
             path,
             "profile_shift",
-            Slot::Optional(&mut shift, Default::Value(0.0)),
-            m("", "−2 … 2"),
+            Slot::Optional(&mut shift, default_of(&q::PROFILE_SHIFT)),
+            of(&q::PROFILE_SHIFT),
         );
         gear.profile_shift = shift.unwrap_or(0.0);
         one(
             path,
             "tip_radius_mm",
             Slot::Value(&mut gear.tip_radius_mm),
-            m("mm", "above the base and root radii"),
+            of(&q::TIP_RADIUS_MM),
         );
         one(
             path,
             "root_radius_mm",
             Slot::Value(&mut gear.root_radius_mm),
-            m("mm", "> 0"),
+            of(&q::ROOT_RADIUS_MM),
         );
         one(
             path,
             "bore_radius_mm",
             Slot::Value(&mut gear.bore_radius_mm),
-            m("mm", "below the base and root radii"),
+            of(&q::BORE_RADIUS_MM),
         );
         one(
             path,
@@ -643,7 +642,10 @@ fn same_path(walked: &[Cow<'_, str>], wanted: &[String]) -> bool {
 
 /// (R / (R + h))² of the spec's orbit.
 fn earth_view_factor(spec: &ScenarioSpec) -> f64 {
-    let r = spec.orbit.earth_radius_m.unwrap_or(EARTH_RADIUS_M);
+    let r = spec
+        .orbit
+        .earth_radius_m
+        .unwrap_or(q::EARTH_RADIUS_M.default_value());
     (r / (r + spec.orbit.altitude_m)).powi(2)
 }
 
