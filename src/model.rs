@@ -385,7 +385,7 @@ impl Model {
                                 &mut l.area_m2,
                             ),
                             &q::ABSORPTIVITY,
-                            *i,
+                            sc.bindings.sun[*i],
                         )
                     }
                     LoadSection::Albedo => {
@@ -397,7 +397,7 @@ impl Model {
                                 &mut l.area_m2,
                             ),
                             &q::ABSORPTIVITY,
-                            self.spec.sun.len() + *i,
+                            sc.bindings.albedo[*i],
                         )
                     }
                     LoadSection::EarthIr => {
@@ -405,7 +405,7 @@ impl Model {
                         (
                             (&mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2),
                             &q::EMISSIVITY,
-                            self.spec.sun.len() + self.spec.albedo.len() + *i,
+                            sc.bindings.earth_ir[*i],
                         )
                     }
                 };
@@ -430,11 +430,11 @@ impl Model {
                 let at = match section {
                     LoadSection::Albedo => {
                         self.spec.albedo[*i].view_factor = Some(value);
-                        self.spec.sun.len() + *i
+                        sc.bindings.albedo[*i]
                     }
                     _ => {
                         self.spec.earth_ir[*i].view_factor = Some(value);
-                        self.spec.sun.len() + self.spec.albedo.len() + *i
+                        sc.bindings.earth_ir[*i]
                     }
                 };
                 match &mut net.loads[at].kind {

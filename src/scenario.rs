@@ -16,6 +16,20 @@ pub struct Scenario {
     pub sensors: Vec<Sensor>,
     /// Gear pairs whose backlash is evaluated at every step.
     pub gears: Vec<GearPair>,
+    /// Where the compiler put each element of the spec that the model writes into
+    /// directly (`Model::set_param`).
+    pub bindings: Bindings,
+}
+
+/// Per load element of the spec (`[[sun]]`, `[[albedo]]`, `[[earth_ir]]`,
+/// `[[dissipation]]`, in file order), its index among the compiled
+/// `Network::loads`, recorded by `spec::compile` as it builds them.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Bindings {
+    pub sun: Vec<usize>,
+    pub albedo: Vec<usize>,
+    pub earth_ir: Vec<usize>,
+    pub dissipation: Vec<usize>,
 }
 
 #[derive(Debug, Clone, PartialEq)]

@@ -4,7 +4,8 @@
 //! reaches a model — the TOML reader (the scenario file edited), `--set`
 //! (`Model::set`), the fast write of a resolved parameter (`Model::set_param`) and the
 //! dispersion check (`Plan::new` with the value as its only case). All four must agree:
-//! accept, or refuse naming the same key with the same message. A value outside the
+//! accept, or refuse naming the same key with the same message; when accepted, the fast
+//! write gives the same compiled model as the recompiled one. A value outside the
 //! quantity's range must be refused (a value inside may still be refused by its
 //! context, e.g. a heater's on_k above its off_k, as long as all four say so).
 
@@ -79,9 +80,17 @@ fn check_scenario(file: &str, text: &str) -> (usize, Vec<&'static Quantity>) {
         for v in probes(lo, hi) {
             let what = format!("{file}: {} = {v:e} ({} {})", p.path, q.unit, q.range);
             let by_toml = through_toml(text, &spec, &p.path, v);
-            let by_set = of_model(model.clone().set(&p.path, v));
+            let (mut set, mut fast) = (model.clone(), model.clone());
+            let by_set = of_model(set.set(&p.path, v));
             let id = model.param(&p.path).unwrap();
-            let by_param = of_model(model.clone().set_param(&id, v));
+            let by_param = of_model(fast.set_param(&id, v));
+            if by_set.is_ok() && by_param.is_ok() {
+                // the fast write lands where the compiler put the number
+                assert!(
+                    set.scenario() == fast.scenario(),
+                    "{what}: set_param gives another model than --set"
+                );
+            }
             assert_eq!(by_set, by_toml, "{what}: --set vs the TOML file");
             assert_eq!(by_param, by_toml, "{what}: set_param vs the TOML file");
             let by_dispersion = through_dispersion(&model, &p.path, v);

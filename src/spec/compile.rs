@@ -13,7 +13,8 @@ use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
 use crate::orbit::{CircularEnvironment, Incidence, Orbit, Profile};
 use crate::quantity::{self as q, Quantity, Rule};
 use crate::scenario::{
-    DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, RunControl, Scenario, Sensor, SensorTarget,
+    Bindings, DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, RunControl, Scenario, Sensor,
+    SensorTarget,
 };
 use crate::sim::SolverSettings;
 use crate::thermal::iteration::{
@@ -628,6 +629,8 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             )
         })
     };
+    // Where each load element of the spec lands among the compiled loads.
+    let mut bindings = Bindings::default();
     for (i, s) in raw.sun.into_iter().enumerate() {
         let p = KeyPath::new("sun").elem(i, &keys.sun[i]);
         let node = diffusion(&p.key("node"), &s.node)?;
@@ -650,6 +653,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
                 )
             })?,
         };
+        bindings.sun.push(loads.len());
         loads.push(Load {
             name: load_name(s.name, "sun", &s.node, i),
             node,
@@ -683,6 +687,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             s.area_m2,
             s.view_factor,
         )?;
+        bindings.albedo.push(loads.len());
         loads.push(Load {
             name: load_name(s.name, "albedo", &s.node, i),
             node,
@@ -702,6 +707,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             s.area_m2,
             s.view_factor,
         )?;
+        bindings.earth_ir.push(loads.len());
         loads.push(Load {
             name: load_name(s.name, "earth_ir", &s.node, i),
             node,
@@ -730,6 +736,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
                 )
             })?),
         };
+        bindings.dissipation.push(loads.len());
         loads.push(Load {
             name: load_name(s.name, "dissipation", &s.node, i),
             node,
@@ -882,6 +889,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
 
     Ok(Scenario {
         gears,
+        bindings,
         name: raw.scenario.name,
         description: raw.scenario.description,
         thermal: ThermalModel {
