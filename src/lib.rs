@@ -70,6 +70,7 @@ pub mod margins;
 pub mod model;
 pub mod orbit;
 pub mod quantity;
+pub mod recording;
 pub mod sample;
 pub mod scenario;
 pub mod sensor;

@@ -9,12 +9,11 @@
 //! sample. The CSV export, the MCAP log, the summaries and the sensors all sample
 //! through it, so "the temperature at 3600 s" is the same number in every output.
 
-use std::cell::RefCell;
-
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::{EnvState, EnvironmentModel};
+pub use crate::sim::{Probe, ProbeWork};
 use crate::sim::{RunStart, StepView, mesh_or_nan};
-use crate::thermal::{Compiled, Flows, StepSwitches, ThermalModel};
+use crate::thermal::{Compiled, StepSwitches, ThermalModel};
 
 /// Heat flows at one instant, W.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -75,25 +74,6 @@ pub struct Sample {
     pub mesh: Vec<MeshState>,
     /// When wanted.
     pub flows: HeatFlows,
-}
-
-/// Evaluates samples from the model a run was set up with: handed to observers inside
-/// [`RunStart`] and [`StepView`]. Cheap to copy; its workspace is the setup's.
-#[derive(Clone, Copy)]
-pub struct Probe<'a> {
-    pub(crate) model: &'a ThermalModel,
-    pub(crate) gears: &'a [GearPair],
-    pub(crate) work: &'a RefCell<ProbeWork>,
-}
-
-/// The probe's workspace: a compiled network of its own (the stepper's is in the middle
-/// of a step) and scratch vectors, made on first use.
-#[derive(Default)]
-pub struct ProbeWork {
-    compiled: Option<Compiled>,
-    flows: Flows,
-    scratch_w: Vec<f64>,
-    temps_k: Vec<f64>,
 }
 
 impl<'a> Probe<'a> {

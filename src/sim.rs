@@ -9,7 +9,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::{EnvState, EnvironmentModel, LoadKink};
-use crate::sample::{Probe, ProbeWork};
 use crate::thermal::iteration::LinearSolver;
 use crate::thermal::solver::{StepData, StepFailure, Stepper, StepperMemory, W0, W1};
 use crate::thermal::{StepSwitches, ThermalModel};
@@ -83,7 +82,7 @@ pub struct StepView<'a> {
     /// The gear pairs' state at the end of the step (NaN backlash where the mesh is
     /// invalid).
     pub mesh: &'a [MeshState],
-    /// Evaluates samples within the step (see [`crate::sample`]).
+    /// Evaluates samples within the step (the `sample` module's methods).
     pub probe: Probe<'a>,
 }
 
@@ -134,6 +133,26 @@ impl StepView<'_> {
         let d = self.data;
         d.temperatures_at_fraction(((t_s - d.t0_s) / d.h_s).clamp(0.0, 1.0), out_k);
     }
+}
+
+/// Evaluates samples from the model a run was set up with: handed to observers inside
+/// [`RunStart`] and [`StepView`]. Cheap to copy; its workspace is the setup's. Its
+/// methods (sampling an instant, the mesh at a time) are in the `sample` module.
+#[derive(Clone, Copy)]
+pub struct Probe<'a> {
+    pub(crate) model: &'a ThermalModel,
+    pub(crate) gears: &'a [GearPair],
+    pub(crate) work: &'a std::cell::RefCell<ProbeWork>,
+}
+
+/// The probe's workspace: a compiled network of its own (the stepper's is in the middle
+/// of a step) and scratch vectors, made on first use.
+#[derive(Default)]
+pub struct ProbeWork {
+    pub(crate) compiled: Option<crate::thermal::Compiled>,
+    pub(crate) flows: crate::thermal::Flows,
+    pub(crate) scratch_w: Vec<f64>,
+    pub(crate) temps_k: Vec<f64>,
 }
 
 pub type ObserverResult = Result<(), Box<dyn std::error::Error + Send + Sync>>;

@@ -4,8 +4,8 @@
 
 use serde::Serialize;
 
-use crate::io::recording::Recording;
 use crate::orbit::EnvironmentModel;
+use crate::recording::Recording;
 use crate::scenario::Scenario;
 
 use super::DiagnoseError;

@@ -36,8 +36,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 use serde::ser::SerializeMap;
 
-use crate::io::recording::Recording;
 use crate::model::{Model, ModelError};
+use crate::recording::Recording;
 use crate::sample::Cadence;
 use crate::sensor::{Readings, Sensor, SensorTarget};
 use crate::sim::{

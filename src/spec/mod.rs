@@ -55,7 +55,8 @@ pub struct ScenarioSpec {
     pub dispersion: Vec<DispersionSpec>,
 }
 
-/// One dispersed number: a key path and its distribution (see `crate::dispersion`).
+/// One dispersed number: a key path and its distribution (the `dispersion` module
+/// samples it).
 #[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DispersionSpec {
