@@ -52,13 +52,37 @@ impl Default for SteadyOptions {
     }
 }
 
+/// How the periodic orbit was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PeriodicMethod {
+    /// Newton shooting on the one-orbit map.
+    Newton,
+    /// Orbit after orbit until it repeats.
+    Marching,
+}
+
+impl PeriodicMethod {
+    /// "newton" or "marching".
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PeriodicMethod::Newton => "newton",
+            PeriodicMethod::Marching => "marching",
+        }
+    }
+}
+
+impl std::fmt::Display for PeriodicMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
 /// The periodic orbit's start state and how it was found.
 #[derive(Debug, Clone)]
 pub struct Periodic {
     /// At t = `t0_s`: temperatures and heater states that return after one period.
     pub state: State,
-    /// "newton" or "marching".
-    pub method: &'static str,
+    pub method: PeriodicMethod,
     /// One-orbit runs spent (warm-up, Jacobian columns, Newton steps, marching).
     pub orbits: u64,
     pub newton_iterations: u32,
@@ -163,7 +187,7 @@ pub fn periodic_orbit(
             if r <= opts.tolerance_k {
                 return Ok(Periodic {
                     state: start_state(setup, t0, x, heaters),
-                    method: "newton",
+                    method: PeriodicMethod::Newton,
                     orbits,
                     newton_iterations: iterations,
                     periodicity_error_k: r,
@@ -213,7 +237,7 @@ pub fn periodic_orbit(
         if r <= opts.tolerance_k {
             return Ok(Periodic {
                 state: start_state(setup, t0, x, heaters),
-                method: "marching",
+                method: PeriodicMethod::Marching,
                 orbits,
                 newton_iterations: iterations,
                 periodicity_error_k: r,

@@ -18,7 +18,7 @@ fn check(sc: &Scenario, want_method: &str) {
         ..SteadyOptions::default()
     };
     let p = periodic_orbit(&mut setup, &start, period, newton).unwrap();
-    assert_eq!(p.method, want_method, "{} orbits", p.orbits);
+    assert_eq!(p.method.as_str(), want_method, "{} orbits", p.orbits);
     assert!(p.periodicity_error_k <= 1e-4);
     // brute force: march 80 orbits from the scenario's start, one run
     let mut marched = setup.initial_state();
@@ -86,7 +86,7 @@ fn val_second_method_periodic_orbit_with_a_thermostat() {
         "{} switches",
         stats.heater_switches
     );
-    check(&sc, p.method);
+    check(&sc, p.method.as_str());
 }
 
 #[test]
@@ -222,7 +222,7 @@ fn core_marching_fallback_finds_the_same_orbit() {
         },
     )
     .unwrap();
-    assert_eq!(newton.method, "newton");
+    assert_eq!(newton.method.as_str(), "newton");
     let marching = periodic_orbit(
         &mut setup,
         &start,
@@ -236,7 +236,7 @@ fn core_marching_fallback_finds_the_same_orbit() {
     // Auto picks marching here: the reference contracts ~5× per orbit, cheaper than
     // Newton's 11 orbits per iteration
     let auto = periodic_orbit(&mut setup, &start, period, SteadyOptions::default()).unwrap();
-    assert_eq!(auto.method, "marching");
+    assert_eq!(auto.method.as_str(), "marching");
     assert!(
         auto.orbits < newton.orbits,
         "{} vs {}",
@@ -262,8 +262,8 @@ fn core_marching_fallback_finds_the_same_orbit() {
         SteadyOptions::default(),
     )
     .unwrap();
-    assert_eq!(p.method, "newton", "{} orbits", p.orbits);
-    assert_eq!(marching.method, "marching");
+    assert_eq!(p.method.as_str(), "newton", "{} orbits", p.orbits);
+    assert_eq!(marching.method.as_str(), "marching");
     eprintln!(
         "newton: {} orbits, marching: {} orbits",
         newton.orbits, marching.orbits

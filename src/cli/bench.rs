@@ -624,7 +624,7 @@ fn bench_diagnose(a: &BenchArgs, recording: &std::path::Path) -> Result<()> {
     let fitted = d
         .candidates
         .iter()
-        .filter(|c| c.status != "not_fitted")
+        .filter(|c| c.status != orbitlash::diagnose::CandidateStatus::NotFitted)
         .count();
     let mut o = String::new();
     outln!(

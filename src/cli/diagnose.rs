@@ -7,7 +7,7 @@ use std::sync::Mutex;
 use anyhow::{Context, Result};
 use clap::Args;
 
-use orbitlash::diagnose::{self, Diagnosis, Options, Verdict};
+use orbitlash::diagnose::{self, CandidateStatus, Diagnosis, Options, Verdict};
 use orbitlash::io::output::{OutputPolicy, Outputs};
 use orbitlash::io::recording::Recording;
 
@@ -400,10 +400,10 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
     outln!(o, "candidates ({} tried):", d.candidates.len());
     let mut unfitted = 0;
     for c in &d.candidates {
-        if c.status == "not_fitted" && c.rank_chi2_drop <= 0.0 {
+        if c.status == CandidateStatus::NotFitted && c.rank_chi2_drop <= 0.0 {
             continue;
         }
-        if c.status == "not_fitted" {
+        if c.status == CandidateStatus::NotFitted {
             unfitted += 1;
             if unfitted > 4 {
                 continue;
@@ -429,7 +429,7 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
     let quiet = d
         .candidates
         .iter()
-        .filter(|c| c.status == "not_fitted" && c.rank_chi2_drop <= 0.0)
+        .filter(|c| c.status == CandidateStatus::NotFitted && c.rank_chi2_drop <= 0.0)
         .count();
     if quiet > 0 {
         outln!(

@@ -258,13 +258,39 @@ pub struct Finding {
     pub set: BTreeMap<String, f64>,
 }
 
+/// What became of a candidate: serialised as "accepted", "rejected", "not_fitted".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CandidateStatus {
+    Accepted,
+    Rejected,
+    NotFitted,
+}
+
+impl CandidateStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CandidateStatus::Accepted => "accepted",
+            CandidateStatus::Rejected => "rejected",
+            CandidateStatus::NotFitted => "not_fitted",
+        }
+    }
+}
+
+impl std::fmt::Display for CandidateStatus {
+    /// As serialised; honours width and alignment (`{:<10}`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
 /// One line per candidate tried.
 #[derive(Debug, Clone, Serialize)]
 pub struct CandidateReport {
     pub effect: &'static str,
     pub target: String,
     /// `accepted`, `rejected` or `not_fitted`.
-    pub status: &'static str,
+    pub status: CandidateStatus,
     pub reason: String,
     /// Training χ² drop at the best start point (the ranking score).
     pub rank_chi2_drop: f64,
@@ -766,7 +792,7 @@ the verdict rests on noise; check the channel's unit and scaling",
         let mut rep = CandidateReport {
             effect: c.effect.id(),
             target: c.label(),
-            status: "not_fitted",
+            status: CandidateStatus::NotFitted,
             reason: String::new(),
             rank_chi2_drop: rank_drop,
             delta_bic: None,
@@ -789,7 +815,7 @@ the verdict rests on noise; check the channel's unit and scaling",
                 rep.time_s += fitted[p].1;
                 match &fitted[p].0 {
                     Err(e) => {
-                        rep.status = "rejected";
+                        rep.status = CandidateStatus::Rejected;
                         rep.reason = format!("fit failed: {e}");
                     }
                     Ok(h) => {
@@ -803,7 +829,7 @@ the verdict rests on noise; check the channel's unit and scaling",
                                 .map(|(k, v, _)| (k, v))
                                 .collect(),
                         );
-                        rep.status = "rejected";
+                        rep.status = CandidateStatus::Rejected;
                         if gain <= opts.bic_margin {
                             rep.reason = format!(
                                 "BIC improves by {gain:.1}, not by more than the margin {:.0}",
@@ -822,7 +848,7 @@ the verdict rests on noise; check the channel's unit and scaling",
                                 100.0 * opts.min_effect
                             );
                         } else {
-                            rep.status = "accepted";
+                            rep.status = CandidateStatus::Accepted;
                             singles.push(h.clone());
                         }
                     }
@@ -1005,13 +1031,13 @@ the verdict rests on noise; check the channel's unit and scaling",
             report.corrected = Some(h.model.clone());
             for (ci, rep) in reports.iter_mut().enumerate() {
                 if h.members.contains(&ci) {
-                    rep.status = "accepted";
+                    rep.status = CandidateStatus::Accepted;
                     rep.reason = match h.members.iter().find(|&&m| m != ci) {
                         Some(&other) => format!("together with {}", cands[other].label()),
                         None => String::new(),
                     };
-                } else if rep.status == "accepted" {
-                    rep.status = "rejected";
+                } else if rep.status == CandidateStatus::Accepted {
+                    rep.status = CandidateStatus::Rejected;
                     rep.reason = format!(
                         "improves the fit, but {} explains the residual better",
                         h.members
@@ -1024,8 +1050,11 @@ the verdict rests on noise; check the channel's unit and scaling",
             }
         }
         None => {
-            for rep in reports.iter_mut().filter(|r| r.status == "accepted") {
-                rep.status = "rejected";
+            for rep in reports
+                .iter_mut()
+                .filter(|r| r.status == CandidateStatus::Accepted)
+            {
+                rep.status = CandidateStatus::Rejected;
                 rep.reason = "improves the fit but does not explain the residual".into();
             }
             report.verdict = if baseline_at_noise {
@@ -1038,9 +1067,9 @@ the verdict rests on noise; check the channel's unit and scaling",
     }
     reports.sort_by(|a, b| {
         let key = |r: &CandidateReport| match r.status {
-            "accepted" => 0,
-            "rejected" => 1,
-            _ => 2,
+            CandidateStatus::Accepted => 0,
+            CandidateStatus::Rejected => 1,
+            CandidateStatus::NotFitted => 2,
         };
         key(a)
             .cmp(&key(b))
