@@ -294,8 +294,9 @@ pub struct RunStats {
     pub newton_iterations: u64,
     /// Factorisations of the iteration matrix (the rest reuse one).
     pub factorizations: u64,
-    /// How the linear systems were solved: "dense", "sparse" or "iterative".
-    pub linear_solver: &'static str,
+    /// How the linear systems were solved: dense, sparse or iterative (`Auto`: no step
+    /// was taken).
+    pub linear_solver: LinearSolver,
     /// Iterative solver only: linear solves and conjugate-gradient iterations.
     pub linear_solves: u64,
     pub krylov_iterations: u64,

@@ -598,7 +598,8 @@ pub struct EnergySummary {
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct SolverSummary {
     pub method: &'static str,
-    pub linear_solver: &'static str,
+    /// "dense", "sparse" or "iterative".
+    pub linear_solver: crate::thermal::iteration::LinearSolver,
     pub steps: u64,
     pub rejected_steps: u64,
     pub factorizations: u64,

@@ -36,8 +36,10 @@ use faer::{ColMut, Conj, Par};
 use super::Compiled;
 use super::lu::{Lu, Singular};
 
-/// How the implicit stages solve their linear systems.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// How the implicit stages solve their linear systems. Serialised as its name
+/// ("auto", "dense", "sparse", "iterative").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum LinearSolver {
     /// Dense up to [`AUTO_SPARSE_ABOVE_NODES`] diffusion nodes, iterative above.
     #[default]
@@ -252,12 +254,12 @@ impl IterationMatrix {
         IterationMatrix { inner }
     }
 
-    /// "dense", "sparse" or "iterative".
-    pub fn kind(&self) -> &'static str {
+    /// Dense, sparse or iterative (never `Auto`: the choice made).
+    pub fn kind(&self) -> LinearSolver {
         match self.inner {
-            Inner::Dense(_) => "dense",
-            Inner::Sparse(_) => "sparse",
-            Inner::Krylov(_) => "iterative",
+            Inner::Dense(_) => LinearSolver::Dense,
+            Inner::Sparse(_) => LinearSolver::Sparse,
+            Inner::Krylov(_) => LinearSolver::Iterative,
         }
     }
 
@@ -758,8 +760,8 @@ mod tests {
         let cap = c.capacitance_j_per_k.clone();
         let mut dense = IterationMatrix::new(&c, LinearSolver::Dense);
         let mut sparse = IterationMatrix::new(&c, LinearSolver::Sparse);
-        assert_eq!((dense.kind(), sparse.kind()), ("dense", "sparse"));
-        assert_eq!(IterationMatrix::new(&c, LinearSolver::Auto).kind(), "dense");
+        assert_eq!((dense.kind().name(), sparse.kind().name()), ("dense", "sparse"));
+        assert_eq!(IterationMatrix::new(&c, LinearSolver::Auto).kind().name(), "dense");
         for dh in [0.1, 30.0, 3000.0] {
             for m in [&mut dense, &mut sparse] {
                 m.set_jacobian(&c, &temps);
@@ -789,7 +791,7 @@ mod tests {
         let cap = c.capacitance_j_per_k.clone();
         let mut dense = IterationMatrix::new(&c, LinearSolver::Dense);
         let mut cg = IterationMatrix::new(&c, LinearSolver::Iterative);
-        assert_eq!(cg.kind(), "iterative");
+        assert_eq!(cg.kind().name(), "iterative");
         for m in [&mut dense, &mut cg] {
             m.set_jacobian(&c, &temps);
             m.factor(&cap, 300.0).unwrap();
@@ -809,7 +811,7 @@ mod tests {
         let mut y = b.clone();
         cg.solve(&mut y);
         cg.set_jacobian(&c, &temps);
-        assert_eq!(cg.kind(), "sparse");
+        assert_eq!(cg.kind().name(), "sparse");
         cg.factor(&cap, 300.0).unwrap();
         let mut y = b.clone();
         cg.solve(&mut y);

@@ -254,7 +254,7 @@ pub struct Stepper {
     pub factorizations: u64,
     /// The linear solver asked for, and the kind it gave at the start.
     linear_choice: LinearSolver,
-    initial_linear: &'static str,
+    initial_linear: crate::thermal::iteration::LinearSolver,
     pub data: StepData,
 }
 
@@ -412,8 +412,8 @@ impl Stepper {
 }
 
 impl Stepper {
-    /// "dense", "sparse" or "iterative": how this stepper solves its linear systems.
-    pub fn linear_solver(&self) -> &'static str {
+    /// Dense, sparse or iterative: how this stepper solves its linear systems.
+    pub fn linear_solver(&self) -> crate::thermal::iteration::LinearSolver {
         self.matrix.kind()
     }
 
@@ -441,13 +441,12 @@ pub struct StepperMemory {
     factored_step_s: f64,
     theta: f64,
     last_end: Option<(Vec<f64>, Flows)>,
-    /// The linear solver in use ("dense", "sparse", "iterative"): an iterative solver
-    /// may have turned to the sparse LU.
-    linear: &'static str,
+    /// The linear solver in use: an iterative solver may have turned to the sparse LU.
+    linear: crate::thermal::iteration::LinearSolver,
 }
 
 impl StepperMemory {
-    fn fresh(linear: &'static str) -> StepperMemory {
+    fn fresh(linear: crate::thermal::iteration::LinearSolver) -> StepperMemory {
         StepperMemory {
             jacobian_at_k: None,
             factored_step_s: f64::NAN,
@@ -481,7 +480,7 @@ impl Stepper {
     /// same temperatures and factorised for the same step, which gives the same bits.
     pub fn restore(&mut self, m: &StepperMemory) {
         if m.linear != self.matrix.kind() {
-            if m.linear == "sparse" {
+            if m.linear == crate::thermal::iteration::LinearSolver::Sparse {
                 self.matrix.turn_sparse(&self.compiled);
             } else {
                 self.matrix = IterationMatrix::new(&self.compiled, self.linear_choice);
