@@ -450,12 +450,53 @@ pub struct State {
     memory: Option<Memory>,
 }
 
+/// The kinds of event after which a step starts again short. Each remembers the step
+/// the controller reached after its last occurrence, and the next one restarts there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum EventClass {
+    EclipseEntry,
+    EclipseExit,
+    HeaterSwitch,
+    /// A table point, a mode edge, a load kink.
+    Other,
+}
+
+/// The restart step of each [`EventClass`], s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct RestartSteps([f64; 4]);
+
+impl std::ops::Index<EventClass> for RestartSteps {
+    type Output = f64;
+    fn index(&self, c: EventClass) -> &f64 {
+        &self.0[c as usize]
+    }
+}
+
+impl std::ops::IndexMut<EventClass> for RestartSteps {
+    fn index_mut(&mut self, c: EventClass) -> &mut f64 {
+        &mut self.0[c as usize]
+    }
+}
+
+/// The step controller's factors. The local error of TR-BDF2 grows as h³, so a step
+/// that gave the error ratio `err` (error / tolerance) is scaled by
+/// `STEP_SAFETY · err^(−1/3)`.
+const STEP_SAFETY: f64 = 0.9;
+const STEP_ERROR_EXPONENT: f64 = -1.0 / 3.0;
+/// Growth after a step with no measurable error.
+const STEP_GROWTH_WITHOUT_ERROR: f64 = 5.0;
+/// Growth below this factor holds the step, so the factorised iteration matrix is kept.
+const STEP_HOLD_BELOW_GROWTH: f64 = 1.2;
+/// Bounds of the factor after an accepted step, and after a rejected one.
+const STEP_FACTOR_RANGE: (f64, f64) = (0.2, 3.0);
+const REJECTED_STEP_FACTOR_RANGE: (f64, f64) = (0.1, 0.9);
+
 /// The solver's part of a [`State`].
 #[derive(Debug, Clone, PartialEq)]
 struct Memory {
     step_s: f64,
-    restart_steps_s: [f64; 4],
-    event_class: Option<usize>,
+    restart_steps_s: RestartSteps,
+    event_class: Option<EventClass>,
     t_kink_s: f64,
     next_shadow: Option<(f64, bool)>,
     shadow_horizon_s: f64,
@@ -663,7 +704,7 @@ impl<'a> Setup<'a> {
                 }),
                 // One memory per kind of event: entering eclipse, leaving it, a heater
                 // switching, anything else (table point, mode edge, load kink).
-                restart_steps_s: [settings.max_step_s / 30.0; 4],
+                restart_steps_s: RestartSteps([settings.max_step_s / 30.0; 4]),
                 event_class: None,
                 t_kink_s: self.next_kink(t_start),
                 next_shadow: env.next_shadow_crossing(t_start, t_end_s),
@@ -804,7 +845,9 @@ impl<'a> Setup<'a> {
             stats.newton_iterations += stepper.data.newton_iterations as u64;
             let err = stepper.data.error_max_k() / tol;
             if settings.adaptive && err > 1.0 && h_try > 1e3 * MIN_STEP_S {
-                h = h_try * (0.9 * err.powf(-1.0 / 3.0)).clamp(0.1, 0.9);
+                h = h_try
+                    * (STEP_SAFETY * err.powf(STEP_ERROR_EXPONENT))
+                        .clamp(REJECTED_STEP_FACTOR_RANGE.0, REJECTED_STEP_FACTOR_RANGE.1);
                 stats.rejected_steps += 1;
                 continue;
             }
@@ -893,7 +936,7 @@ impl<'a> Setup<'a> {
             y.copy_from_slice(&stepper.data.temps1_k);
 
             let class_before_step = event_class.take();
-            let mark = |class: usize, slot: &mut Option<usize>| {
+            let mark = |class: EventClass, slot: &mut Option<EventClass>| {
                 // the class whose restart step is shortest wins when events coincide
                 if slot.is_none_or(|c| h_after_event[class] < h_after_event[c]) {
                     *slot = Some(class);
@@ -913,15 +956,20 @@ impl<'a> Setup<'a> {
                 };
                 events = events.and(emit(observer, t, kind));
                 next_shadow = env.next_shadow_crossing(t, t_end_s);
-                mark(if entering { 0 } else { 1 }, &mut event_class);
+                let class = if entering {
+                    EventClass::EclipseEntry
+                } else {
+                    EventClass::EclipseExit
+                };
+                mark(class, &mut event_class);
             }
             if t >= t_kink {
                 t_kink = next_kink(t);
-                mark(3, &mut event_class);
+                mark(EventClass::Other, &mut event_class);
             }
             while breakpoints.get(next_bp).is_some_and(|&b| b <= t) {
                 next_bp += 1;
-                mark(3, &mut event_class);
+                mark(EventClass::Other, &mut event_class);
             }
             for (k, m) in model.modes.iter().enumerate() {
                 let now = m.active(t + 1e-9 * (1.0 + t));
@@ -937,7 +985,7 @@ impl<'a> Setup<'a> {
             if let Some(k) = switched {
                 heaters_on[k] = !heaters_on[k];
                 stats.heater_switches += 1;
-                mark(2, &mut event_class);
+                mark(EventClass::HeaterSwitch, &mut event_class);
                 let kind = if heaters_on[k] {
                     EventKind::HeaterOn(k)
                 } else {
@@ -954,14 +1002,18 @@ impl<'a> Setup<'a> {
             // one, so it never shrinks the controller's step.
             h = if settings.adaptive {
                 let fac = if err > 0.0 {
-                    0.9 * err.powf(-1.0 / 3.0)
+                    STEP_SAFETY * err.powf(STEP_ERROR_EXPONENT)
                 } else {
-                    5.0
+                    STEP_GROWTH_WITHOUT_ERROR
                 };
                 // Hold the step when it would grow by less than 20 %: the solver then
                 // reuses its factorised iteration matrix.
-                let fac = if (1.0..1.2).contains(&fac) { 1.0 } else { fac };
-                let proposed = h_try * fac.clamp(0.2, 3.0);
+                let fac = if (1.0..STEP_HOLD_BELOW_GROWTH).contains(&fac) {
+                    1.0
+                } else {
+                    fac
+                };
+                let proposed = h_try * fac.clamp(STEP_FACTOR_RANGE.0, STEP_FACTOR_RANGE.1);
                 if let Some(c) = class_before_step {
                     h_after_event[c] = proposed;
                 }

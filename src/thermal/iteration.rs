@@ -760,8 +760,14 @@ mod tests {
         let cap = c.capacitance_j_per_k.clone();
         let mut dense = IterationMatrix::new(&c, LinearSolver::Dense);
         let mut sparse = IterationMatrix::new(&c, LinearSolver::Sparse);
-        assert_eq!((dense.kind().name(), sparse.kind().name()), ("dense", "sparse"));
-        assert_eq!(IterationMatrix::new(&c, LinearSolver::Auto).kind().name(), "dense");
+        assert_eq!(
+            (dense.kind().name(), sparse.kind().name()),
+            ("dense", "sparse")
+        );
+        assert_eq!(
+            IterationMatrix::new(&c, LinearSolver::Auto).kind().name(),
+            "dense"
+        );
         for dh in [0.1, 30.0, 3000.0] {
             for m in [&mut dense, &mut sparse] {
                 m.set_jacobian(&c, &temps);
