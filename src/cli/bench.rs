@@ -10,6 +10,7 @@ use orbitlash::orbit::EnvironmentModel;
 
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::OutputPolicy;
+use orbitlash::scenario::Scenario;
 use orbitlash::sim::{MAX_STEPS, SolverSettings, estimate_run, simulate};
 use orbitlash::summary::{MeshStats, Samples, WindowStats};
 use orbitlash::thermal::iteration::LinearSolver;
@@ -234,29 +235,65 @@ fn parse_shape(s: &str) -> Result<orbitlash::thermal::synthetic::Shape> {
     })
 }
 
+/// What `orbitlash bench` measures, from its flags.
+enum Mode<'a> {
+    /// Synthetic networks of many sizes (`--scaling`).
+    Scaling,
+    /// `diagnose` on a recording (`--diagnose`).
+    Diagnose(&'a std::path::Path),
+    /// `margins` with one thread and every core (`--margins`).
+    Margins,
+    /// Print a synthetic network as a scenario (`--emit-network SHAPE:NODES`).
+    EmitNetwork(&'a str),
+    /// The solver, logging, parameter writes, the backlash and the accuracy on a
+    /// scenario (the default).
+    Solver,
+}
+
+impl BenchArgs {
+    fn mode(&self) -> Mode<'_> {
+        if self.scaling {
+            Mode::Scaling
+        } else if let Some(rec) = &self.diagnose {
+            Mode::Diagnose(rec)
+        } else if self.margins {
+            Mode::Margins
+        } else if let Some(spec) = &self.emit_network {
+            Mode::EmitNetwork(spec)
+        } else {
+            Mode::Solver
+        }
+    }
+}
+
 pub fn bench(a: BenchArgs) -> Result<()> {
-    if a.scaling {
-        return scaling(&a);
+    match a.mode() {
+        Mode::Scaling => scaling(&a),
+        Mode::Diagnose(rec) => bench_diagnose(&a, rec),
+        Mode::Margins => bench_margins(&a),
+        Mode::EmitNetwork(spec) => emit_network(spec),
+        Mode::Solver => bench_solver(&a),
     }
-    if let Some(rec) = &a.diagnose {
-        return bench_diagnose(&a, rec);
-    }
-    if a.margins {
-        return bench_margins(&a);
-    }
-    if let Some(spec) = &a.emit_network {
-        use orbitlash::thermal::synthetic::{network, to_toml};
-        let (shape, n) = spec.split_once(':').ok_or_else(|| {
-            anyhow::anyhow!("--emit-network {spec}: give SHAPE:NODES, e.g. lattice:2000")
-        })?;
-        let n: usize = n
-            .parse()
-            .ok()
-            .filter(|&n| (2..=1_000_000).contains(&n))
-            .ok_or_else(|| anyhow::anyhow!("--emit-network {spec}: NODES must be 2 … 1000000"))?;
-        let model = network(parse_shape(shape)?, n);
-        return print_out(&to_toml(&model, &format!("{shape}-{n}"), 1.0));
-    }
+}
+
+/// `bench --emit-network SHAPE:NODES`: a synthetic network as scenario text.
+fn emit_network(spec: &str) -> Result<()> {
+    use orbitlash::thermal::synthetic::{network, to_toml};
+    let (shape, n) = spec.split_once(':').ok_or_else(|| {
+        anyhow::anyhow!("--emit-network {spec}: give SHAPE:NODES, e.g. lattice:2000")
+    })?;
+    let n: usize = n
+        .parse()
+        .ok()
+        .filter(|&n| (2..=1_000_000).contains(&n))
+        .ok_or_else(|| anyhow::anyhow!("--emit-network {spec}: NODES must be 2 … 1000000"))?;
+    let model = network(parse_shape(shape)?, n);
+    print_out(&to_toml(&model, &format!("{shape}-{n}"), 1.0))
+}
+
+/// `bench` on a scenario: solver cost per orbit and step, logging, parameter writes,
+/// backlash evaluation and accuracy against a step-converged run.
+fn bench_solver(a: &BenchArgs) -> Result<()> {
     let mut o = String::new();
     let loaded = load(a.scenario.as_deref())?;
     let sc = loaded
@@ -279,9 +316,47 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         );
     }
     let t_end = sc.run.duration_s;
-    let period = sc.period_s();
     let repeat = a.repeat as usize;
 
+    let steps = solver_cost(&sc, repeat, &mut o)?;
+    logging_cost(&sc, steps, repeat, &mut o)?;
+    parameter_cost(&loaded.model, &mut o)?;
+    backlash_cost(&sc, &mut o)?;
+    if a.no_accuracy {
+        return print_out(&o);
+    }
+    if t_end / 0.5 > MAX_STEPS / 10.0 {
+        outln!(
+            o,
+            "accuracy: not measured (the step-converged run would take {:.1e} steps; use fewer --orbits)",
+            t_end / 0.5
+        );
+        return print_out(&o);
+    }
+    // Accuracy against a step-converged run (fixed 0.5 s steps; TR-BDF2 is second order,
+    // so its own error is ~(0.5/300)² of the default's).
+    let mut ours = Samples::every(30.0);
+    simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut ours, None)?;
+    let fine = SolverSettings {
+        adaptive: false,
+        max_step_s: 0.5,
+        ..sc.solver.clone()
+    };
+    let mut reference = Samples::every(30.0);
+    simulate(&sc.thermal, &sc.gears, &fine, t_end, &mut reference, None)?;
+
+    outln!(
+        o,
+        "accuracy: max |T − T_converged| = {:.4} K over all nodes, every 30 s",
+        ours.max_abs_diff_k(&reference)
+    );
+    print_out(&o)
+}
+
+/// The thermal solver alone: the median of `repeat` runs, per run, orbit and step.
+/// Returns the steps of one run.
+fn solver_cost(sc: &Scenario, repeat: usize, o: &mut String) -> Result<u64> {
+    let (t_end, period) = (sc.run.duration_s, sc.period_s());
     let mut times = Vec::with_capacity(repeat);
     let mut steps = 0;
     for _ in 0..repeat {
@@ -296,25 +371,33 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let orbits = t_end / period;
 
     outln!(
-        o,
+        *o,
         "{}: {orbits:.2} orbits, {} nodes",
         sc.name,
         sc.thermal.network.nodes.len()
     );
     outln!(
-        o,
+        *o,
         "solver tr-bdf2 tolerance {} K, max step {} s: {steps} steps ({:.1} per orbit)",
         sc.solver.tolerance_k,
         sc.solver.max_step_s,
         steps as f64 / orbits
     );
     outln!(
-        o,
+        *o,
         "median of {repeat} runs: {:.3} ms per run, {:.1} µs per orbit, {:.3} µs per step",
         median * 1e3,
         median * 1e6 / orbits,
         median * 1e6 / steps as f64
     );
+    Ok(steps)
+}
+
+/// A run with the observers `run` uses, with and without an MCAP log of every step,
+/// unless that log would be large.
+fn logging_cost(sc: &Scenario, steps: u64, repeat: usize, o: &mut String) -> Result<()> {
+    let (t_end, period) = (sc.run.duration_s, sc.period_s());
+    let orbits = t_end / period;
     // Logging every step: the full run (summaries and gear evaluation included) with
     // and without the MCAP log, unless that log would be large.
     let log_bytes = (steps as f64 + 1.0) * estimated_bytes_per_sample(&sc.thermal, &sc.gears);
@@ -322,7 +405,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     let free = orbitlash::io::output::available_bytes(&tmp.join("x")).unwrap_or(u64::MAX) as f64;
     if log_bytes > 200e6 || log_bytes > 0.5 * free {
         outln!(
-            o,
+            *o,
             "logging every step: not measured (the log would take about {:.0} MB; use fewer --orbits)",
             log_bytes / 1e6
         );
@@ -386,7 +469,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         without.sort_by(f64::total_cmp);
         let (w, wo) = (with[with.len() / 2], without[without.len() / 2]);
         outln!(
-            o,
+            *o,
             "logging every step: {:.3} ms with the MCAP log vs {:.3} ms without (+{:.0} %), {:.1} kB per orbit",
             w * 1e3,
             wo * 1e3,
@@ -395,10 +478,17 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         );
         let _ = std::fs::remove_dir_all(&dir);
     }
+    Ok(())
+}
+
+/// Ten changes to a built model by resolved key path, then a run set up and its start
+/// state made (what a Monte Carlo sample does before it steps); and a change that
+/// recompiles the whole scenario.
+fn parameter_cost(model: &orbitlash::model::Model, o: &mut String) -> Result<()> {
     // Parameters: ten changes to a built model by resolved key path, then a run set up
     // and its start state made (what a Monte Carlo sample does before it steps).
     {
-        let mut model = loaded.model.clone();
+        let mut model = model.clone();
         let wanted = [
             "node.housing.capacitance_j_per_k",
             "node.motor.capacitance_j_per_k",
@@ -429,7 +519,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             }
             times.sort_by(f64::total_cmp);
             outln!(
-                o,
+                *o,
                 "parameters: {:.2} µs to apply 10 changes by key path and start a run (median of {rounds})",
                 times[rounds / 2] * 1e6
             );
@@ -447,12 +537,18 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             }
             times.sort_by(f64::total_cmp);
             outln!(
-                o,
+                *o,
                 "            {:.2} µs for a change that recompiles the scenario (orbit.altitude_m, median of {rounds})",
                 times[rounds / 2] * 1e6
             );
         }
     }
+    Ok(())
+}
+
+/// Every pair evaluated at the node temperatures of the end of a run, slightly varied.
+fn backlash_cost(sc: &Scenario, o: &mut String) -> Result<()> {
+    let t_end = sc.run.duration_s;
     // Backlash: every pair evaluated at the node temperatures of the end of a run.
     if !sc.gears.is_empty() {
         let stats = simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut (), None)?;
@@ -474,7 +570,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         }
         times.sort_by(f64::total_cmp);
         outln!(
-            o,
+            *o,
             "backlash: {:.3} µs per evaluation of all {} pair(s) (exact, closed form, paper), median of 5 × {evals}{}",
             times[2] * 1e6 / evals as f64,
             sc.gears.len(),
@@ -485,35 +581,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             }
         );
     }
-    if a.no_accuracy {
-        return print_out(&o);
-    }
-    if t_end / 0.5 > MAX_STEPS / 10.0 {
-        outln!(
-            o,
-            "accuracy: not measured (the step-converged run would take {:.1e} steps; use fewer --orbits)",
-            t_end / 0.5
-        );
-        return print_out(&o);
-    }
-    // Accuracy against a step-converged run (fixed 0.5 s steps; TR-BDF2 is second order,
-    // so its own error is ~(0.5/300)² of the default's).
-    let mut ours = Samples::every(30.0);
-    simulate(&sc.thermal, &sc.gears, &sc.solver, t_end, &mut ours, None)?;
-    let fine = SolverSettings {
-        adaptive: false,
-        max_step_s: 0.5,
-        ..sc.solver.clone()
-    };
-    let mut reference = Samples::every(30.0);
-    simulate(&sc.thermal, &sc.gears, &fine, t_end, &mut reference, None)?;
-
-    outln!(
-        o,
-        "accuracy: max |T − T_converged| = {:.4} K over all nodes, every 30 s",
-        ours.max_abs_diff_k(&reference)
-    );
-    print_out(&o)
+    Ok(())
 }
 
 /// `bench --margins`: margins with 1 thread and with every core.
