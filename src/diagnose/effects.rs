@@ -31,6 +31,33 @@ pub enum Effect {
     CteScale,
 }
 
+/// What an effect is: physics the model left out, a sensor's own behaviour, or a
+/// calibration of a number the model has. Serialised as "physics", "sensor",
+/// "calibration".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectKind {
+    Physics,
+    Sensor,
+    Calibration,
+}
+
+impl EffectKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            EffectKind::Physics => "physics",
+            EffectKind::Sensor => "sensor",
+            EffectKind::Calibration => "calibration",
+        }
+    }
+}
+
+impl std::fmt::Display for EffectKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.as_str())
+    }
+}
+
 impl Effect {
     pub const ALL: [Effect; 11] = [
         Effect::EarthAlbedoIr,
@@ -62,13 +89,13 @@ impl Effect {
         }
     }
 
-    pub fn kind(self) -> &'static str {
+    pub fn kind(self) -> EffectKind {
         match self {
-            Effect::SensorLag | Effect::SensorOffset => "sensor",
+            Effect::SensorLag | Effect::SensorOffset => EffectKind::Sensor,
             Effect::AbsorptivityScale | Effect::ConductanceScale | Effect::CteScale => {
-                "calibration"
+                EffectKind::Calibration
             }
-            _ => "physics",
+            _ => EffectKind::Physics,
         }
     }
 

@@ -225,7 +225,7 @@ pub struct Fitted {
 #[derive(Debug, Clone, Serialize)]
 pub struct Finding {
     pub effect: &'static str,
-    pub kind: &'static str,
+    pub kind: effects::EffectKind,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub node: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
