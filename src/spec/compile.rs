@@ -261,178 +261,11 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let keys = element_keys(&raw);
     check_names(cx, &raw)?;
 
-    // Orbit.
-    let op = KeyPath::new("orbit");
-    let earth_radius_m = cx.quantity(
-        &q::EARTH_RADIUS_M,
-        &op.key("earth_radius_m"),
-        raw.orbit
-            .earth_radius_m
-            .unwrap_or(q::EARTH_RADIUS_M.default_value()),
-    )?;
-    let altitude_m = cx.finite(&op.key("altitude_m"), raw.orbit.altitude_m)?;
-    if !(100e3..=100_000e3).contains(&altitude_m) {
-        return Err(cx.err(
-            &op.key("altitude_m"),
-            format!("must be within 100 km … 100 000 km, in metres (got {altitude_m} m)"),
-        ));
-    }
-    let orbit = Orbit {
-        altitude_m,
-        earth_radius_m,
-        mu_m3_per_s2: cx.quantity(
-            &q::MU_M3_PER_S2,
-            &op.key("mu_m3_per_s2"),
-            raw.orbit
-                .mu_m3_per_s2
-                .unwrap_or(q::MU_M3_PER_S2.default_value()),
-        )?,
-        // Reduced modulo 360° exactly (fmod is exact) before the conversion, so that a
-        // large angle keeps its fraction of a turn.
-        orbit_angle_at_start_rad: cx
-            .quantity(
-                &q::ORBIT_ANGLE_AT_START_DEG,
-                &op.key("orbit_angle_at_start_deg"),
-                raw.orbit
-                    .orbit_angle_at_start_deg
-                    .unwrap_or(q::ORBIT_ANGLE_AT_START_DEG.default_value()),
-            )?
-            .rem_euclid(360.0)
-            .to_radians(),
-    };
-    let period_s = orbit.period_s();
-    if !(MIN_PERIOD_S..=MAX_PERIOD_S).contains(&period_s) {
-        let which = if raw.orbit.mu_m3_per_s2.is_some() {
-            "mu_m3_per_s2"
-        } else {
-            "altitude_m"
-        };
-        return Err(cx.err(
-            &op.key(which),
-            format!(
-                "gives an orbital period of {period_s:.3e} s; it must be within {MIN_PERIOD_S} … {MAX_PERIOD_S:.0} s (10 min … 30 days)"
-            ),
-        ));
-    }
-
-    // Environment and mission profile.
-    let ep = KeyPath::new("environment");
-    let e = raw.environment;
-    let beta_deg = cx.profile(&ep.key("beta_deg"), e.beta_deg, &|p, v| {
-        cx.quantity(&q::BETA_DEG, p, v)
-    })?;
-    let solar_flux = cx.profile(
-        &ep.key("solar_flux_w_per_m2"),
-        e.solar_flux_w_per_m2.unwrap_or(ProfileSpec::Constant(
-            q::SOLAR_FLUX_W_PER_M2.default_value(),
-        )),
-        &|p, v| cx.quantity(&q::SOLAR_FLUX_W_PER_M2, p, v),
-    )?;
-    let space_sink_k = cx.quantity(
-        &q::SPACE_SINK_K,
-        &ep.key("space_sink_k"),
-        e.space_sink_k.unwrap_or(q::SPACE_SINK_K.default_value()),
-    )?;
-    let environment = CircularEnvironment {
-        orbit,
-        beta_rad: beta_deg.map(f64::to_radians),
-        solar_flux_w_per_m2: solar_flux,
-        albedo: cx.quantity(
-            &q::ALBEDO,
-            &ep.key("albedo"),
-            e.albedo.unwrap_or(q::ALBEDO.default_value()),
-        )?,
-        earth_ir_w_per_m2: cx.quantity(
-            &q::EARTH_IR_W_PER_M2,
-            &ep.key("earth_ir_w_per_m2"),
-            e.earth_ir_w_per_m2
-                .unwrap_or(q::EARTH_IR_W_PER_M2.default_value()),
-        )?,
-        space_sink_k,
-    };
+    let (environment, space_sink_k) = environment(cx, &raw.orbit, raw.environment)?;
+    let period_s = environment.orbit.period_s();
     let view_factor_default = environment.orbit.earth_view_factor();
-
-    // Run control.
-    let rp = KeyPath::new("run");
-    let duration = |key: &'static str, v: f64, unit_s: f64| {
-        let d = cx.positive(&rp.key(key), v)? * unit_s;
-        if d < MIN_DURATION_S {
-            return Err(cx.err(
-                &rp.key(key),
-                format!(
-                    "gives a run of {} s; runs last at least {MIN_DURATION_S} s",
-                    num(d)
-                ),
-            ));
-        }
-        if d > MAX_DURATION_S {
-            return Err(cx.err(
-                &rp.key(key),
-                format!(
-                    "gives a run of {d:.3e} s; runs are limited to {MAX_DURATION_S:.0e} s (31.7 years), where time still resolves the shortest step"
-                ),
-            ));
-        }
-        Ok(d)
-    };
-    let duration_s = match (raw.run.orbits, raw.run.duration_s, raw.run.duration_days) {
-        (Some(o), None, None) => duration("orbits", o, period_s)?,
-        (None, Some(s), None) => duration("duration_s", s, 1.0)?,
-        (None, None, Some(d)) => duration("duration_days", d, SECONDS_PER_DAY)?,
-        _ => {
-            return Err(cx.err(
-                &rp,
-                "give exactly one of `orbits`, `duration_s` or `duration_days`",
-            ));
-        }
-    };
-    let run = RunControl {
-        duration_s,
-        output_interval_s: cx.quantity(
-            &q::OUTPUT_INTERVAL_S,
-            &rp.key("output_interval_s"),
-            raw.run
-                .output_interval_s
-                .unwrap_or(q::OUTPUT_INTERVAL_S.default_value()),
-        )?,
-    };
-
-    // Solver.
-    let sp = KeyPath::new("solver");
-    if let Some(m) = &raw.solver.method
-        && m != "tr-bdf2"
-    {
-        return Err(cx.err(
-            &sp.key("method"),
-            format!("unknown method `{m}` (known: tr-bdf2)"),
-        ));
-    }
-    let defaults = SolverSettings::default();
-    let solver = SolverSettings {
-        tolerance_k: cx.quantity(
-            &q::TOLERANCE_K,
-            &sp.key("tolerance_k"),
-            raw.solver.tolerance_k.unwrap_or(defaults.tolerance_k),
-        )?,
-        max_step_s: cx.quantity(
-            &q::MAX_STEP_S,
-            &sp.key("max_step_s"),
-            raw.solver.max_step_s.unwrap_or(defaults.max_step_s),
-        )?,
-        adaptive: raw.solver.adaptive.unwrap_or(defaults.adaptive),
-        linear: match raw.solver.linear.as_deref() {
-            None => defaults.linear,
-            Some(name) => LinearSolver::from_name(name).ok_or_else(|| {
-                cx.err(
-                    &sp.key("linear"),
-                    format!(
-                        "unknown linear solver `{name}` (known: {})",
-                        LinearSolver::NAMES.join(", ")
-                    ),
-                )
-            })?,
-        },
-    };
+    let run = run_control(cx, &raw.run, period_s)?;
+    let solver = solver_settings(cx, &raw.solver)?;
 
     // Nodes.
     let mut names: HashMap<String, NodeRef> = HashMap::new();
@@ -859,6 +692,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         heaters,
     };
     // An explicit direct solver must fit the network.
+    let sp = KeyPath::new("solver");
     let n = network.nodes.len();
     match solver.linear {
         LinearSolver::Dense if n > DENSE_MAX_NODES => {
@@ -901,6 +735,195 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         solver,
         sensors,
     })
+}
+
+/// The orbit, its eclipses' geometry and the mission profile (β, solar flux, albedo,
+/// Earth infrared, the space sink): the environment and the sink temperature.
+fn environment(
+    cx: &Cx,
+    orbit_spec: &OrbitSpec,
+    environment_spec: EnvironmentSpec,
+) -> Result<(CircularEnvironment, f64), SpecError> {
+    // Orbit.
+    let op = KeyPath::new("orbit");
+    let earth_radius_m = cx.quantity(
+        &q::EARTH_RADIUS_M,
+        &op.key("earth_radius_m"),
+        orbit_spec
+            .earth_radius_m
+            .unwrap_or(q::EARTH_RADIUS_M.default_value()),
+    )?;
+    let altitude_m = cx.finite(&op.key("altitude_m"), orbit_spec.altitude_m)?;
+    if !(100e3..=100_000e3).contains(&altitude_m) {
+        return Err(cx.err(
+            &op.key("altitude_m"),
+            format!("must be within 100 km … 100 000 km, in metres (got {altitude_m} m)"),
+        ));
+    }
+    let orbit = Orbit {
+        altitude_m,
+        earth_radius_m,
+        mu_m3_per_s2: cx.quantity(
+            &q::MU_M3_PER_S2,
+            &op.key("mu_m3_per_s2"),
+            orbit_spec
+                .mu_m3_per_s2
+                .unwrap_or(q::MU_M3_PER_S2.default_value()),
+        )?,
+        // Reduced modulo 360° exactly (fmod is exact) before the conversion, so that a
+        // large angle keeps its fraction of a turn.
+        orbit_angle_at_start_rad: cx
+            .quantity(
+                &q::ORBIT_ANGLE_AT_START_DEG,
+                &op.key("orbit_angle_at_start_deg"),
+                orbit_spec
+                    .orbit_angle_at_start_deg
+                    .unwrap_or(q::ORBIT_ANGLE_AT_START_DEG.default_value()),
+            )?
+            .rem_euclid(360.0)
+            .to_radians(),
+    };
+    let period_s = orbit.period_s();
+    if !(MIN_PERIOD_S..=MAX_PERIOD_S).contains(&period_s) {
+        let which = if orbit_spec.mu_m3_per_s2.is_some() {
+            "mu_m3_per_s2"
+        } else {
+            "altitude_m"
+        };
+        return Err(cx.err(
+            &op.key(which),
+            format!(
+                "gives an orbital period of {period_s:.3e} s; it must be within {MIN_PERIOD_S} … {MAX_PERIOD_S:.0} s (10 min … 30 days)"
+            ),
+        ));
+    }
+
+    // Environment and mission profile.
+    let ep = KeyPath::new("environment");
+    let e = environment_spec;
+    let beta_deg = cx.profile(&ep.key("beta_deg"), e.beta_deg, &|p, v| {
+        cx.quantity(&q::BETA_DEG, p, v)
+    })?;
+    let solar_flux = cx.profile(
+        &ep.key("solar_flux_w_per_m2"),
+        e.solar_flux_w_per_m2.unwrap_or(ProfileSpec::Constant(
+            q::SOLAR_FLUX_W_PER_M2.default_value(),
+        )),
+        &|p, v| cx.quantity(&q::SOLAR_FLUX_W_PER_M2, p, v),
+    )?;
+    let space_sink_k = cx.quantity(
+        &q::SPACE_SINK_K,
+        &ep.key("space_sink_k"),
+        e.space_sink_k.unwrap_or(q::SPACE_SINK_K.default_value()),
+    )?;
+    let environment = CircularEnvironment {
+        orbit,
+        beta_rad: beta_deg.map(f64::to_radians),
+        solar_flux_w_per_m2: solar_flux,
+        albedo: cx.quantity(
+            &q::ALBEDO,
+            &ep.key("albedo"),
+            e.albedo.unwrap_or(q::ALBEDO.default_value()),
+        )?,
+        earth_ir_w_per_m2: cx.quantity(
+            &q::EARTH_IR_W_PER_M2,
+            &ep.key("earth_ir_w_per_m2"),
+            e.earth_ir_w_per_m2
+                .unwrap_or(q::EARTH_IR_W_PER_M2.default_value()),
+        )?,
+        space_sink_k,
+    };
+    Ok((environment, space_sink_k))
+}
+
+/// The run's length and output interval.
+fn run_control(cx: &Cx, run_spec: &RunSpec, period_s: f64) -> Result<RunControl, SpecError> {
+    // Run control.
+    let rp = KeyPath::new("run");
+    let duration = |key: &'static str, v: f64, unit_s: f64| {
+        let d = cx.positive(&rp.key(key), v)? * unit_s;
+        if d < MIN_DURATION_S {
+            return Err(cx.err(
+                &rp.key(key),
+                format!(
+                    "gives a run of {} s; runs last at least {MIN_DURATION_S} s",
+                    num(d)
+                ),
+            ));
+        }
+        if d > MAX_DURATION_S {
+            return Err(cx.err(
+                &rp.key(key),
+                format!(
+                    "gives a run of {d:.3e} s; runs are limited to {MAX_DURATION_S:.0e} s (31.7 years), where time still resolves the shortest step"
+                ),
+            ));
+        }
+        Ok(d)
+    };
+    let duration_s = match (run_spec.orbits, run_spec.duration_s, run_spec.duration_days) {
+        (Some(o), None, None) => duration("orbits", o, period_s)?,
+        (None, Some(s), None) => duration("duration_s", s, 1.0)?,
+        (None, None, Some(d)) => duration("duration_days", d, SECONDS_PER_DAY)?,
+        _ => {
+            return Err(cx.err(
+                &rp,
+                "give exactly one of `orbits`, `duration_s` or `duration_days`",
+            ));
+        }
+    };
+    let run = RunControl {
+        duration_s,
+        output_interval_s: cx.quantity(
+            &q::OUTPUT_INTERVAL_S,
+            &rp.key("output_interval_s"),
+            run_spec
+                .output_interval_s
+                .unwrap_or(q::OUTPUT_INTERVAL_S.default_value()),
+        )?,
+    };
+    Ok(run)
+}
+
+/// The solver's settings, defaults filled in.
+fn solver_settings(cx: &Cx, solver_spec: &SolverSpec) -> Result<SolverSettings, SpecError> {
+    // Solver.
+    let sp = KeyPath::new("solver");
+    if let Some(m) = &solver_spec.method
+        && m != "tr-bdf2"
+    {
+        return Err(cx.err(
+            &sp.key("method"),
+            format!("unknown method `{m}` (known: tr-bdf2)"),
+        ));
+    }
+    let defaults = SolverSettings::default();
+    let solver = SolverSettings {
+        tolerance_k: cx.quantity(
+            &q::TOLERANCE_K,
+            &sp.key("tolerance_k"),
+            solver_spec.tolerance_k.unwrap_or(defaults.tolerance_k),
+        )?,
+        max_step_s: cx.quantity(
+            &q::MAX_STEP_S,
+            &sp.key("max_step_s"),
+            solver_spec.max_step_s.unwrap_or(defaults.max_step_s),
+        )?,
+        adaptive: solver_spec.adaptive.unwrap_or(defaults.adaptive),
+        linear: match solver_spec.linear.as_deref() {
+            None => defaults.linear,
+            Some(name) => LinearSolver::from_name(name).ok_or_else(|| {
+                cx.err(
+                    &sp.key("linear"),
+                    format!(
+                        "unknown linear solver `{name}` (known: {})",
+                        LinearSolver::NAMES.join(", ")
+                    ),
+                )
+            })?,
+        },
+    };
+    Ok(solver)
 }
 
 /// Every name a scenario gives (scenario, nodes, boundaries, conductors, radiative
