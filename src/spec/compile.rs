@@ -615,73 +615,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     }
 
     // Sensors (after the gear pairs they may name).
-    let mut sensors: Vec<Sensor> = Vec::new();
-    for (i, s) in raw.sensor.into_iter().enumerate() {
-        let p = KeyPath::new("sensor").elem(i, &keys.sensor[i]);
-        if sensors.iter().any(|x| x.column == s.column) {
-            return Err(cx.err(
-                &p.key("column"),
-                format!("column `{}` is defined twice", s.column),
-            ));
-        }
-        let target = match (s.node, s.quantity) {
-            (Some(n), None) => {
-                if s.gear_pair.is_some() {
-                    return Err(cx.err(
-                        &p.key("gear_pair"),
-                        "a temperature sensor reads a node, not a gear pair",
-                    ));
-                }
-                SensorTarget::Node(diffusion(&p.key("node"), &n)?)
-            }
-            (None, Some(q)) => {
-                if !DERIVED_QUANTITIES.contains(&q.as_str()) {
-                    return Err(cx.err(
-                        &p.key("quantity"),
-                        format!(
-                            "unknown quantity `{q}` (known: {})",
-                            DERIVED_QUANTITIES.join(", ")
-                        ),
-                    ));
-                }
-                for (key, given) in [("tau_s", s.tau_s), ("offset_k", s.offset_k)] {
-                    if given.is_some() {
-                        return Err(cx.err(
-                            &p.key(key),
-                            format!("applies to temperature sensors only (`{q}` is derived)"),
-                        ));
-                    }
-                }
-                let pair = match &s.gear_pair {
-                    None if gears.is_empty() => {
-                        return Err(
-                            cx.err(&p.key("quantity"), "needs a [[gear_pair]] in the scenario")
-                        );
-                    }
-                    None => 0,
-                    Some(name) => gears.iter().position(|g| &g.name == name).ok_or_else(|| {
-                        cx.err(&p.key("gear_pair"), format!("unknown gear pair `{name}`"))
-                    })?,
-                };
-                SensorTarget::Backlash(pair)
-            }
-            _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
-        };
-        let tau_s = match s.tau_s {
-            Some(v) => cx.quantity(&q::SENSOR_TAU_S, &p.key("tau_s"), v)?,
-            None => 0.0,
-        };
-        let offset_k = match s.offset_k {
-            Some(v) => cx.quantity(&q::SENSOR_OFFSET_K, &p.key("offset_k"), v)?,
-            None => 0.0,
-        };
-        sensors.push(Sensor {
-            column: s.column,
-            target,
-            offset_k,
-            tau_s,
-        });
-    }
+    let sensors = sensors(cx, raw.sensor, &keys.sensor, &gears, &diffusion)?;
 
     let network = Network {
         nodes,
@@ -735,6 +669,85 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         solver,
         sensors,
     })
+}
+
+/// The sensors: recording columns read as a node's temperature (with a lag and an
+/// offset) or as a gear pair's backlash.
+fn sensors(
+    cx: &Cx,
+    specs: Vec<SensorSpec>,
+    keys: &[String],
+    gears: &[GearPair],
+    diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
+) -> Result<Vec<Sensor>, SpecError> {
+    let mut sensors: Vec<Sensor> = Vec::new();
+    for (i, s) in specs.into_iter().enumerate() {
+        let p = KeyPath::new("sensor").elem(i, &keys[i]);
+        if sensors.iter().any(|x| x.column == s.column) {
+            return Err(cx.err(
+                &p.key("column"),
+                format!("column `{}` is defined twice", s.column),
+            ));
+        }
+        let target = match (s.node, s.quantity) {
+            (Some(n), None) => {
+                if s.gear_pair.is_some() {
+                    return Err(cx.err(
+                        &p.key("gear_pair"),
+                        "a temperature sensor reads a node, not a gear pair",
+                    ));
+                }
+                SensorTarget::Node(diffusion(&p.key("node"), &n)?)
+            }
+            (None, Some(q)) => {
+                if !DERIVED_QUANTITIES.contains(&q.as_str()) {
+                    return Err(cx.err(
+                        &p.key("quantity"),
+                        format!(
+                            "unknown quantity `{q}` (known: {})",
+                            DERIVED_QUANTITIES.join(", ")
+                        ),
+                    ));
+                }
+                for (key, given) in [("tau_s", s.tau_s), ("offset_k", s.offset_k)] {
+                    if given.is_some() {
+                        return Err(cx.err(
+                            &p.key(key),
+                            format!("applies to temperature sensors only (`{q}` is derived)"),
+                        ));
+                    }
+                }
+                let pair = match &s.gear_pair {
+                    None if gears.is_empty() => {
+                        return Err(
+                            cx.err(&p.key("quantity"), "needs a [[gear_pair]] in the scenario")
+                        );
+                    }
+                    None => 0,
+                    Some(name) => gears.iter().position(|g| &g.name == name).ok_or_else(|| {
+                        cx.err(&p.key("gear_pair"), format!("unknown gear pair `{name}`"))
+                    })?,
+                };
+                SensorTarget::Backlash(pair)
+            }
+            _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
+        };
+        let tau_s = match s.tau_s {
+            Some(v) => cx.quantity(&q::SENSOR_TAU_S, &p.key("tau_s"), v)?,
+            None => q::SENSOR_TAU_S.default_value(),
+        };
+        let offset_k = match s.offset_k {
+            Some(v) => cx.quantity(&q::SENSOR_OFFSET_K, &p.key("offset_k"), v)?,
+            None => q::SENSOR_OFFSET_K.default_value(),
+        };
+        sensors.push(Sensor {
+            column: s.column,
+            target,
+            offset_k,
+            tau_s,
+        });
+    }
+    Ok(sensors)
 }
 
 /// The orbit, its eclipses' geometry and the mission profile (β, solar flux, albedo,
