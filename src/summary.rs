@@ -314,9 +314,7 @@ pub struct MeshStats {
     start_s: f64,
     pub pairs: Vec<PairStats>,
     pub run_pairs: Vec<PairStats>,
-    /// Exact backlash at the end of the previous step, per pair.
-    last_m: Vec<f64>,
-    /// Exact, closed-form and paper backlash there, per pair.
+    /// Exact, closed-form and paper backlash at the end of the previous step, per pair.
     last_tracked_m: Vec<[f64; 3]>,
     /// The previous step's end: its time, the temperature path's tangent there
     /// (K/s per node) and each pair's rates of the tracked backlash along it (m/s;
@@ -373,7 +371,6 @@ impl Observer for MeshStats {
         self.start_s = (r.t_end_s - self.window_s).max(r.t_start_s);
         self.pairs = r.gears.iter().map(|g| PairStats::new(&g.name)).collect();
         self.run_pairs = self.pairs.clone();
-        self.last_m = r.mesh.iter().map(|m| m.backlash_exact_m).collect();
         self.edge_t_s = f64::NAN;
         self.last_tracked_m = r.mesh.iter().map(tracked).collect();
         self.edge_slope_m_per_s = vec![[f64::NAN; 3]; r.mesh.len()];
@@ -441,19 +438,17 @@ impl Observer for MeshStats {
             if skip && !self.always_probe {
                 self.skipped_steps += 1;
                 self.see(k, t1, &step.mesh[k]);
-                self.last_m[k] = b1[0];
                 continue;
             }
             self.probed_steps += 1;
             let ts = [t0, t0 + 0.25 * h, t0 + 0.5 * h, t0 + 0.75 * h];
-            let mut values = [self.last_m[k], 0.0, 0.0, 0.0, step.mesh[k].backlash_exact_m];
+            let mut values = [b0[0], 0.0, 0.0, 0.0, b1[0]];
             for i in 1..4 {
                 let m = at(ts[i]);
                 values[i] = m.backlash_exact_m;
                 self.see(k, ts[i], &m);
             }
             self.see(k, t1, &step.mesh[k]);
-            self.last_m[k] = values[4];
             // Golden-section refinement around an interior minimum.
             let i = (1..4)
                 .min_by(|&x, &y| values[x].total_cmp(&values[y]))

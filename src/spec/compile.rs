@@ -122,6 +122,17 @@ impl Cx {
         }
     }
 
+    /// An optional value of quantity `q`, absent standing for the quantity's default,
+    /// checked by its rule.
+    fn quantity_or_default(
+        &self,
+        q: &Quantity,
+        path: &KeyPath,
+        v: Option<f64>,
+    ) -> Result<f64, SpecError> {
+        self.quantity(q, path, v.unwrap_or(q.default_value()))
+    }
+
     fn within(
         &self,
         path: &KeyPath,
@@ -732,14 +743,9 @@ fn sensors(
             }
             _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
         };
-        let tau_s = match s.tau_s {
-            Some(v) => cx.quantity(&q::SENSOR_TAU_S, &p.key("tau_s"), v)?,
-            None => q::SENSOR_TAU_S.default_value(),
-        };
-        let offset_k = match s.offset_k {
-            Some(v) => cx.quantity(&q::SENSOR_OFFSET_K, &p.key("offset_k"), v)?,
-            None => q::SENSOR_OFFSET_K.default_value(),
-        };
+        let tau_s = cx.quantity_or_default(&q::SENSOR_TAU_S, &p.key("tau_s"), s.tau_s)?;
+        let offset_k =
+            cx.quantity_or_default(&q::SENSOR_OFFSET_K, &p.key("offset_k"), s.offset_k)?;
         sensors.push(Sensor {
             column: s.column,
             target,
@@ -759,12 +765,10 @@ fn environment(
 ) -> Result<(CircularEnvironment, f64), SpecError> {
     // Orbit.
     let op = KeyPath::new("orbit");
-    let earth_radius_m = cx.quantity(
+    let earth_radius_m = cx.quantity_or_default(
         &q::EARTH_RADIUS_M,
         &op.key("earth_radius_m"),
-        orbit_spec
-            .earth_radius_m
-            .unwrap_or(q::EARTH_RADIUS_M.default_value()),
+        orbit_spec.earth_radius_m,
     )?;
     let altitude_m = cx.finite(&op.key("altitude_m"), orbit_spec.altitude_m)?;
     if !(100e3..=100_000e3).contains(&altitude_m) {
@@ -776,22 +780,18 @@ fn environment(
     let orbit = Orbit {
         altitude_m,
         earth_radius_m,
-        mu_m3_per_s2: cx.quantity(
+        mu_m3_per_s2: cx.quantity_or_default(
             &q::MU_M3_PER_S2,
             &op.key("mu_m3_per_s2"),
-            orbit_spec
-                .mu_m3_per_s2
-                .unwrap_or(q::MU_M3_PER_S2.default_value()),
+            orbit_spec.mu_m3_per_s2,
         )?,
         // Reduced modulo 360° exactly (fmod is exact) before the conversion, so that a
         // large angle keeps its fraction of a turn.
         orbit_angle_at_start_rad: cx
-            .quantity(
+            .quantity_or_default(
                 &q::ORBIT_ANGLE_AT_START_DEG,
                 &op.key("orbit_angle_at_start_deg"),
-                orbit_spec
-                    .orbit_angle_at_start_deg
-                    .unwrap_or(q::ORBIT_ANGLE_AT_START_DEG.default_value()),
+                orbit_spec.orbit_angle_at_start_deg,
             )?
             .rem_euclid(360.0)
             .to_radians(),
@@ -824,25 +824,17 @@ fn environment(
         )),
         &|p, v| cx.quantity(&q::SOLAR_FLUX_W_PER_M2, p, v),
     )?;
-    let space_sink_k = cx.quantity(
-        &q::SPACE_SINK_K,
-        &ep.key("space_sink_k"),
-        e.space_sink_k.unwrap_or(q::SPACE_SINK_K.default_value()),
-    )?;
+    let space_sink_k =
+        cx.quantity_or_default(&q::SPACE_SINK_K, &ep.key("space_sink_k"), e.space_sink_k)?;
     let environment = CircularEnvironment {
         orbit,
         beta_rad: beta_deg.map(f64::to_radians),
         solar_flux_w_per_m2: solar_flux,
-        albedo: cx.quantity(
-            &q::ALBEDO,
-            &ep.key("albedo"),
-            e.albedo.unwrap_or(q::ALBEDO.default_value()),
-        )?,
-        earth_ir_w_per_m2: cx.quantity(
+        albedo: cx.quantity_or_default(&q::ALBEDO, &ep.key("albedo"), e.albedo)?,
+        earth_ir_w_per_m2: cx.quantity_or_default(
             &q::EARTH_IR_W_PER_M2,
             &ep.key("earth_ir_w_per_m2"),
-            e.earth_ir_w_per_m2
-                .unwrap_or(q::EARTH_IR_W_PER_M2.default_value()),
+            e.earth_ir_w_per_m2,
         )?,
         space_sink_k,
     };
@@ -851,7 +843,6 @@ fn environment(
 
 /// The run's length and output interval.
 fn run_control(cx: &Cx, run_spec: &RunSpec, period_s: f64) -> Result<RunControl, SpecError> {
-    // Run control.
     let rp = KeyPath::new("run");
     let duration = |key: &'static str, v: f64, unit_s: f64| {
         let d = cx.positive(&rp.key(key), v)? * unit_s;
@@ -887,12 +878,10 @@ fn run_control(cx: &Cx, run_spec: &RunSpec, period_s: f64) -> Result<RunControl,
     };
     let run = RunControl {
         duration_s,
-        output_interval_s: cx.quantity(
+        output_interval_s: cx.quantity_or_default(
             &q::OUTPUT_INTERVAL_S,
             &rp.key("output_interval_s"),
-            run_spec
-                .output_interval_s
-                .unwrap_or(q::OUTPUT_INTERVAL_S.default_value()),
+            run_spec.output_interval_s,
         )?,
     };
     Ok(run)
@@ -900,7 +889,6 @@ fn run_control(cx: &Cx, run_spec: &RunSpec, period_s: f64) -> Result<RunControl,
 
 /// The solver's settings, defaults filled in.
 fn solver_settings(cx: &Cx, solver_spec: &SolverSpec) -> Result<SolverSettings, SpecError> {
-    // Solver.
     let sp = KeyPath::new("solver");
     if let Some(m) = &solver_spec.method
         && m != "tr-bdf2"
