@@ -16,9 +16,9 @@
 //!
 //! ```
 //! use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
-//! use orbitlash::model::Model;
-//! use orbitlash::sim::{Setup, Stop};
-//! use orbitlash::summary::MeshStats;
+//! use orbitlash::spec::model::Model;
+//! use orbitlash::run::sim::{Setup, Stop};
+//! use orbitlash::run::summary::MeshStats;
 //!
 //! let mut model = Model::new(parse_spec(REFERENCE_HINGE_TOML, "reference").unwrap()).unwrap();
 //! let beta = model.param("environment.beta_deg").unwrap(); // resolve a key path once
@@ -63,21 +63,12 @@ pub(crate) fn error_chain(e: &dyn std::error::Error) -> String {
 
 pub mod constants;
 pub mod diagnose;
-pub mod dispersion;
 pub mod gear;
 pub mod io;
 pub mod margins;
-pub mod model;
 pub mod orbit;
-pub mod quantity;
 pub mod recording;
-pub mod sample;
-pub mod scenario;
-pub mod sensor;
-pub mod sim;
+pub mod run;
 pub mod spec;
-pub mod steady;
-pub mod summary;
 pub mod thermal;
 pub mod units;
-pub mod validate;

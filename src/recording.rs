@@ -2,7 +2,7 @@
 //! each row came from (for messages). Reading files into one is `io::recording`'s job;
 //! `diagnose` and the sensors work on this type only.
 
-use crate::sensor::Sensor;
+use crate::spec::scenario::Sensor;
 
 /// A recording: `values[k][j]` is channel `columns[k]` at `time_s[j]` (None: missing).
 #[derive(Debug, Clone, PartialEq)]

@@ -9,9 +9,9 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use orbitlash::io::scenario_toml;
-use orbitlash::sample::Cadence;
-use orbitlash::sensor::Readings;
-use orbitlash::sim::simulate;
+use orbitlash::run::sample::Cadence;
+use orbitlash::run::sensor::Readings;
+use orbitlash::run::sim::simulate;
 use predicates::prelude::*;
 use serde_json::Value;
 

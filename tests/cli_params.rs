@@ -7,7 +7,7 @@ use std::path::Path;
 mod common;
 use common::{bin, reference_text, tmpdir};
 use orbitlash::io::scenario_toml;
-use orbitlash::model::Model;
+use orbitlash::spec::model::Model;
 
 fn spec_of(file: &str) -> orbitlash::spec::ScenarioSpec {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))

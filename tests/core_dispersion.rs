@@ -2,9 +2,9 @@
 //! strata, draws that depend only on (seed, sample index), groups, and errors that name
 //! the `[[dispersion]]` entry and its line before any sample runs.
 
-use orbitlash::dispersion::{Distribution, Plan, Sampling};
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, located, parse_spec};
-use orbitlash::model::Model;
+use orbitlash::margins::dispersion::{Distribution, Plan, Sampling};
+use orbitlash::spec::model::Model;
 
 /// The reference scenario with `extra` appended (dispersion entries).
 fn with(extra: &str) -> (String, Model) {
@@ -217,7 +217,7 @@ fn core_bad_dispersions_are_named_with_their_line() {
     ] {
         let (text, model) = with(extra);
         let e = match Plan::new(&model, &model.spec().dispersion, Sampling::Random, 10, 1) {
-            Err(orbitlash::dispersion::PlanError::Spec(e)) => e,
+            Err(orbitlash::margins::dispersion::PlanError::Spec(e)) => e,
             other => panic!("expected an entry's error, got {other:?}"),
         };
         let shown = located(&text, "d.toml", e).to_string();

@@ -7,8 +7,8 @@
 //! consistency checks (`core_`), not validations.
 
 use orbitlash::io::scenario_toml::reference;
-use orbitlash::sim::{SolverSettings, simulate};
-use orbitlash::summary::Samples;
+use orbitlash::run::sim::{SolverSettings, simulate};
+use orbitlash::run::summary::Samples;
 use orbitlash::thermal::ThermalModel;
 use orbitlash::thermal::iteration::LinearSolver;
 use orbitlash::thermal::synthetic::{Shape, network, network_scaled};

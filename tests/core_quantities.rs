@@ -1,4 +1,4 @@
-//! One generated test over the table of quantities (`orbitlash::quantity`): every
+//! One generated test over the table of quantities (`orbitlash::spec::quantity`): every
 //! number of the shipped scenarios that has a quantity with a range is pushed just
 //! below, at and just above each end of that range through the four ways a value
 //! reaches a model — the TOML reader (the scenario file edited), `--set`
@@ -9,10 +9,10 @@
 //! quantity's range must be refused (a value inside may still be refused by its
 //! context, e.g. a heater's on_k above its off_k, as long as all four say so).
 
-use orbitlash::dispersion::{Plan, PlanError, Sampling};
 use orbitlash::io::scenario_toml::{ScenarioError, edited, parse, parse_spec};
-use orbitlash::model::{Model, ModelError};
-use orbitlash::quantity::{Quantity, TABLE};
+use orbitlash::margins::dispersion::{Plan, PlanError, Sampling};
+use orbitlash::spec::model::{Model, ModelError};
+use orbitlash::spec::quantity::{Quantity, TABLE};
 use orbitlash::spec::{DispersionSpec, ScenarioSpec, params};
 
 /// What one way made of a value: accepted, or refused with (key, message).

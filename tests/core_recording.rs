@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use orbitlash::io::log_schema::{Kind, MessageType, descriptor_set};
 use orbitlash::io::protobuf::Encoder;
 use orbitlash::io::recording::{Recording, RecordingError};
-use orbitlash::sensor::{Sensor, SensorTarget};
+use orbitlash::run::sensor::{Sensor, SensorTarget};
 
 /// Channels by name: (time, name → values).
 type ByName = (Vec<f64>, BTreeMap<String, Vec<Option<f64>>>);

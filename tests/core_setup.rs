@@ -6,11 +6,11 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 
 use orbitlash::io::scenario_toml;
-use orbitlash::sample::{Cadence, Sampler, Want};
-use orbitlash::scenario::Scenario;
-use orbitlash::sim::{
+use orbitlash::run::sample::{Cadence, Sampler, Want};
+use orbitlash::run::sim::{
     Event, EventKind, Observer, ObserverResult, RunStart, RunStats, Setup, State, StepView, Stop,
 };
+use orbitlash::spec::scenario::Scenario;
 
 /// Counts the allocations of the current thread (tests run on several), to show the
 /// stepping loop makes none.
@@ -394,7 +394,7 @@ fn core_an_observer_that_fails_at_the_start_leaves_the_state() {
 
 #[test]
 fn core_sensor_readings_continue_across_a_split_run() {
-    use orbitlash::sensor::Readings;
+    use orbitlash::run::sensor::Readings;
     let mut sc = scenario("reference-hinge.toml");
     sc.sensors[0].tau_s = 600.0;
     sc.sensors[1].offset_k = 0.5;

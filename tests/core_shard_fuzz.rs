@@ -6,12 +6,12 @@
 
 use std::sync::atomic::AtomicU64;
 
-use orbitlash::dispersion::{Plan, Sampling};
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
+use orbitlash::margins::dispersion::{Plan, Sampling};
 use orbitlash::margins::{
     Horizon, RunIdentity, SHARD_FORMAT, Shard, merge, read_shard, report, run_samples, shard_range,
 };
-use orbitlash::model::Model;
+use orbitlash::spec::model::Model;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 

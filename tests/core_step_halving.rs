@@ -4,8 +4,8 @@
 //! the same accuracy are the closed forms in `val_closed_forms.rs` and the truth model.
 
 use orbitlash::io::scenario_toml::reference;
-use orbitlash::sim::{SolverSettings, simulate};
-use orbitlash::summary::Samples;
+use orbitlash::run::sim::{SolverSettings, simulate};
+use orbitlash::run::summary::Samples;
 
 fn samples(settings: &SolverSettings, orbits: f64) -> Samples {
     let sc = reference().with_orbits(orbits).unwrap();

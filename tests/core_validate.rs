@@ -4,7 +4,7 @@
 
 use orbitlash::io::scenario_toml;
 use orbitlash::orbit::Profile;
-use orbitlash::scenario::Scenario;
+use orbitlash::spec::scenario::Scenario;
 use orbitlash::thermal::synthetic::{Shape, network};
 use orbitlash::thermal::{Conductor, NodeRef};
 

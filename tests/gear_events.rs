@@ -1,7 +1,7 @@
 //! Margin and interference events follow the backlash evaluated at every step.
 
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse};
-use orbitlash::sim::{Event, EventKind, Observer, ObserverResult, StepView, simulate};
+use orbitlash::run::sim::{Event, EventKind, Observer, ObserverResult, StepView, simulate};
 
 #[derive(Default)]
 struct Trace {

@@ -2,8 +2,8 @@
 //! makes the solver take many more steps, reject steps, or leak energy shows here.
 
 use orbitlash::io::scenario_toml::{load_file, reference};
-use orbitlash::scenario::Scenario;
-use orbitlash::sim::{RunStats, simulate};
+use orbitlash::run::sim::{RunStats, simulate};
+use orbitlash::spec::scenario::Scenario;
 
 /// The scenario run for its own duration, with no observer.
 fn run_to_end(sc: &Scenario) -> RunStats {
@@ -88,7 +88,7 @@ fn regress_reference_orbit6_golden_values() {
     // tests/val_*): a change beyond these tolerances is a change of results and must be
     // explained. Produced by `orbitlash run --no-log` (the "last orbit" table and the
     // exact row of the gear-pair table), commit 3cfc369.
-    use orbitlash::summary::{MeshStats, WindowStats};
+    use orbitlash::run::summary::{MeshStats, WindowStats};
     let sc = reference();
     let period = sc.period_s();
     let mut nodes = WindowStats::last(period);

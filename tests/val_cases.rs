@@ -9,11 +9,11 @@ mod common;
 
 use orbitlash::io::recording::Recording;
 use orbitlash::io::scenario_toml;
-use orbitlash::model::Model;
-use orbitlash::sample::Cadence;
-use orbitlash::scenario::Scenario;
-use orbitlash::sensor::Readings;
-use orbitlash::sim::simulate;
+use orbitlash::run::sample::Cadence;
+use orbitlash::run::sensor::Readings;
+use orbitlash::run::sim::simulate;
+use orbitlash::spec::model::Model;
+use orbitlash::spec::scenario::Scenario;
 
 /// The reference scenario with `edit` made through the library's model API.
 fn scenario(edit: impl FnOnce(&mut Model)) -> Scenario {

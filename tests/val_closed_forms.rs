@@ -4,14 +4,14 @@ mod common;
 
 use common::scenario;
 use orbitlash::constants::STEFAN_BOLTZMANN_W_PER_M2_K4;
-use orbitlash::sim::{Event, EventKind, Observer, ObserverResult, SolverSettings, simulate};
-use orbitlash::summary::Samples;
+use orbitlash::run::sim::{Event, EventKind, Observer, ObserverResult, SolverSettings, simulate};
+use orbitlash::run::summary::Samples;
 use std::f64::consts::PI;
 
 const NO_ECLIPSE_ENV: &str = "beta_deg = 90.0\nspace_sink_k = 0.0";
 
 fn run_samples(
-    sc: &orbitlash::scenario::Scenario,
+    sc: &orbitlash::spec::scenario::Scenario,
     settings: &SolverSettings,
     t_end: f64,
     every: f64,

@@ -4,7 +4,7 @@
 mod common;
 
 use nalgebra::{DMatrix, DVector};
-use orbitlash::sim::simulate;
+use orbitlash::run::sim::simulate;
 use orbitlash::thermal::{LoadKind, NodeRef};
 
 #[test]

@@ -10,7 +10,7 @@ use orbitlash::gear::involute::{base_tooth_thickness, inv, shifted_tooth_thickne
 use orbitlash::gear::strain::StrainLaw;
 use orbitlash::io::recording::Recording;
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse, reference};
-use orbitlash::scenario::Scenario;
+use orbitlash::spec::scenario::Scenario;
 
 /// Solves equation (14), u'' + u'/r − u/r² = (1+ν) dε/dr on [r_a, r_b], by
 /// second-order finite differences in x = ln r, where it reads u_xx − u = (1+ν) r ε_x,
@@ -308,7 +308,7 @@ fn val_cases_null_backlash_matches_independent_implementation() {
     // The null case is the reference model plus noise (0.3 µm on backlash): binned by
     // level, the mean residual of the exact backlash must vanish within its standard
     // error; 0.05 µm is the acceptance bound of the issue.
-    use orbitlash::sim::{Observer, ObserverResult, StepView, simulate};
+    use orbitlash::run::sim::{Observer, ObserverResult, StepView, simulate};
     struct Backlash(Vec<(f64, f64)>, f64);
     impl Observer for Backlash {
         fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {

@@ -4,13 +4,13 @@
 
 use std::sync::atomic::AtomicU64;
 
-use orbitlash::dispersion::{Plan, Sampling};
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
+use orbitlash::margins::dispersion::{Plan, Sampling};
 use orbitlash::margins::stats::{
     clopper_pearson, quantile, spearman, wilks_minimum_samples, wilks_rank,
 };
 use orbitlash::margins::{Horizon, run_samples};
-use orbitlash::model::Model;
+use orbitlash::spec::model::Model;
 
 #[test]
 fn val_published_wilks_sample_sizes() {

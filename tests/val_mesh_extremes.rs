@@ -5,9 +5,9 @@
 //! windows and the paper model on).
 
 use orbitlash::io::scenario_toml::{load_file, reference};
-use orbitlash::scenario::Scenario;
-use orbitlash::sim::simulate;
-use orbitlash::summary::MeshStats;
+use orbitlash::run::sim::simulate;
+use orbitlash::run::summary::MeshStats;
+use orbitlash::spec::scenario::Scenario;
 
 /// (skipping, probing every step) after the scenario's run of `duration_s`.
 fn both(sc: &Scenario, duration_s: f64) -> (MeshStats, MeshStats) {

@@ -13,7 +13,7 @@ use cases::{Effect, Gear, Recipe, Schedule};
 use orbitlash::diagnose::{Diagnosis, Options, diagnose};
 use orbitlash::io::recording::Recording;
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
-use orbitlash::model::Model;
+use orbitlash::spec::model::Model;
 
 fn run(name: &str, recipe: &Recipe) -> Diagnosis {
     let csv = cases::generate(recipe);

@@ -6,9 +6,9 @@ mod common;
 
 use orbitlash::io::recording::Recording;
 use orbitlash::io::scenario_toml::reference;
-use orbitlash::scenario::SensorTarget;
-use orbitlash::sim::simulate;
-use orbitlash::summary::Samples;
+use orbitlash::run::sim::simulate;
+use orbitlash::run::summary::Samples;
+use orbitlash::spec::scenario::SensorTarget;
 use orbitlash::units::k_to_c;
 
 #[test]

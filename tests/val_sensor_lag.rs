@@ -2,10 +2,10 @@
 //! closed forms and a second numerical method.
 
 use orbitlash::io::scenario_toml;
-use orbitlash::sample::Cadence;
-use orbitlash::sensor::{Readings, Sensor, SensorTarget, lag_over};
-use orbitlash::sim::simulate;
-use orbitlash::summary::Samples;
+use orbitlash::run::sample::Cadence;
+use orbitlash::run::sensor::{Readings, Sensor, SensorTarget, lag_over};
+use orbitlash::run::sim::simulate;
+use orbitlash::run::summary::Samples;
 
 /// A ramp T(t) = a + b t from S0: S(t) = T(t) − τ b + (S0 − a + τ b) e^{−t/τ}.
 #[test]

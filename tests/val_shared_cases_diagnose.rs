@@ -9,7 +9,7 @@ mod common;
 use orbitlash::diagnose::{Options, Verdict, diagnose};
 use orbitlash::io::recording::Recording;
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
-use orbitlash::model::Model;
+use orbitlash::spec::model::Model;
 use serde_json::Value;
 
 fn reference() -> Model {

@@ -3,11 +3,11 @@
 //! on the backlash over the orbit, with and without a thermostat heater.
 
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse};
-use orbitlash::sample::{Cadence, Sampler, Want};
-use orbitlash::scenario::Scenario;
-use orbitlash::sim::{Observer, ObserverResult, RunStart, Setup, StepView, Stop};
-use orbitlash::steady::{Method, SteadyOptions, periodic_orbit};
-use orbitlash::summary::MeshStats;
+use orbitlash::run::sample::{Cadence, Sampler, Want};
+use orbitlash::run::sim::{Observer, ObserverResult, RunStart, Setup, StepView, Stop};
+use orbitlash::run::steady::{Method, SteadyOptions, periodic_orbit};
+use orbitlash::run::summary::MeshStats;
+use orbitlash::spec::scenario::Scenario;
 
 fn check(sc: &Scenario, want_method: &str) {
     let period = sc.period_s();
@@ -30,7 +30,7 @@ fn check(sc: &Scenario, want_method: &str) {
     }
     assert_eq!(p.state.heaters_on, marched.heaters_on);
     // the backlash over one orbit from each
-    let mut orbit_min = |mut s: orbitlash::sim::State| {
+    let mut orbit_min = |mut s: orbitlash::run::sim::State| {
         s.forget_solver();
         let t0 = s.t_s;
         let mut mesh = MeshStats::last(period);
@@ -183,9 +183,9 @@ fn val_second_method_margin_samples_on_the_periodic_orbit() {
     // Each sample's periodic-orbit minimum against 40 marched orbits of the same sample
     // (the reference cools towards its periodic orbit, so the marched minimum is on
     // its last orbits).
-    use orbitlash::dispersion::{Plan, Sampling};
+    use orbitlash::margins::dispersion::{Plan, Sampling};
     use orbitlash::margins::{Horizon, run_sample};
-    use orbitlash::model::Model;
+    use orbitlash::spec::model::Model;
     let text = format!(
         "{REFERENCE_HINGE_TOML}\n[[dispersion]]\npath = \"node.housing.capacitance_j_per_k\"\ndistribution = \"uniform\"\nmin = 90.0\nmax = 150.0\n\n[[dispersion]]\npath = \"sun.\\\"sun.housing\\\".absorptivity\"\ndistribution = \"uniform\"\nmin = 0.6\nmax = 0.8\n"
     );

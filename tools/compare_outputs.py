@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Byte-for-byte comparison of two orbitlash binaries' outputs (for changes that must
 not move a number, e.g. a refactor): `run` (text, JSON, CSV, MCAP log), `margins --json`
-and `diagnose --json` on the shipped scenarios and example recordings.
+and `diagnose --json` on the shipped scenarios and example recordings (and on
+`../shared/cases` when it is there).
 
     python3 tools/compare_outputs.py BEFORE_BINARY AFTER_BINARY [WORK_DIR]
 
@@ -53,6 +54,11 @@ def cases(out: pathlib.Path):
         p = out / f"diagnose-{r}"
         yield f"diagnose {r}", ["diagnose", str(sc / "reference-hinge.toml"), "--recording", str(rec / f"{r}.csv"),
                                 "--json", f"{p}.json"], [f"{p}.json"]
+    shared = ROOT.parent / "shared" / "cases"
+    for case in sorted(d.name for d in shared.iterdir()) if shared.is_dir() else []:
+        p = out / f"diagnose-shared-{case}"
+        yield f"diagnose shared {case}", ["diagnose", str(sc / "reference-hinge.toml"), "--recording",
+                                          str(shared / case / "recording.csv"), "--json", f"{p}.json"], [f"{p}.json"]
 
 
 def run_all(binary: str, out: pathlib.Path):

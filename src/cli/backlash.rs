@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 
 use orbitlash::gear::{CenterDistance, DeformedGear, GearPair, MeshState};
-use orbitlash::summary::PassFail;
+use orbitlash::run::summary::PassFail;
 use orbitlash::units::{c_to_k, k_to_c};
 
 use super::table::{self, Align};
@@ -137,7 +137,7 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             .into_iter()
             .map(|c| {
                 let temps = temperatures(pair, n, &c);
-                let m = orbitlash::sim::mesh_or_nan(pair, &temps);
+                let m = orbitlash::run::sim::mesh_or_nan(pair, &temps);
                 (c, m)
             })
             .collect();

@@ -10,9 +10,9 @@ use orbitlash::orbit::EnvironmentModel;
 
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::OutputPolicy;
-use orbitlash::scenario::Scenario;
-use orbitlash::sim::{MAX_STEPS, SolverSettings, estimate_run, simulate};
-use orbitlash::summary::{MeshStats, Samples, WindowStats};
+use orbitlash::run::sim::{MAX_STEPS, SolverSettings, estimate_run, simulate};
+use orbitlash::run::summary::{MeshStats, Samples, WindowStats};
+use orbitlash::spec::scenario::Scenario;
 use orbitlash::thermal::iteration::LinearSolver;
 
 use super::{load, orbits_arg, print_out};
@@ -90,8 +90,11 @@ fn time_per_step(
 ) -> Result<PerStep> {
     use std::sync::atomic::{AtomicBool, Ordering};
     struct Budget<'a>(Instant, u64, f64, &'a AtomicBool);
-    impl orbitlash::sim::Observer for Budget<'_> {
-        fn on_step(&mut self, _: &orbitlash::sim::StepView<'_>) -> orbitlash::sim::ObserverResult {
+    impl orbitlash::run::sim::Observer for Budget<'_> {
+        fn on_step(
+            &mut self,
+            _: &orbitlash::run::sim::StepView<'_>,
+        ) -> orbitlash::run::sim::ObserverResult {
             self.1 += 1;
             if self.1 >= 300 || self.0.elapsed().as_secs_f64() > self.2 {
                 self.3.store(true, Ordering::Relaxed);
@@ -484,7 +487,7 @@ fn logging_cost(sc: &Scenario, steps: u64, repeat: usize, o: &mut String) -> Res
 /// Ten changes to a built model by resolved key path, then a run set up and its start
 /// state made (what a Monte Carlo sample does before it steps); and a change that
 /// recompiles the whole scenario.
-fn parameter_cost(model: &orbitlash::model::Model, o: &mut String) -> Result<()> {
+fn parameter_cost(model: &orbitlash::spec::model::Model, o: &mut String) -> Result<()> {
     // Parameters: ten changes to a built model by resolved key path, then a run set up
     // and its start state made (what a Monte Carlo sample does before it steps).
     {
@@ -513,7 +516,7 @@ fn parameter_cost(model: &orbitlash::model::Model, o: &mut String) -> Result<()>
                     model.set_param(id, v)?;
                 }
                 let sc = model.scenario();
-                let setup = orbitlash::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+                let setup = orbitlash::run::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
                 std::hint::black_box(setup.initial_state());
                 times.push(start.elapsed().as_secs_f64());
             }
@@ -586,7 +589,7 @@ fn backlash_cost(sc: &Scenario, o: &mut String) -> Result<()> {
 
 /// `bench --margins`: margins with 1 thread and with every core.
 fn bench_margins(a: &BenchArgs) -> Result<()> {
-    use orbitlash::dispersion::Sampling;
+    use orbitlash::margins::dispersion::Sampling;
     use orbitlash::margins::{Horizon, run_samples};
     let loaded = load(a.scenario.as_deref())?;
     if loaded.model.spec().dispersion.is_empty() {
@@ -594,7 +597,7 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
     }
     let horizon = match a.margins_horizon.as_str() {
         "steady" => {
-            orbitlash::steady::check_repeats(&loaded.scenario.thermal)
+            orbitlash::run::steady::check_repeats(&loaded.scenario.thermal)
                 .map_err(|e| anyhow::anyhow!("--margins-horizon steady: {e}"))?;
             Horizon::SteadyState
         }

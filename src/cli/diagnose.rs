@@ -151,7 +151,7 @@ fn residual_plot_name(channel: &str) -> String {
 /// writes its own default log).
 fn corrected_name(name: &str) -> String {
     const SUFFIX: &str = "-corrected";
-    let keep = orbitlash::scenario::MAX_NAME_LEN - SUFFIX.len();
+    let keep = orbitlash::spec::scenario::MAX_NAME_LEN - SUFFIX.len();
     let mut base: String = name.chars().take(keep).collect();
     while base.len() > keep {
         base.pop();
@@ -463,8 +463,8 @@ fn sig(v: f64) -> String {
 /// column's unit) or its pair's exact backlash at every logged time. The sensors' lags
 /// and offsets are not applied (a log holds the model's own values). None when the
 /// file is not an orbitlash log.
-fn recording_from_log(path: &Path, sc: &orbitlash::scenario::Scenario) -> Option<Recording> {
-    use orbitlash::sensor::{ColumnUnit, SensorTarget};
+fn recording_from_log(path: &Path, sc: &orbitlash::spec::scenario::Scenario) -> Option<Recording> {
+    use orbitlash::run::sensor::{ColumnUnit, SensorTarget};
     let table = orbitlash::io::mcap_read::read_log(path).ok()?;
     let topic = "/thermal/temperature";
     let t_col = table.column(&format!("{topic}.time_s"))?;

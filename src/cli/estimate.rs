@@ -5,9 +5,9 @@
 use anyhow::Result;
 
 use orbitlash::margins::Horizon;
-use orbitlash::scenario::Scenario;
-use orbitlash::sim::{MAX_STEPS, RunEstimate, estimate_run};
-use orbitlash::steady::SteadyOptions;
+use orbitlash::run::sim::{MAX_STEPS, RunEstimate, estimate_run};
+use orbitlash::run::steady::SteadyOptions;
+use orbitlash::spec::scenario::Scenario;
 
 /// Most solver steps of all the runs of one command (samples, candidates): about an
 /// hour of computing on two cores for the reference mechanism.

@@ -8,8 +8,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
 
-use orbitlash::dispersion::{Plan, Sampling};
 use orbitlash::io::output::{OutputPolicy, Outputs};
+use orbitlash::margins::dispersion::{Plan, Sampling};
 use orbitlash::margins::{
     Horizon, Report, RunIdentity, SHARD_FORMAT, SampleOutcome, Shard, merge, read_shard, report,
     run_samples, shard_range,
@@ -97,7 +97,7 @@ fn shard_arg(s: &str) -> Result<(u64, u64), String> {
 }
 
 pub fn samples_arg(s: &str) -> Result<u64, String> {
-    let max = orbitlash::dispersion::MAX_SAMPLES;
+    let max = orbitlash::margins::dispersion::MAX_SAMPLES;
     match s.parse::<u64>() {
         Ok(n) if (1..=max).contains(&n) => Ok(n),
         _ => Err(format!(
@@ -152,7 +152,7 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         }
         (None, true) => {
             // before any sample runs
-            orbitlash::steady::check_repeats(&sc.thermal)
+            orbitlash::run::steady::check_repeats(&sc.thermal)
                 .map_err(|e| anyhow::anyhow!("--steady-state: {e}"))?;
             Horizon::SteadyState
         }
@@ -299,7 +299,7 @@ fn finish(
 }
 
 fn run_with_progress(
-    model: &orbitlash::model::Model,
+    model: &orbitlash::spec::model::Model,
     plan: &Plan,
     range: std::ops::Range<u64>,
     horizon: Horizon,

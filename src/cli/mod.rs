@@ -26,9 +26,9 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 use orbitlash::io::scenario_toml::{self, REFERENCE_HINGE_NAME, REFERENCE_HINGE_TOML};
-use orbitlash::model::{Model, ModelError};
-use orbitlash::scenario::Scenario;
+use orbitlash::spec::model::{Model, ModelError};
 use orbitlash::spec::params::parse_assignment;
+use orbitlash::spec::scenario::Scenario;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -217,12 +217,12 @@ pub enum SetsOnDispersed {
 /// disperse (the dispersion would silently replace it in every sample).
 pub fn plan(
     loaded: &Loaded,
-    sampling: orbitlash::dispersion::Sampling,
+    sampling: orbitlash::margins::dispersion::Sampling,
     samples: u64,
     seed: u64,
     sets: SetsOnDispersed,
-) -> Result<orbitlash::dispersion::Plan> {
-    use orbitlash::dispersion::{Plan, PlanError};
+) -> Result<orbitlash::margins::dispersion::Plan> {
+    use orbitlash::margins::dispersion::{Plan, PlanError};
     let plan = Plan::new(
         &loaded.model,
         &loaded.model.spec().dispersion,
@@ -272,7 +272,7 @@ pub fn orbits_arg(s: &str) -> Result<f64, String> {
 /// (`scenario::check_name`) so that this stays inside `logs/`; a name that would not is
 /// refused here as well.
 pub fn default_log_path(name: &str) -> Result<PathBuf> {
-    orbitlash::scenario::check_name(name)
+    orbitlash::spec::scenario::check_name(name)
         .map_err(|m| anyhow::anyhow!("scenario name {m}; it names the default log"))?;
     Ok(PathBuf::from("logs").join(format!("{name}.mcap")))
 }

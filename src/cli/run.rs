@@ -13,9 +13,9 @@ use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::{OutputError, OutputPolicy, Outputs, available_bytes};
 use orbitlash::orbit::EnvironmentModel;
-use orbitlash::scenario::Scenario;
-use orbitlash::sim::{MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run};
-use orbitlash::summary::{MeshStats, PairStats, PairVerdict, RunSummary, WindowStats};
+use orbitlash::run::sim::{MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run};
+use orbitlash::run::summary::{MeshStats, PairStats, PairVerdict, RunSummary, WindowStats};
+use orbitlash::spec::scenario::Scenario;
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
 
@@ -115,7 +115,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     }
     let period_s = sc.period_s();
     if a.steady_state {
-        orbitlash::steady::check_repeats(&sc.thermal)
+        orbitlash::run::steady::check_repeats(&sc.thermal)
             .map_err(|e| anyhow!("--steady-state: {e}"))?;
         sc = sc
             .with_orbits(1.0)
@@ -230,7 +230,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             &mut log,
             progress,
         );
-        let mut setup = orbitlash::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+        let mut setup = orbitlash::run::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
         let mut state = match &steady {
             Some((start, _)) => start.clone(),
             None => setup.initial_state(),
@@ -239,7 +239,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             &mut state,
             t_end_s,
             &mut observers,
-            orbitlash::sim::Stop {
+            orbitlash::run::sim::Stop {
                 cancel: Some(interrupt),
                 pause_after_s: None,
             },
@@ -722,9 +722,9 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
 /// Writes sample `k`'s dispersed values into the loaded model (as `margins` drew them)
 /// and records them with the `--set` changes; returns a line for the summary.
 fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> Result<String> {
-    use orbitlash::dispersion::Sampling;
+    use orbitlash::margins::dispersion::Sampling;
     let sampling: Sampling = a.sampling.into();
-    let max = orbitlash::dispersion::MAX_SAMPLES;
+    let max = orbitlash::margins::dispersion::MAX_SAMPLES;
     if k >= max {
         anyhow::bail!(
             "--sample {k}: a margins run has at most {max} samples, numbered 0 … {}",
@@ -762,10 +762,10 @@ fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> 
 
 /// The start of the periodic orbit of `sc` (at t = 0) and a line saying how it was
 /// found.
-fn periodic_start(sc: &Scenario) -> Result<(orbitlash::sim::State, String)> {
-    use orbitlash::steady::{SteadyOptions, periodic_orbit};
+fn periodic_start(sc: &Scenario) -> Result<(orbitlash::run::sim::State, String)> {
+    use orbitlash::run::steady::{SteadyOptions, periodic_orbit};
     let period = sc.period_s();
-    let mut setup = orbitlash::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+    let mut setup = orbitlash::run::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
     let start = setup.initial_state();
     let p = periodic_orbit(&mut setup, &start, period, SteadyOptions::default())
         .map_err(|e| anyhow!("--steady-state: {e}"))?;

@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::orbit::EnvironmentModel;
 use crate::recording::Recording;
-use crate::scenario::Scenario;
+use crate::spec::scenario::Scenario;
 
 use super::DiagnoseError;
 
@@ -173,7 +173,10 @@ impl Observations {
             .iter()
             .zip(&sensor_of)
             .map(|(name, &k)| {
-                let temp = matches!(sc.sensors[k].target, crate::sensor::SensorTarget::Node(_));
+                let temp = matches!(
+                    sc.sensors[k].target,
+                    crate::run::sensor::SensorTarget::Node(_)
+                );
                 Channel {
                     name: name.clone(),
                     sensor: k,
@@ -296,7 +299,7 @@ fn check_temperatures(
     sc: &Scenario,
     sensor_of: &[usize],
 ) -> Result<(), DiagnoseError> {
-    use crate::sensor::ColumnUnit;
+    use crate::run::sensor::ColumnUnit;
     for (c, &k) in sensor_of.iter().enumerate() {
         let (offset, unit) = match sc.sensors[k].unit() {
             ColumnUnit::Celsius => (crate::constants::ZERO_CELSIUS_K, "°C"),
@@ -308,7 +311,7 @@ fn check_temperatures(
             let t_k = v + offset;
             let why = if t_k < 0.0 {
                 "below absolute zero"
-            } else if t_k > crate::sim::MAX_TEMPERATURE_K {
+            } else if t_k > crate::run::sim::MAX_TEMPERATURE_K {
                 "above 10 000 K"
             } else {
                 continue;
@@ -333,12 +336,12 @@ fn check_temperatures(
 pub fn check_time_base(rec: &Recording, sc: &Scenario) -> Result<(), DiagnoseError> {
     let period = sc.period_s();
     let last = rec.time_s.last().copied().unwrap_or(0.0);
-    if last > crate::scenario::MAX_DURATION_S {
+    if last > crate::spec::scenario::MAX_DURATION_S {
         return Err(DiagnoseError::Recording(format!(
             "{}: the recording ends at t = {} s, later than any run can last ({:.0e} s, 31.7 years): is the time column in seconds from the scenario's t = 0?",
             rec.file,
             crate::units::num(last),
-            crate::scenario::MAX_DURATION_S
+            crate::spec::scenario::MAX_DURATION_S
         )));
     }
     let mut gaps: Vec<f64> = rec.time_s.windows(2).map(|w| w[1] - w[0]).collect();

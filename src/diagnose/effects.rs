@@ -7,8 +7,8 @@
 
 use serde::Serialize;
 
-use crate::model::Model;
 use crate::spec::keys::quote_key;
+use crate::spec::model::Model;
 use crate::spec::{
     AlbedoSpec, CenterDistanceSpec, DissipationSpec, EarthIrSpec, HeaterSpec, ProfileSpec,
     ScenarioSpec,
@@ -157,19 +157,105 @@ pub fn values(setters: &[Setter], theta: &[f64]) -> Vec<(String, f64)> {
         .collect()
 }
 
+/// What a candidate acts on. The report names it by the fields of
+/// [`super::Finding`] (`node`, `channel`, …), which [`Target::node`] and its siblings
+/// give.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    /// A diffusion node (Earth albedo and IR, a heater).
+    Node(String),
+    /// A dissipation on a node, on a schedule: `always`, `sunlit`, `eclipse` or a mode.
+    Scheduled { node: String, schedule: String },
+    /// A gear pair whose centre distance follows a node.
+    NodeAndPair { node: String, gear_pair: String },
+    /// A gear pair's material.
+    Pair(String),
+    /// A gear's bore (`<pair>.pinion`), fitted to its shaft node.
+    Bore {
+        gear_pair: String,
+        gear: String,
+        shaft: String,
+    },
+    /// A recording channel's sensor.
+    Channel(String),
+    /// A sun load.
+    Load(String),
+    /// A conductor or radiative coupling.
+    Conductor(String),
+}
+
+impl Target {
+    pub fn node(&self) -> Option<String> {
+        match self {
+            Target::Node(n)
+            | Target::Scheduled { node: n, .. }
+            | Target::NodeAndPair { node: n, .. }
+            | Target::Bore { shaft: n, .. } => Some(n.clone()),
+            _ => None,
+        }
+    }
+    pub fn channel(&self) -> Option<String> {
+        match self {
+            Target::Channel(c) => Some(c.clone()),
+            _ => None,
+        }
+    }
+    pub fn conductor(&self) -> Option<String> {
+        match self {
+            Target::Conductor(c) => Some(c.clone()),
+            _ => None,
+        }
+    }
+    pub fn load(&self) -> Option<String> {
+        match self {
+            Target::Load(l) => Some(l.clone()),
+            _ => None,
+        }
+    }
+    pub fn gear_pair(&self) -> Option<String> {
+        match self {
+            Target::NodeAndPair { gear_pair: p, .. }
+            | Target::Pair(p)
+            | Target::Bore { gear_pair: p, .. } => Some(p.clone()),
+            _ => None,
+        }
+    }
+    pub fn gear(&self) -> Option<String> {
+        match self {
+            Target::Bore { gear, .. } => Some(gear.clone()),
+            _ => None,
+        }
+    }
+    pub fn schedule(&self) -> Option<String> {
+        match self {
+            Target::Scheduled { schedule, .. } => Some(schedule.clone()),
+            _ => None,
+        }
+    }
+
+    /// The element a label names: the node, channel, conductor, load, gear or gear
+    /// pair, the first of these it has.
+    fn named(&self) -> String {
+        [
+            self.node(),
+            self.channel(),
+            self.conductor(),
+            self.load(),
+            self.gear(),
+            self.gear_pair(),
+        ]
+        .into_iter()
+        .flatten()
+        .next()
+        .unwrap_or_default()
+    }
+}
+
 /// An effect on one target, ready to be fitted.
 #[derive(Clone)]
 pub struct Candidate {
     pub effect: Effect,
-    /// What it acts on, as the report names it.
-    pub node: Option<String>,
-    pub channel: Option<String>,
-    pub conductor: Option<String>,
-    pub load: Option<String>,
-    pub gear_pair: Option<String>,
-    pub gear: Option<String>,
-    /// Dissipation schedule: `always`, `sunlit`, `eclipse` or a mode.
-    pub schedule: Option<String>,
+    pub target: Target,
     pub params: Vec<ParamDef>,
     pub setters: Vec<Setter>,
     /// Start points for the cheap ranking (the best one starts the fit).
@@ -187,22 +273,23 @@ pub struct Candidate {
 pub type Edit = std::sync::Arc<dyn Fn(&mut ScenarioSpec) + Send + Sync>;
 
 impl Candidate {
+    /// `effect` on `target`, adding `edit` to the scenario; no parameters yet.
+    fn new(effect: Effect, target: Target, edit: Option<Edit>) -> Candidate {
+        Candidate {
+            effect,
+            target,
+            params: Vec::new(),
+            setters: Vec::new(),
+            starts: Vec::new(),
+            null: None,
+            edits: edit.into_iter().collect(),
+        }
+    }
+
     /// A short label: `heater_thermostat on housing`.
     pub fn label(&self) -> String {
-        let on = [
-            &self.node,
-            &self.channel,
-            &self.conductor,
-            &self.load,
-            &self.gear,
-            &self.gear_pair,
-        ]
-        .into_iter()
-        .flatten()
-        .next()
-        .cloned()
-        .unwrap_or_default();
-        match &self.schedule {
+        let on = self.target.named();
+        match self.target.schedule() {
             Some(s) => format!("{} on {on} ({s})", self.effect.id()),
             None => format!("{} on {on}", self.effect.id()),
         }
@@ -249,44 +336,76 @@ pub struct Hints {
 const C_TO_K: f64 = 273.15;
 
 /// Every candidate of the vocabulary on every element of `model` that the recording's
-/// `channels` (sensor columns) can see.
+/// `channels` (sensor columns) can see, in a fixed order: per node (Earth albedo and
+/// IR, a heater, dissipations, centre distances following it), per gear pair (α(T),
+/// a scaled α, bore fits), per temperature channel (lag, offset), then calibrations.
 pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> Vec<Candidate> {
+    let g = Generator::new(model);
     let spec = model.spec();
-    let gear_nodes: Vec<&str> = spec
-        .gear_pair
-        .iter()
-        .flat_map(|g| g.pinion.nodes.iter().chain(&g.wheel.nodes))
-        .map(|s| s.as_str())
-        .collect();
     let mut out = Vec::new();
-    let blank = |effect: Effect, edit: Option<Edit>| Candidate {
-        effect,
-        node: None,
-        channel: None,
-        conductor: None,
-        load: None,
-        gear_pair: None,
-        gear: None,
-        schedule: None,
-        params: Vec::new(),
-        setters: Vec::new(),
-        starts: Vec::new(),
-        null: None,
-        edits: edit.into_iter().collect(),
-    };
-    let path_of = |m: &Model, prefix: &str, name: &str, key: &str| -> Option<String> {
-        let p = format!("{prefix}.{}.{key}", quote_key(name));
-        m.get(&p).ok().map(|_| p)
-    };
-    let with = |edit: &Edit| -> Option<Model> {
-        let mut m = model.clone();
-        m.modify(|s| edit(s)).ok().map(|_| m)
-    };
-
     for (ni, node) in spec.node.iter().enumerate() {
-        let n = node.name.clone();
-        // Earth albedo and IR on the node, referred to the areas the node already
-        // shows the Sun and space (or 0.01 m² where it shows neither).
+        let n = &node.name;
+        out.extend(g.earth_albedo_ir(n));
+        if let Some(on_k) = hints.heater_on_k.get(ni).copied().flatten() {
+            out.extend(g.heater_thermostat(n, on_k));
+        }
+        out.extend(g.internal_dissipation(n));
+        out.extend(g.housing_expansion(n));
+    }
+    for gi in 0..spec.gear_pair.len() {
+        out.extend(g.cte_temperature_and_scale(gi));
+        out.extend(g.bore_fits(gi));
+    }
+    for (col, is_temp) in channels {
+        if *is_temp {
+            out.extend(g.sensor_lag_and_offset(col));
+        }
+    }
+    out.extend(g.calibrations());
+    out
+}
+
+/// A key path `prefix.name.key` when `m` has it.
+fn path_of(m: &Model, prefix: &str, name: &str, key: &str) -> Option<String> {
+    let p = format!("{prefix}.{}.{key}", quote_key(name));
+    m.get(&p).ok().map(|_| p)
+}
+
+/// Builds the candidates of one model: one method per effect (or per pair of effects
+/// built from the same facts).
+struct Generator<'a> {
+    model: &'a Model,
+    spec: &'a ScenarioSpec,
+    /// The nodes of every gear body.
+    gear_nodes: Vec<&'a str>,
+}
+
+impl<'a> Generator<'a> {
+    fn new(model: &'a Model) -> Generator<'a> {
+        let spec = model.spec();
+        let gear_nodes = spec
+            .gear_pair
+            .iter()
+            .flat_map(|g| g.pinion.nodes.iter().chain(&g.wheel.nodes))
+            .map(|s| s.as_str())
+            .collect();
+        Generator {
+            model,
+            spec,
+            gear_nodes,
+        }
+    }
+
+    /// The model with `edit` applied (None: the model refuses it).
+    fn with(&self, edit: &Edit) -> Option<Model> {
+        let mut m = self.model.clone();
+        m.modify(|s| edit(s)).ok().map(|_| m)
+    }
+
+    /// Earth albedo and IR on node `n`, referred to the areas the node already shows
+    /// the Sun and space (or 0.01 m² where it shows neither).
+    fn earth_albedo_ir(&self, n: &str) -> Option<Candidate> {
+        let spec = self.spec;
         let sun_aa: f64 = spec
             .sun
             .iter()
@@ -299,7 +418,7 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
         let space_ea: f64 = spec
             .radiation
             .iter()
-            .filter(|r| r.between.contains(&n) && r.between.iter().any(|b| b == "space"))
+            .filter(|r| r.between.iter().any(|b| b == n) && r.between.iter().any(|b| b == "space"))
             .map(|r| {
                 r.emissivity_area_m2
                     .unwrap_or(r.emissivity.unwrap_or(0.0) * r.area_m2.unwrap_or(0.0))
@@ -315,120 +434,121 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
             .environment
             .earth_ir_w_per_m2
             .unwrap_or(crate::constants::EARTH_IR_W_PER_M2);
+        if !(env_albedo > 0.0 && env_ir > 0.0) {
+            return None;
+        }
         let (an, en) = (
             format!("diagnose.albedo.{n}"),
             format!("diagnose.earth_ir.{n}"),
         );
-        if env_albedo > 0.0 && env_ir > 0.0 {
-            let edit: Edit = {
-                let (n, an, en) = (n.clone(), an.clone(), en.clone());
-                std::sync::Arc::new(move |s: &mut ScenarioSpec| {
-                    s.albedo.push(AlbedoSpec {
-                        name: Some(an.clone()),
-                        node: n.clone(),
-                        absorptivity_area_m2: Some(a_ref),
-                        absorptivity: None,
-                        area_m2: None,
-                        view_factor: None,
-                    });
-                    s.earth_ir.push(EarthIrSpec {
-                        name: Some(en.clone()),
-                        node: n.clone(),
-                        emissivity_area_m2: Some(e_ref),
-                        emissivity: None,
-                        area_m2: None,
-                        view_factor: None,
-                    });
+        let edit: Edit = {
+            let (n, an, en) = (n.to_string(), an.clone(), en.clone());
+            std::sync::Arc::new(move |s: &mut ScenarioSpec| {
+                s.albedo.push(AlbedoSpec {
+                    name: Some(an.clone()),
+                    node: n.clone(),
+                    absorptivity_area_m2: Some(a_ref),
+                    absorptivity: None,
+                    area_m2: None,
+                    view_factor: None,
+                });
+                s.earth_ir.push(EarthIrSpec {
+                    name: Some(en.clone()),
+                    node: n.clone(),
+                    emissivity_area_m2: Some(e_ref),
+                    emissivity: None,
+                    area_m2: None,
+                    view_factor: None,
+                });
+            })
+        };
+        let base = self.with(&edit)?;
+        let pa = path_of(&base, "albedo", &an, "absorptivity_area_m2")?;
+        let pe = path_of(&base, "earth_ir", &en, "emissivity_area_m2")?;
+        Some(Candidate {
+            params: vec![
+                ParamDef::new("albedo", 1e-4, 1.0, 0.005),
+                ParamDef::new("earth_ir_w_per_m2", 0.01, 500.0, 2.0),
+            ],
+            setters: vec![
+                Setter::scaled(pa, 0, a_ref / env_albedo),
+                Setter::scaled(pe, 1, e_ref / env_ir),
+            ],
+            starts: vec![
+                vec![0.15, 0.01],
+                vec![1e-4, 100.0],
+                vec![0.15, 100.0],
+                vec![0.3, 237.0],
+            ],
+            null: Some(vec![0.0, 0.0]),
+            ..Candidate::new(Effect::EarthAlbedoIr, Target::Node(n.into()), Some(edit))
+        })
+    }
+
+    /// A heater with a thermostat on node `n` (reading the node), started at the set
+    /// point `on_k` the data suggest.
+    fn heater_thermostat(&self, n: &str, on_k: f64) -> Option<Candidate> {
+        let hn = format!("diagnose.heater.{n}");
+        let edit: Edit = {
+            let (n, hn) = (n.to_string(), hn.clone());
+            std::sync::Arc::new(move |s: &mut ScenarioSpec| {
+                s.heater.push(HeaterSpec {
+                    name: Some(hn.clone()),
+                    node: n.clone(),
+                    sensor_node: None,
+                    power_w: 1.0,
+                    on_k,
+                    off_k: on_k + 5.0,
                 })
-            };
-            let base = with(&edit);
-            if let Some(base) = base {
-                let pa = path_of(&base, "albedo", &an, "absorptivity_area_m2");
-                let pe = path_of(&base, "earth_ir", &en, "emissivity_area_m2");
-                if let (Some(pa), Some(pe)) = (pa, pe) {
-                    let mut c = blank(Effect::EarthAlbedoIr, Some(edit.clone()));
-                    c.node = Some(n.clone());
-                    c.params = vec![
-                        ParamDef::new("albedo", 1e-4, 1.0, 0.005),
-                        ParamDef::new("earth_ir_w_per_m2", 0.01, 500.0, 2.0),
-                    ];
-                    c.setters = vec![
-                        Setter::scaled(pa, 0, a_ref / env_albedo),
-                        Setter::scaled(pe, 1, e_ref / env_ir),
-                    ];
-                    c.starts = vec![
-                        vec![0.15, 0.01],
-                        vec![1e-4, 100.0],
-                        vec![0.15, 100.0],
-                        vec![0.3, 237.0],
-                    ];
-                    c.null = Some(vec![0.0, 0.0]);
-                    out.push(c);
+            })
+        };
+        let base = self.with(&edit)?;
+        let pp = path_of(&base, "heater", &hn, "power_w")?;
+        let pon = path_of(&base, "heater", &hn, "on_k")?;
+        let poff = path_of(&base, "heater", &hn, "off_k")?;
+        let on_c = on_k - C_TO_K;
+        let mut starts = Vec::new();
+        for p in [1.0, 3.0, 8.0] {
+            for h in [2.0, 5.0] {
+                for d in [-1.0, 0.0] {
+                    starts.push(vec![p, on_c + d, h]);
                 }
             }
         }
-        // A heater with a thermostat on the node (reading the node).
-        if let Some(on_k) = hints.heater_on_k.get(ni).copied().flatten() {
-            let hn = format!("diagnose.heater.{n}");
-            let edit: Edit = {
-                let (n, hn) = (n.clone(), hn.clone());
-                std::sync::Arc::new(move |s: &mut ScenarioSpec| {
-                    s.heater.push(HeaterSpec {
-                        name: Some(hn.clone()),
-                        node: n.clone(),
-                        sensor_node: None,
-                        power_w: 1.0,
-                        on_k,
-                        off_k: on_k + 5.0,
-                    })
-                })
-            };
-            let base = with(&edit);
-            if let Some(base) = base {
-                let pp = path_of(&base, "heater", &hn, "power_w");
-                let pon = path_of(&base, "heater", &hn, "on_k");
-                let poff = path_of(&base, "heater", &hn, "off_k");
-                if let (Some(pp), Some(pon), Some(poff)) = (pp, pon, poff) {
-                    let on_c = on_k - C_TO_K;
-                    let mut c = blank(Effect::HeaterThermostat, Some(edit.clone()));
-                    c.node = Some(n.clone());
-                    c.params = vec![
-                        ParamDef::new("power_w", 0.01, 1000.0, 0.02),
-                        ParamDef::new("on_c", on_c - 30.0, on_c + 30.0, 0.05),
-                        ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05),
-                    ];
-                    c.setters = vec![
-                        Setter::scaled(pp, 0, 1.0),
-                        Setter {
-                            path: pon,
-                            constant: C_TO_K,
-                            terms: vec![(1, 1.0)],
-                        },
-                        Setter {
-                            path: poff,
-                            constant: C_TO_K,
-                            terms: vec![(1, 1.0), (2, 1.0)],
-                        },
-                    ];
-                    for p in [1.0, 3.0, 8.0] {
-                        for h in [2.0, 5.0] {
-                            for d in [-1.0, 0.0] {
-                                c.starts.push(vec![p, on_c + d, h]);
-                            }
-                        }
-                    }
-                    c.null = Some(vec![0.0, on_c, 5.0]);
-                    out.push(c);
-                }
-            }
-        }
-        // Internal dissipation, always or on a schedule.
+        Some(Candidate {
+            params: vec![
+                ParamDef::new("power_w", 0.01, 1000.0, 0.02),
+                ParamDef::new("on_c", on_c - 30.0, on_c + 30.0, 0.05),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05),
+            ],
+            setters: vec![
+                Setter::scaled(pp, 0, 1.0),
+                Setter {
+                    path: pon,
+                    constant: C_TO_K,
+                    terms: vec![(1, 1.0)],
+                },
+                Setter {
+                    path: poff,
+                    constant: C_TO_K,
+                    terms: vec![(1, 1.0), (2, 1.0)],
+                },
+            ],
+            starts,
+            null: Some(vec![0.0, on_c, 5.0]),
+            ..Candidate::new(Effect::HeaterThermostat, Target::Node(n.into()), Some(edit))
+        })
+    }
+
+    /// Internal dissipation on node `n`: always, sunlit, in eclipse, or in each mode.
+    fn internal_dissipation(&self, n: &str) -> Vec<Candidate> {
         let mut whens = vec!["always".to_string(), "sunlit".into(), "eclipse".into()];
-        whens.extend(spec.mode.iter().map(|m| m.name.clone()));
+        whens.extend(self.spec.mode.iter().map(|m| m.name.clone()));
+        let mut out = Vec::new();
         for when in whens {
             let dn = format!("diagnose.dissipation.{n}.{when}");
             let edit: Edit = {
-                let (n, dn, when) = (n.clone(), dn.clone(), when.clone());
+                let (n, dn, when) = (n.to_string(), dn.clone(), when.clone());
                 std::sync::Arc::new(move |s: &mut ScenarioSpec| {
                     s.dissipation.push(DissipationSpec {
                         name: Some(dn.clone()),
@@ -438,66 +558,84 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                     })
                 })
             };
-            let base = with(&edit);
-            let Some(base) = base else { continue };
+            let Some(base) = self.with(&edit) else {
+                continue;
+            };
             let Some(pp) = path_of(&base, "dissipation", &dn, "power_w") else {
                 continue;
             };
-            let mut c = blank(Effect::InternalDissipation, Some(edit.clone()));
-            c.node = Some(n.clone());
-            c.schedule = Some(when);
-            c.params = vec![ParamDef::new("power_w", 0.0, 1000.0, 0.02)];
-            c.setters = vec![Setter::scaled(pp, 0, 1.0)];
-            c.starts = vec![vec![0.25], vec![1.0], vec![4.0]];
-            c.null = Some(vec![0.0]);
-            out.push(c);
+            let target = Target::Scheduled {
+                node: n.into(),
+                schedule: when,
+            };
+            out.push(Candidate {
+                params: vec![ParamDef::new("power_w", 0.0, 1000.0, 0.02)],
+                setters: vec![Setter::scaled(pp, 0, 1.0)],
+                starts: vec![vec![0.25], vec![1.0], vec![4.0]],
+                null: Some(vec![0.0]),
+                ..Candidate::new(Effect::InternalDissipation, target, Some(edit))
+            });
         }
-        // The centre distance of a gear pair follows this node.
-        if !gear_nodes.contains(&n.as_str()) {
-            for (gi, gp) in spec.gear_pair.iter().enumerate() {
-                if gp
-                    .center_distance
-                    .as_ref()
-                    .is_some_and(|c| c.follows != "fixed")
-                {
-                    continue;
-                }
-                let pair = pair_name(spec, gi);
-                let edit: Edit = {
-                    let (n,) = (n.clone(),);
-                    std::sync::Arc::new(move |s: &mut ScenarioSpec| {
-                        s.gear_pair[gi].center_distance = Some(CenterDistanceSpec {
-                            follows: "housing".into(),
-                            node: Some(n.clone()),
-                            alpha_per_k: Some(5e-6),
-                            dalpha_dt_per_k2: None,
-                            strain_polynomial: None,
-                            alpha_polynomial: None,
-                            strain_table: None,
-                        })
-                    })
-                };
-                let base = with(&edit);
-                let Some(base) = base else { continue };
-                let p = format!("gear_pair.{}.center_distance.alpha_per_k", quote_key(&pair));
-                if base.get(&p).is_err() {
-                    continue;
-                }
-                let mut c = blank(Effect::HousingExpansion, Some(edit.clone()));
-                c.node = Some(n.clone());
-                c.gear_pair = Some(pair);
-                c.params = vec![ParamDef::new("alpha_per_k", -2e-5, 1e-4, 1e-7)];
-                c.setters = vec![Setter::scaled(p, 0, 1.0)];
-                c.starts = vec![vec![2e-6], vec![8e-6], vec![2e-5]];
-                c.null = Some(vec![0.0]);
-                out.push(c);
-            }
-        }
+        out
     }
 
-    // Gear-pair effects: α(T), a bore fit, a scaled α.
-    for (gi, gp) in spec.gear_pair.iter().enumerate() {
-        let pair = pair_name(spec, gi);
+    /// The centre distance of each gear pair with a fixed one following node `n`
+    /// (a node outside the gears: the housing or a structure).
+    fn housing_expansion(&self, n: &str) -> Vec<Candidate> {
+        let mut out = Vec::new();
+        if self.gear_nodes.contains(&n) {
+            return out;
+        }
+        for (gi, gp) in self.spec.gear_pair.iter().enumerate() {
+            if gp
+                .center_distance
+                .as_ref()
+                .is_some_and(|c| c.follows != "fixed")
+            {
+                continue;
+            }
+            let pair = pair_name(self.spec, gi);
+            let edit: Edit = {
+                let n = n.to_string();
+                std::sync::Arc::new(move |s: &mut ScenarioSpec| {
+                    s.gear_pair[gi].center_distance = Some(CenterDistanceSpec {
+                        follows: "housing".into(),
+                        node: Some(n.clone()),
+                        alpha_per_k: Some(5e-6),
+                        dalpha_dt_per_k2: None,
+                        strain_polynomial: None,
+                        alpha_polynomial: None,
+                        strain_table: None,
+                    })
+                })
+            };
+            let Some(base) = self.with(&edit) else {
+                continue;
+            };
+            let p = format!("gear_pair.{}.center_distance.alpha_per_k", quote_key(&pair));
+            if base.get(&p).is_err() {
+                continue;
+            }
+            let target = Target::NodeAndPair {
+                node: n.into(),
+                gear_pair: pair,
+            };
+            out.push(Candidate {
+                params: vec![ParamDef::new("alpha_per_k", -2e-5, 1e-4, 1e-7)],
+                setters: vec![Setter::scaled(p, 0, 1.0)],
+                starts: vec![vec![2e-6], vec![8e-6], vec![2e-5]],
+                null: Some(vec![0.0]),
+                ..Candidate::new(Effect::HousingExpansion, target, Some(edit))
+            });
+        }
+        out
+    }
+
+    /// For gear pair `gi` with linear materials: α(T) (when neither gear has one yet)
+    /// and a scaled α.
+    fn cte_temperature_and_scale(&self, gi: usize) -> Vec<Candidate> {
+        let gp = &self.spec.gear_pair[gi];
+        let pair = pair_name(self.spec, gi);
         let q = quote_key(&pair);
         let linear = |m: &crate::spec::MaterialSpec| {
             m.alpha_per_k.is_some()
@@ -505,49 +643,62 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                 && m.alpha_polynomial.is_none()
                 && m.strain_table.is_none()
         };
-        if linear(&gp.pinion.material) && linear(&gp.wheel.material) {
-            let a1 = gp.pinion.material.alpha_per_k.unwrap();
-            let a2 = gp.wheel.material.alpha_per_k.unwrap();
-            if gp.pinion.material.dalpha_dt_per_k2.is_none()
-                && gp.wheel.material.dalpha_dt_per_k2.is_none()
-            {
-                let edit: Edit = {
-                    std::sync::Arc::new(move |s: &mut ScenarioSpec| {
-                        s.gear_pair[gi].pinion.material.dalpha_dt_per_k2 = Some(0.0);
-                        s.gear_pair[gi].wheel.material.dalpha_dt_per_k2 = Some(0.0);
-                    })
-                };
-                let base = with(&edit);
-                if let Some(base) = base {
-                    let p1 = format!("gear_pair.{q}.pinion.material.dalpha_dt_per_k2");
-                    let p2 = format!("gear_pair.{q}.wheel.material.dalpha_dt_per_k2");
-                    if base.get(&p1).is_ok() && base.get(&p2).is_ok() {
-                        let mut c = blank(Effect::CteTemperature, Some(edit.clone()));
-                        c.gear_pair = Some(pair.clone());
-                        c.params = vec![ParamDef::new("dalpha_dt_per_k2", -1e-6, 1e-6, 1e-9)];
-                        c.setters = vec![Setter::scaled(p1, 0, 1.0), Setter::scaled(p2, 0, 1.0)];
-                        c.starts = vec![vec![-5e-8], vec![-1.5e-8], vec![1.5e-8], vec![5e-8]];
-                        c.null = Some(vec![0.0]);
-                        out.push(c);
-                    }
+        let mut out = Vec::new();
+        if !(linear(&gp.pinion.material) && linear(&gp.wheel.material)) {
+            return out;
+        }
+        let a1 = gp.pinion.material.alpha_per_k.unwrap();
+        let a2 = gp.wheel.material.alpha_per_k.unwrap();
+        if gp.pinion.material.dalpha_dt_per_k2.is_none()
+            && gp.wheel.material.dalpha_dt_per_k2.is_none()
+        {
+            let edit: Edit = std::sync::Arc::new(move |s: &mut ScenarioSpec| {
+                s.gear_pair[gi].pinion.material.dalpha_dt_per_k2 = Some(0.0);
+                s.gear_pair[gi].wheel.material.dalpha_dt_per_k2 = Some(0.0);
+            });
+            if let Some(base) = self.with(&edit) {
+                let p1 = format!("gear_pair.{q}.pinion.material.dalpha_dt_per_k2");
+                let p2 = format!("gear_pair.{q}.wheel.material.dalpha_dt_per_k2");
+                if base.get(&p1).is_ok() && base.get(&p2).is_ok() {
+                    out.push(Candidate {
+                        params: vec![ParamDef::new("dalpha_dt_per_k2", -1e-6, 1e-6, 1e-9)],
+                        setters: vec![Setter::scaled(p1, 0, 1.0), Setter::scaled(p2, 0, 1.0)],
+                        starts: vec![vec![-5e-8], vec![-1.5e-8], vec![1.5e-8], vec![5e-8]],
+                        null: Some(vec![0.0]),
+                        ..Candidate::new(
+                            Effect::CteTemperature,
+                            Target::Pair(pair.clone()),
+                            Some(edit),
+                        )
+                    });
                 }
             }
-            let mut c = blank(Effect::CteScale, None);
-            c.gear_pair = Some(pair.clone());
-            c.params = vec![ParamDef::new("scale", 0.1, 5.0, 0.005)];
-            c.setters = vec![
+        }
+        out.push(Candidate {
+            params: vec![ParamDef::new("scale", 0.1, 5.0, 0.005)],
+            setters: vec![
                 Setter::scaled(format!("gear_pair.{q}.pinion.material.alpha_per_k"), 0, a1),
                 Setter::scaled(format!("gear_pair.{q}.wheel.material.alpha_per_k"), 0, a2),
-            ];
-            c.starts = vec![vec![0.8], vec![0.9], vec![1.1], vec![1.25]];
-            c.null = Some(vec![1.0]);
-            out.push(c);
-        }
+            ],
+            starts: vec![vec![0.8], vec![0.9], vec![1.1], vec![1.25]],
+            null: Some(vec![1.0]),
+            ..Candidate::new(Effect::CteScale, Target::Pair(pair), None)
+        });
+        out
+    }
+
+    /// An elastic bore fit on each free gear of pair `gi` that sits on a shaft node
+    /// (the node outside the gear its bore node conducts to).
+    fn bore_fits(&self, gi: usize) -> Vec<Candidate> {
+        let spec = self.spec;
+        let gp = &spec.gear_pair[gi];
+        let pair = pair_name(spec, gi);
+        let q = quote_key(&pair);
+        let mut out = Vec::new();
         for (which, g) in [("pinion", &gp.pinion), ("wheel", &gp.wheel)] {
             if !matches!(g.bore_fit.as_deref(), None | Some("free")) {
                 continue;
             }
-            // The shaft: the node outside the gear that its bore node conducts to.
             let bore = &g.nodes[0];
             let shaft = spec.conductor.iter().find_map(|c| {
                 let other = match (c.between.first(), c.between.get(1)) {
@@ -555,13 +706,13 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                     (Some(a), Some(b)) if b == bore => a,
                     _ => return None,
                 };
-                (!gear_nodes.contains(&other.as_str())
+                (!self.gear_nodes.contains(&other.as_str())
                     && spec.node.iter().any(|n| n.name == *other))
                 .then(|| other.clone())
             });
             let Some(shaft) = shaft else { continue };
             let edit: Edit = {
-                let (shaft,) = (shaft.clone(),);
+                let shaft = shaft.clone();
                 std::sync::Arc::new(move |s: &mut ScenarioSpec| {
                     let gs = if which == "pinion" {
                         &mut s.gear_pair[gi].pinion
@@ -574,105 +725,106 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
                     gs.interference_um = Some(5.0);
                 })
             };
-            let base = with(&edit);
-            let Some(base) = base else { continue };
+            let Some(base) = self.with(&edit) else {
+                continue;
+            };
             let p = format!("gear_pair.{q}.{which}.interference_um");
             if base.get(&p).is_err() {
                 continue;
             }
-            let mut c = blank(Effect::BoreFit, Some(edit.clone()));
-            c.gear_pair = Some(pair.clone());
-            c.gear = Some(format!("{pair}.{which}"));
-            c.node = Some(shaft.clone());
-            c.params = vec![ParamDef::new("interference_um", 0.0, 500.0, 0.2)];
-            c.setters = vec![Setter::scaled(p, 0, 1.0)];
-            c.starts = vec![vec![2.0], vec![10.0], vec![40.0]];
-            out.push(c);
+            let target = Target::Bore {
+                gear_pair: pair.clone(),
+                gear: format!("{pair}.{which}"),
+                shaft,
+            };
+            out.push(Candidate {
+                params: vec![ParamDef::new("interference_um", 0.0, 500.0, 0.2)],
+                setters: vec![Setter::scaled(p, 0, 1.0)],
+                starts: vec![vec![2.0], vec![10.0], vec![40.0]],
+                ..Candidate::new(Effect::BoreFit, target, Some(edit))
+            });
         }
+        out
     }
 
-    // Sensors: a lag or an offset on any temperature channel of the recording.
-    for (col, is_temp) in channels {
-        if !is_temp {
-            continue;
-        }
+    /// A lag and an offset on temperature channel `col`.
+    fn sensor_lag_and_offset(&self, col: &str) -> Vec<Candidate> {
         let q = quote_key(col);
         let (pt, po) = (format!("sensor.{q}.tau_s"), format!("sensor.{q}.offset_k"));
-        let (Ok(tau0), Ok(off0)) = (model.get(&pt), model.get(&po)) else {
-            continue;
+        let (Ok(tau0), Ok(off0)) = (self.model.get(&pt), self.model.get(&po)) else {
+            return Vec::new();
         };
-        let mut c = blank(Effect::SensorLag, None);
-        c.channel = Some(col.clone());
-        c.params = vec![ParamDef::new("tau_s", 0.0, 7200.0, 1.0)];
-        c.setters = vec![Setter {
-            path: pt,
-            constant: tau0,
-            terms: vec![(0, 1.0)],
-        }];
-        c.starts = vec![vec![20.0], vec![60.0], vec![200.0], vec![600.0]];
-        c.null = Some(vec![0.0]);
-        out.push(c);
-        let mut c = blank(Effect::SensorOffset, None);
-        c.channel = Some(col.clone());
-        c.params = vec![ParamDef::new("offset_k", -50.0, 50.0, 0.05)];
-        c.setters = vec![Setter {
-            path: po,
-            constant: off0,
-            terms: vec![(0, 1.0)],
-        }];
-        c.starts = vec![vec![-0.5], vec![0.5]];
-        c.null = Some(vec![0.0]);
-        out.push(c);
+        let lag = Candidate {
+            params: vec![ParamDef::new("tau_s", 0.0, 7200.0, 1.0)],
+            setters: vec![Setter {
+                path: pt,
+                constant: tau0,
+                terms: vec![(0, 1.0)],
+            }],
+            starts: vec![vec![20.0], vec![60.0], vec![200.0], vec![600.0]],
+            null: Some(vec![0.0]),
+            ..Candidate::new(Effect::SensorLag, Target::Channel(col.into()), None)
+        };
+        let offset = Candidate {
+            params: vec![ParamDef::new("offset_k", -50.0, 50.0, 0.05)],
+            setters: vec![Setter {
+                path: po,
+                constant: off0,
+                terms: vec![(0, 1.0)],
+            }],
+            starts: vec![vec![-0.5], vec![0.5]],
+            null: Some(vec![0.0]),
+            ..Candidate::new(Effect::SensorOffset, Target::Channel(col.into()), None)
+        };
+        vec![lag, offset]
     }
 
-    // Calibration: a sun load's absorptivity, one conductor.
-    for p in model.params() {
-        let (effect, what) = if p.path.starts_with("sun.")
-            && (p.path.ends_with(".absorptivity") || p.path.ends_with(".absorptivity_area_m2"))
-        {
-            (Effect::AbsorptivityScale, "load")
-        } else if (p.path.starts_with("conductor.") && p.path.ends_with(".conductance_w_per_k"))
-            || (p.path.starts_with("radiation.")
-                && (p.path.ends_with(".emissivity_area_m2") || p.path.ends_with(".emissivity")))
-        {
-            (Effect::ConductanceScale, "conductor")
-        } else {
-            continue;
-        };
-        if p.value.is_nan() || p.value <= 0.0 {
-            continue;
+    /// Calibrations, in the order of the model's parameters: a sun load's
+    /// absorptivity scaled, a conductor's or radiative coupling's conductance scaled.
+    fn calibrations(&self) -> Vec<Candidate> {
+        let mut out = Vec::new();
+        for p in self.model.params() {
+            let is_load = p.path.starts_with("sun.")
+                && (p.path.ends_with(".absorptivity") || p.path.ends_with(".absorptivity_area_m2"));
+            let is_conductor = (p.path.starts_with("conductor.")
+                && p.path.ends_with(".conductance_w_per_k"))
+                || (p.path.starts_with("radiation.")
+                    && (p.path.ends_with(".emissivity_area_m2")
+                        || p.path.ends_with(".emissivity")));
+            if !(is_load || is_conductor) || p.value.is_nan() || p.value <= 0.0 {
+                continue;
+            }
+            let name = element_of(&p.path);
+            let upper = if p.path.ends_with(".absorptivity") || p.path.ends_with(".emissivity") {
+                1.0 / p.value
+            } else {
+                20.0
+            };
+            let (effect, target, param, starts) = if is_load {
+                (
+                    Effect::AbsorptivityScale,
+                    Target::Load(name),
+                    ParamDef::new("scale", 0.05, upper, 0.003),
+                    vec![0.8, 0.9, 1.1f64.min(upper), 1.25f64.min(upper)],
+                )
+            } else {
+                (
+                    Effect::ConductanceScale,
+                    Target::Conductor(name),
+                    ParamDef::new("scale", 0.02, upper, 0.01),
+                    vec![0.3, 0.6, 1.5f64.min(upper), 3.0f64.min(upper)],
+                )
+            };
+            out.push(Candidate {
+                params: vec![param],
+                setters: vec![Setter::scaled(p.path.clone(), 0, p.value)],
+                starts: starts.into_iter().map(|s| vec![s]).collect(),
+                null: Some(vec![1.0]),
+                ..Candidate::new(effect, target, None)
+            });
         }
-        let name = element_of(&p.path);
-        let mut c = blank(effect, None);
-        let upper = if p.path.ends_with(".absorptivity") || p.path.ends_with(".emissivity") {
-            1.0 / p.value
-        } else {
-            20.0
-        };
-        if what == "load" {
-            c.load = Some(name);
-            c.params = vec![ParamDef::new("scale", 0.05, upper, 0.003)];
-            c.starts = vec![
-                vec![0.8],
-                vec![0.9],
-                vec![1.1f64.min(upper)],
-                vec![1.25f64.min(upper)],
-            ];
-        } else {
-            c.conductor = Some(name);
-            c.params = vec![ParamDef::new("scale", 0.02, upper, 0.01)];
-            c.starts = vec![
-                vec![0.3],
-                vec![0.6],
-                vec![1.5f64.min(upper)],
-                vec![3.0f64.min(upper)],
-            ];
-        }
-        c.setters = vec![Setter::scaled(p.path.clone(), 0, p.value)];
-        c.null = Some(vec![1.0]);
-        out.push(c);
+        out
     }
-    out
 }
 
 fn pair_name(spec: &ScenarioSpec, i: usize) -> String {

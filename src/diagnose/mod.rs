@@ -27,25 +27,26 @@
 pub mod data;
 pub mod effects;
 pub mod lm;
+mod search;
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
-use rayon::prelude::*;
 use serde::Serialize;
 use serde::ser::SerializeMap;
 
-use crate::model::{Model, ModelError};
 use crate::recording::Recording;
-use crate::sample::Cadence;
-use crate::sensor::{Readings, Sensor, SensorTarget};
-use crate::sim::{
+use crate::run::sample::Cadence;
+use crate::run::sensor::{Readings, Sensor, SensorTarget};
+use crate::run::sim::{
     Event, Observer, ObserverResult, RunStart, RunStats, SimError, StepView, simulate,
 };
+use crate::spec::model::{Model, ModelError};
 
 use data::{Mismatch, Observations, Part};
-use effects::{Candidate, Hints, ParamDef, Setter};
+use effects::{Candidate, Hints};
+use search::{Hypothesis, Problem, Ranking, Reference};
 
 #[derive(Debug, thiserror::Error)]
 pub enum DiagnoseError {
@@ -172,6 +173,11 @@ impl Serialize for ChannelMap {
 }
 
 impl ChannelMap {
+    /// `values` named by `names`, in order.
+    fn of(names: &[String], values: &[f64]) -> ChannelMap {
+        ChannelMap(names.iter().cloned().zip(values.iter().copied()).collect())
+    }
+
     pub fn get(&self, k: &str) -> Option<f64> {
         self.0.iter().find(|(n, _)| n == k).map(|(_, v)| *v)
     }
@@ -410,195 +416,41 @@ impl Observer for Budget {
     }
 }
 
-/// A model with one or more candidates' effects, parameters concatenated.
-struct Composite {
-    base: Model,
-    params: Vec<ParamDef>,
-    setters: Vec<Setter>,
-}
-
-impl Composite {
-    fn new(model: &Model, members: &[&Candidate]) -> Result<Composite, ModelError> {
-        let mut base = model.clone();
-        let edits: Vec<_> = members
-            .iter()
-            .flat_map(|c| c.edits.iter().cloned())
-            .collect();
-        if !edits.is_empty() {
-            base.modify(|s| {
-                for e in &edits {
-                    e(s)
-                }
-            })?;
-        }
-        let mut params = Vec::new();
-        let mut setters = Vec::new();
-        for c in members {
-            let off = params.len();
-            params.extend(c.params.iter().cloned());
-            setters.extend(c.setters.iter().map(|s| Setter {
-                path: s.path.clone(),
-                constant: s.constant,
-                terms: s.terms.iter().map(|&(i, k)| (i + off, k)).collect(),
-            }));
-        }
-        Ok(Composite {
-            base,
-            params,
-            setters,
-        })
-    }
-
-    fn model_at(&self, theta: &[f64]) -> Result<Model, ModelError> {
-        let mut m = self.base.clone();
-        m.set_many(&effects::values(&self.setters, theta))?;
-        Ok(m)
-    }
-}
-
-/// The data a fit needs, shared by every candidate.
-struct Problem<'a> {
-    obs: &'a Observations,
-    noise: Vec<f64>,
-    /// Times up to the end of the training orbits, and up to the end of the held-out.
-    train_times: Arc<[f64]>,
-    all_times: Arc<[f64]>,
-    /// Step budget of one simulation of the whole recording.
-    max_steps: u64,
-}
-
-impl Problem<'_> {
-    /// Weighted training residuals (recorded − predicted)/noise.
-    fn train_residuals(&self, pred: &[Vec<f64>]) -> Vec<f64> {
-        let mut out = Vec::new();
-        for (c, ch) in self.obs.channels.iter().enumerate() {
-            let p = &pred[ch.sensor];
-            for (j, v) in self.obs.values[c].iter().enumerate().take(p.len()) {
-                if let (Some(v), Part::Train) = (v, self.obs.part[j]) {
-                    out.push((v - p[j]) / self.noise[c]);
-                }
-            }
-        }
-        out
-    }
-
-    /// The largest, over channels, drop of the held-out mean square residual from
-    /// `before` to `after`, in units of the channel's noise variance.
-    fn material(&self, before: &[Vec<f64>], after: &[Vec<f64>]) -> f64 {
-        let mut best = f64::NEG_INFINITY;
-        for (c, ch) in self.obs.channels.iter().enumerate() {
-            let (b, a) = (&before[ch.sensor], &after[ch.sensor]);
-            let (mut s, mut n) = (0.0, 0usize);
-            for (j, v) in self.obs.values[c]
-                .iter()
-                .enumerate()
-                .take(a.len().min(b.len()))
-            {
-                if let (Some(v), Part::Holdout) = (v, self.obs.part[j]) {
-                    s += ((v - b[j]).powi(2) - (v - a[j]).powi(2)) / self.noise[c].powi(2);
-                    n += 1;
-                }
-            }
-            if n > 0 {
-                best = best.max(s / n as f64);
-            }
-        }
-        best
-    }
-
-    fn chi2(&self, pred: &[Vec<f64>], part: Part) -> f64 {
-        let mut s = 0.0;
-        for (c, ch) in self.obs.channels.iter().enumerate() {
-            let p = &pred[ch.sensor];
-            for (j, v) in self.obs.values[c].iter().enumerate().take(p.len()) {
-                if let (Some(v), true) = (v, self.obs.part[j] == part) {
-                    s += ((v - p[j]) / self.noise[c]).powi(2);
-                }
-            }
-        }
-        s
-    }
-
-    fn train_residuals_at(&self, comp: &Composite, theta: &[f64]) -> Result<Vec<f64>, String> {
-        let m = comp.model_at(theta).map_err(|e| e.to_string())?;
-        let pred = self.predict(&m, &self.train_times)?;
-        Ok(self.train_residuals(&pred))
-    }
-
-    fn predict(&self, m: &Model, times: &Arc<[f64]>) -> Result<Vec<Vec<f64>>, String> {
-        predict(m, times, &[], self.max_steps)
-            .map(|p| p.0)
-            .map_err(|e| crate::error_chain(&e))
-    }
-}
-
-/// A candidate's ranking: its best training χ² and parameters (None: it could not be
-/// simulated), the last error, and the wall time.
-type Ranked = (Option<(f64, Vec<f64>)>, String, f64);
-
-/// A fitted hypothesis (one or two candidates).
-#[derive(Debug, Clone)]
-struct Hypothesis {
-    members: Vec<usize>,
-    theta: Vec<f64>,
-    fit: lm::LmFit,
-    train_chi2: f64,
-    holdout_chi2: f64,
+/// The model as given, against the recording (step 2).
+struct BaselineRun {
+    /// Per sensor of the scenario, at the recording's times.
     pred: Vec<Vec<f64>>,
-    model: Model,
+    /// Per diffusion node, K, at the recording's times (for thermostat start points).
+    node_temps_k: Vec<Vec<f64>>,
+    /// Recorded − predicted, per channel.
+    residuals: Vec<Vec<Option<f64>>>,
+    /// Each channel's noise (floored at [`NOISE_FLOOR`]).
+    noise: Vec<f64>,
+    /// The solver's steps over the whole recording.
+    steps: u64,
 }
 
-/// Runs the diagnosis of `recording` against `model`.
-pub fn diagnose(
+/// Step 2: the baseline simulated over the whole recording, with every diffusion node
+/// read too; its residuals; each channel's noise from them (the training orbits only,
+/// when there are held-out ones). A channel smoother than the floor gets a note.
+fn baseline(
     model: &Model,
-    recording: &Recording,
-    opts: &Options,
-    progress: Progress<'_>,
-) -> Result<Diagnosis, DiagnoseError> {
-    let started = Instant::now();
-    let sc = model.scenario();
-    let obs = Observations::new(recording, sc, opts.holdout_orbits)?;
-    let mut notes = Vec::new();
-    let validate = obs.split.can_validate();
-    if !validate {
-        notes.push(format!(
-            "the recording covers {} whole orbit(s) of {:.1} s; held-out validation needs at \
-             least two (one to fit, one to check), so only the baseline and the mismatches \
-             are reported",
-            obs.split.orbits, obs.split.period_s
-        ));
-    }
-
-    // Baseline, with every diffusion node read too (for the thermostat start points).
-    progress("baseline", 0, 1);
-    let all_times: Arc<[f64]> = obs
-        .time_s
-        .iter()
-        .copied()
-        .take_while(|&t| t <= obs.split.holdout_end_s)
-        .collect::<Vec<_>>()
-        .into();
-    let train_times: Arc<[f64]> = obs
-        .time_s
-        .iter()
-        .copied()
-        .take_while(|&t| t < obs.split.train_end_s)
-        .collect::<Vec<_>>()
-        .into();
+    obs: &Observations,
+    validate: bool,
+    notes: &mut Vec<String>,
+) -> Result<BaselineRun, DiagnoseError> {
     let whole: Arc<[f64]> = obs.time_s.clone().into();
-    let node_count = sc.thermal.network.nodes.len();
-    let node_sensors: Vec<Sensor> = (0..node_count)
+    let sc = model.scenario();
+    let node_sensors: Vec<Sensor> = (0..sc.thermal.network.nodes.len())
         .map(|i| Sensor::new(format!("__node{i}_k"), SensorTarget::Node(i)))
         .collect();
-    let (base_pred_ext, base_steps) =
+    let (mut pred, steps) =
         predict(model, &whole, &node_sensors, u64::MAX).map_err(DiagnoseError::Baseline)?;
-    let n_sensors = sc.sensors.len();
-    let node_temps_k = &base_pred_ext[n_sensors..];
-    let base_pred: Vec<Vec<f64>> = base_pred_ext[..n_sensors].to_vec();
-    let base_res = obs.residuals(&base_pred);
+    let node_temps_k = pred.split_off(sc.sensors.len());
+    let residuals = obs.residuals(&pred);
     let fit_part = |j: usize| !validate || obs.part[j] == Part::Train;
     let mut noise = Vec::new();
-    for (c, r) in base_res.iter().enumerate() {
+    for (c, r) in residuals.iter().enumerate() {
         let sigma = data::noise(&obs.time_s, r, fit_part).ok_or_else(|| {
             DiagnoseError::Recording(format!(
                 "{}: channel `{}` has too few consecutive samples to estimate its noise",
@@ -614,86 +466,96 @@ pub fn diagnose(
         }
         noise.push(sigma.max(NOISE_FLOOR));
     }
+    Ok(BaselineRun {
+        pred,
+        node_temps_k,
+        residuals,
+        noise,
+        steps,
+    })
+}
+
+/// Channels whose noise is far larger than their signal: the verdict would rest on
+/// noise.
+fn noise_warnings(obs: &Observations, base: &BaselineRun, validate: bool) -> Vec<String> {
+    let fit_part = |j: usize| !validate || obs.part[j] == Part::Train;
     let mut warnings = Vec::new();
     for (c, ch) in obs.channels.iter().enumerate() {
-        let signal = signal_rms(&obs, c, &base_pred[ch.sensor], noise[c], fit_part);
-        if noise[c] > 2.0 * signal && noise[c] > 1.0 {
+        let noise = base.noise[c];
+        let signal = signal_rms(obs, c, &base.pred[ch.sensor], noise, fit_part);
+        if noise > 2.0 * signal && noise > 1.0 {
             warnings.push(format!(
                 "channel `{}`: its noise ({:.3} {u}) is far larger than its signal ({:.3} {u} rms, recorded and modelled): \
 the verdict rests on noise; check the channel's unit and scaling",
                 ch.name,
-                noise[c],
+                noise,
                 signal,
                 u = ch.unit
             ));
         }
     }
-    let names: Vec<String> = obs.channels.iter().map(|c| c.name.clone()).collect();
-    let cmap = |v: &[f64]| ChannelMap(names.iter().cloned().zip(v.iter().copied()).collect());
-    let base_rms = obs.rms(&base_res, Part::Train);
-    let base_rms_h = obs.rms(&base_res, Part::Holdout);
-    let problem = Problem {
-        obs: &obs,
-        noise: noise.clone(),
-        train_times,
-        all_times,
-        max_steps: 20 * base_steps + 5000,
-    };
-    let base_chi2 = problem.chi2(&base_pred, Part::Train);
-    let base_chi2_h = problem.chi2(&base_pred, Part::Holdout);
-    let n_train = problem.train_residuals(&base_pred).len();
-    let orbit_rmse = data::orbit_rms(&obs, &base_res)
+    warnings
+}
+
+/// The report as the baseline leaves it (verdict `consistent` or `unexplained`, no
+/// findings), and the series with the baseline as the corrected values.
+fn baseline_report(
+    obs: &Observations,
+    base: &BaselineRun,
+    problem: &Problem<'_>,
+    opts: &Options,
+    notes: Vec<String>,
+    warnings: Vec<String>,
+) -> (Diagnosis, Series) {
+    let names = channel_names(obs);
+    let cmap = |v: &[f64]| ChannelMap::of(&names, v);
+    let rms = obs.rms(&base.residuals, Part::Train);
+    let rms_heldout = obs.rms(&base.residuals, Part::Holdout);
+    let orbit_rmse = data::orbit_rms(obs, &base.residuals)
         .into_iter()
         .zip(&names)
         .map(|(v, n)| (n.clone(), v.into_iter().map(finite).collect()))
         .collect();
-    let mismatches = data::mismatches(&obs, &base_res, &noise, opts.noise_ratio);
+    let mismatches = data::mismatches(obs, &base.residuals, &base.noise, opts.noise_ratio);
     let baseline = Baseline {
-        rmse: cmap(&base_rms),
-        heldout_rmse: cmap(&base_rms_h),
+        rmse: cmap(&rms),
+        heldout_rmse: cmap(&rms_heldout),
         orbit_rmse,
-        chi2: base_chi2,
-        samples: n_train,
+        chi2: problem.chi2(&base.pred, Part::Train),
+        samples: problem.train_residuals(&base.pred).len(),
     };
-    progress("baseline", 1, 1);
-    let at_noise = |rms: &[f64]| {
-        rms.iter()
-            .zip(&noise)
-            .all(|(r, s)| r.is_nan() || *r <= opts.noise_ratio * s)
+    let at_noise = at_noise(&rms, &base.noise, opts)
+        && (!obs.split.can_validate() || at_noise(&rms_heldout, &base.noise, opts));
+    let per_channel = |pred: &[Vec<f64>]| -> Vec<Vec<f64>> {
+        obs.channels
+            .iter()
+            .map(|c| pred[c.sensor].clone())
+            .collect()
     };
-    let baseline_at_noise = at_noise(&base_rms) && (!validate || at_noise(&base_rms_h));
-
-    let mut series = Series {
+    let last_s = *obs.time_s.last().unwrap();
+    let series = Series {
         time_s: obs.time_s.clone(),
         channels: names.clone(),
         units: obs.channels.iter().map(|c| c.unit).collect(),
         recorded: obs.values.clone(),
-        baseline: obs
-            .channels
-            .iter()
-            .map(|c| base_pred[c.sensor].clone())
-            .collect(),
-        corrected: obs
-            .channels
-            .iter()
-            .map(|c| base_pred[c.sensor].clone())
-            .collect(),
-        train_end_s: obs.split.train_end_s.min(*obs.time_s.last().unwrap()),
-        holdout_end_s: obs.split.holdout_end_s.min(*obs.time_s.last().unwrap()),
-        noise: noise.clone(),
+        baseline: per_channel(&base.pred),
+        corrected: per_channel(&base.pred),
+        train_end_s: obs.split.train_end_s.min(last_s),
+        holdout_end_s: obs.split.holdout_end_s.min(last_s),
+        noise: base.noise.clone(),
     };
-    let mut report = Diagnosis {
-        verdict: if baseline_at_noise {
+    let report = Diagnosis {
+        verdict: if at_noise {
             Verdict::Consistent
         } else {
             Verdict::Unexplained
         },
-        noise: cmap(&noise),
+        noise: cmap(&base.noise),
         baseline,
         mismatches: mismatches.clone(),
         findings: Vec::new(),
-        heldout_rmse: cmap(&base_rms_h),
-        rmse: cmap(&base_rms),
+        heldout_rmse: cmap(&rms_heldout),
+        rmse: cmap(&rms),
         remaining: mismatches,
         split: obs.split.clone(),
         candidates: Vec::new(),
@@ -704,91 +566,47 @@ the verdict rests on noise; check the channel's unit and scaling",
         series: Series::default(),
         corrected: None,
     };
-    if !validate {
-        report.series = series;
-        report.time_s = started.elapsed().as_secs_f64();
-        return Ok(report);
-    }
+    (report, series)
+}
 
-    // Candidates, thermostats started from the data.
-    let hints = heater_hints(&obs, &base_res, &noise, node_temps_k);
-    let channels: Vec<(String, bool)> = obs
-        .channels
-        .iter()
-        .map(|c| (c.name.clone(), c.is_temperature))
-        .collect();
-    let cands = effects::candidates(model, &channels, &hints);
-    let search_started = Instant::now();
+fn channel_names(obs: &Observations) -> Vec<String> {
+    obs.channels.iter().map(|c| c.name.clone()).collect()
+}
 
-    // Ranking: the training χ² at each start point, and along the line from the
-    // effect's null through it (the residual projected on the change it makes).
-    let r0 = problem.train_residuals(&base_pred);
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let total = cands.len();
-    let ranked: Vec<Ranked> = cands
-        .par_iter()
-        .map(|c| {
-            let t0 = Instant::now();
-            let out = match Composite::new(model, &[c]) {
-                Err(e) => (None, e.to_string()),
-                Ok(comp) => {
-                    let mut best: Option<(f64, Vec<f64>)> = None;
-                    let mut err = String::new();
-                    for s in &c.starts {
-                        match problem.train_residuals_at(&comp, s) {
-                            Ok(r1) => {
-                                for (x2, theta) in rank_point(&r0, &r1, c, s) {
-                                    if best.as_ref().is_none_or(|b| x2 < b.0) {
-                                        best = Some((x2, theta));
-                                    }
-                                }
-                            }
-                            Err(e) => err = e,
-                        }
-                    }
-                    (best, err)
-                }
-            };
-            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress("ranking", k, total);
-            (out.0, out.1, t0.elapsed().as_secs_f64())
-        })
-        .collect();
-    let mut order: Vec<usize> = (0..cands.len())
-        .filter(|&i| ranked[i].0.is_some())
-        .collect();
-    let score = |i: usize| base_chi2 - ranked[i].0.as_ref().unwrap().0;
-    order.sort_by(|&a, &b| score(b).total_cmp(&score(a)).then(a.cmp(&b)));
-    let to_fit: Vec<usize> = order
-        .iter()
-        .copied()
-        .filter(|&i| score(i) > 0.0)
-        .take(opts.fits)
-        .collect();
+/// Every channel's RMS residual within `opts.noise_ratio` × its noise (NaN: a channel
+/// with no samples there).
+fn at_noise(rms: &[f64], noise: &[f64], opts: &Options) -> bool {
+    rms.iter()
+        .zip(noise)
+        .all(|(r, s)| r.is_nan() || *r <= opts.noise_ratio * s)
+}
 
-    // Fitting the leading candidates.
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let nfit = to_fit.len();
-    let fitted: Vec<(Result<Hypothesis, String>, f64)> = to_fit
-        .par_iter()
-        .map(|&i| {
-            let t0 = Instant::now();
-            let start = ranked[i].0.as_ref().unwrap().1.clone();
-            let h = fit(&problem, model, &cands, &[i], &start);
-            let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress("fitting", k, nfit);
-            (h, t0.elapsed().as_secs_f64())
-        })
-        .collect();
-    let ln_n = (n_train.max(2) as f64).ln();
-    let bic_gain = |h: &Hypothesis, chi2_ref: f64, k_extra: usize| {
-        chi2_ref - h.train_chi2 - k_extra as f64 * ln_n
-    };
-    let mut singles: Vec<Hypothesis> = Vec::new();
-    let mut reports: Vec<CandidateReport> = Vec::new();
+/// A hypothesis explains the recording when it brings every channel to its noise on
+/// the training and the held-out orbits.
+fn explains(obs: &Observations, noise: &[f64], opts: &Options, h: &Hypothesis) -> bool {
+    let res = obs.residuals(&h.pred);
+    at_noise(&obs.rms(&res, Part::Holdout), noise, opts)
+        && at_noise(&obs.rms(&res, Part::Train), noise, opts)
+}
+
+/// Step 6 for single effects: each candidate's line in the report, and the fitted
+/// ones [`Problem::judge`] accepts over the baseline.
+fn judge_singles(
+    problem: &Problem<'_>,
+    base: &Reference<'_>,
+    cands: &[Candidate],
+    ranked: &[Ranking],
+    to_fit: &[usize],
+    fitted: &[(Result<Hypothesis, String>, f64)],
+    opts: &Options,
+) -> (Vec<CandidateReport>, Vec<Hypothesis>) {
+    let mut singles = Vec::new();
+    let mut reports = Vec::new();
     for (ci, c) in cands.iter().enumerate() {
-        let fit_pos = to_fit.iter().position(|&i| i == ci);
-        let rank_drop = ranked[ci].0.as_ref().map_or(f64::NAN, |r| base_chi2 - r.0);
+        let rank_drop = ranked[ci]
+            .best
+            .as_ref()
+            .map_or(f64::NAN, |r| base.train_chi2 - r.0);
         let mut rep = CandidateReport {
             effect: c.effect.id(),
             target: c.label(),
@@ -798,11 +616,11 @@ the verdict rests on noise; check the channel's unit and scaling",
             delta_bic: None,
             heldout_chi2_drop: None,
             parameters: None,
-            time_s: ranked[ci].2,
+            time_s: ranked[ci].time_s,
         };
-        match fit_pos {
-            None if ranked[ci].0.is_none() => {
-                rep.reason = format!("could not be simulated: {}", ranked[ci].1);
+        match to_fit.iter().position(|&i| i == ci) {
+            None if ranked[ci].best.is_none() => {
+                rep.reason = format!("could not be simulated: {}", ranked[ci].error);
             }
             None => {
                 rep.reason = if rank_drop <= 0.0 {
@@ -813,43 +631,24 @@ the verdict rests on noise; check the channel's unit and scaling",
             }
             Some(p) => {
                 rep.time_s += fitted[p].1;
+                rep.status = CandidateStatus::Rejected;
                 match &fitted[p].0 {
-                    Err(e) => {
-                        rep.status = CandidateStatus::Rejected;
-                        rep.reason = format!("fit failed: {e}");
-                    }
+                    Err(e) => rep.reason = format!("fit failed: {e}"),
                     Ok(h) => {
-                        let gain = bic_gain(h, base_chi2, c.params.len());
-                        let hdrop = base_chi2_h - h.holdout_chi2;
-                        rep.delta_bic = Some(-gain);
-                        rep.heldout_chi2_drop = Some(hdrop);
+                        rep.delta_bic = Some(-problem.bic_gain(h, base.train_chi2, c.params.len()));
+                        rep.heldout_chi2_drop = Some(base.holdout_chi2 - h.holdout_chi2);
                         rep.parameters = Some(
                             c.report_params(&h.theta, None)
                                 .into_iter()
                                 .map(|(k, v, _)| (k, v))
                                 .collect(),
                         );
-                        rep.status = CandidateStatus::Rejected;
-                        if gain <= opts.bic_margin {
-                            rep.reason = format!(
-                                "BIC improves by {gain:.1}, not by more than the margin {:.0}",
-                                opts.bic_margin
-                            );
-                        } else if hdrop <= opts.holdout_margin {
-                            rep.reason = format!(
-                                "fits the training orbits (BIC −{gain:.0}) but does not improve \
-                                 the held-out orbits (χ² drop {hdrop:.1} ≤ {:.0})",
-                                opts.holdout_margin
-                            );
-                        } else if problem.material(&base_pred, &h.pred) < opts.min_effect {
-                            rep.reason = format!(
-                                "significant but immaterial: lowers no channel's held-out mean \
-                                 square residual by {:.0} % of its noise variance",
-                                100.0 * opts.min_effect
-                            );
-                        } else {
-                            rep.status = CandidateStatus::Accepted;
-                            singles.push(h.clone());
+                        match problem.judge(h, base, c.params.len(), opts) {
+                            Err(why) => rep.reason = why.reason(opts),
+                            Ok(()) => {
+                                rep.status = CandidateStatus::Accepted;
+                                singles.push(h.clone());
+                            }
                         }
                     }
                 }
@@ -857,212 +656,120 @@ the verdict rests on noise; check the channel's unit and scaling",
         }
         reports.push(rep);
     }
-    let single_gain = |h: &Hypothesis| bic_gain(h, base_chi2, h.theta.len());
-    singles.sort_by(|a, b| single_gain(b).total_cmp(&single_gain(a)));
-    let explains = |h: &Hypothesis| {
-        let res = obs.residuals(&h.pred);
-        at_noise(&obs.rms(&res, Part::Holdout)) && at_noise(&obs.rms(&res, Part::Train))
-    };
+    let gain = |h: &Hypothesis| problem.bic_gain(h, base.train_chi2, h.theta.len());
+    singles.sort_by(|a, b| gain(b).total_cmp(&gain(a)));
+    (reports, singles)
+}
 
-    let mut best: Option<Hypothesis> = None;
-    if let Some(first) = singles.first() {
-        if explains(first) {
-            best = Some(first.clone());
+/// The findings of the accepted hypothesis `h`, one per member, each with its
+/// parameters, their errors and correlations, and its own evidence: the hypothesis
+/// against the baseline (one member), or against the other member alone (a pair).
+fn findings(
+    problem: &Problem<'_>,
+    base: &Reference<'_>,
+    cands: &[Candidate],
+    singles: &[Hypothesis],
+    h: &Hypothesis,
+    heldout_rmse: &ChannelMap,
+) -> Vec<Finding> {
+    let cov = h.fit.covariance.as_ref().map(|c| {
+        (0..c.nrows())
+            .map(|i| (0..c.ncols()).map(|j| c[(i, j)]).collect::<Vec<f64>>())
+            .collect::<Vec<_>>()
+    });
+    let corr = h.fit.correlation();
+    let mut out = Vec::new();
+    let mut off = 0;
+    for (m, &ci) in h.members.iter().enumerate() {
+        let c = &cands[ci];
+        let k = c.params.len();
+        let theta = &h.theta[off..off + k];
+        let sub_cov: Option<Vec<Vec<f64>>> = cov.as_ref().map(|cv| {
+            (off..off + k)
+                .map(|i| cv[i][off..off + k].to_vec())
+                .collect()
+        });
+        let params = c.report_params(theta, sub_cov.as_deref());
+        let against_baseline = || {
+            (
+                -problem.bic_gain(h, base.train_chi2, h.theta.len()),
+                base.holdout_chi2 - h.holdout_chi2,
+            )
+        };
+        let (delta_bic, hdrop) = if h.members.len() == 1 {
+            against_baseline()
         } else {
-            // One effect is not enough: rank every other candidate again on the
-            // residual the best one leaves (forward selection), then fit the leading
-            // ones together with it.
-            let f0 = first.members[0];
-            let r_first = problem.train_residuals(&first.pred);
-            let done = std::sync::atomic::AtomicUsize::new(0);
-            let second: Vec<Option<(f64, Vec<f64>)>> = (0..cands.len())
-                .into_par_iter()
-                .map(|j| {
-                    let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    progress("pairs: ranking", k, cands.len());
-                    if j == f0 || ranked[j].0.is_none() {
-                        return None;
-                    }
-                    let comp = Composite::new(model, &[&cands[f0], &cands[j]]).ok()?;
-                    let mut best: Option<(f64, Vec<f64>)> = None;
-                    for s in &cands[j].starts {
-                        let mut theta = first.theta.clone();
-                        theta.extend_from_slice(s);
-                        let Ok(r1) = problem.train_residuals_at(&comp, &theta) else {
-                            continue;
-                        };
-                        for (x2, th) in rank_point(&r_first, &r1, &cands[j], s) {
-                            if best.as_ref().is_none_or(|b| x2 < b.0) {
-                                best = Some((x2, th));
-                            }
-                        }
-                    }
-                    best
-                })
-                .collect();
-            let mut partners: Vec<usize> = (0..cands.len())
-                .filter(|&j| second[j].as_ref().is_some_and(|b| b.0 < first.train_chi2))
-                .collect();
-            partners.sort_by(|&a, &b| {
-                let (xa, xb) = (second[a].as_ref().unwrap().0, second[b].as_ref().unwrap().0);
-                xa.total_cmp(&xb).then(a.cmp(&b))
-            });
-            partners.truncate(opts.pair_partners);
-            let npairs = partners.len();
-            let done = std::sync::atomic::AtomicUsize::new(0);
-            let pairs: Vec<Result<Hypothesis, String>> = partners
-                .par_iter()
-                .map(|&j| {
-                    let mut start = first.theta.clone();
-                    start.extend_from_slice(&second[j].as_ref().unwrap().1);
-                    let r = fit(&problem, model, &cands, &[first.members[0], j], &start);
-                    let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    progress("pairs", k, npairs);
-                    r
-                })
-                .collect();
-            let mut best_pair: Option<Hypothesis> = None;
-            for h in pairs.into_iter().flatten() {
-                let extra = bic_gain(&h, first.train_chi2, cands[h.members[1]].params.len());
-                let hdrop = first.holdout_chi2 - h.holdout_chi2;
-                if extra > opts.bic_margin
-                    && hdrop > opts.holdout_margin
-                    && problem.material(&first.pred, &h.pred) >= opts.min_effect
-                    && best_pair
-                        .as_ref()
-                        .is_none_or(|b| h.train_chi2 < b.train_chi2)
-                {
-                    best_pair = Some(h);
-                }
+            let other = h.members[1 - m];
+            match singles.iter().find(|s| s.members == [other]) {
+                Some(a) => (
+                    -problem.bic_gain(h, a.train_chi2, k),
+                    a.holdout_chi2 - h.holdout_chi2,
+                ),
+                None => against_baseline(),
             }
-            match best_pair {
-                Some(p) if explains(&p) => best = Some(p),
-                Some(p) => {
-                    report.notes.push(format!(
-                        "{} with {} improves on either alone but leaves a structured residual",
-                        cands[p.members[0]].label(),
-                        cands[p.members[1]].label()
-                    ));
-                }
-                None => {}
-            }
-            if best.is_none() {
-                report.notes.push(format!(
-                    "the best candidate, {}, improves the fit (BIC −{:.0}) but does not bring the \
-                     held-out orbits to the noise; no effect of the vocabulary, alone or in a \
-                     pair, explains the residual",
-                    cands[first.members[0]].label(),
-                    single_gain(first)
-                ));
-            }
-        }
+        };
+        out.push(Finding {
+            effect: c.effect.id(),
+            kind: c.effect.kind(),
+            node: c.target.node(),
+            channel: c.target.channel(),
+            conductor: c.target.conductor(),
+            load: c.target.load(),
+            gear_pair: c.target.gear_pair(),
+            gear: c.target.gear(),
+            schedule: c.target.schedule(),
+            parameters: params.iter().map(|(n, v, _)| (n.clone(), *v)).collect(),
+            std_errors: params
+                .iter()
+                .map(|(n, _, s)| (n.clone(), finite(*s)))
+                .collect(),
+            correlation: (off..off + k)
+                .map(|i| (off..off + k).map(|j| finite(corr[i][j])).collect())
+                .collect(),
+            correlation_order: c.params.iter().map(|p| p.name.to_string()).collect(),
+            heldout_rmse: heldout_rmse.clone(),
+            delta_bic,
+            heldout_chi2_drop: hdrop,
+            set: c.values(theta).into_iter().collect(),
+        });
+        off += k;
     }
+    out
+}
 
-    // The verdict and the corrected model.
-    match &best {
-        Some(h) => {
-            report.verdict = Verdict::Explained;
-            let res = obs.residuals(&h.pred);
-            report.heldout_rmse = cmap(&obs.rms(&res, Part::Holdout));
-            report.rmse = cmap(&obs.rms(&res, Part::Train));
-            report.remaining = data::mismatches(&obs, &res, &noise, opts.noise_ratio);
-            let cov = h.fit.covariance.as_ref().map(|c| {
-                (0..c.nrows())
-                    .map(|i| (0..c.ncols()).map(|j| c[(i, j)]).collect::<Vec<f64>>())
-                    .collect::<Vec<_>>()
-            });
-            let corr = h.fit.correlation();
-            let mut off = 0;
-            for (m, &ci) in h.members.iter().enumerate() {
-                let c = &cands[ci];
-                let k = c.params.len();
-                let theta = &h.theta[off..off + k];
-                let sub_cov: Option<Vec<Vec<f64>>> = cov.as_ref().map(|cv| {
-                    (off..off + k)
-                        .map(|i| cv[i][off..off + k].to_vec())
-                        .collect()
-                });
-                let params = c.report_params(theta, sub_cov.as_deref());
-                // Evidence of this member: the hypothesis against it without this member.
-                let (delta_bic, hdrop) = if h.members.len() == 1 {
-                    (-single_gain(h), base_chi2_h - h.holdout_chi2)
-                } else {
-                    let other = h.members[1 - m];
-                    let alone = singles.iter().find(|s| s.members == [other]);
-                    match alone {
-                        Some(a) => (
-                            -(a.train_chi2 - h.train_chi2 - k as f64 * ln_n),
-                            a.holdout_chi2 - h.holdout_chi2,
-                        ),
-                        None => (-single_gain(h), base_chi2_h - h.holdout_chi2),
-                    }
+/// The candidates' final statuses once the best hypothesis is known (None: nothing
+/// explains the residual), most relevant first: accepted, rejected, not fitted, each
+/// by ranking score.
+fn settle_candidates(
+    reports: &mut [CandidateReport],
+    cands: &[Candidate],
+    best: Option<&Hypothesis>,
+) {
+    for (ci, rep) in reports.iter_mut().enumerate() {
+        match best {
+            Some(h) if h.members.contains(&ci) => {
+                rep.status = CandidateStatus::Accepted;
+                rep.reason = match h.members.iter().find(|&&m| m != ci) {
+                    Some(&other) => format!("together with {}", cands[other].label()),
+                    None => String::new(),
                 };
-                let names_k: Vec<String> = c.params.iter().map(|p| p.name.to_string()).collect();
-                report.findings.push(Finding {
-                    effect: c.effect.id(),
-                    kind: c.effect.kind(),
-                    node: c.node.clone(),
-                    channel: c.channel.clone(),
-                    conductor: c.conductor.clone(),
-                    load: c.load.clone(),
-                    gear_pair: c.gear_pair.clone(),
-                    gear: c.gear.clone(),
-                    schedule: c.schedule.clone(),
-                    parameters: params.iter().map(|(n, v, _)| (n.clone(), *v)).collect(),
-                    std_errors: params
+            }
+            Some(h) if rep.status == CandidateStatus::Accepted => {
+                rep.status = CandidateStatus::Rejected;
+                rep.reason = format!(
+                    "improves the fit, but {} explains the residual better",
+                    h.members
                         .iter()
-                        .map(|(n, _, s)| (n.clone(), finite(*s)))
-                        .collect(),
-                    correlation: (off..off + k)
-                        .map(|i| (off..off + k).map(|j| finite(corr[i][j])).collect())
-                        .collect(),
-                    correlation_order: names_k,
-                    heldout_rmse: cmap(&obs.rms(&res, Part::Holdout)),
-                    delta_bic,
-                    heldout_chi2_drop: hdrop,
-                    set: c.values(theta).into_iter().collect(),
-                });
-                off += k;
+                        .map(|&m| cands[m].label())
+                        .collect::<Vec<_>>()
+                        .join(" with ")
+                );
             }
-            // The corrected series over the whole recording (tail included).
-            let (p, _) =
-                predict(&h.model, &whole, &[], u64::MAX).map_err(DiagnoseError::Corrected)?;
-            series.corrected = obs.channels.iter().map(|c| p[c.sensor].clone()).collect();
-            report.corrected = Some(h.model.clone());
-            for (ci, rep) in reports.iter_mut().enumerate() {
-                if h.members.contains(&ci) {
-                    rep.status = CandidateStatus::Accepted;
-                    rep.reason = match h.members.iter().find(|&&m| m != ci) {
-                        Some(&other) => format!("together with {}", cands[other].label()),
-                        None => String::new(),
-                    };
-                } else if rep.status == CandidateStatus::Accepted {
-                    rep.status = CandidateStatus::Rejected;
-                    rep.reason = format!(
-                        "improves the fit, but {} explains the residual better",
-                        h.members
-                            .iter()
-                            .map(|&m| cands[m].label())
-                            .collect::<Vec<_>>()
-                            .join(" with ")
-                    );
-                }
-            }
-        }
-        None => {
-            for rep in reports
-                .iter_mut()
-                .filter(|r| r.status == CandidateStatus::Accepted)
-            {
+            None if rep.status == CandidateStatus::Accepted => {
                 rep.status = CandidateStatus::Rejected;
                 rep.reason = "improves the fit but does not explain the residual".into();
             }
-            report.verdict = if baseline_at_noise {
-                Verdict::Consistent
-            } else {
-                Verdict::Unexplained
-            };
-            report.corrected = None;
+            _ => {}
         }
     }
     reports.sort_by(|a, b| {
@@ -1075,86 +782,137 @@ the verdict rests on noise; check the channel's unit and scaling",
             .cmp(&key(b))
             .then(b.rank_chi2_drop.total_cmp(&a.rank_chi2_drop))
     });
+}
+
+/// Runs the diagnosis of `recording` against `model`: the steps of the module doc,
+/// one function each.
+pub fn diagnose(
+    model: &Model,
+    recording: &Recording,
+    opts: &Options,
+    progress: Progress<'_>,
+) -> Result<Diagnosis, DiagnoseError> {
+    let started = Instant::now();
+    // 1. The recording matched to the sensors, split into training and held-out orbits.
+    let obs = Observations::new(recording, model.scenario(), opts.holdout_orbits)?;
+    let mut notes = Vec::new();
+    let validate = obs.split.can_validate();
+    if !validate {
+        notes.push(format!(
+            "the recording covers {} whole orbit(s) of {:.1} s; held-out validation needs at \
+             least two (one to fit, one to check), so only the baseline and the mismatches \
+             are reported",
+            obs.split.orbits, obs.split.period_s
+        ));
+    }
+
+    // 2. The baseline.
+    progress("baseline", 0, 1);
+    let base = baseline(model, &obs, validate, &mut notes)?;
+    let warnings = noise_warnings(&obs, &base, validate);
+    let problem = Problem::new(&obs, base.noise.clone(), base.steps);
+    let (mut report, mut series) = baseline_report(&obs, &base, &problem, opts, notes, warnings);
+    progress("baseline", 1, 1);
+    if !validate {
+        report.series = series;
+        report.time_s = started.elapsed().as_secs_f64();
+        return Ok(report);
+    }
+    let reference = Reference {
+        train_chi2: report.baseline.chi2,
+        holdout_chi2: problem.chi2(&base.pred, Part::Holdout),
+        pred: &base.pred,
+    };
+
+    // 3. Candidates, thermostats started from the data.
+    let hints = heater_hints(&obs, &base.residuals, &base.noise, &base.node_temps_k);
+    let channels: Vec<(String, bool)> = obs
+        .channels
+        .iter()
+        .map(|c| (c.name.clone(), c.is_temperature))
+        .collect();
+    let cands = effects::candidates(model, &channels, &hints);
+    let search_started = Instant::now();
+
+    // 4. Ranking; 5. the leading candidates fitted.
+    let ranked = search::rank(
+        &problem,
+        model,
+        &cands,
+        &problem.train_residuals(&base.pred),
+        progress,
+    );
+    let score = |i: usize| reference.train_chi2 - ranked[i].best.as_ref().unwrap().0;
+    let mut order: Vec<usize> = (0..cands.len())
+        .filter(|&i| ranked[i].best.is_some())
+        .collect();
+    order.sort_by(|&a, &b| score(b).total_cmp(&score(a)).then(a.cmp(&b)));
+    let to_fit: Vec<usize> = order
+        .into_iter()
+        .filter(|&i| score(i) > 0.0)
+        .take(opts.fits)
+        .collect();
+    let fitted = search::fit_leading(&problem, model, &cands, &ranked, &to_fit, progress);
+
+    // 6. Selection: single effects, then a pair by forward selection.
+    let (mut reports, singles) = judge_singles(
+        &problem, &reference, &cands, &ranked, &to_fit, &fitted, opts,
+    );
+    let mut best: Option<Hypothesis> = None;
+    if let Some(first) = singles.first() {
+        if explains(&obs, &base.noise, opts, first) {
+            best = Some(first.clone());
+        } else {
+            match search::best_pair(&problem, model, &cands, &ranked, first, opts, progress) {
+                Some(p) if explains(&obs, &base.noise, opts, &p) => best = Some(p),
+                Some(p) => report.notes.push(format!(
+                    "{} with {} improves on either alone but leaves a structured residual",
+                    cands[p.members[0]].label(),
+                    cands[p.members[1]].label()
+                )),
+                None => {}
+            }
+            if best.is_none() {
+                report.notes.push(format!(
+                    "the best candidate, {}, improves the fit (BIC −{:.0}) but does not bring the \
+                     held-out orbits to the noise; no effect of the vocabulary, alone or in a \
+                     pair, explains the residual",
+                    cands[first.members[0]].label(),
+                    problem.bic_gain(first, reference.train_chi2, first.theta.len())
+                ));
+            }
+        }
+    }
+
+    // 7. The verdict, the findings and the corrected model.
+    if let Some(h) = &best {
+        let names = channel_names(&obs);
+        let res = obs.residuals(&h.pred);
+        report.verdict = Verdict::Explained;
+        report.heldout_rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Holdout));
+        report.rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Train));
+        report.remaining = data::mismatches(&obs, &res, &base.noise, opts.noise_ratio);
+        report.findings = findings(
+            &problem,
+            &reference,
+            &cands,
+            &singles,
+            h,
+            &report.heldout_rmse,
+        );
+        // The corrected series over the whole recording (tail included).
+        let whole: Arc<[f64]> = obs.time_s.clone().into();
+        let (p, _) = predict(&h.model, &whole, &[], u64::MAX).map_err(DiagnoseError::Corrected)?;
+        series.corrected = obs.channels.iter().map(|c| p[c.sensor].clone()).collect();
+        report.corrected = Some(h.model.clone());
+    }
+    settle_candidates(&mut reports, &cands, best.as_ref());
     report.candidates = reports;
     report.series = series;
     report.time_per_candidate_s =
         search_started.elapsed().as_secs_f64() / cands.len().max(1) as f64;
     report.time_s = started.elapsed().as_secs_f64();
     Ok(report)
-}
-
-/// The training χ² a start point `s` reaches (residuals `r1`), and, for an effect with
-/// a null, the best point on the line from the null through `s` under a linear model
-/// of the change (r(α) = r0 − α (r0 − r1)), within the bounds.
-fn rank_point(r0: &[f64], r1: &[f64], c: &Candidate, s: &[f64]) -> Vec<(f64, Vec<f64>)> {
-    let x2_0: f64 = r0.iter().map(|v| v * v).sum();
-    let x2_1: f64 = r1.iter().map(|v| v * v).sum();
-    let mut out = vec![(x2_1, s.to_vec())];
-    let Some(null) = &c.null else { return out };
-    let (mut rd, mut dd) = (0.0, 0.0);
-    for (a, b) in r0.iter().zip(r1) {
-        let d = a - b;
-        rd += a * d;
-        dd += d * d;
-    }
-    if dd.is_nan() || dd <= 0.0 {
-        return out;
-    }
-    // The largest α that keeps every parameter within its bounds.
-    let mut alpha_max = f64::INFINITY;
-    for (i, p) in c.params.iter().enumerate() {
-        let dir = s[i] - null[i];
-        if dir > 0.0 {
-            alpha_max = alpha_max.min((p.upper - null[i]) / dir);
-        } else if dir < 0.0 {
-            alpha_max = alpha_max.min((p.lower - null[i]) / dir);
-        }
-    }
-    let alpha = (rd / dd).clamp(0.0, alpha_max.max(0.0));
-    let theta: Vec<f64> = (0..s.len())
-        .map(|i| (null[i] + alpha * (s[i] - null[i])).clamp(c.params[i].lower, c.params[i].upper))
-        .collect();
-    out.push((x2_0 - (2.0 * alpha * rd - alpha * alpha * dd), theta));
-    out
-}
-
-/// Fits `members` together from `start` on the training orbits, then predicts the
-/// held-out orbits.
-fn fit(
-    problem: &Problem<'_>,
-    model: &Model,
-    cands: &[Candidate],
-    members: &[usize],
-    start: &[f64],
-) -> Result<Hypothesis, String> {
-    let refs: Vec<&Candidate> = members.iter().map(|&i| &cands[i]).collect();
-    let comp = Composite::new(model, &refs).map_err(|e| e.to_string())?;
-    let lower: Vec<f64> = comp.params.iter().map(|p| p.lower).collect();
-    let upper: Vec<f64> = comp.params.iter().map(|p| p.upper).collect();
-    let steps: Vec<f64> = comp.params.iter().map(|p| p.step).collect();
-    let f = |theta: &[f64]| -> Result<Vec<f64>, String> {
-        let m = comp.model_at(theta).map_err(|e| e.to_string())?;
-        let pred = problem.predict(&m, &problem.train_times)?;
-        Ok(problem.train_residuals(&pred))
-    };
-    let opts = lm::LmOptions {
-        max_iterations: 40,
-        ftol: 1e-6,
-        xtol: 1e-4,
-        cost_floor: 0.0,
-    };
-    let fit = lm::minimize(f, start, &lower, &upper, &steps, opts)?;
-    let m = comp.model_at(&fit.x).map_err(|e| e.to_string())?;
-    let pred = problem.predict(&m, &problem.all_times)?;
-    Ok(Hypothesis {
-        members: members.to_vec(),
-        theta: fit.x.clone(),
-        train_chi2: problem.chi2(&pred, Part::Train),
-        holdout_chi2: problem.chi2(&pred, Part::Holdout),
-        fit,
-        pred,
-        model: m,
-    })
 }
 
 /// Thermostat start points: the channel with the most warming residual in the

@@ -9,8 +9,8 @@ use std::path::Path;
 
 use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use crate::gear::GearPair;
-use crate::sample::{Cadence, Sample, Sampler, Want};
-use crate::sim::{Observer, ObserverResult, RunStart, RunStats, StepView};
+use crate::run::sample::{Cadence, Sample, Sampler, Want};
+use crate::run::sim::{Observer, ObserverResult, RunStart, RunStats, StepView};
 
 pub struct CsvExport {
     file: Option<AtomicFile>,

@@ -33,8 +33,8 @@ use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
 use super::protobuf::Encoder;
 use super::scene;
 use crate::gear::{GearPair, MeshState};
-use crate::sample::{Cadence, Sample, Sampler, Want};
-use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView};
+use crate::run::sample::{Cadence, Sample, Sampler, Want};
+use crate::run::sim::{Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView};
 use crate::thermal::ThermalModel;
 
 /// How often the log records the state.

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::scenario::Scenario;
+use crate::spec::scenario::Scenario;
 use crate::spec::{KeyPath, ScenarioSpec, Seg, SpecError, compile};
 
 /// The reference scenario, embedded in the binary.

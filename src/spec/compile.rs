@@ -4,19 +4,19 @@
 
 use std::collections::HashMap;
 
-use super::keys::{KeyPath, element_keys};
+use super::keys::{ElementKeys, KeyPath, element_keys};
 use super::*;
 use crate::gear::disc::{BoreFit, DiscMaterial};
 use crate::gear::involute::{inv, shifted_tooth_thickness};
 use crate::gear::strain::StrainLaw;
 use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
 use crate::orbit::{CircularEnvironment, Incidence, Orbit, Profile};
-use crate::quantity::{self as q, Quantity, Rule};
-use crate::scenario::{
+use crate::spec::quantity::{self as q, Quantity, Rule};
+use crate::spec::scenario::SolverSettings;
+use crate::spec::scenario::{
     Bindings, DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, RunControl, Scenario, Sensor,
     SensorTarget,
 };
-use crate::sim::SolverSettings;
 use crate::thermal::iteration::{
     DENSE_MAX_NODES, LinearSolver, SPARSE_MAX_FLOPS, direct_fill_estimate,
 };
@@ -104,7 +104,7 @@ impl Cx {
         }
     }
 
-    /// `v` checked by the rule of quantity `q` (see [`crate::quantity`]), with its
+    /// `v` checked by the rule of quantity `q` (see [`crate::spec::quantity`]), with its
     /// error text.
     fn quantity(&self, q: &Quantity, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
         match q.rule {
@@ -255,7 +255,7 @@ impl Cx {
 
 // ---------------------------------------------------------------- validation
 
-pub use crate::quantity::{
+pub use crate::spec::quantity::{
     MAX_AREA_M2, MAX_CAPACITANCE_J_PER_K, MAX_CONDUCTANCE_W_PER_K, MAX_POWER_W,
     MIN_CAPACITANCE_J_PER_K,
 };
@@ -278,11 +278,168 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let run = run_control(cx, &raw.run, period_s)?;
     let solver = solver_settings(cx, &raw.solver)?;
 
-    // Nodes.
+    let (table, nodes, boundaries) =
+        nodes_and_boundaries(cx, &keys, raw.node, raw.boundary, space_sink_k)?;
+    let diffusion = |p: &KeyPath, name: &str| table.diffusion(cx, p, name);
+    let (conductors, radiators) = links(cx, &keys, &table, &raw.conductor, &raw.radiation)?;
+    // Modes before loads, which may refer to them.
+    let modes = modes(cx, &keys, raw.mode)?;
+    let sections = LoadSections {
+        sun: raw.sun,
+        albedo: raw.albedo,
+        earth_ir: raw.earth_ir,
+        dissipation: raw.dissipation,
+    };
+    let (loads, bindings) = loads(cx, &keys, &table, sections, &modes, view_factor_default)?;
+    let heaters = heaters(cx, &keys, &table, raw.heater)?;
+
+    // Gear pairs.
+    let mut gears = Vec::new();
+    for (i, g) in raw.gear_pair.into_iter().enumerate() {
+        let p = KeyPath::new("gear_pair").elem(i, &keys.gear_pair[i]);
+        let pair = gear_pair(cx, &p, g, i, &nodes, &diffusion)?;
+        if gears.iter().any(|x: &GearPair| x.name == pair.name) {
+            return Err(cx.err(
+                &KeyPath::new("gear_pair").at(i).key("name"),
+                format!("gear pair `{}` is defined twice", pair.name),
+            ));
+        }
+        gears.push(pair);
+    }
+
+    // Sensors (after the gear pairs they may name).
+    let sensors = sensors(cx, raw.sensor, &keys.sensor, &gears, &diffusion)?;
+
+    let network = Network {
+        nodes,
+        boundaries,
+        conductors,
+        radiators,
+        loads,
+        heaters,
+    };
+    // An explicit direct solver must fit the network.
+    let sp = KeyPath::new("solver");
+    let n = network.nodes.len();
+    match solver.linear {
+        LinearSolver::Dense if n > DENSE_MAX_NODES => {
+            return Err(cx.err(
+                &sp.key("linear"),
+                format!(
+                    "\"dense\" takes 16 n² bytes ({:.1} GB) and O(n³) per factorisation for {n} nodes; it is limited to {DENSE_MAX_NODES} nodes: use \"iterative\" or \"auto\"",
+                    16.0 * (n * n) as f64 / 1e9
+                ),
+            ));
+        }
+        LinearSolver::Sparse => {
+            let (fill, flops) = direct_fill_estimate(&crate::thermal::Compiled::new(&network));
+            if flops > SPARSE_MAX_FLOPS {
+                return Err(cx.err(
+                    &sp.key("linear"),
+                    format!(
+                        "the sparse LU of this network would fill in to about {} entries and take about {} operations per factorisation (the limit is {}): use \"iterative\" or \"auto\"",
+                        num(fill as f64),
+                        num(flops),
+                        num(SPARSE_MAX_FLOPS)
+                    ),
+                ));
+            }
+        }
+        _ => {}
+    }
+
+    Ok(Scenario {
+        gears,
+        bindings,
+        name: raw.scenario.name,
+        description: raw.scenario.description,
+        thermal: ThermalModel {
+            environment: environment.into(),
+            network,
+            modes,
+        },
+        run,
+        solver,
+        sensors,
+    })
+}
+
+/// The names of a network's nodes, diffusion and boundary, as the spec's elements
+/// refer to them.
+struct NodeTable {
+    names: HashMap<String, NodeRef>,
+}
+
+impl NodeTable {
+    /// The node `name` (at key `p`).
+    fn lookup(&self, cx: &Cx, p: &KeyPath, name: &str) -> Result<NodeRef, SpecError> {
+        self.names.get(name).copied().ok_or_else(|| {
+            let mut known: Vec<&str> = self.names.keys().map(String::as_str).collect();
+            known.sort();
+            cx.err(
+                p,
+                format!("unknown node `{name}` (known: {})", known.join(", ")),
+            )
+        })
+    }
+
+    /// The diffusion node `name` (at key `p`): a boundary is refused.
+    fn diffusion(&self, cx: &Cx, p: &KeyPath, name: &str) -> Result<usize, SpecError> {
+        match self.lookup(cx, p, name)? {
+            NodeRef::Diffusion(i) => Ok(i),
+            NodeRef::Boundary(_) => Err(cx.err(
+                p,
+                format!("`{name}` is a boundary node; this needs a diffusion node"),
+            )),
+        }
+    }
+
+    /// The two ends of a link (`between` at element `p`): two different nodes, not
+    /// both boundaries.
+    fn pair(
+        &self,
+        cx: &Cx,
+        p: &KeyPath,
+        between: &[String],
+    ) -> Result<(NodeRef, NodeRef), SpecError> {
+        let bp = p.key("between");
+        if between.len() != 2 {
+            return Err(cx.err(
+                &bp,
+                format!(
+                    "lists {} node(s); a link joins exactly two: between = [\"a\", \"b\"]",
+                    between.len()
+                ),
+            ));
+        }
+        let a = self.lookup(cx, &bp.at(0), &between[0])?;
+        let b = self.lookup(cx, &bp.at(1), &between[1])?;
+        if a == b {
+            return Err(cx.err(&bp, format!("links `{}` to itself", between[0])));
+        }
+        if matches!((a, b), (NodeRef::Boundary(_), NodeRef::Boundary(_))) {
+            return Err(cx.err(
+                &bp,
+                "links two boundary nodes; it would carry no heat the model tracks",
+            ));
+        }
+        Ok((a, b))
+    }
+}
+
+/// `[[node]]` and `[[boundary]]` (after the built-in `space` at `space_sink_k`), and
+/// the table of their names.
+fn nodes_and_boundaries(
+    cx: &Cx,
+    keys: &ElementKeys,
+    node_specs: Vec<NodeSpec>,
+    boundary_specs: Vec<BoundarySpec>,
+    space_sink_k: f64,
+) -> Result<(NodeTable, Vec<DiffusionNode>, Vec<BoundaryNode>), SpecError> {
     let mut names: HashMap<String, NodeRef> = HashMap::new();
     let np = KeyPath::new("node");
     let mut nodes = Vec::new();
-    for (i, n) in raw.node.into_iter().enumerate() {
+    for (i, n) in node_specs.into_iter().enumerate() {
         let p = np.elem(i, &keys.node[i]);
         check_name(cx, &np.at(i).key("name"), &n.name, &names)?;
         let node = DiffusionNode {
@@ -317,7 +474,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         temperature_k: Profile::Constant(space_sink_k),
     }];
     names.insert(SPACE.to_string(), NodeRef::Boundary(0));
-    for (i, b) in raw.boundary.into_iter().enumerate() {
+    for (i, b) in boundary_specs.into_iter().enumerate() {
         let p = bp.elem(i, &keys.boundary[i]);
         if b.name == SPACE {
             return Err(cx.err(
@@ -335,54 +492,21 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             temperature_k: t,
         });
     }
-    let lookup = |p: &KeyPath, name: &str| -> Result<NodeRef, SpecError> {
-        names.get(name).copied().ok_or_else(|| {
-            let mut known: Vec<&str> = names.keys().map(String::as_str).collect();
-            known.sort();
-            cx.err(
-                p,
-                format!("unknown node `{name}` (known: {})", known.join(", ")),
-            )
-        })
-    };
-    let diffusion = |p: &KeyPath, name: &str| -> Result<usize, SpecError> {
-        match lookup(p, name)? {
-            NodeRef::Diffusion(i) => Ok(i),
-            NodeRef::Boundary(_) => Err(cx.err(
-                p,
-                format!("`{name}` is a boundary node; this needs a diffusion node"),
-            )),
-        }
-    };
-    let pair = |p: &KeyPath, between: &[String]| -> Result<(NodeRef, NodeRef), SpecError> {
-        let bp = p.key("between");
-        if between.len() != 2 {
-            return Err(cx.err(
-                &bp,
-                format!(
-                    "lists {} node(s); a link joins exactly two: between = [\"a\", \"b\"]",
-                    between.len()
-                ),
-            ));
-        }
-        let a = lookup(&bp.at(0), &between[0])?;
-        let b = lookup(&bp.at(1), &between[1])?;
-        if a == b {
-            return Err(cx.err(&bp, format!("links `{}` to itself", between[0])));
-        }
-        if matches!((a, b), (NodeRef::Boundary(_), NodeRef::Boundary(_))) {
-            return Err(cx.err(
-                &bp,
-                "links two boundary nodes; it would carry no heat the model tracks",
-            ));
-        }
-        Ok((a, b))
-    };
+    Ok((NodeTable { names }, nodes, boundaries))
+}
 
+/// `[[conductor]]` and `[[radiation]]`.
+fn links(
+    cx: &Cx,
+    keys: &ElementKeys,
+    table: &NodeTable,
+    conductor_specs: &[ConductorSpec],
+    radiation_specs: &[RadiationSpec],
+) -> Result<(Vec<Conductor>, Vec<Radiator>), SpecError> {
     let mut conductors = Vec::new();
-    for (i, c) in raw.conductor.iter().enumerate() {
+    for (i, c) in conductor_specs.iter().enumerate() {
         let p = KeyPath::new("conductor").elem(i, &keys.conductor[i]);
-        let (a, b) = pair(&p, &c.between)?;
+        let (a, b) = table.pair(cx, &p, &c.between)?;
         conductors.push(Conductor {
             a,
             b,
@@ -394,9 +518,9 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         });
     }
     let mut radiators = Vec::new();
-    for (i, r) in raw.radiation.iter().enumerate() {
+    for (i, r) in radiation_specs.iter().enumerate() {
         let p = KeyPath::new("radiation").elem(i, &keys.radiation[i]);
-        let (a, b) = pair(&p, &r.between)?;
+        let (a, b) = table.pair(cx, &p, &r.between)?;
         let ea = cx.product(
             &p,
             (r.emissivity_area_m2, "emissivity_area_m2"),
@@ -411,9 +535,13 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         });
     }
 
-    // Modes (before loads, which may refer to them).
+    Ok((conductors, radiators))
+}
+
+/// `[[mode]]`: named windows of mission time.
+fn modes(cx: &Cx, keys: &ElementKeys, specs: Vec<ModeSpec>) -> Result<Vec<Mode>, SpecError> {
     let mut modes = Vec::new();
-    for (i, m) in raw.mode.into_iter().enumerate() {
+    for (i, m) in specs.into_iter().enumerate() {
         let p = KeyPath::new("mode").elem(i, &keys.mode[i]);
         if ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
             return Err(cx.err(
@@ -459,7 +587,29 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         });
     }
 
-    // Loads.
+    Ok(modes)
+}
+
+/// The load sections of a spec, in the order their loads are compiled.
+struct LoadSections {
+    sun: Vec<SunSpec>,
+    albedo: Vec<AlbedoSpec>,
+    earth_ir: Vec<EarthIrSpec>,
+    dissipation: Vec<DissipationSpec>,
+}
+
+/// The loads (`[[sun]]`, `[[albedo]]`, `[[earth_ir]]`, `[[dissipation]]`, in that
+/// order) and where each element landed among them ([`Bindings`]). Earth-facing loads
+/// take `view_factor_default` ((R/(R+h))²) unless they give one.
+fn loads(
+    cx: &Cx,
+    keys: &ElementKeys,
+    table: &NodeTable,
+    raw: LoadSections,
+    modes: &[Mode],
+    view_factor_default: f64,
+) -> Result<(Vec<Load>, Bindings), SpecError> {
+    let diffusion = |p: &KeyPath, name: &str| table.diffusion(cx, p, name);
     let mut loads = Vec::new();
     let load_name = |given: Option<String>, kind: &str, node: &str, i: usize| {
         given.unwrap_or_else(|| {
@@ -590,8 +740,19 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
             },
         });
     }
+    Ok((loads, bindings))
+}
+
+/// `[[heater]]`: thermostat-controlled heaters.
+fn heaters(
+    cx: &Cx,
+    keys: &ElementKeys,
+    table: &NodeTable,
+    specs: Vec<HeaterSpec>,
+) -> Result<Vec<Heater>, SpecError> {
+    let diffusion = |p: &KeyPath, name: &str| table.diffusion(cx, p, name);
     let mut heaters = Vec::new();
-    for (i, h) in raw.heater.into_iter().enumerate() {
+    for (i, h) in specs.into_iter().enumerate() {
         let p = KeyPath::new("heater").elem(i, &keys.heater[i]);
         let node = diffusion(&p.key("node"), &h.node)?;
         let sensor_node = match &h.sensor_node {
@@ -611,75 +772,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         });
     }
 
-    // Gear pairs.
-    let mut gears = Vec::new();
-    for (i, g) in raw.gear_pair.into_iter().enumerate() {
-        let p = KeyPath::new("gear_pair").elem(i, &keys.gear_pair[i]);
-        let pair = gear_pair(cx, &p, g, i, &nodes, &diffusion)?;
-        if gears.iter().any(|x: &GearPair| x.name == pair.name) {
-            return Err(cx.err(
-                &KeyPath::new("gear_pair").at(i).key("name"),
-                format!("gear pair `{}` is defined twice", pair.name),
-            ));
-        }
-        gears.push(pair);
-    }
-
-    // Sensors (after the gear pairs they may name).
-    let sensors = sensors(cx, raw.sensor, &keys.sensor, &gears, &diffusion)?;
-
-    let network = Network {
-        nodes,
-        boundaries,
-        conductors,
-        radiators,
-        loads,
-        heaters,
-    };
-    // An explicit direct solver must fit the network.
-    let sp = KeyPath::new("solver");
-    let n = network.nodes.len();
-    match solver.linear {
-        LinearSolver::Dense if n > DENSE_MAX_NODES => {
-            return Err(cx.err(
-                &sp.key("linear"),
-                format!(
-                    "\"dense\" takes 16 n² bytes ({:.1} GB) and O(n³) per factorisation for {n} nodes; it is limited to {DENSE_MAX_NODES} nodes: use \"iterative\" or \"auto\"",
-                    16.0 * (n * n) as f64 / 1e9
-                ),
-            ));
-        }
-        LinearSolver::Sparse => {
-            let (fill, flops) = direct_fill_estimate(&crate::thermal::Compiled::new(&network));
-            if flops > SPARSE_MAX_FLOPS {
-                return Err(cx.err(
-                    &sp.key("linear"),
-                    format!(
-                        "the sparse LU of this network would fill in to about {} entries and take about {} operations per factorisation (the limit is {}): use \"iterative\" or \"auto\"",
-                        num(fill as f64),
-                        num(flops),
-                        num(SPARSE_MAX_FLOPS)
-                    ),
-                ));
-            }
-        }
-        _ => {}
-    }
-
-    Ok(Scenario {
-        gears,
-        bindings,
-        name: raw.scenario.name,
-        description: raw.scenario.description,
-        thermal: ThermalModel {
-            environment: environment.into(),
-            network,
-            modes,
-        },
-        run,
-        solver,
-        sensors,
-    })
+    Ok(heaters)
 }
 
 /// The sensors: recording columns read as a node's temperature (with a lag and an
@@ -929,7 +1022,7 @@ fn solver_settings(cx: &Cx, solver_spec: &SolverSpec) -> Result<SolverSettings, 
 
 /// Every name a scenario gives (scenario, nodes, boundaries, conductors, radiative
 /// couplings, loads, heaters, modes, gear pairs, sensor columns), checked by the one
-/// rule [`crate::scenario::check_name`]: names become file names (the default log,
+/// rule [`crate::spec::scenario::check_name`]: names become file names (the default log,
 /// `diagnose`'s `residuals-<column>.svg`), log fields, CSV headers, key paths and
 /// terminal text. The description, free text, may hold no control characters (no
 /// escape sequences reach a terminal).
@@ -1003,7 +1096,7 @@ fn check_names(cx: &Cx, raw: &ScenarioSpec) -> Result<(), SpecError> {
         )
     }));
     for (p, name) in all {
-        crate::scenario::check_name(name).map_err(|m| cx.err(&p, m))?;
+        crate::spec::scenario::check_name(name).map_err(|m| cx.err(&p, m))?;
     }
     let d = &raw.scenario.description;
     if let Some(c) = d

@@ -1,7 +1,7 @@
 //! The scenario as the user wrote it: every key of a scenario file, nothing derived
 //! (α and A kept apart, tooth thinning as thinning, view factors and run length left to
 //! what the orbit gives). [`compile`] turns a spec into the validated numeric model
-//! ([`crate::scenario::Scenario`]); the checks live there, whatever built the spec (a TOML
+//! ([`crate::spec::scenario::Scenario`]); the checks live there, whatever built the spec (a TOML
 //! file, `--set`, a program), and its errors name the key path. `io::scenario_toml`
 //! reads TOML into a spec and maps those key paths back to file:line:column.
 //!
@@ -9,7 +9,11 @@
 
 pub(crate) mod compile;
 pub mod keys;
+pub mod model;
 pub mod params;
+pub mod quantity;
+pub mod scenario;
+pub mod validate;
 
 pub(crate) use compile::check;
 pub use compile::{SpecError, compile};

@@ -8,7 +8,7 @@ use std::borrow::Cow;
 
 use super::keys::{ElementKeys, Part, element_keys, parse_path, quote_key};
 use super::*;
-use crate::quantity::{self as q, Quantity};
+use crate::spec::quantity::{self as q, Quantity};
 
 /// How a number is stored in the spec.
 pub enum Slot<'a> {
@@ -32,7 +32,7 @@ pub enum Default {
 }
 
 /// Unit and valid range of a value, for `orbitlash params` and `scenarios/README.md`:
-/// those of its quantity in the table ([`crate::quantity`]), or for numbers checked
+/// those of its quantity in the table ([`crate::spec::quantity`]), or for numbers checked
 /// only in context (gear geometry, table times, windows), written here.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Meta {

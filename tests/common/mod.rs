@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use orbitlash::io::scenario_toml;
-use orbitlash::scenario::Scenario;
+use orbitlash::spec::scenario::Scenario;
 
 /// A scenario from its parts: `[environment]` keys, `[run]`/`[solver]` keys and the
 /// network body. The orbit is 500 km unless `orbit` is given.

@@ -9,41 +9,15 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::{EnvState, EnvironmentModel, LoadKink};
+pub use crate::spec::scenario::{SolverSettings, fixed_step_advice};
 use crate::thermal::iteration::LinearSolver;
 use crate::thermal::solver::{StepData, StepFailure, Stepper, StepperMemory, W0, W1};
 use crate::thermal::{StepSwitches, ThermalModel};
 
-/// Integration settings. Defaults meet 0.05 K against a step-converged solution on
-/// the reference network (see `tests/core_step_halving.rs`).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SolverSettings {
-    /// Local error per step allowed on any node, K. Default 0.002; typical 1e-4 … 0.01.
-    pub tolerance_k: f64,
-    /// Longest step, s. Default 300; the step is also capped by events.
-    pub max_step_s: f64,
-    /// Adaptive step-size control; when false every step is `max_step_s` (except
-    /// where it lands on an event).
-    pub adaptive: bool,
-    /// How the implicit stages solve their linear systems. Default `Auto`: dense up to
-    /// 40 nodes, iterative above (the crossover in `docs/performance.md`).
-    pub linear: LinearSolver,
-}
-
-impl Default for SolverSettings {
-    fn default() -> Self {
-        SolverSettings {
-            tolerance_k: crate::quantity::TOLERANCE_K.default_value(),
-            max_step_s: crate::quantity::MAX_STEP_S.default_value(),
-            adaptive: true,
-            linear: LinearSolver::Auto,
-        }
-    }
-}
-
 /// Steps shorter than this are not attempted, s.
 pub const MIN_STEP_S: f64 = 1e-7;
 
-pub use crate::quantity::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K};
+pub use crate::spec::quantity::{MAX_TOLERANCE_K, MIN_MAX_STEP_S, MIN_TOLERANCE_K};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EventKind {
@@ -339,17 +313,6 @@ pub enum SimError {
     },
     #[error("the step at t = {t_s} s is below the time resolution of the run")]
     TimeResolution { t_s: f64 },
-}
-
-/// What to do about a fixed step longer than a node's time constant `tau_s`.
-pub fn fixed_step_advice(tau_s: f64) -> String {
-    if tau_s >= MIN_MAX_STEP_S {
-        format!("use solver.adaptive = true or a solver.max_step_s below {tau_s:.3e} s")
-    } else {
-        format!(
-            "use solver.adaptive = true (the time constant is below the shortest fixed step allowed, {MIN_MAX_STEP_S} s)"
-        )
-    }
 }
 
 /// Highest temperature a result may reach, K: above the vaporisation point of every

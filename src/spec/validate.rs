@@ -5,15 +5,15 @@
 
 use crate::gear::GearPair;
 use crate::orbit::{CircularEnvironment, Environment, EnvironmentModel, Profile};
-use crate::quantity::{self as q, Quantity};
-use crate::scenario::{
-    MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, Scenario, SensorTarget,
-};
-use crate::sensor::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
-use crate::sim::MIN_MAX_STEP_S;
 use crate::spec::compile::{
     MAX_AREA_M2, MAX_CAPACITANCE_J_PER_K, MAX_CONDUCTANCE_W_PER_K, MAX_PERIOD_S, MAX_POWER_W,
     MIN_CAPACITANCE_J_PER_K, MIN_PERIOD_S,
+};
+use crate::spec::quantity::MIN_MAX_STEP_S;
+use crate::spec::quantity::{self as q, Quantity};
+use crate::spec::quantity::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
+use crate::spec::scenario::{
+    MAX_DURATION_S, MIN_DURATION_S, MIN_OUTPUT_INTERVAL_S, Scenario, SensorTarget,
 };
 use crate::thermal::{LoadKind, NodeRef, ThermalModel, When};
 
@@ -376,12 +376,12 @@ fn gear_pair(k: usize, p: &GearPair, n: usize) -> Result<(), Invalid> {
 
 impl Scenario {
     /// Every name (scenario, nodes, boundaries, loads, heaters, modes, gear pairs,
-    /// sensor columns) by the one rule of [`crate::scenario::check_name`], and a
+    /// sensor columns) by the one rule of [`crate::spec::scenario::check_name`], and a
     /// description without control characters.
     fn check_names(&self) -> Result<(), Invalid> {
         let net = &self.thermal.network;
         let named = |what: &str, i: usize, name: &str| {
-            crate::scenario::check_name(name).map_err(|m| bad(format!("{what}[{i}].name"), m))
+            crate::spec::scenario::check_name(name).map_err(|m| bad(format!("{what}[{i}].name"), m))
         };
         named("scenario", 0, &self.name)?;
         for (i, x) in net.nodes.iter().enumerate() {
@@ -403,7 +403,7 @@ impl Scenario {
             named("gears", i, &x.name)?;
         }
         for (i, x) in self.sensors.iter().enumerate() {
-            crate::scenario::check_name(&x.column)
+            crate::spec::scenario::check_name(&x.column)
                 .map_err(|m| bad(format!("sensors[{i}].column"), m))?;
         }
         if self

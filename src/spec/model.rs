@@ -5,10 +5,10 @@
 //! everything that depends on the changed value (a view factor on the altitude, a run
 //! length in orbits on the period, a tooth thickness on its thinning) follows.
 
-use crate::quantity::{self as q, Quantity};
-use crate::scenario::Scenario;
 use crate::spec::keys::{ElementKeys, element_keys};
 use crate::spec::params::{self, Param, ParamError};
+use crate::spec::quantity::{self as q, Quantity};
+use crate::spec::scenario::Scenario;
 use crate::spec::{
     AlbedoSpec, DissipationSpec, EarthIrSpec, HeaterSpec, KeyPath, ProfileSpec, ScenarioSpec,
     SensorSpec, SpecError, SunSpec, compile,

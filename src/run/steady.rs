@@ -7,7 +7,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::sim::{Setup, SimError, State, Stop};
+use crate::run::sim::{Setup, SimError, State, Stop};
 
 /// Which way to the periodic orbit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,7 +125,7 @@ fn one_orbit(
     period: f64,
     x: &[f64],
     heaters: &[bool],
-    budget: &mut crate::sim::StepBudget,
+    budget: &mut crate::run::sim::StepBudget,
 ) -> Result<(Vec<f64>, Vec<bool>), SimError> {
     let mut s = setup.state_at(t0, x.to_vec());
     s.heaters_on.copy_from_slice(heaters);
@@ -148,7 +148,7 @@ pub fn periodic_orbit(
     opts: SteadyOptions,
 ) -> Result<Periodic, SteadyError> {
     check_repeats(setup.model())?;
-    let mut budget = crate::sim::StepBudget::new(opts.max_steps);
+    let mut budget = crate::run::sim::StepBudget::new(opts.max_steps);
     let t0 = start.t_s;
     let mut x = start.temperatures_k.clone();
     let mut heaters = start.heaters_on.clone();

@@ -11,8 +11,8 @@
 
 use crate::gear::{GearPair, MeshState};
 use crate::orbit::{EnvState, EnvironmentModel};
-pub use crate::sim::{Probe, ProbeWork};
-use crate::sim::{RunStart, StepView, mesh_or_nan};
+pub use crate::run::sim::{Probe, ProbeWork};
+use crate::run::sim::{RunStart, StepView, mesh_or_nan};
 use crate::thermal::{Compiled, StepSwitches, ThermalModel};
 
 /// Heat flows at one instant, W.

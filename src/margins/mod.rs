@@ -1,21 +1,23 @@
 //! Monte Carlo margins: each sample is the nominal model with its dispersed values
-//! ([`crate::dispersion::Plan`]), run over a horizon; the smallest backlash of each
+//! ([`crate::margins::dispersion::Plan`]), run over a horizon; the smallest backlash of each
 //! gear pair and when it happened are kept. Samples are independent and evaluated in
 //! parallel (rayon); their results depend only on (seed, index), so any thread count
 //! and any slice of indices give the same numbers. The statistics an engineer signs
 //! (percentiles, a Wilks tolerance bound, Clopper–Pearson intervals, Spearman
 //! sensitivities) are in [`stats`].
 
+pub mod dispersion;
+
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
-use crate::dispersion::Plan;
-use crate::model::Model;
+use crate::margins::dispersion::Plan;
 use crate::orbit::EnvironmentModel;
-use crate::sim::{RunStats, Setup, SimError, Stop};
-use crate::summary::{MeshStats, PassFail};
+use crate::run::sim::{RunStats, Setup, SimError, Stop};
+use crate::run::summary::{MeshStats, PassFail};
+use crate::spec::model::Model;
 
 /// How long each sample runs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,7 +105,7 @@ pub fn run_sample(
         Ok(v) => v,
         Err(e) => {
             let why = match &e {
-                crate::dispersion::SampleError::Model { source, path, .. } => {
+                crate::margins::dispersion::SampleError::Model { source, path, .. } => {
                     format!("the model refuses {path} with the other values: {source}")
                 }
                 other => other.to_string(),
@@ -129,13 +131,13 @@ pub fn run_sample(
         Horizon::Mission => sc.run.duration_s,
         Horizon::SteadyState => {
             let period = env.mean_period_s();
-            match crate::steady::periodic_orbit(
+            match crate::run::steady::periodic_orbit(
                 &mut setup,
                 &state,
                 period,
-                crate::steady::SteadyOptions {
+                crate::run::steady::SteadyOptions {
                     max_steps,
-                    ..crate::steady::SteadyOptions::default()
+                    ..crate::run::steady::SteadyOptions::default()
                 },
             ) {
                 Ok(p) => state = p.state,
@@ -150,7 +152,7 @@ pub fn run_sample(
         }
     };
     let mut mesh = MeshStats::last(env.mean_period_s());
-    let mut budget = crate::sim::StepBudget::new(max_steps);
+    let mut budget = crate::run::sim::StepBudget::new(max_steps);
     let run: Result<RunStats, SimError> = setup.run(
         &mut state,
         t_end,
@@ -464,7 +466,7 @@ impl RunIdentity {
     pub fn new(
         scenario_toml: &str,
         sets: &[(String, f64)],
-        sc: &crate::scenario::Scenario,
+        sc: &crate::spec::scenario::Scenario,
         plan: &Plan,
         horizon: Horizon,
     ) -> RunIdentity {
@@ -479,8 +481,8 @@ impl RunIdentity {
             seed: plan.seed,
             samples: plan.samples,
             sampling: match plan.sampling {
-                crate::dispersion::Sampling::Random => "random",
-                crate::dispersion::Sampling::LatinHypercube => "latin_hypercube",
+                crate::margins::dispersion::Sampling::Random => "random",
+                crate::margins::dispersion::Sampling::LatinHypercube => "latin_hypercube",
             }
             .to_string(),
             horizon: match horizon {
@@ -565,11 +567,11 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
         return Err(bad(format!("format `{}`", crate::units::shown(&s.format))));
     }
     let r = &s.run;
-    if !(1..=crate::dispersion::MAX_SAMPLES).contains(&r.samples) {
+    if !(1..=crate::margins::dispersion::MAX_SAMPLES).contains(&r.samples) {
         return Err(bad(format!(
             "the run has {} samples, outside 1 … {}",
             r.samples,
-            crate::dispersion::MAX_SAMPLES
+            crate::margins::dispersion::MAX_SAMPLES
         )));
     }
     let (i, n) = s.shard;
@@ -586,7 +588,7 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
             .map(|(p, _)| ("a gear pair name", p.as_str())),
     );
     for (what, name) in named {
-        crate::scenario::check_name(name).map_err(|m| bad(format!("{what} {m}")))?;
+        crate::spec::scenario::check_name(name).map_err(|m| bad(format!("{what} {m}")))?;
     }
     let mut texts = r
         .dispersed
@@ -659,7 +661,7 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
             let plausible = |v: f64, max: f64| v.is_nan() || v.abs() <= max;
             if !(plausible(p.min_backlash_um, MAX_BACKLASH_UM)
                 && plausible(p.min_margin_um, 2.0 * MAX_BACKLASH_UM)
-                && p.t_min_s.abs() <= 2.0 * crate::scenario::MAX_DURATION_S
+                && p.t_min_s.abs() <= 2.0 * crate::spec::scenario::MAX_DURATION_S
                 && (0.0..=360.0).contains(&p.orbit_phase_deg))
             {
                 return Err(sample(format!(
@@ -743,7 +745,7 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
             });
         }
     }
-    if !(1..=crate::dispersion::MAX_SAMPLES).contains(&id.samples) {
+    if !(1..=crate::margins::dispersion::MAX_SAMPLES).contains(&id.samples) {
         return Err(MergeError::NotAShard {
             file: first_file.clone(),
             why: format!("the run has {} samples", id.samples),

@@ -3,8 +3,8 @@
 //! extremes between steps are not missed.
 
 use crate::gear::MeshState;
-use crate::sample::{Cadence, Sampler, Want};
-use crate::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView};
+use crate::run::sample::{Cadence, Sampler, Want};
+use crate::run::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeStats {
@@ -605,8 +605,8 @@ pub struct SolverSummary {
 impl RunSummary {
     /// The summary of a run of `scenario` from its statistics and observers.
     pub fn new(
-        scenario: &crate::scenario::Scenario,
-        stats: &crate::sim::RunStats,
+        scenario: &crate::spec::scenario::Scenario,
+        stats: &crate::run::sim::RunStats,
         window: &WindowStats,
         mesh: &MeshStats,
         wall_time_s: f64,

@@ -8,75 +8,25 @@
 //! scenario at the times a [`Cadence`] says (every 30 s, or a recording's own times),
 //! integrating each lag exactly over every step of the run.
 
-use crate::sample::{Cadence, Sample, Sampler, Want};
-use crate::sim::{Observer, ObserverResult, RunStart, StepView};
+use crate::run::sample::{Cadence, Sample, Sampler, Want};
+use crate::run::sim::{Observer, ObserverResult, RunStart, StepView};
+// The sensor types are part of the validated scenario (`spec::scenario`); kept
+// reachable here, where they are read.
+pub use crate::spec::quantity::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
+pub use crate::spec::scenario::{ColumnUnit, DERIVED_QUANTITIES, Sensor, SensorTarget};
 
-/// A recording column and what it measures.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Sensor {
-    pub column: String,
-    pub target: SensorTarget,
-    /// Constant bias added to the reading, K (temperature sensors; 0 for none).
-    pub offset_k: f64,
-    /// First-order time constant of the instrument, s (temperature sensors; 0: it
-    /// reads its node's temperature instantly).
-    pub tau_s: f64,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-pub enum SensorTarget {
-    /// A diffusion node's temperature.
-    Node(usize),
-    /// Gear pair k's exact backlash (the smallest over a mesh cycle).
-    Backlash(usize),
-}
-
-/// Derived quantities a sensor may name (`quantity = "…"`).
-pub const DERIVED_QUANTITIES: [&str; 1] = ["backlash_um"];
-
-/// The unit of a recording column.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ColumnUnit {
-    Celsius,
-    Kelvin,
-    Micrometre,
-}
-
-pub use crate::quantity::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
-
-impl Sensor {
-    /// A sensor reading `target` directly (no offset, no lag).
-    pub fn new(column: impl Into<String>, target: SensorTarget) -> Sensor {
-        Sensor {
-            column: column.into(),
-            target,
-            offset_k: 0.0,
-            tau_s: 0.0,
-        }
-    }
-
-    /// Temperatures are in °C unless the column name ends in `_k`; backlash in µm.
-    pub fn unit(&self) -> ColumnUnit {
-        match self.target {
-            SensorTarget::Backlash(_) => ColumnUnit::Micrometre,
-            SensorTarget::Node(_) if self.column.ends_with("_k") => ColumnUnit::Kelvin,
-            SensorTarget::Node(_) => ColumnUnit::Celsius,
-        }
-    }
-
-    /// The reading for a (lagged) temperature `sensed_k` or for the sample's backlash,
-    /// in the column's unit.
-    fn reading(&self, sensed_k: f64, s: &Sample) -> f64 {
-        match self.target {
-            SensorTarget::Node(_) => {
-                let t = sensed_k + self.offset_k;
-                match self.unit() {
-                    ColumnUnit::Kelvin => t,
-                    _ => crate::units::k_to_c(t),
-                }
+/// What `sensor` reads for a (lagged) temperature `sensed_k` or for the sample's
+/// backlash, in the column's unit.
+fn reading(sensor: &Sensor, sensed_k: f64, s: &Sample) -> f64 {
+    match sensor.target {
+        SensorTarget::Node(_) => {
+            let t = sensed_k + sensor.offset_k;
+            match sensor.unit() {
+                ColumnUnit::Kelvin => t,
+                _ => crate::units::k_to_c(t),
             }
-            SensorTarget::Backlash(k) => s.mesh[k].backlash_exact_m * 1e6,
         }
+        SensorTarget::Backlash(k) => s.mesh[k].backlash_exact_m * 1e6,
     }
 }
 
@@ -182,7 +132,7 @@ impl Observer for Readings {
         if let Some(s) = self.sampler.start(r) {
             self.times_s.push(s.t_s);
             for (k, sensor) in self.sensors.iter().enumerate() {
-                self.values[k].push(sensor.reading(self.sensed_k[k], s));
+                self.values[k].push(reading(sensor, self.sensed_k[k], s));
             }
         }
         Ok(())
@@ -209,7 +159,7 @@ impl Observer for Readings {
                     SensorTarget::Node(i) => s.temperatures_k[i],
                     SensorTarget::Backlash(_) => f64::NAN,
                 };
-                values[k].push(sensor.reading(sensed, s));
+                values[k].push(reading(sensor, sensed, s));
             }
             Ok::<_, std::convert::Infallible>(())
         })?;

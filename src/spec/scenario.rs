@@ -3,8 +3,9 @@
 //! downstream may rely on it being physically valid.
 
 use crate::gear::GearPair;
-use crate::sim::SolverSettings;
+use crate::spec::quantity::MIN_MAX_STEP_S;
 use crate::thermal::ThermalModel;
+use crate::thermal::iteration::LinearSolver;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scenario {
@@ -40,7 +41,95 @@ pub struct RunControl {
     pub output_interval_s: f64,
 }
 
-pub use crate::sensor::{DERIVED_QUANTITIES, Sensor, SensorTarget};
+/// A recording column and what it measures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sensor {
+    pub column: String,
+    pub target: SensorTarget,
+    /// Constant bias added to the reading, K (temperature sensors; 0 for none).
+    pub offset_k: f64,
+    /// First-order time constant of the instrument, s (temperature sensors; 0: it
+    /// reads its node's temperature instantly).
+    pub tau_s: f64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum SensorTarget {
+    /// A diffusion node's temperature.
+    Node(usize),
+    /// Gear pair k's exact backlash (the smallest over a mesh cycle).
+    Backlash(usize),
+}
+
+/// Derived quantities a sensor may name (`quantity = "…"`).
+pub const DERIVED_QUANTITIES: [&str; 1] = ["backlash_um"];
+
+/// The unit of a recording column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ColumnUnit {
+    Celsius,
+    Kelvin,
+    Micrometre,
+}
+
+impl Sensor {
+    /// A sensor reading `target` directly (no offset, no lag).
+    pub fn new(column: impl Into<String>, target: SensorTarget) -> Sensor {
+        Sensor {
+            column: column.into(),
+            target,
+            offset_k: 0.0,
+            tau_s: 0.0,
+        }
+    }
+
+    /// Temperatures are in °C unless the column name ends in `_k`; backlash in µm.
+    pub fn unit(&self) -> ColumnUnit {
+        match self.target {
+            SensorTarget::Backlash(_) => ColumnUnit::Micrometre,
+            SensorTarget::Node(_) if self.column.ends_with("_k") => ColumnUnit::Kelvin,
+            SensorTarget::Node(_) => ColumnUnit::Celsius,
+        }
+    }
+}
+
+/// Integration settings. Defaults meet 0.05 K against a step-converged solution on
+/// the reference network (see `tests/core_step_halving.rs`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverSettings {
+    /// Local error per step allowed on any node, K. Default 0.002; typical 1e-4 … 0.01.
+    pub tolerance_k: f64,
+    /// Longest step, s. Default 300; the step is also capped by events.
+    pub max_step_s: f64,
+    /// Adaptive step-size control; when false every step is `max_step_s` (except
+    /// where it lands on an event).
+    pub adaptive: bool,
+    /// How the implicit stages solve their linear systems. Default `Auto`: dense up to
+    /// 40 nodes, iterative above (the crossover in `docs/performance.md`).
+    pub linear: LinearSolver,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            tolerance_k: crate::spec::quantity::TOLERANCE_K.default_value(),
+            max_step_s: crate::spec::quantity::MAX_STEP_S.default_value(),
+            adaptive: true,
+            linear: LinearSolver::Auto,
+        }
+    }
+}
+
+/// What to do about a fixed step longer than a node's time constant `tau_s`.
+pub fn fixed_step_advice(tau_s: f64) -> String {
+    if tau_s >= MIN_MAX_STEP_S {
+        format!("use solver.adaptive = true or a solver.max_step_s below {tau_s:.3e} s")
+    } else {
+        format!(
+            "use solver.adaptive = true (the time constant is below the shortest fixed step allowed, {MIN_MAX_STEP_S} s)"
+        )
+    }
+}
 
 /// Longest run, s (about 31.7 years). Beyond it the time of day no longer resolves the
 /// solver's shortest step (1e-7 s) in double precision.
@@ -49,7 +138,7 @@ pub const MAX_DURATION_S: f64 = 1e9;
 /// Shortest run, s.
 pub const MIN_DURATION_S: f64 = 1.0;
 
-pub use crate::quantity::MIN_OUTPUT_INTERVAL_S;
+pub use crate::spec::quantity::MIN_OUTPUT_INTERVAL_S;
 
 /// Longest name of a scenario, node, boundary, load, heater, mode or gear pair.
 pub const MAX_NAME_LEN: usize = 100;
@@ -152,7 +241,7 @@ impl Scenario {
                         "the fixed step of {} s (adaptive = false) exceeds the time constant of node {} ({t:.3e} s): its transients are not resolved; {}",
                         self.solver.max_step_s,
                         net.nodes[i].name,
-                        crate::sim::fixed_step_advice(t)
+                        fixed_step_advice(t)
                     ),
                 });
             }

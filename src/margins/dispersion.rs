@@ -19,10 +19,10 @@ use rand_chacha::ChaCha12Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 use statrs::distribution::{ContinuousCDF, Normal};
 
-use crate::model::{Model, ModelError, ParamId};
 use crate::spec::DispersionSpec;
 use crate::spec::compile::SpecError;
 use crate::spec::keys::KeyPath;
+use crate::spec::model::{Model, ModelError, ParamId};
 
 /// The most samples a plan holds (its Latin hypercube keeps a stratum per sample and
 /// dimension; a margins run reports every sample).

@@ -1,0 +1,508 @@
+//! The candidate search of a diagnosis (steps 4–6 of the module doc): candidates
+//! ranked at their start points, the leading ones fitted, each fit judged against a
+//! reference (the baseline, or the best single effect when a second is tried with it),
+//! and forward selection of a pair when one effect leaves a structured residual.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::data::{Observations, Part};
+use super::effects::{self, Candidate, ParamDef, Setter};
+use super::{Options, Progress, lm, predict};
+use crate::spec::model::{Model, ModelError};
+
+/// A stage's progress, counted from parallel workers: `tick` once per item done.
+struct Counter<'a> {
+    stage: &'static str,
+    total: usize,
+    done: AtomicUsize,
+    progress: Progress<'a>,
+}
+
+impl<'a> Counter<'a> {
+    fn new(stage: &'static str, total: usize, progress: Progress<'a>) -> Counter<'a> {
+        Counter {
+            stage,
+            total,
+            done: AtomicUsize::new(0),
+            progress,
+        }
+    }
+
+    fn tick(&self) {
+        let k = self.done.fetch_add(1, Ordering::Relaxed) + 1;
+        (self.progress)(self.stage, k, self.total);
+    }
+}
+
+/// A model with one or more candidates' effects, parameters concatenated.
+pub(super) struct Composite {
+    base: Model,
+    params: Vec<ParamDef>,
+    setters: Vec<Setter>,
+}
+
+impl Composite {
+    fn new(model: &Model, members: &[&Candidate]) -> Result<Composite, ModelError> {
+        let mut base = model.clone();
+        let edits: Vec<_> = members
+            .iter()
+            .flat_map(|c| c.edits.iter().cloned())
+            .collect();
+        if !edits.is_empty() {
+            base.modify(|s| {
+                for e in &edits {
+                    e(s)
+                }
+            })?;
+        }
+        let mut params = Vec::new();
+        let mut setters = Vec::new();
+        for c in members {
+            let off = params.len();
+            params.extend(c.params.iter().cloned());
+            setters.extend(c.setters.iter().map(|s| Setter {
+                path: s.path.clone(),
+                constant: s.constant,
+                terms: s.terms.iter().map(|&(i, k)| (i + off, k)).collect(),
+            }));
+        }
+        Ok(Composite {
+            base,
+            params,
+            setters,
+        })
+    }
+
+    fn model_at(&self, theta: &[f64]) -> Result<Model, ModelError> {
+        let mut m = self.base.clone();
+        m.set_many(&effects::values(&self.setters, theta))?;
+        Ok(m)
+    }
+}
+
+/// The data a fit needs, shared by every candidate.
+pub(super) struct Problem<'a> {
+    obs: &'a Observations,
+    noise: Vec<f64>,
+    /// Times up to the end of the training orbits, and up to the end of the held-out.
+    train_times: Arc<[f64]>,
+    all_times: Arc<[f64]>,
+    /// Step budget of one simulation of the whole recording.
+    max_steps: u64,
+    /// ln n of the number of training residuals: BIC's price of a parameter.
+    ln_n: f64,
+}
+
+impl<'a> Problem<'a> {
+    /// The fit problem of `obs` with each channel's `noise`; `baseline_steps` (the
+    /// baseline's solver steps) sets the budget of every later simulation.
+    pub(super) fn new(obs: &'a Observations, noise: Vec<f64>, baseline_steps: u64) -> Problem<'a> {
+        let times_to = |keep: &dyn Fn(f64) -> bool| -> Arc<[f64]> {
+            obs.time_s
+                .iter()
+                .copied()
+                .take_while(|&t| keep(t))
+                .collect::<Vec<_>>()
+                .into()
+        };
+        let n_train = obs
+            .values
+            .iter()
+            .map(|v| {
+                v.iter()
+                    .enumerate()
+                    .filter(|(j, x)| x.is_some() && obs.part[*j] == Part::Train)
+                    .count()
+            })
+            .sum::<usize>();
+        Problem {
+            obs,
+            noise,
+            train_times: times_to(&|t| t < obs.split.train_end_s),
+            all_times: times_to(&|t| t <= obs.split.holdout_end_s),
+            max_steps: 20 * baseline_steps + 5000,
+            ln_n: (n_train.max(2) as f64).ln(),
+        }
+    }
+
+    /// Weighted training residuals (recorded − predicted)/noise.
+    pub(super) fn train_residuals(&self, pred: &[Vec<f64>]) -> Vec<f64> {
+        let mut out = Vec::new();
+        for (c, ch) in self.obs.channels.iter().enumerate() {
+            let p = &pred[ch.sensor];
+            for (j, v) in self.obs.values[c].iter().enumerate().take(p.len()) {
+                if let (Some(v), Part::Train) = (v, self.obs.part[j]) {
+                    out.push((v - p[j]) / self.noise[c]);
+                }
+            }
+        }
+        out
+    }
+
+    /// The largest, over channels, drop of the held-out mean square residual from
+    /// `before` to `after`, in units of the channel's noise variance.
+    pub(super) fn material(&self, before: &[Vec<f64>], after: &[Vec<f64>]) -> f64 {
+        let mut best = f64::NEG_INFINITY;
+        for (c, ch) in self.obs.channels.iter().enumerate() {
+            let (b, a) = (&before[ch.sensor], &after[ch.sensor]);
+            let (mut s, mut n) = (0.0, 0usize);
+            for (j, v) in self.obs.values[c]
+                .iter()
+                .enumerate()
+                .take(a.len().min(b.len()))
+            {
+                if let (Some(v), Part::Holdout) = (v, self.obs.part[j]) {
+                    s += ((v - b[j]).powi(2) - (v - a[j]).powi(2)) / self.noise[c].powi(2);
+                    n += 1;
+                }
+            }
+            if n > 0 {
+                best = best.max(s / n as f64);
+            }
+        }
+        best
+    }
+
+    pub(super) fn chi2(&self, pred: &[Vec<f64>], part: Part) -> f64 {
+        let mut s = 0.0;
+        for (c, ch) in self.obs.channels.iter().enumerate() {
+            let p = &pred[ch.sensor];
+            for (j, v) in self.obs.values[c].iter().enumerate().take(p.len()) {
+                if let (Some(v), true) = (v, self.obs.part[j] == part) {
+                    s += ((v - p[j]) / self.noise[c]).powi(2);
+                }
+            }
+        }
+        s
+    }
+
+    pub(super) fn train_residuals_at(
+        &self,
+        comp: &Composite,
+        theta: &[f64],
+    ) -> Result<Vec<f64>, String> {
+        let m = comp.model_at(theta).map_err(|e| e.to_string())?;
+        let pred = self.predict(&m, &self.train_times)?;
+        Ok(self.train_residuals(&pred))
+    }
+
+    pub(super) fn predict(&self, m: &Model, times: &Arc<[f64]>) -> Result<Vec<Vec<f64>>, String> {
+        predict(m, times, &[], self.max_steps)
+            .map(|p| p.0)
+            .map_err(|e| crate::error_chain(&e))
+    }
+}
+
+/// A fitted hypothesis (one or two candidates).
+#[derive(Debug, Clone)]
+pub(super) struct Hypothesis {
+    pub members: Vec<usize>,
+    pub theta: Vec<f64>,
+    pub fit: lm::LmFit,
+    pub train_chi2: f64,
+    pub holdout_chi2: f64,
+    pub pred: Vec<Vec<f64>>,
+    pub model: Model,
+}
+
+/// A candidate's ranking: its best training χ² and parameters (None: it could not be
+/// simulated), the last error, and the wall time, s.
+pub(super) struct Ranking {
+    pub best: Option<(f64, Vec<f64>)>,
+    pub error: String,
+    pub time_s: f64,
+}
+
+/// What a hypothesis is judged against: the baseline, or the best single effect when
+/// a second effect is tried with it.
+pub(super) struct Reference<'p> {
+    pub train_chi2: f64,
+    pub holdout_chi2: f64,
+    pub pred: &'p [Vec<f64>],
+}
+
+/// Why a fitted hypothesis is not accepted over its reference.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Rejection {
+    /// BIC improves by `gain`, not by more than the margin.
+    Bic { gain: f64 },
+    /// The training orbits improve (BIC by `gain`), the held-out ones by only `drop`.
+    Holdout { gain: f64, drop: f64 },
+    /// Significant, but no channel's held-out residual drops by enough.
+    Immaterial,
+}
+
+impl Rejection {
+    /// The reason as the candidate table gives it.
+    pub(super) fn reason(self, opts: &Options) -> String {
+        match self {
+            Rejection::Bic { gain } => format!(
+                "BIC improves by {gain:.1}, not by more than the margin {:.0}",
+                opts.bic_margin
+            ),
+            Rejection::Holdout { gain, drop } => format!(
+                "fits the training orbits (BIC −{gain:.0}) but does not improve \
+                 the held-out orbits (χ² drop {drop:.1} ≤ {:.0})",
+                opts.holdout_margin
+            ),
+            Rejection::Immaterial => format!(
+                "significant but immaterial: lowers no channel's held-out mean \
+                 square residual by {:.0} % of its noise variance",
+                100.0 * opts.min_effect
+            ),
+        }
+    }
+}
+
+impl Problem<'_> {
+    /// The BIC gain of `h` over a reference with training χ² `chi2_ref`, for the
+    /// `k_extra` parameters it adds.
+    pub(super) fn bic_gain(&self, h: &Hypothesis, chi2_ref: f64, k_extra: usize) -> f64 {
+        chi2_ref - h.train_chi2 - k_extra as f64 * self.ln_n
+    }
+
+    /// The one acceptance test, for single effects and pairs alike: `h` (adding
+    /// `k_extra` parameters to `reference`) must win BIC by the margin, lower the
+    /// held-out χ² by the margin, and be material.
+    pub(super) fn judge(
+        &self,
+        h: &Hypothesis,
+        reference: &Reference<'_>,
+        k_extra: usize,
+        opts: &Options,
+    ) -> Result<(), Rejection> {
+        let gain = self.bic_gain(h, reference.train_chi2, k_extra);
+        let drop = reference.holdout_chi2 - h.holdout_chi2;
+        if !(gain > opts.bic_margin) {
+            Err(Rejection::Bic { gain })
+        } else if !(drop > opts.holdout_margin) {
+            Err(Rejection::Holdout { gain, drop })
+        } else if !(self.material(reference.pred, &h.pred) >= opts.min_effect) {
+            Err(Rejection::Immaterial)
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// The best training χ² of candidate `c` (parameters after those of `fixed`, which
+/// keep the values `fixed_theta`) over its start points and, for an effect with a
+/// null, along the line from the null through each (residuals `r0` without it).
+fn best_start(
+    problem: &Problem<'_>,
+    comp: &Composite,
+    c: &Candidate,
+    fixed_theta: &[f64],
+    r0: &[f64],
+) -> (Option<(f64, Vec<f64>)>, String) {
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    let mut err = String::new();
+    for s in &c.starts {
+        let mut theta = fixed_theta.to_vec();
+        theta.extend_from_slice(s);
+        match problem.train_residuals_at(comp, &theta) {
+            Ok(r1) => {
+                for (x2, th) in rank_point(r0, &r1, c, s) {
+                    if best.as_ref().is_none_or(|b| x2 < b.0) {
+                        best = Some((x2, th));
+                    }
+                }
+            }
+            Err(e) => err = e,
+        }
+    }
+    (best, err)
+}
+
+/// Step 4: every candidate's training χ² at its start points, and along the line
+/// from its null through each (the baseline residual `r0` projected on the change it
+/// makes). In parallel; results in candidate order.
+pub(super) fn rank(
+    problem: &Problem<'_>,
+    model: &Model,
+    cands: &[Candidate],
+    r0: &[f64],
+    progress: Progress<'_>,
+) -> Vec<Ranking> {
+    let counter = Counter::new("ranking", cands.len(), progress);
+    cands
+        .par_iter()
+        .map(|c| {
+            let t0 = Instant::now();
+            let (best, error) = match Composite::new(model, &[c]) {
+                Err(e) => (None, e.to_string()),
+                Ok(comp) => best_start(problem, &comp, c, &[], r0),
+            };
+            counter.tick();
+            Ranking {
+                best,
+                error,
+                time_s: t0.elapsed().as_secs_f64(),
+            }
+        })
+        .collect()
+}
+
+/// Step 5: the candidates `to_fit` fitted from their ranking's best point, in
+/// parallel; each result with its wall time, s.
+pub(super) fn fit_leading(
+    problem: &Problem<'_>,
+    model: &Model,
+    cands: &[Candidate],
+    ranked: &[Ranking],
+    to_fit: &[usize],
+    progress: Progress<'_>,
+) -> Vec<(Result<Hypothesis, String>, f64)> {
+    let counter = Counter::new("fitting", to_fit.len(), progress);
+    to_fit
+        .par_iter()
+        .map(|&i| {
+            let t0 = Instant::now();
+            let start = ranked[i].best.as_ref().unwrap().1.clone();
+            let h = fit(problem, model, cands, &[i], &start);
+            counter.tick();
+            (h, t0.elapsed().as_secs_f64())
+        })
+        .collect()
+}
+
+/// Forward selection when the best single effect `first` does not explain the
+/// residual: every other candidate ranked again on the residual `first` leaves, the
+/// leading `opts.pair_partners` fitted together with it, and the best pair that
+/// passes [`Problem::judge`] against `first` returned.
+pub(super) fn best_pair(
+    problem: &Problem<'_>,
+    model: &Model,
+    cands: &[Candidate],
+    ranked: &[Ranking],
+    first: &Hypothesis,
+    opts: &Options,
+    progress: Progress<'_>,
+) -> Option<Hypothesis> {
+    let f0 = first.members[0];
+    let r_first = problem.train_residuals(&first.pred);
+    let counter = Counter::new("pairs: ranking", cands.len(), progress);
+    let second: Vec<Option<(f64, Vec<f64>)>> = (0..cands.len())
+        .into_par_iter()
+        .map(|j| {
+            counter.tick();
+            if j == f0 || ranked[j].best.is_none() {
+                return None;
+            }
+            let comp = Composite::new(model, &[&cands[f0], &cands[j]]).ok()?;
+            best_start(problem, &comp, &cands[j], &first.theta, &r_first).0
+        })
+        .collect();
+    let mut partners: Vec<usize> = (0..cands.len())
+        .filter(|&j| second[j].as_ref().is_some_and(|b| b.0 < first.train_chi2))
+        .collect();
+    partners.sort_by(|&a, &b| {
+        let (xa, xb) = (second[a].as_ref().unwrap().0, second[b].as_ref().unwrap().0);
+        xa.total_cmp(&xb).then(a.cmp(&b))
+    });
+    partners.truncate(opts.pair_partners);
+    let counter = Counter::new("pairs", partners.len(), progress);
+    let pairs: Vec<Result<Hypothesis, String>> = partners
+        .par_iter()
+        .map(|&j| {
+            let mut start = first.theta.clone();
+            start.extend_from_slice(&second[j].as_ref().unwrap().1);
+            let r = fit(problem, model, cands, &[f0, j], &start);
+            counter.tick();
+            r
+        })
+        .collect();
+    let reference = Reference {
+        train_chi2: first.train_chi2,
+        holdout_chi2: first.holdout_chi2,
+        pred: &first.pred,
+    };
+    let mut best: Option<Hypothesis> = None;
+    for h in pairs.into_iter().flatten() {
+        let k_extra = cands[h.members[1]].params.len();
+        if problem.judge(&h, &reference, k_extra, opts).is_ok()
+            && best.as_ref().is_none_or(|b| h.train_chi2 < b.train_chi2)
+        {
+            best = Some(h);
+        }
+    }
+    best
+}
+
+/// The training χ² a start point `s` reaches (residuals `r1`), and, for an effect with
+/// a null, the best point on the line from the null through `s` under a linear model
+/// of the change (r(α) = r0 − α (r0 − r1)), within the bounds.
+fn rank_point(r0: &[f64], r1: &[f64], c: &Candidate, s: &[f64]) -> Vec<(f64, Vec<f64>)> {
+    let x2_0: f64 = r0.iter().map(|v| v * v).sum();
+    let x2_1: f64 = r1.iter().map(|v| v * v).sum();
+    let mut out = vec![(x2_1, s.to_vec())];
+    let Some(null) = &c.null else { return out };
+    let (mut rd, mut dd) = (0.0, 0.0);
+    for (a, b) in r0.iter().zip(r1) {
+        let d = a - b;
+        rd += a * d;
+        dd += d * d;
+    }
+    if dd.is_nan() || dd <= 0.0 {
+        return out;
+    }
+    // The largest α that keeps every parameter within its bounds.
+    let mut alpha_max = f64::INFINITY;
+    for (i, p) in c.params.iter().enumerate() {
+        let dir = s[i] - null[i];
+        if dir > 0.0 {
+            alpha_max = alpha_max.min((p.upper - null[i]) / dir);
+        } else if dir < 0.0 {
+            alpha_max = alpha_max.min((p.lower - null[i]) / dir);
+        }
+    }
+    let alpha = (rd / dd).clamp(0.0, alpha_max.max(0.0));
+    let theta: Vec<f64> = (0..s.len())
+        .map(|i| (null[i] + alpha * (s[i] - null[i])).clamp(c.params[i].lower, c.params[i].upper))
+        .collect();
+    out.push((x2_0 - (2.0 * alpha * rd - alpha * alpha * dd), theta));
+    out
+}
+
+/// Fits `members` together from `start` on the training orbits, then predicts the
+/// held-out orbits.
+pub(super) fn fit(
+    problem: &Problem<'_>,
+    model: &Model,
+    cands: &[Candidate],
+    members: &[usize],
+    start: &[f64],
+) -> Result<Hypothesis, String> {
+    let refs: Vec<&Candidate> = members.iter().map(|&i| &cands[i]).collect();
+    let comp = Composite::new(model, &refs).map_err(|e| e.to_string())?;
+    let lower: Vec<f64> = comp.params.iter().map(|p| p.lower).collect();
+    let upper: Vec<f64> = comp.params.iter().map(|p| p.upper).collect();
+    let steps: Vec<f64> = comp.params.iter().map(|p| p.step).collect();
+    let f = |theta: &[f64]| -> Result<Vec<f64>, String> {
+        let m = comp.model_at(theta).map_err(|e| e.to_string())?;
+        let pred = problem.predict(&m, &problem.train_times)?;
+        Ok(problem.train_residuals(&pred))
+    };
+    let opts = lm::LmOptions {
+        max_iterations: 40,
+        ftol: 1e-6,
+        xtol: 1e-4,
+        cost_floor: 0.0,
+    };
+    let fit = lm::minimize(f, start, &lower, &upper, &steps, opts)?;
+    let m = comp.model_at(&fit.x).map_err(|e| e.to_string())?;
+    let pred = problem.predict(&m, &problem.all_times)?;
+    Ok(Hypothesis {
+        members: members.to_vec(),
+        theta: fit.x.clone(),
+        train_chi2: problem.chi2(&pred, Part::Train),
+        holdout_chi2: problem.chi2(&pred, Part::Holdout),
+        fit,
+        pred,
+        model: m,
+    })
+}
