@@ -1288,20 +1288,68 @@ fn gear_pair(
         &p.key("reference_temperature_k"),
         g.reference_temperature_k,
     )?;
+    let coating = coating(cx, p, g.coating)?;
+    let cutter = Cutter { module_m, alpha0 };
+    let pinion = gear(
+        cx,
+        &p.key("pinion"),
+        "pinion",
+        g.pinion,
+        cutter,
+        nodes,
+        diffusion,
+    )?;
+    let wheel = gear(
+        cx,
+        &p.key("wheel"),
+        "wheel",
+        g.wheel,
+        cutter,
+        nodes,
+        diffusion,
+    )?;
+    let center = center_distance(cx, p, g.center_distance, diffusion)?;
+    let pair = GearPair {
+        name: g.name.unwrap_or_else(|| {
+            if index == 0 {
+                "mesh".into()
+            } else {
+                format!("mesh{index}")
+            }
+        }),
+        module_m,
+        pressure_angle_rad: alpha0,
+        face_width_m: cx.quantity(&q::FACE_WIDTH_MM, &p.key("face_width_mm"), g.face_width_mm)?
+            * 1e-3,
+        center_distance_m: cx.positive(&p.key("center_distance_mm"), g.center_distance_mm)? * 1e-3,
+        center,
+        reference_temperature_k: t_ref,
+        coating,
+        min_backlash_m: cx.quantity(
+            &q::MIN_BACKLASH_UM,
+            &p.key("min_backlash_um"),
+            g.min_backlash_um,
+        )? * 1e-6,
+        gears: [pinion, wheel],
+        constants: Default::default(),
+        paper_model: true,
+    };
+    check_mesh(cx, p, &pair)?;
+    Ok(pair)
+}
+
+/// The coating of a pair's teeth (`gear_pair.….coating`).
+fn coating(cx: &Cx, p: &KeyPath, c: CoatingSpec) -> Result<Coating, SpecError> {
     let cp = p.key("coating");
-    let coating = Coating {
+    Ok(Coating {
         thickness_m: cx.quantity(
             &q::COATING_THICKNESS_UM,
             &cp.key("thickness_um"),
-            g.coating.thickness_um,
+            c.thickness_um,
         )? * 1e-6,
-        alpha_per_k: cx.quantity(
-            &q::EXPANSION_PER_K,
-            &cp.key("alpha_per_k"),
-            g.coating.alpha_per_k,
-        )?,
+        alpha_per_k: cx.quantity(&q::EXPANSION_PER_K, &cp.key("alpha_per_k"), c.alpha_per_k)?,
         poisson: {
-            let v = cx.finite(&cp.key("poisson"), g.coating.poisson)?;
+            let v = cx.finite(&cp.key("poisson"), c.poisson)?;
             if !(v > -1.0 && v < 0.5) {
                 return Err(cx.err(
                     &cp.key("poisson"),
@@ -1310,216 +1358,288 @@ fn gear_pair(
             }
             v
         },
-    };
-    let mut built = Vec::new();
-    for (key, raw) in [("pinion", g.pinion), ("wheel", g.wheel)] {
-        let gp = p.key(key);
-        let teeth = raw.teeth;
-        if !(5..=10_000).contains(&teeth) {
-            return Err(cx.err(
-                &gp.key("teeth"),
-                format!("must be within 5 … 10000 (got {teeth})"),
-            ));
-        }
-        let teeth = teeth as u32;
-        let shift = cx.quantity(
-            &q::PROFILE_SHIFT,
-            &gp.key("profile_shift"),
-            raw.profile_shift,
-        )?;
-        let r_ref = module_m * teeth as f64 / 2.0;
-        let r_b = r_ref * alpha0.cos();
-        let tip = cx.quantity(
-            &q::TIP_RADIUS_MM,
-            &gp.key("tip_radius_mm"),
-            raw.tip_radius_mm,
-        )? * 1e-3;
-        let root = cx.quantity(
-            &q::ROOT_RADIUS_MM,
-            &gp.key("root_radius_mm"),
-            raw.root_radius_mm,
-        )? * 1e-3;
-        let bore = cx.quantity(
-            &q::BORE_RADIUS_MM,
+    })
+}
+
+/// The module and pressure angle a pair's gears are cut with.
+#[derive(Clone, Copy)]
+struct Cutter {
+    module_m: f64,
+    alpha0: f64,
+}
+
+/// One gear (`gear_pair.….pinion` or `.wheel`, at key `gp`): its teeth, radii, tooth
+/// thickness, nodes from the bore to the base circle, material and bore fit.
+fn gear(
+    cx: &Cx,
+    gp: &KeyPath,
+    key: &str,
+    raw: GearSpec,
+    cutter: Cutter,
+    nodes: &[DiffusionNode],
+    diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
+) -> Result<Gear, SpecError> {
+    let Cutter { module_m, alpha0 } = cutter;
+    let teeth = raw.teeth;
+    if !(5..=10_000).contains(&teeth) {
+        return Err(cx.err(
+            &gp.key("teeth"),
+            format!("must be within 5 … 10000 (got {teeth})"),
+        ));
+    }
+    let teeth = teeth as u32;
+    let shift = cx.quantity(
+        &q::PROFILE_SHIFT,
+        &gp.key("profile_shift"),
+        raw.profile_shift,
+    )?;
+    let r_ref = module_m * teeth as f64 / 2.0;
+    let r_b = r_ref * alpha0.cos();
+    let tip = cx.quantity(
+        &q::TIP_RADIUS_MM,
+        &gp.key("tip_radius_mm"),
+        raw.tip_radius_mm,
+    )? * 1e-3;
+    let root = cx.quantity(
+        &q::ROOT_RADIUS_MM,
+        &gp.key("root_radius_mm"),
+        raw.root_radius_mm,
+    )? * 1e-3;
+    let bore = cx.quantity(
+        &q::BORE_RADIUS_MM,
+        &gp.key("bore_radius_mm"),
+        raw.bore_radius_mm,
+    )? * 1e-3;
+    let mm = |x: f64| format!("{} mm", crate::units::fixed(x * 1e3, 6));
+    if bore >= r_b {
+        return Err(cx.err(
             &gp.key("bore_radius_mm"),
-            raw.bore_radius_mm,
-        )? * 1e-3;
-        let mm = |x: f64| format!("{} mm", crate::units::fixed(x * 1e3, 6));
-        if bore >= r_b {
-            return Err(cx.err(
-                &gp.key("bore_radius_mm"),
-                format!(
-                    "bore radius {} must be below the base radius r_b = m z cos α₀ / 2 = {}",
-                    mm(bore),
-                    mm(r_b)
-                ),
-            ));
-        }
-        if bore >= root {
-            return Err(cx.err(
-                &gp.key("bore_radius_mm"),
-                format!(
-                    "bore radius {} must be below the root radius {}",
-                    mm(bore),
-                    mm(root)
-                ),
-            ));
-        }
-        if tip <= r_b || tip <= root {
-            return Err(cx.err(
-                &gp.key("tip_radius_mm"),
-                format!(
-                    "tip radius {} must exceed the base radius {} and the root radius {}",
-                    mm(tip),
-                    mm(r_b),
-                    mm(root)
-                ),
-            ));
-        }
-        let (thickness, tkey) = match (raw.tooth_thickness_mm, raw.tooth_thinning_um) {
-            (Some(s), None) => (
-                cx.positive(&gp.key("tooth_thickness_mm"), s)? * 1e-3,
-                "tooth_thickness_mm",
+            format!(
+                "bore radius {} must be below the base radius r_b = m z cos α₀ / 2 = {}",
+                mm(bore),
+                mm(r_b)
             ),
-            (None, Some(t)) => {
-                let t = cx.finite(&gp.key("tooth_thinning_um"), t)?;
-                (
-                    shifted_tooth_thickness(module_m, shift, alpha0) - t * 1e-6,
-                    "tooth_thinning_um",
-                )
-            }
-            _ => {
+        ));
+    }
+    if bore >= root {
+        return Err(cx.err(
+            &gp.key("bore_radius_mm"),
+            format!(
+                "bore radius {} must be below the root radius {}",
+                mm(bore),
+                mm(root)
+            ),
+        ));
+    }
+    if tip <= r_b || tip <= root {
+        return Err(cx.err(
+            &gp.key("tip_radius_mm"),
+            format!(
+                "tip radius {} must exceed the base radius {} and the root radius {}",
+                mm(tip),
+                mm(r_b),
+                mm(root)
+            ),
+        ));
+    }
+    let (thickness, tkey) = tooth_thickness(cx, gp, &raw, cutter, shift)?;
+    check_tooth(cx, &gp.key(tkey), cutter, thickness, r_ref, r_b, tip)?;
+    let (node_ids, radii) = gear_nodes(cx, gp, &raw.nodes, nodes, diffusion, bore, r_b)?;
+    let material = disc_material(cx, &gp.key("material"), raw.material)?;
+    let shaft_node = match &raw.shaft_node {
+        Some(n) => Some(diffusion(&gp.key("shaft_node"), n)?),
+        None => None,
+    };
+    let fit = match raw.bore_fit.as_deref() {
+        None | Some("free") => BoreFit::Free,
+        Some("rigid") => BoreFit::Rigid,
+        Some("elastic") => {
+            let shaft = raw
+                .shaft_material
+                .ok_or_else(|| cx.err(gp, "an elastic bore fit needs `shaft_material`"))?;
+            if shaft_node.is_none() {
                 return Err(cx.err(
                     &gp,
-                    "give exactly one of `tooth_thickness_mm` or `tooth_thinning_um`",
+                    "an elastic bore fit needs `shaft_node` (the shaft's temperature)",
                 ));
             }
-        };
-        // The tooth must exist and fit: 0 < s < π m on the reference circle, and not
-        // come to a point below the tip (s_a > 0 on the tip circle).
-        let pitch = std::f64::consts::PI * module_m;
-        if !(thickness > 0.0 && thickness < pitch) {
-            return Err(cx.err(
-                &gp.key(tkey),
-                format!(
-                    "gives a tooth thickness of {} on the reference circle; it must be within 0 … {} (the circular pitch π m)",
-                    mm(thickness),
-                    mm(pitch)
-                ),
-            ));
-        }
-        let alpha_tip = (r_b / tip).acos();
-        let tip_thickness = tip * (thickness / r_ref + 2.0 * inv(alpha0) - 2.0 * inv(alpha_tip));
-        if tip_thickness <= 0.0 {
-            return Err(cx.err(
-                &gp.key(tkey),
-                format!(
-                    "gives a tooth thickness of {} on the reference circle, which comes to a point below the tip radius {} (thickness at the tip {})",
-                    mm(thickness),
-                    mm(tip),
-                    mm(tip_thickness)
-                ),
-            ));
-        }
-        let np = gp.key("nodes");
-        if raw.nodes.len() < 2 || raw.nodes.len() > MAX_GEAR_NODES {
-            return Err(cx.err(
-                &np,
-                format!("list 2 … {MAX_GEAR_NODES} nodes from the bore to the base circle"),
-            ));
-        }
-        let mut node_ids = Vec::new();
-        let mut radii = Vec::new();
-        for (k, name) in raw.nodes.iter().enumerate() {
-            let id = diffusion(&np.at(k), name)?;
-            let r = nodes[id].radius_m.ok_or_else(|| {
-                cx.err(
-                    &np.at(k),
-                    format!("node `{name}` needs `radius_mm` to be part of a gear profile"),
-                )
-            })?;
-            if radii.last().is_some_and(|&prev| r <= prev) {
-                return Err(cx.err(
-                    &np.at(k),
-                    "node radii must increase from the bore to the base circle",
-                ));
+            let sm = disc_material(cx, &gp.key("shaft_material"), shaft)?;
+            BoreFit::Elastic {
+                interference_m: cx.finite(
+                    &gp.key("interference_um"),
+                    raw.interference_um.unwrap_or(0.0),
+                )? * 1e-6,
+                shaft_youngs_modulus_pa: sm.youngs_modulus_pa,
+                shaft_poisson: sm.poisson,
+                shaft_strain: sm.strain,
             }
-            node_ids.push(id);
-            radii.push(r);
         }
-        if (radii[0] - bore).abs() > RADIUS_TOLERANCE * bore {
+        Some(other) => {
             return Err(cx.err(
-                &np.at(0),
-                format!(
-                    "the first node sits at {} but the bore radius is {}",
-                    mm(radii[0]),
-                    mm(bore)
-                ),
+                &gp.key("bore_fit"),
+                format!("unknown bore fit `{other}` (known: free, rigid, elastic)"),
             ));
         }
-        let last = *radii.last().expect("two nodes");
-        if (last - r_b).abs() > RADIUS_TOLERANCE * r_b {
+    };
+    Ok(Gear {
+        name: key.to_string(),
+        teeth,
+        profile_shift: shift,
+        tip_radius_m: tip,
+        root_radius_m: root,
+        bore_radius_m: bore,
+        tooth_thickness_m: thickness,
+        material,
+        fit,
+        nodes: node_ids,
+        node_radii_m: radii,
+        shaft_node,
+    })
+}
+
+/// The tooth thickness on the reference circle, from `tooth_thickness_mm` or from
+/// `tooth_thinning_um` (below the profile-shifted nominal), and the key it came from.
+fn tooth_thickness(
+    cx: &Cx,
+    gp: &KeyPath,
+    raw: &GearSpec,
+    cutter: Cutter,
+    shift: f64,
+) -> Result<(f64, &'static str), SpecError> {
+    let Cutter { module_m, alpha0 } = cutter;
+    Ok(match (raw.tooth_thickness_mm, raw.tooth_thinning_um) {
+        (Some(s), None) => (
+            cx.positive(&gp.key("tooth_thickness_mm"), s)? * 1e-3,
+            "tooth_thickness_mm",
+        ),
+        (None, Some(t)) => {
+            let t = cx.finite(&gp.key("tooth_thinning_um"), t)?;
+            (
+                shifted_tooth_thickness(module_m, shift, alpha0) - t * 1e-6,
+                "tooth_thinning_um",
+            )
+        }
+        _ => {
             return Err(cx.err(
-                &np.at(radii.len() - 1),
-                format!(
-                    "the last node sits at {} but the base radius is {}",
-                    mm(last),
-                    mm(r_b)
-                ),
+                gp,
+                "give exactly one of `tooth_thickness_mm` or `tooth_thinning_um`",
             ));
         }
-        let material = disc_material(cx, &gp.key("material"), raw.material)?;
-        let shaft_node = match &raw.shaft_node {
-            Some(n) => Some(diffusion(&gp.key("shaft_node"), n)?),
-            None => None,
-        };
-        let fit = match raw.bore_fit.as_deref() {
-            None | Some("free") => BoreFit::Free,
-            Some("rigid") => BoreFit::Rigid,
-            Some("elastic") => {
-                let shaft = raw
-                    .shaft_material
-                    .ok_or_else(|| cx.err(&gp, "an elastic bore fit needs `shaft_material`"))?;
-                if shaft_node.is_none() {
-                    return Err(cx.err(
-                        &gp,
-                        "an elastic bore fit needs `shaft_node` (the shaft's temperature)",
-                    ));
-                }
-                let sm = disc_material(cx, &gp.key("shaft_material"), shaft)?;
-                BoreFit::Elastic {
-                    interference_m: cx.finite(
-                        &gp.key("interference_um"),
-                        raw.interference_um.unwrap_or(0.0),
-                    )? * 1e-6,
-                    shaft_youngs_modulus_pa: sm.youngs_modulus_pa,
-                    shaft_poisson: sm.poisson,
-                    shaft_strain: sm.strain,
-                }
-            }
-            Some(other) => {
-                return Err(cx.err(
-                    &gp.key("bore_fit"),
-                    format!("unknown bore fit `{other}` (known: free, rigid, elastic)"),
-                ));
-            }
-        };
-        built.push(Gear {
-            name: key.to_string(),
-            teeth,
-            profile_shift: shift,
-            tip_radius_m: tip,
-            root_radius_m: root,
-            bore_radius_m: bore,
-            tooth_thickness_m: thickness,
-            material,
-            fit,
-            nodes: node_ids,
-            node_radii_m: radii,
-            shaft_node,
-        });
+    })
+}
+
+/// The tooth must exist and fit: 0 < s < π m on the reference circle, and not come to
+/// a point below the tip (s_a > 0 on the tip circle). Errors name `key`.
+fn check_tooth(
+    cx: &Cx,
+    key: &KeyPath,
+    cutter: Cutter,
+    thickness: f64,
+    r_ref: f64,
+    r_b: f64,
+    tip: f64,
+) -> Result<(), SpecError> {
+    let Cutter { module_m, alpha0 } = cutter;
+    let mm = |x: f64| format!("{} mm", crate::units::fixed(x * 1e3, 6));
+    let pitch = std::f64::consts::PI * module_m;
+    if !(thickness > 0.0 && thickness < pitch) {
+        return Err(cx.err(
+            key,
+            format!(
+                "gives a tooth thickness of {} on the reference circle; it must be within 0 … {} (the circular pitch π m)",
+                mm(thickness),
+                mm(pitch)
+            ),
+        ));
     }
-    let center = match g.center_distance {
+    let alpha_tip = (r_b / tip).acos();
+    let tip_thickness = tip * (thickness / r_ref + 2.0 * inv(alpha0) - 2.0 * inv(alpha_tip));
+    if tip_thickness <= 0.0 {
+        return Err(cx.err(
+            key,
+            format!(
+                "gives a tooth thickness of {} on the reference circle, which comes to a point below the tip radius {} (thickness at the tip {})",
+                mm(thickness),
+                mm(tip),
+                mm(tip_thickness)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A gear's nodes (`names`, at `gp.nodes`): 2 … MAX_GEAR_NODES diffusion nodes with
+/// radii increasing from the bore (`bore`) to the base circle (`r_b`); their indices
+/// and radii.
+fn gear_nodes(
+    cx: &Cx,
+    gp: &KeyPath,
+    names: &[String],
+    nodes: &[DiffusionNode],
+    diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
+    bore: f64,
+    r_b: f64,
+) -> Result<(Vec<usize>, Vec<f64>), SpecError> {
+    let mm = |x: f64| format!("{} mm", crate::units::fixed(x * 1e3, 6));
+    let np = gp.key("nodes");
+    if names.len() < 2 || names.len() > MAX_GEAR_NODES {
+        return Err(cx.err(
+            &np,
+            format!("list 2 … {MAX_GEAR_NODES} nodes from the bore to the base circle"),
+        ));
+    }
+    let mut node_ids = Vec::new();
+    let mut radii = Vec::new();
+    for (k, name) in names.iter().enumerate() {
+        let id = diffusion(&np.at(k), name)?;
+        let r = nodes[id].radius_m.ok_or_else(|| {
+            cx.err(
+                &np.at(k),
+                format!("node `{name}` needs `radius_mm` to be part of a gear profile"),
+            )
+        })?;
+        if radii.last().is_some_and(|&prev| r <= prev) {
+            return Err(cx.err(
+                &np.at(k),
+                "node radii must increase from the bore to the base circle",
+            ));
+        }
+        node_ids.push(id);
+        radii.push(r);
+    }
+    if (radii[0] - bore).abs() > RADIUS_TOLERANCE * bore {
+        return Err(cx.err(
+            &np.at(0),
+            format!(
+                "the first node sits at {} but the bore radius is {}",
+                mm(radii[0]),
+                mm(bore)
+            ),
+        ));
+    }
+    let last = *radii.last().expect("two nodes");
+    if (last - r_b).abs() > RADIUS_TOLERANCE * r_b {
+        return Err(cx.err(
+            &np.at(radii.len() - 1),
+            format!(
+                "the last node sits at {} but the base radius is {}",
+                mm(last),
+                mm(r_b)
+            ),
+        ));
+    }
+    Ok((node_ids, radii))
+}
+
+/// How the centre distance moves (`gear_pair.….center_distance`): fixed, or with a
+/// housing node's strain.
+fn center_distance(
+    cx: &Cx,
+    p: &KeyPath,
+    spec: Option<CenterDistanceSpec>,
+    diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
+) -> Result<CenterDistance, SpecError> {
+    Ok(match spec {
         None => CenterDistance::Fixed,
         Some(c) => {
             let cp = p.key("center_distance");
@@ -1553,34 +1673,12 @@ fn gear_pair(
                 }
             }
         }
-    };
-    let [pinion, wheel]: [Gear; 2] = built.try_into().map_err(|_| cx.err(p, "two gears"))?;
-    let pair = GearPair {
-        name: g.name.unwrap_or_else(|| {
-            if index == 0 {
-                "mesh".into()
-            } else {
-                format!("mesh{index}")
-            }
-        }),
-        module_m,
-        pressure_angle_rad: alpha0,
-        face_width_m: cx.quantity(&q::FACE_WIDTH_MM, &p.key("face_width_mm"), g.face_width_mm)?
-            * 1e-3,
-        center_distance_m: cx.positive(&p.key("center_distance_mm"), g.center_distance_mm)? * 1e-3,
-        center,
-        reference_temperature_k: t_ref,
-        coating,
-        min_backlash_m: cx.quantity(
-            &q::MIN_BACKLASH_UM,
-            &p.key("min_backlash_um"),
-            g.min_backlash_um,
-        )? * 1e-6,
-        gears: [pinion, wheel],
-        constants: Default::default(),
-        paper_model: true,
-    };
-    // The assembled pair must mesh with positive backlash.
+    })
+}
+
+/// The assembled pair must mesh with positive backlash.
+fn check_mesh(cx: &Cx, p: &KeyPath, pair: &GearPair) -> Result<(), SpecError> {
+    let (module_m, alpha0) = (pair.module_m, pair.pressure_angle_rad);
     let nominal = pair.nominal_backlash_m();
     let rb_sum = pair
         .gears
@@ -1605,7 +1703,7 @@ fn gear_pair(
             format!("the pair has negative backlash at assembly ({:.3} µm): the teeth are too thick for this centre distance", nominal * 1e6),
         ));
     }
-    Ok(pair)
+    Ok(())
 }
 
 /// The checks of single values, shared with the fast parameter writes of
