@@ -12,7 +12,7 @@ use crate::orbit::{EnvState, EnvironmentModel, LoadKink};
 pub use crate::spec::scenario::{SolverSettings, fixed_step_advice};
 use crate::thermal::iteration::LinearSolver;
 use crate::thermal::solver::{StepData, StepFailure, Stepper, StepperMemory, W0, W1};
-use crate::thermal::{StepSwitches, ThermalModel};
+use crate::thermal::{Network, StepSwitches, ThermalModel};
 
 /// Steps shorter than this are not attempted, s.
 pub const MIN_STEP_S: f64 = 1e-7;
@@ -605,9 +605,89 @@ impl<'a> Setup<'a> {
         self.model.environment.next_load_kink(t, &self.kinks)
     }
 
+    /// The solver's memory for a run from `state` to `t_end_s`, taken from `state`: the
+    /// one it carries when the state is as its run left it and the model is the same,
+    /// else that of a fresh start (then `true`). The setup's stepper is put in that
+    /// memory's state.
+    fn resume(&mut self, state: &mut State, t_end_s: f64) -> (Memory, bool) {
+        let settings = &self.settings;
+        let model = self.model;
+        let env = &model.environment;
+        let t_start = state.t_s;
+        let resumed = state.memory.take().filter(|m| {
+            let (t, temps, heaters, lit) = &m.left;
+            t.to_bits() == t_start.to_bits()
+                && temps.len() == state.temperatures_k.len()
+                && temps
+                    .iter()
+                    .zip(&state.temperatures_k)
+                    .all(|(a, b)| a.to_bits() == b.to_bits())
+                && *heaters == state.heaters_on
+                && *lit == state.sunlit
+                && (m.made_by.0 == self.id || m.model_print == self.fingerprint())
+        });
+        let fresh = resumed.is_none();
+        let mut memory = match resumed {
+            Some(m) => m,
+            None => Memory {
+                step_s: settings.max_step_s.min(if settings.adaptive {
+                    1.0
+                } else {
+                    f64::INFINITY
+                }),
+                // One memory per kind of event: entering eclipse, leaving it, a heater
+                // switching, anything else (table point, mode edge, load kink).
+                restart_steps_s: RestartSteps([settings.max_step_s / 30.0; 4]),
+                event_class: None,
+                t_kink_s: self.next_kink(t_start),
+                next_shadow: env.next_shadow_crossing(t_start, t_end_s),
+                shadow_horizon_s: t_end_s,
+                modes_active: model.modes.iter().map(|m| m.active(t_start)).collect(),
+                mesh_flags: vec![[false; 3]; self.gears.len()],
+                stepper: self.stepper.fresh_memory(),
+                made_by: (0, 0),
+                model_print: 0,
+                left: (0.0, Vec::new(), Vec::new(), false),
+            },
+        };
+        // The setup's stepper is in that state already when it ended that very run.
+        if memory.made_by != (self.id, self.runs) {
+            self.stepper.restore(&memory.stepper);
+        }
+        if memory.next_shadow.is_none() && memory.shadow_horizon_s < t_end_s {
+            // the last search stopped at an earlier end
+            memory.next_shadow = env.next_shadow_crossing(t_start, t_end_s);
+        }
+        (memory, fresh)
+    }
+
+    /// The solver's work since the counts `factorizations_before` and `solves_before`
+    /// (linear solves, Krylov iterations), and the linear solver it used, into `stats`.
+    fn count_solver_work(
+        &self,
+        stats: &mut RunStats,
+        factorizations_before: u64,
+        solves_before: (u64, u64),
+    ) {
+        stats.factorizations = self.stepper.factorizations - factorizations_before;
+        stats.linear_solver = self.stepper.linear_solver();
+        let solves = self.stepper.solve_counts();
+        stats.linear_solves = solves.0 - solves_before.0;
+        stats.krylov_iterations = solves.1 - solves_before.1;
+    }
+
     /// Advances `state` to `t_end_s` (landing on it), or until `stop` says. Observers
     /// see every accepted step and event. The energy balance is measured from the start
     /// state. `state` is left at the end, with the solver's memory.
+    ///
+    /// Long by choice (about 350 lines): it is one step loop whose dozen locals (time,
+    /// temperatures, heaters, sunlit, controller step, restart steps, upcoming events,
+    /// mesh flags) are the run's state between steps, read and written by every
+    /// section. The sections are commented in order (next event, step, error control,
+    /// thermostats, the physical-range check, accept, events at the new time, next
+    /// step size); the parts that need none of that state are functions of their own:
+    /// [`Setup::resume`], [`plan_step`], [`next_step_s`], `earliest_thermostat_switch`,
+    /// `first_nonphysical`, `mesh_events`, [`Setup::count_solver_work`].
     pub fn run<O: Observer>(
         &mut self,
         state: &mut State,
@@ -624,26 +704,11 @@ impl<'a> Setup<'a> {
         let env = &model.environment;
         let net = &model.network;
         let t_start = state.t_s;
+        let (memory, fresh) = self.resume(state, t_end_s);
         let y_start = state.temperatures_k.clone();
         let mut y = std::mem::take(&mut state.temperatures_k);
         let mut heaters_on = std::mem::take(&mut state.heaters_on);
         let mut sunlit = state.sunlit;
-
-        // The solver's memory: carried over when the state is as its run left it and
-        // the model is the same, else that of a fresh start.
-        let resumed = state.memory.take().filter(|m| {
-            let (t, temps, heaters, lit) = &m.left;
-            t.to_bits() == t_start.to_bits()
-                && temps.len() == y.len()
-                && temps
-                    .iter()
-                    .zip(&y)
-                    .all(|(a, b)| a.to_bits() == b.to_bits())
-                && *heaters == heaters_on
-                && *lit == sunlit
-                && (m.made_by.0 == self.id || m.model_print == self.fingerprint())
-        });
-        let fresh = resumed.is_none();
         let Memory {
             step_s: mut h,
             restart_steps_s: mut h_after_event,
@@ -653,41 +718,8 @@ impl<'a> Setup<'a> {
             shadow_horizon_s,
             mut modes_active,
             mut mesh_flags,
-            stepper: stepper_memory,
-            made_by,
-            model_print: _,
-            left: _,
-        } = match resumed {
-            Some(m) => m,
-            None => Memory {
-                step_s: settings.max_step_s.min(if settings.adaptive {
-                    1.0
-                } else {
-                    f64::INFINITY
-                }),
-                // One memory per kind of event: entering eclipse, leaving it, a heater
-                // switching, anything else (table point, mode edge, load kink).
-                restart_steps_s: RestartSteps([settings.max_step_s / 30.0; 4]),
-                event_class: None,
-                t_kink_s: self.next_kink(t_start),
-                next_shadow: env.next_shadow_crossing(t_start, t_end_s),
-                shadow_horizon_s: t_end_s,
-                modes_active: model.modes.iter().map(|m| m.active(t_start)).collect(),
-                mesh_flags: vec![[false; 3]; gears.len()],
-                stepper: self.stepper.fresh_memory(),
-                made_by: (0, 0),
-                model_print: 0,
-                left: (0.0, Vec::new(), Vec::new(), false),
-            },
-        };
-        // The setup's stepper is in that state already when it ended that very run.
-        if made_by != (self.id, self.runs) {
-            self.stepper.restore(&stepper_memory);
-        }
-        if next_shadow.is_none() && shadow_horizon_s < t_end_s {
-            // the last search stopped at an earlier end
-            next_shadow = env.next_shadow_crossing(t_start, t_end_s);
-        }
+            ..
+        } = memory;
         let mut next_bp = self.breakpoints.partition_point(|&b| b <= t_start);
         let factorizations_before = self.stepper.factorizations;
         let solves_before = self.stepper.solve_counts();
@@ -764,16 +796,9 @@ impl<'a> Setup<'a> {
                 .filter(|&b| b < t_end_s)
                 .unwrap_or(f64::INFINITY);
             let t_event = t_shadow.min(t_bp).min(t_kink).min(t_end_s);
-            let dt_event = t_event - t;
-            let mut h_try = h.min(settings.max_step_s);
-            let mut lands = false;
-            if h_try >= dt_event || dt_event - h_try < 0.1 * h_try {
-                h_try = dt_event;
-                lands = true;
-            } else if dt_event < 2.0 * h_try {
-                h_try = 0.5 * dt_event;
-            }
+            let (mut h_try, mut lands) = plan_step(h.min(settings.max_step_s), t_event - t);
 
+            // The step (modes as at its middle); a failed solve retries a quarter as long.
             let phase_time = t + 0.5 * h_try;
             for (a, m) in modes_active.iter_mut().zip(&model.modes) {
                 *a = m.active(phase_time);
@@ -806,6 +831,7 @@ impl<'a> Setup<'a> {
                 continue;
             }
             stats.newton_iterations += stepper.data.newton_iterations as u64;
+            // Error control: a step over the tolerance is retried shorter.
             let err = stepper.data.error_max_k() / tol;
             if settings.adaptive && err > 1.0 && h_try > 1e3 * MIN_STEP_S {
                 h = h_try
@@ -961,34 +987,17 @@ impl<'a> Setup<'a> {
                 stepper.continue_from_last_end();
             }
 
-            // Next step size. A step cut short by an event says little about the next
-            // one, so it never shrinks the controller's step.
+            // Next step size.
             h = if settings.adaptive {
-                let fac = if err > 0.0 {
-                    STEP_SAFETY * err.powf(STEP_ERROR_EXPONENT)
-                } else {
-                    STEP_GROWTH_WITHOUT_ERROR
-                };
-                // Hold the step when it would grow by less than 20 %: the solver then
-                // reuses its factorised iteration matrix.
-                let fac = if (1.0..STEP_HOLD_BELOW_GROWTH).contains(&fac) {
-                    1.0
-                } else {
-                    fac
-                };
-                let proposed = h_try * fac.clamp(STEP_FACTOR_RANGE.0, STEP_FACTOR_RANGE.1);
-                if let Some(c) = class_before_step {
-                    h_after_event[c] = proposed;
-                }
-                let next = if lands || switched.is_some() {
-                    proposed.max(h)
-                } else {
-                    proposed
-                };
-                match event_class {
-                    Some(c) => next.min(h_after_event[c]),
-                    None => next,
-                }
+                next_step_s(
+                    err,
+                    h_try,
+                    h,
+                    lands || switched.is_some(),
+                    class_before_step,
+                    event_class,
+                    &mut h_after_event,
+                )
             } else {
                 settings.max_step_s
             };
@@ -998,17 +1007,8 @@ impl<'a> Setup<'a> {
             }
         }
         stats.t_end_s = t;
-        stats.factorizations = self.stepper.factorizations - factorizations_before;
-        stats.linear_solver = self.stepper.linear_solver();
-        let solves = self.stepper.solve_counts();
-        stats.linear_solves = solves.0 - solves_before.0;
-        stats.krylov_iterations = solves.1 - solves_before.1;
-        stats.energy.stored_j = net
-            .nodes
-            .iter()
-            .zip(y.iter().zip(&y_start))
-            .map(|(nd, (&yt, &y0))| nd.capacitance_j_per_k * (yt - y0))
-            .sum();
+        self.count_solver_work(&mut stats, factorizations_before, solves_before);
+        stats.energy.stored_j = stored_energy_j(net, &y_start, &y);
         stats.final_temperatures_k = y.clone();
         // The state at the end, with the solver's memory: a valid start of the next run.
         self.runs += 1;
@@ -1040,6 +1040,71 @@ impl<'a> Setup<'a> {
             .on_finish(&stats)
             .map_err(|source| SimError::Observer { t_s: t, source })?;
         Ok(stats)
+    }
+}
+
+/// The energy the diffusion nodes of `net` gained from `y_start_k` to `y_k`, J.
+fn stored_energy_j(net: &Network, y_start_k: &[f64], y_k: &[f64]) -> f64 {
+    net.nodes
+        .iter()
+        .zip(y_k.iter().zip(y_start_k))
+        .map(|(nd, (&yt, &y0))| nd.capacitance_j_per_k * (yt - y0))
+        .sum()
+}
+
+/// The step to try toward the next event `dt_event_s` ahead, from the controller's
+/// step `h_s`: land on the event when the step reaches it or would stop within 10 %
+/// of a step short of it (then `true`); halve the way when two steps would reach it,
+/// so that no sliver of a step is left before it.
+fn plan_step(h_s: f64, dt_event_s: f64) -> (f64, bool) {
+    if h_s >= dt_event_s || dt_event_s - h_s < 0.1 * h_s {
+        (dt_event_s, true)
+    } else if dt_event_s < 2.0 * h_s {
+        (0.5 * dt_event_s, false)
+    } else {
+        (h_s, false)
+    }
+}
+
+/// The adaptive controller's next step after an accepted step `h_try_s` with error
+/// ratio `err` (error / tolerance). A step cut short by an event (`cut_short`: it landed
+/// on one or on a thermostat switch) says little about the next one, so it never
+/// shrinks the controller's step `h_s`. The step after an event of a class starts from
+/// that class's restart step, which the first step after it (`class_before_step`)
+/// updates.
+fn next_step_s(
+    err: f64,
+    h_try_s: f64,
+    h_s: f64,
+    cut_short: bool,
+    class_before_step: Option<EventClass>,
+    event_class: Option<EventClass>,
+    h_after_event: &mut RestartSteps,
+) -> f64 {
+    let fac = if err > 0.0 {
+        STEP_SAFETY * err.powf(STEP_ERROR_EXPONENT)
+    } else {
+        STEP_GROWTH_WITHOUT_ERROR
+    };
+    // Hold the step when it would grow by less than 20 %: the solver then reuses its
+    // factorised iteration matrix.
+    let fac = if (1.0..STEP_HOLD_BELOW_GROWTH).contains(&fac) {
+        1.0
+    } else {
+        fac
+    };
+    let proposed = h_try_s * fac.clamp(STEP_FACTOR_RANGE.0, STEP_FACTOR_RANGE.1);
+    if let Some(c) = class_before_step {
+        h_after_event[c] = proposed;
+    }
+    let next = if cut_short {
+        proposed.max(h_s)
+    } else {
+        proposed
+    };
+    match event_class {
+        Some(c) => next.min(h_after_event[c]),
+        None => next,
     }
 }
 
