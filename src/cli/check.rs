@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::Args;
 
-use orbitlash::margins::dispersion::Sampling;
+use orbitlash::margins::dispersion::{Plan, Sampling};
 use orbitlash::orbit::EnvironmentModel;
+use orbitlash::spec::scenario::Scenario;
 use orbitlash::thermal::analysis::time_constants;
 
 use super::table::{self, Align};
-use super::{load_with, print_out};
+use super::{Loaded, load_with, print_out};
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
@@ -34,7 +35,6 @@ pub fn check(a: CheckArgs) -> Result<()> {
     )?;
     let sc = &loaded.scenario;
     let env = &sc.thermal.environment;
-    let net = &sc.thermal.network;
     let warnings = sc.warnings();
     outln!(
         o,
@@ -58,6 +58,16 @@ pub fn check(a: CheckArgs) -> Result<()> {
         outln!(o, "{line}");
     }
 
+    network_section(&mut o, sc);
+    gear_section(&mut o, sc)?;
+    dispersions_section(&mut o, &loaded, &plan);
+    run_section(&mut o, sc, period);
+    print_out(&o)
+}
+
+/// The network: element counts, time constants, linear solver, stiffness.
+fn network_section(o: &mut String, sc: &Scenario) {
+    let net = &sc.thermal.network;
     outln!(o, "\nnetwork");
     outln!(
         o,
@@ -113,7 +123,7 @@ pub fn check(a: CheckArgs) -> Result<()> {
             format!("{t:.2} s"),
         ]);
     }
-    o += &table::render(&table, "    ");
+    *o += &table::render(&table, "    ");
     outln!(
         o,
         "  linear systems: {} ({} nodes; solver.linear = \"{}\")",
@@ -128,6 +138,12 @@ pub fn check(a: CheckArgs) -> Result<()> {
         tc.fastest_s,
         tc.stiffness_ratio()
     );
+}
+
+/// Each gear pair at assembly: centre distance, pressure angle, contact ratio, base
+/// dimensions and backlash against its minimum.
+fn gear_section(o: &mut String, sc: &Scenario) -> Result<()> {
+    let net = &sc.thermal.network;
     for pair in &sc.gears {
         let m = pair
             .evaluate(&vec![pair.reference_temperature_k; net.nodes.len()])
@@ -177,7 +193,7 @@ pub fn check(a: CheckArgs) -> Result<()> {
                     .join(", "),
             ]);
         }
-        o += &table::render(&table, "  ");
+        *o += &table::render(&table, "  ");
         outln!(
             o,
             "  normal backlash {:.3} µm, minimum allowed {:.3} µm, margin {:.3} µm",
@@ -186,6 +202,11 @@ pub fn check(a: CheckArgs) -> Result<()> {
             m.margin_m * 1e6
         );
     }
+    Ok(())
+}
+
+/// The dispersions a margins run would draw from.
+fn dispersions_section(o: &mut String, loaded: &Loaded, plan: &Plan) {
     if !plan.dispersions.is_empty() {
         outln!(o, "\ndispersions (for `orbitlash margins`)");
         let mut table = table::new(
@@ -200,8 +221,12 @@ pub fn check(a: CheckArgs) -> Result<()> {
                 d.group.clone().unwrap_or_default(),
             ]);
         }
-        o += &table::render(&table, "  ");
+        *o += &table::render(&table, "  ");
     }
+}
+
+/// Run length, solver settings and sensors.
+fn run_section(o: &mut String, sc: &Scenario, period: f64) {
     outln!(o, "\nrun");
     outln!(
         o,
@@ -243,5 +268,4 @@ pub fn check(a: CheckArgs) -> Result<()> {
                 .join(", ")
         }
     );
-    print_out(&o)
 }

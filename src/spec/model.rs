@@ -375,55 +375,7 @@ impl Model {
                 net.radiators[*i].emissivity_area_m2 = product;
             }
             Target::Load(section, i, part) => {
-                let (fields, what, at) = match section {
-                    LoadSection::Sun => {
-                        let l = &mut self.spec.sun[*i];
-                        (
-                            (
-                                &mut l.absorptivity_area_m2,
-                                &mut l.absorptivity,
-                                &mut l.area_m2,
-                            ),
-                            &q::ABSORPTIVITY,
-                            sc.bindings.sun[*i],
-                        )
-                    }
-                    LoadSection::Albedo => {
-                        let l = &mut self.spec.albedo[*i];
-                        (
-                            (
-                                &mut l.absorptivity_area_m2,
-                                &mut l.absorptivity,
-                                &mut l.area_m2,
-                            ),
-                            &q::ABSORPTIVITY,
-                            sc.bindings.albedo[*i],
-                        )
-                    }
-                    LoadSection::EarthIr => {
-                        let l = &mut self.spec.earth_ir[*i];
-                        (
-                            (&mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2),
-                            &q::EMISSIVITY,
-                            sc.bindings.earth_ir[*i],
-                        )
-                    }
-                };
-                let product = area_product(path, *part, value, fields, what)?;
-                match &mut net.loads[at].kind {
-                    LoadKind::Sun {
-                        absorptivity_area_m2,
-                        ..
-                    }
-                    | LoadKind::Albedo {
-                        absorptivity_area_m2,
-                        ..
-                    } => *absorptivity_area_m2 = product,
-                    LoadKind::EarthIr {
-                        emissivity_area_m2, ..
-                    } => *emissivity_area_m2 = product,
-                    LoadKind::Dissipation { .. } => unreachable!("not an area load"),
-                }
+                self.set_area_load(path, *section, *i, *part, value)?
             }
             Target::ViewFactor(section, i) => {
                 let f = check::value(&q::VIEW_FACTOR, path, value)?;
@@ -450,26 +402,7 @@ impl Model {
             }
             Target::HeaterOn(i) | Target::HeaterOff(i) => {
                 let on = matches!(id.target, Target::HeaterOn(_));
-                let quantity = if on {
-                    &q::HEATER_ON_K
-                } else {
-                    &q::HEATER_OFF_K
-                };
-                let t = check::value(quantity, path, value)?;
-                let h = &self.spec.heater[*i];
-                let (on_k, off_k) = if on { (t, h.off_k) } else { (h.on_k, t) };
-                let off_path = KeyPath::new("heater")
-                    .elem(*i, &self.keys.heater[*i])
-                    .key("off_k");
-                check::heater_band(&off_path, on_k, off_k)?;
-                let (hs, hm) = (&mut self.spec.heater[*i], &mut net.heaters[*i]);
-                if on {
-                    hs.on_k = value;
-                    hm.on_k = t;
-                } else {
-                    hs.off_k = value;
-                    hm.off_k = t;
-                }
+                self.set_heater_switch(path, *i, on, value)?
             }
             Target::Albedo => {
                 let a = check::value(&q::ALBEDO, path, value)?;
@@ -507,34 +440,133 @@ impl Model {
                 sc.thermal.environment.circular_mut().solar_flux_w_per_m2 =
                     crate::orbit::Profile::Constant(s);
             }
-            Target::GearPair(g) => {
-                let old = self.spec.gear_pair[*g].clone();
-                let direct = id.position.is_some_and(|k| {
-                    params::set_at(&mut self.spec, &self.keys, &id.canonical, k, value)
-                });
-                if !direct {
-                    params::set_canonical(
-                        &mut self.spec,
-                        &self.keys,
-                        &id.path,
-                        &id.canonical,
-                        value,
-                    )?;
-                }
-                match crate::spec::check::gear_pair_again(
-                    &self.spec,
-                    *g,
-                    &self.keys.gear_pair[*g],
-                    &self.scenario.thermal.network,
-                ) {
-                    Ok(pair) => self.scenario.gears[*g] = pair,
-                    Err(e) => {
-                        self.spec.gear_pair[*g] = old;
-                        return Err(e.into());
-                    }
-                }
-            }
+            Target::GearPair(g) => self.set_gear_value(id, *g, value)?,
             _ => return self.set(&id.path, value),
+        }
+        Ok(())
+    }
+
+    /// Writes one number of an area load (`sun`, `albedo`, `earth_ir` element `i`):
+    /// the product or one of its factors, checked as the compiler checks it; the
+    /// compiled load is found through the compiler's [`Bindings`](crate::spec::scenario::Bindings).
+    fn set_area_load(
+        &mut self,
+        path: &KeyPath,
+        section: LoadSection,
+        i: usize,
+        part: Part3,
+        value: f64,
+    ) -> Result<(), ModelError> {
+        use crate::thermal::LoadKind;
+        let (fields, what, at) = match section {
+            LoadSection::Sun => {
+                let l = &mut self.spec.sun[i];
+                (
+                    (
+                        &mut l.absorptivity_area_m2,
+                        &mut l.absorptivity,
+                        &mut l.area_m2,
+                    ),
+                    &q::ABSORPTIVITY,
+                    self.scenario.bindings.sun[i],
+                )
+            }
+            LoadSection::Albedo => {
+                let l = &mut self.spec.albedo[i];
+                (
+                    (
+                        &mut l.absorptivity_area_m2,
+                        &mut l.absorptivity,
+                        &mut l.area_m2,
+                    ),
+                    &q::ABSORPTIVITY,
+                    self.scenario.bindings.albedo[i],
+                )
+            }
+            LoadSection::EarthIr => {
+                let l = &mut self.spec.earth_ir[i];
+                (
+                    (&mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2),
+                    &q::EMISSIVITY,
+                    self.scenario.bindings.earth_ir[i],
+                )
+            }
+        };
+        let product = area_product(path, part, value, fields, what)?;
+        match &mut self.scenario.thermal.network.loads[at].kind {
+            LoadKind::Sun {
+                absorptivity_area_m2,
+                ..
+            }
+            | LoadKind::Albedo {
+                absorptivity_area_m2,
+                ..
+            } => *absorptivity_area_m2 = product,
+            LoadKind::EarthIr {
+                emissivity_area_m2, ..
+            } => *emissivity_area_m2 = product,
+            LoadKind::Dissipation { .. } => unreachable!("not an area load"),
+        }
+        Ok(())
+    }
+
+    /// Writes heater `i`'s switch-on (`on`) or switch-off temperature, keeping the band
+    /// valid.
+    fn set_heater_switch(
+        &mut self,
+        path: &KeyPath,
+        i: usize,
+        on: bool,
+        value: f64,
+    ) -> Result<(), ModelError> {
+        use crate::spec::check;
+        let quantity = if on {
+            &q::HEATER_ON_K
+        } else {
+            &q::HEATER_OFF_K
+        };
+        let t = check::value(quantity, path, value)?;
+        let h = &self.spec.heater[i];
+        let (on_k, off_k) = if on { (t, h.off_k) } else { (h.on_k, t) };
+        let off_path = KeyPath::new("heater")
+            .elem(i, &self.keys.heater[i])
+            .key("off_k");
+        check::heater_band(&off_path, on_k, off_k)?;
+        let (hs, hm) = (
+            &mut self.spec.heater[i],
+            &mut self.scenario.thermal.network.heaters[i],
+        );
+        if on {
+            hs.on_k = value;
+            hm.on_k = t;
+        } else {
+            hs.off_k = value;
+            hm.off_k = t;
+        }
+        Ok(())
+    }
+
+    /// Writes a number of gear pair `g` and recompiles that pair only (its checks tie
+    /// many numbers together); on an error the pair is as before.
+    fn set_gear_value(&mut self, id: &ParamId, g: usize, value: f64) -> Result<(), ModelError> {
+        let old = self.spec.gear_pair[g].clone();
+        let direct = id
+            .position
+            .is_some_and(|k| params::set_at(&mut self.spec, &self.keys, &id.canonical, k, value));
+        if !direct {
+            params::set_canonical(&mut self.spec, &self.keys, &id.path, &id.canonical, value)?;
+        }
+        match crate::spec::check::gear_pair_again(
+            &self.spec,
+            g,
+            &self.keys.gear_pair[g],
+            &self.scenario.thermal.network,
+        ) {
+            Ok(pair) => self.scenario.gears[g] = pair,
+            Err(e) => {
+                self.spec.gear_pair[g] = old;
+                return Err(e.into());
+            }
         }
         Ok(())
     }
