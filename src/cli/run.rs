@@ -1,7 +1,7 @@
 //! `orbitlash run`: simulate, observe, summarise.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -13,14 +13,16 @@ use orbitlash::io::csv_export::CsvExport;
 use orbitlash::io::mcap_log::{LogCadence, McapLog, Provenance, estimated_bytes_per_sample};
 use orbitlash::io::output::{OutputError, OutputPolicy, Outputs, available_bytes};
 use orbitlash::orbit::EnvironmentModel;
-use orbitlash::run::sim::{MAX_STEPS, Observer, ObserverResult, RunStats, StepView, estimate_run};
+use orbitlash::run::sim::{
+    MAX_STEPS, Observer, ObserverResult, RunStats, SimError, StepView, estimate_run,
+};
 use orbitlash::run::summary::{MeshStats, PairStats, PairVerdict, RunSummary, WindowStats};
 use orbitlash::spec::scenario::Scenario;
 use orbitlash::thermal::ThermalModel;
 use orbitlash::units::k_to_c;
 
 use super::table::{self, Align};
-use super::{Outcome, default_log_path, error_chain, load_with, orbits_arg, print_out};
+use super::{Loaded, Outcome, default_log_path, error_chain, load_with, orbits_arg, print_out};
 
 #[derive(Args, Debug)]
 pub struct RunArgs {
@@ -130,37 +132,8 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         );
     }
 
-    // Every output is checked before the run, so a bad path fails now: none may be an
-    // input (the scenario file), a device, a FIFO or a link (`io::output`), nor another
-    // output of this run.
-    let inputs = loaded.inputs();
-    let mut outs = Outputs::new(OutputPolicy::reading(&inputs));
-    let (log_path, log_policy) = match (&a.out, a.no_log) {
-        (_, true) => (None, OutputPolicy::reading(&inputs)),
-        (Some(p), false) => (Some(p.clone()), OutputPolicy::reading(&inputs)),
-        (None, false) => (
-            Some(default_log_path(&sc.name)?),
-            OutputPolicy::default_in_logs(&inputs),
-        ),
-    };
-    if let Some(l) = &log_path {
-        if a.out.is_none() {
-            outs.folder(
-                "the default log folder",
-                l.parent().expect("logs/<name>"),
-                true,
-            )?;
-        }
-        outs.file(if a.out.is_some() { "--out" } else { "the log" }, l)?;
-    }
-    if let Some(c) = &a.csv {
-        outs.file("--csv", c)?;
-    }
-    // The JSON summary is written after the run, but its path is checked now.
+    let (outs, log_path, log_policy) = plan_outputs(&a, &loaded, &sc)?;
     let json_out = a.json.clone();
-    if let Some(j) = &json_out {
-        outs.file("--json", j)?;
-    }
     bounded(&a, &sc, log_path.as_deref(), loaded.toml.len())?;
     if a.steady_state {
         super::estimate::steady(&sc, a.force)?;
@@ -174,25 +147,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         None
     };
 
-    let log = match &log_path {
-        Some(p) => Some(McapLog::create(
-            p,
-            Provenance {
-                scenario_name: sc.name.clone(),
-                scenario_file: loaded.file.clone(),
-                scenario_toml: loaded.toml.clone(),
-                solver: format!(
-                    "tr-bdf2 tolerance_k={} max_step_s={} adaptive={}",
-                    sc.solver.tolerance_k, sc.solver.max_step_s, sc.solver.adaptive
-                ),
-                seed: a.seed,
-                sets: loaded.sets.clone(),
-            },
-            a.log_every.unwrap_or(LogCadence::Steps(1)),
-            &log_policy,
-        )?),
-        None => None,
-    };
+    let log = open_log(&a, &loaded, &sc, log_path.as_deref(), &log_policy)?;
     let mut log = match log {
         Some(l) if a.scene => Some(l.with_scene(300.0)),
         other => other,
@@ -201,7 +156,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         Some(p) => Some(CsvExport::create(
             p,
             sc.run.output_interval_s,
-            &OutputPolicy::reading(&inputs),
+            &OutputPolicy::reading(&loaded.inputs()),
         )?),
         None => None,
     };
@@ -247,34 +202,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     };
     let stats = match result {
         Ok(stats) => stats,
-        Err(e) => {
-            // Close the log as the record of a failed run; other outputs are discarded.
-            // The message: the cause first, then where the partial output is.
-            let t_fail = e.t_s().unwrap_or(f64::NAN);
-            let cause = error_chain(&anyhow::Error::new(e));
-            let closed = log.as_mut().map(|l| l.close_failed(t_fail, &cause));
-            let mut msg = format!("running {}: {cause}", loaded.file);
-            match closed {
-                Some(Ok(p)) => msg.push_str(&format!(
-                    "\n  the log {} holds the run up to the failure",
-                    p.display()
-                )),
-                Some(Err(OutputError::NotWritten { .. })) => msg.push_str("\n  no log was written"),
-                Some(Err(e)) => {
-                    let why = error_chain(&e.into());
-                    if cause.contains(&why) {
-                        msg.push_str("\n  no log was written");
-                    } else {
-                        msg.push_str(&format!("\n  no log was written: {why}"));
-                    }
-                }
-                None => {}
-            }
-            if a.csv.is_some() {
-                msg.push_str("\n  no CSV was written");
-            }
-            return Err(anyhow!(msg));
-        }
+        Err(e) => return Err(run_failed(e, log.as_mut(), &loaded.file, a.csv.is_some())),
     };
     let wall_s = wall.elapsed().as_secs_f64();
 
@@ -324,6 +252,104 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         );
     }
     Ok(Outcome::from_pass(pass))
+}
+
+/// Every output of a run, checked before it starts so that a bad path fails now: none
+/// may be an input (the scenario file), a device, a FIFO or a link (`io::output`), nor
+/// another output of this run. Returns the plan, the log's path (None: `--no-log`) and
+/// the policy it is written under (the default log only inside `logs/`).
+fn plan_outputs(
+    a: &RunArgs,
+    loaded: &Loaded,
+    sc: &Scenario,
+) -> Result<(Outputs, Option<PathBuf>, OutputPolicy)> {
+    let inputs = loaded.inputs();
+    let mut outs = Outputs::new(OutputPolicy::reading(&inputs));
+    let (log_path, log_policy) = match (&a.out, a.no_log) {
+        (_, true) => (None, OutputPolicy::reading(&inputs)),
+        (Some(p), false) => (Some(p.clone()), OutputPolicy::reading(&inputs)),
+        (None, false) => (
+            Some(default_log_path(&sc.name)?),
+            OutputPolicy::default_in_logs(&inputs),
+        ),
+    };
+    if let Some(l) = &log_path {
+        if a.out.is_none() {
+            outs.folder(
+                "the default log folder",
+                l.parent().expect("logs/<name>"),
+                true,
+            )?;
+        }
+        outs.file(if a.out.is_some() { "--out" } else { "the log" }, l)?;
+    }
+    if let Some(c) = &a.csv {
+        outs.file("--csv", c)?;
+    }
+    // The JSON summary is written after the run, but its path is checked now.
+    if let Some(j) = &a.json {
+        outs.file("--json", j)?;
+    }
+    Ok((outs, log_path, log_policy))
+}
+
+/// The run's MCAP log at `log_path`, with its provenance (scenario text, solver,
+/// seed, `--set`s).
+fn open_log(
+    a: &RunArgs,
+    loaded: &Loaded,
+    sc: &Scenario,
+    log_path: Option<&Path>,
+    log_policy: &OutputPolicy,
+) -> Result<Option<McapLog>> {
+    Ok(match log_path {
+        Some(p) => Some(McapLog::create(
+            p,
+            Provenance {
+                scenario_name: sc.name.clone(),
+                scenario_file: loaded.file.clone(),
+                scenario_toml: loaded.toml.clone(),
+                solver: format!(
+                    "tr-bdf2 tolerance_k={} max_step_s={} adaptive={}",
+                    sc.solver.tolerance_k, sc.solver.max_step_s, sc.solver.adaptive
+                ),
+                seed: a.seed,
+                sets: loaded.sets.clone(),
+            },
+            a.log_every.unwrap_or(LogCadence::Steps(1)),
+            log_policy,
+        )?),
+        None => None,
+    })
+}
+
+/// The error of a failed run: the cause first, then where its partial output is. The
+/// log is closed as the record of the failed run; other outputs are discarded.
+fn run_failed(e: SimError, log: Option<&mut McapLog>, file: &str, csv: bool) -> anyhow::Error {
+    let t_fail = e.t_s().unwrap_or(f64::NAN);
+    let cause = error_chain(&anyhow::Error::new(e));
+    let closed = log.map(|l| l.close_failed(t_fail, &cause));
+    let mut msg = format!("running {file}: {cause}");
+    match closed {
+        Some(Ok(p)) => msg.push_str(&format!(
+            "\n  the log {} holds the run up to the failure",
+            p.display()
+        )),
+        Some(Err(OutputError::NotWritten { .. })) => msg.push_str("\n  no log was written"),
+        Some(Err(e)) => {
+            let why = error_chain(&e.into());
+            if cause.contains(&why) {
+                msg.push_str("\n  no log was written");
+            } else {
+                msg.push_str(&format!("\n  no log was written: {why}"));
+            }
+        }
+        None => {}
+    }
+    if csv {
+        msg.push_str("\n  no CSV was written");
+    }
+    anyhow!(msg)
 }
 
 /// Refuses a run over the step limit (unless `--force`) or whose outputs would not fit
