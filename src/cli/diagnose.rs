@@ -272,6 +272,10 @@ fn unit_of(name: &str) -> &'static str {
 }
 
 /// The human report.
+///
+/// Long by choice (about 170 lines): the report's sections printed in order
+/// (verdict, noise, baseline, mismatches, findings, candidates, notes), no logic
+/// beyond formatting; read top to bottom it is the report.
 pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
     let mut o = String::new();
     let verdict = match d.verdict {

@@ -376,6 +376,10 @@ fn plots_of(dir: &Path, rep: &Report, outcomes: &[SampleOutcome]) -> Vec<(PathBu
     files
 }
 
+/// The human report of a margins run.
+///
+/// Long by choice (about 150 lines): the report's sections printed in order, no logic
+/// beyond formatting.
 pub fn format_report(r: &Report) -> String {
     let mut o = String::new();
     for p in &r.pairs {

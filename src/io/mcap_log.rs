@@ -697,6 +697,63 @@ fn foxglove_schema<M: foxglove::Encode>(
         .map_err(|e| out_err(path, e))
 }
 
+/// The log's provenance (tool, scenario name, file and SHA-256, solver, seed, `--set`s,
+/// end time, cadence) as MCAP metadata, and the scenario file as an attachment.
+fn write_provenance(
+    w: &mut mcap::Writer<AtomicFile>,
+    path: &Path,
+    p: Provenance,
+    cadence: LogCadence,
+    t_end_s: f64,
+) -> Result<(), OutputError> {
+    let cadence = match cadence {
+        LogCadence::Steps(n) => format!("every {n} step(s)"),
+        LogCadence::Interval(dt) => format!("every {dt} s"),
+    };
+    let sha = Sha256::digest(p.scenario_toml.as_bytes());
+    let sha: String = sha.iter().map(|b| format!("{b:02x}")).collect();
+    let metadata: BTreeMap<String, String> = [
+        ("tool", "orbitlash".to_string()),
+        ("tool_version", env!("CARGO_PKG_VERSION").to_string()),
+        ("scenario_name", p.scenario_name.clone()),
+        ("scenario_file", p.scenario_file.clone()),
+        ("scenario_sha256", sha),
+        ("solver", p.solver.clone()),
+        ("seed", p.seed.map_or("none".into(), |s| s.to_string())),
+        (
+            "set",
+            p.sets
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join(" "),
+        ),
+        ("t_end_s", format!("{}", t_end_s)),
+        ("log_cadence", cadence),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_string(), v))
+    .collect();
+    w.write_metadata(&mcap::records::Metadata {
+        name: "orbitlash.provenance".into(),
+        metadata,
+    })
+    .map_err(|e| out_err(path, e))?;
+    let file_name = match Path::new(&p.scenario_file).file_name() {
+        Some(f) if !p.scenario_file.starts_with('<') => f.to_string_lossy().into_owned(),
+        _ => format!("{}.toml", p.scenario_name),
+    };
+    w.attach(&mcap::Attachment {
+        log_time: 0,
+        create_time: 0,
+        name: file_name,
+        media_type: "application/toml".into(),
+        data: std::borrow::Cow::Owned(p.scenario_toml.into_bytes()),
+    })
+    .map_err(|e| out_err(path, e))?;
+    Ok(())
+}
+
 /// Writes the schemas, channels, provenance and attachment of a new log and returns
 /// the writer ready for samples (runs on the writer thread).
 #[allow(clippy::too_many_arguments)]
@@ -740,11 +797,6 @@ fn open_log_writer(
         .with("sunlit", Kind::Double)
         .with("orbit_number", Kind::Double);
 
-    let p = provenance;
-    let cadence = match cadence {
-        LogCadence::Steps(n) => format!("every {n} step(s)"),
-        LogCadence::Interval(dt) => format!("every {dt} s"),
-    };
     let mut node_map = BTreeMap::new();
     for (f, n) in node_fields.iter().zip(&d.nodes) {
         node_map.insert(format!("node:{f}"), n.clone());
@@ -810,47 +862,7 @@ fn open_log_writer(
     let s = foxglove_schema::<foxglove::messages::Log>(w, path)?;
     let log = channel(w, s, "/events", &empty)?;
 
-    let sha = Sha256::digest(p.scenario_toml.as_bytes());
-    let sha: String = sha.iter().map(|b| format!("{b:02x}")).collect();
-    let metadata: BTreeMap<String, String> = [
-        ("tool", "orbitlash".to_string()),
-        ("tool_version", env!("CARGO_PKG_VERSION").to_string()),
-        ("scenario_name", p.scenario_name.clone()),
-        ("scenario_file", p.scenario_file.clone()),
-        ("scenario_sha256", sha),
-        ("solver", p.solver.clone()),
-        ("seed", p.seed.map_or("none".into(), |s| s.to_string())),
-        (
-            "set",
-            p.sets
-                .iter()
-                .map(|(k, v)| format!("{k}={v}"))
-                .collect::<Vec<_>>()
-                .join(" "),
-        ),
-        ("t_end_s", format!("{}", t_end_s)),
-        ("log_cadence", cadence),
-    ]
-    .into_iter()
-    .map(|(k, v)| (k.to_string(), v))
-    .collect();
-    w.write_metadata(&mcap::records::Metadata {
-        name: "orbitlash.provenance".into(),
-        metadata,
-    })
-    .map_err(|e| out_err(path, e))?;
-    let file_name = match Path::new(&p.scenario_file).file_name() {
-        Some(f) if !p.scenario_file.starts_with('<') => f.to_string_lossy().into_owned(),
-        _ => format!("{}.toml", p.scenario_name),
-    };
-    w.attach(&mcap::Attachment {
-        log_time: 0,
-        create_time: 0,
-        name: file_name,
-        media_type: "application/toml".into(),
-        data: std::borrow::Cow::Owned(p.scenario_toml.into_bytes()),
-    })
-    .map_err(|e| out_err(path, e))?;
+    write_provenance(w, path, provenance, cadence, t_end_s)?;
     let ch = Channels {
         temperature,
         heat,

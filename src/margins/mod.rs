@@ -801,6 +801,10 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
 /// the samples that ran; the flags (below the minimum, interference) are derived from
 /// each sample's smallest backlash, never taken from the outcome. `None` when no
 /// sample ran: there is nothing to judge.
+///
+/// Long by choice (about 160 lines): one pass per gear pair gathering the report's
+/// numbers (percentiles, bounds, intervals, flags, sensitivities) into its fields;
+/// the statistics themselves are in [`stats`].
 pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
     let outcomes: Vec<&SampleOutcome> = all.iter().filter(|o| o.invalid.is_none()).collect();
     let invalid: Vec<InvalidSample> = all

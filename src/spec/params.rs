@@ -93,6 +93,9 @@ type Visit<'f> = dyn FnMut(&[Cow<'_, str>], Slot<'_>, Meta) + 'f;
 
 /// Walks every number of `spec`, with its path, and calls `f` with its slot; with
 /// `only`, just the section (and element) that path is in.
+///
+/// Long by choice (about 175 lines): it is the table of keys, one line per number in
+/// file order with its quantity; splitting it would only split the table.
 fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f: &mut Visit<'_>) {
     let section = |name: &str| only.is_none_or(|w| w.first().is_some_and(|s| s == name));
     let element = |name: &str, key: &str| {

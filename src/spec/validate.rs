@@ -136,6 +136,9 @@ fn circular(e: &CircularEnvironment) -> Result<(), Invalid> {
 
 impl ThermalModel {
     /// Checks every invariant of a thermal model (see the module docs).
+    ///
+    /// Long by choice (about 150 lines): the list of invariants, one check after
+    /// another, each with its own error; splitting it would only split the list.
     pub fn validate(&self) -> Result<(), Invalid> {
         environment(&self.environment)?;
         let net = &self.network;
