@@ -109,6 +109,25 @@ impl Cx {
     fn quantity(&self, q: &Quantity, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
         match q.rule {
             Rule::Within { lo, hi, what } => self.within(path, v, lo, hi, what),
+            Rule::Span {
+                lo,
+                hi,
+                open,
+                shown,
+                got_unit,
+            } => {
+                self.finite(path, v)?;
+                let inside = if open {
+                    v > lo && v < hi
+                } else {
+                    (lo..=hi).contains(&v)
+                };
+                if inside {
+                    Ok(v)
+                } else {
+                    Err(self.err(path, format!("must be within {shown} (got {v}{got_unit})")))
+                }
+            }
             Rule::Positive => self.positive(path, v),
             Rule::NonNegative => self.non_negative(path, v),
             Rule::PositiveUpTo { hi } => self.positive_up_to(path, v, hi, q.unit),
@@ -863,13 +882,7 @@ fn environment(
         &op.key("earth_radius_m"),
         orbit_spec.earth_radius_m,
     )?;
-    let altitude_m = cx.finite(&op.key("altitude_m"), orbit_spec.altitude_m)?;
-    if !(100e3..=100_000e3).contains(&altitude_m) {
-        return Err(cx.err(
-            &op.key("altitude_m"),
-            format!("must be within 100 km … 100 000 km, in metres (got {altitude_m} m)"),
-        ));
-    }
+    let altitude_m = cx.quantity(&q::ALTITUDE_M, &op.key("altitude_m"), orbit_spec.altitude_m)?;
     let orbit = Orbit {
         altitude_m,
         earth_radius_m,
@@ -1238,14 +1251,7 @@ fn disc_material(cx: &Cx, p: &KeyPath, m: MaterialSpec) -> Result<DiscMaterial, 
             format!("is in pascal: {youngs} Pa is not a metal (steel is 2e11)"),
         ));
     }
-    let poisson = m.poisson;
-    cx.finite(&p.key("poisson"), poisson)?;
-    if !(poisson > -1.0 && poisson < 0.5) {
-        return Err(cx.err(
-            &p.key("poisson"),
-            format!("must be within −1 … 0.5 (got {poisson})"),
-        ));
-    }
+    let poisson = cx.quantity(&q::POISSON, &p.key("poisson"), m.poisson)?;
     Ok(DiscMaterial {
         strain: strain_law(
             cx,
@@ -1275,13 +1281,11 @@ fn gear_pair(
     diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
 ) -> Result<GearPair, SpecError> {
     let module_m = cx.quantity(&q::MODULE_MM, &p.key("module_mm"), g.module_mm)? * 1e-3;
-    let alpha0_deg = cx.finite(&p.key("pressure_angle_deg"), g.pressure_angle_deg)?;
-    if !(10.0..=35.0).contains(&alpha0_deg) {
-        return Err(cx.err(
-            &p.key("pressure_angle_deg"),
-            format!("must be within 10° … 35° (got {alpha0_deg}°)"),
-        ));
-    }
+    let alpha0_deg = cx.quantity(
+        &q::PRESSURE_ANGLE_DEG,
+        &p.key("pressure_angle_deg"),
+        g.pressure_angle_deg,
+    )?;
     let alpha0 = alpha0_deg.to_radians();
     let t_ref = cx.quantity(
         &q::TEMPERATURE_K,
@@ -1348,16 +1352,7 @@ fn coating(cx: &Cx, p: &KeyPath, c: CoatingSpec) -> Result<Coating, SpecError> {
             c.thickness_um,
         )? * 1e-6,
         alpha_per_k: cx.quantity(&q::EXPANSION_PER_K, &cp.key("alpha_per_k"), c.alpha_per_k)?,
-        poisson: {
-            let v = cx.finite(&cp.key("poisson"), c.poisson)?;
-            if !(v > -1.0 && v < 0.5) {
-                return Err(cx.err(
-                    &cp.key("poisson"),
-                    format!("must be within −1 … 0.5 (got {v})"),
-                ));
-            }
-            v
-        },
+        poisson: cx.quantity(&q::POISSON, &cp.key("poisson"), c.poisson)?,
     })
 }
 

@@ -115,7 +115,7 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
     let o = &mut spec.orbit;
     if section("orbit") {
         at!("orbit".into(); {
-            at!("altitude_m".into(); f(&path, Slot::Value(&mut o.altitude_m), m("m", "100 km … 100 000 km")));
+            at!("altitude_m".into(); f(&path, Slot::Value(&mut o.altitude_m), of(&q::ALTITUDE_M)));
             at!("earth_radius_m".into(); f(&path, Slot::Optional(&mut o.earth_radius_m, default_of(&q::EARTH_RADIUS_M)), of(&q::EARTH_RADIUS_M)));
             at!("mu_m3_per_s2".into(); f(&path, Slot::Optional(&mut o.mu_m3_per_s2, default_of(&q::MU_M3_PER_S2)), of(&q::MU_M3_PER_S2)));
             at!("orbit_angle_at_start_deg".into(); f(&path, Slot::Optional(&mut o.orbit_angle_at_start_deg, default_of(&q::ORBIT_ANGLE_AT_START_DEG)), of(&q::ORBIT_ANGLE_AT_START_DEG)));
@@ -412,7 +412,7 @@ fn material(path: &mut Vec<Cow<'_, str>>, mt: &mut MaterialSpec, f: &mut Visit<'
     );
     path.truncate(n);
     path.push("poisson".into());
-    f(path, Slot::Value(&mut mt.poisson), m("", "−1 … 0.5"));
+    f(path, Slot::Value(&mut mt.poisson), of(&q::POISSON));
     path.truncate(n);
 }
 
@@ -433,7 +433,7 @@ fn gear_pair(path: &mut Vec<Cow<'_, str>>, g: &mut GearPairSpec, f: &mut Visit<'
         path,
         "pressure_angle_deg",
         Slot::Value(&mut g.pressure_angle_deg),
-        m("deg", "10 … 35"),
+        of(&q::PRESSURE_ANGLE_DEG),
     );
     one(
         path,
@@ -475,7 +475,7 @@ fn gear_pair(path: &mut Vec<Cow<'_, str>>, g: &mut GearPairSpec, f: &mut Visit<'
         path,
         "coating.poisson",
         Slot::Value(&mut g.coating.poisson),
-        m("", "−1 … 0.5"),
+        of(&q::POISSON),
     );
     if let Some(c) = &mut g.center_distance {
         path.push("center_distance".into());

@@ -21,6 +21,16 @@ pub enum Rule {
         hi: f64,
         what: &'static str,
     },
+    /// `lo ≤ v ≤ hi` (`lo < v < hi` when `open`), with the error "must be within
+    /// `shown` (got v`got_unit`)": for ranges said in other units than the value's
+    /// (an altitude in km), or with a symbol (degrees).
+    Span {
+        lo: f64,
+        hi: f64,
+        open: bool,
+        shown: &'static str,
+        got_unit: &'static str,
+    },
     /// `v > 0`.
     Positive,
     /// `v ≥ 0`.
@@ -57,6 +67,7 @@ impl Quantity {
     pub fn interval(&self) -> Option<(f64, bool, f64, bool)> {
         match self.rule {
             Rule::Within { lo, hi, .. } => Some((lo, true, hi, true)),
+            Rule::Span { lo, hi, open, .. } => Some((lo, !open, hi, !open)),
             Rule::Positive => Some((0.0, false, f64::INFINITY, true)),
             Rule::NonNegative => Some((0.0, true, f64::INFINITY, true)),
             Rule::PositiveUpTo { hi } => Some((0.0, false, hi, true)),
@@ -225,6 +236,19 @@ pub const MU_M3_PER_S2: Quantity = q(
     Some(crate::constants::EARTH_MU_M3_PER_S2),
     within(1e9, 1e17, "gravitational parameter (m³/s²; Earth 3.986e14)"),
 );
+/// Height of a circular orbit above the Earth's surface.
+pub const ALTITUDE_M: Quantity = q(
+    "m",
+    "100 km … 100 000 km",
+    None,
+    Rule::Span {
+        lo: 100e3,
+        hi: 100_000e3,
+        open: false,
+        shown: "100 km … 100 000 km, in metres",
+        got_unit: " m",
+    },
+);
 pub const ORBIT_ANGLE_AT_START_DEG: Quantity = q(
     "deg",
     "any (reduced modulo 360°)",
@@ -235,6 +259,32 @@ pub const ORBIT_ANGLE_AT_START_DEG: Quantity = q(
 // ---------------------------------------------------------------- gear pairs
 
 pub const MODULE_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
+/// The pressure angle a gear is cut with (standard 20°).
+pub const PRESSURE_ANGLE_DEG: Quantity = q(
+    "deg",
+    "10 … 35",
+    None,
+    Rule::Span {
+        lo: 10.0,
+        hi: 35.0,
+        open: false,
+        shown: "10° … 35°",
+        got_unit: "°",
+    },
+);
+/// Poisson's ratio of an isotropic material (a gear's, a shaft's, a coating's).
+pub const POISSON: Quantity = q(
+    "",
+    "−1 … 0.5",
+    None,
+    Rule::Span {
+        lo: -1.0,
+        hi: 0.5,
+        open: true,
+        shown: "−1 … 0.5",
+        got_unit: "",
+    },
+);
 pub const FACE_WIDTH_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
 pub const MIN_BACKLASH_UM: Quantity = q("µm", "≥ 0", None, Rule::NonNegative);
 pub const COATING_THICKNESS_UM: Quantity = q("µm", "≥ 0", None, Rule::NonNegative);
@@ -314,6 +364,9 @@ pub const SENSOR_OFFSET_K: Quantity = q(
 /// Every quantity above with a range, by name (for the generated test and the
 /// documentation).
 pub const TABLE: &[(&str, &Quantity)] = &[
+    ("ALTITUDE_M", &ALTITUDE_M),
+    ("PRESSURE_ANGLE_DEG", &PRESSURE_ANGLE_DEG),
+    ("POISSON", &POISSON),
     ("TEMPERATURE_K", &TEMPERATURE_K),
     ("CAPACITANCE_J_PER_K", &CAPACITANCE_J_PER_K),
     ("CONDUCTANCE_W_PER_K", &CONDUCTANCE_W_PER_K),

@@ -91,12 +91,7 @@ fn environment(e: &Environment) -> Result<(), Invalid> {
 
 fn circular(e: &CircularEnvironment) -> Result<(), Invalid> {
     let o = &e.orbit;
-    within(
-        "environment.orbit.altitude_m",
-        o.altitude_m,
-        100e3,
-        100_000e3,
-    )?;
+    within_q("environment.orbit.altitude_m", o.altitude_m, &q::ALTITUDE_M)?;
     within(
         "environment.orbit.earth_radius_m",
         o.earth_radius_m,
@@ -342,7 +337,7 @@ fn gear_pair(k: usize, p: &GearPair, n: usize) -> Result<(), Invalid> {
             ));
         }
         let m = &g.material;
-        if !(m.youngs_modulus_pa > 0.0 && m.poisson > -1.0 && m.poisson < 0.5) {
+        if !(m.youngs_modulus_pa > 0.0 && q::POISSON.accepts(m.poisson)) {
             return Err(bad(
                 &w,
                 "the material needs E > 0 and a Poisson ratio within −1 … 0.5",
@@ -352,7 +347,8 @@ fn gear_pair(k: usize, p: &GearPair, n: usize) -> Result<(), Invalid> {
     if !(p.module_m > 0.0 && p.module_m.is_finite()) {
         return Err(bad(&w, "the module must be positive"));
     }
-    if !(10f64.to_radians()..=35f64.to_radians()).contains(&p.pressure_angle_rad) {
+    let (lo_deg, _, hi_deg, _) = q::PRESSURE_ANGLE_DEG.interval().expect("a range");
+    if !(lo_deg.to_radians()..=hi_deg.to_radians()).contains(&p.pressure_angle_rad) {
         return Err(bad(&w, "the pressure angle must lie within 10° … 35°"));
     }
     if let crate::gear::CenterDistance::Housing { node, .. } = p.center
