@@ -506,7 +506,7 @@ pub fn format_report(r: &Report) -> String {
             o,
             "  worst samples (replay one with `orbitlash run SCENARIO --sample K --seed {}{}`):",
             r.seed,
-            if r.sampling == "latin_hypercube" {
+            if r.sampling == Sampling::LatinHypercube {
                 format!(" --sampling lhs --samples {}", r.samples)
             } else {
                 String::new()

@@ -215,13 +215,31 @@ pub fn truncated_std_normal(a: f64, b: f64, u: f64) -> f64 {
     x.clamp(a, b)
 }
 
-/// How the samples cover the quantiles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// How the samples cover the quantiles. Serialised (margins reports, shards) as
+/// "random" or "latin_hypercube".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Sampling {
     /// Independent draws.
     Random,
     /// Latin hypercube: each dimension's N quantiles fall one in each of N strata.
     LatinHypercube,
+}
+
+impl Sampling {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Sampling::Random => "random",
+            Sampling::LatinHypercube => "latin_hypercube",
+        }
+    }
+}
+
+impl std::fmt::Display for Sampling {
+    /// As serialised; honours width and alignment.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.as_str())
+    }
 }
 
 /// A dispersed number, checked.

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
-use crate::margins::dispersion::Plan;
+use crate::margins::dispersion::{Plan, Sampling};
 use crate::orbit::EnvironmentModel;
 use crate::run::sim::{RunStats, Setup, SimError, Stop};
 use crate::run::summary::{MeshStats, PassFail};
@@ -341,7 +341,7 @@ pub struct Report {
     pub valid_samples: u64,
     /// Samples that could not be run, with why (a report with any fails).
     pub invalid: Vec<InvalidSample>,
-    pub sampling: String,
+    pub sampling: Sampling,
     pub horizon: String,
     pub dispersed: Vec<String>,
     pub pairs: Vec<PairReport>,
@@ -455,7 +455,7 @@ pub struct RunIdentity {
     pub sets: Vec<(String, f64)>,
     pub seed: u64,
     pub samples: u64,
-    pub sampling: String,
+    pub sampling: Sampling,
     pub horizon: String,
     pub dispersed: Vec<String>,
     /// Gear pairs: name and minimum allowed backlash, µm.
@@ -480,11 +480,7 @@ impl RunIdentity {
             sets: sets.to_vec(),
             seed: plan.seed,
             samples: plan.samples,
-            sampling: match plan.sampling {
-                crate::margins::dispersion::Sampling::Random => "random",
-                crate::margins::dispersion::Sampling::LatinHypercube => "latin_hypercube",
-            }
-            .to_string(),
+            sampling: plan.sampling,
             horizon: match horizon {
                 Horizon::Orbits(o) => crate::units::count(o, "orbit"),
                 Horizon::Mission => "the scenario's run".to_string(),
@@ -961,7 +957,7 @@ pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
         samples: all.len() as u64,
         valid_samples: n,
         invalid,
-        sampling: id.sampling.clone(),
+        sampling: id.sampling,
         horizon: id.horizon.clone(),
         dispersed: id.dispersed.clone(),
         pairs,
