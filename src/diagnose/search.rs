@@ -277,14 +277,17 @@ impl Problem<'_> {
     ) -> Result<(), Rejection> {
         let gain = self.bic_gain(h, reference.train_chi2, k_extra);
         let drop = reference.holdout_chi2 - h.holdout_chi2;
-        if !(gain > opts.bic_margin) {
+        // Each test passes only on a number (NaN fails it).
+        let wins_bic = gain > opts.bic_margin;
+        let improves_holdout = drop > opts.holdout_margin;
+        if !wins_bic {
             Err(Rejection::Bic { gain })
-        } else if !(drop > opts.holdout_margin) {
+        } else if !improves_holdout {
             Err(Rejection::Holdout { gain, drop })
-        } else if !(self.material(reference.pred, &h.pred) >= opts.min_effect) {
-            Err(Rejection::Immaterial)
-        } else {
+        } else if self.material(reference.pred, &h.pred) >= opts.min_effect {
             Ok(())
+        } else {
+            Err(Rejection::Immaterial)
         }
     }
 }

@@ -1454,7 +1454,7 @@ fn gear(
                 .ok_or_else(|| cx.err(gp, "an elastic bore fit needs `shaft_material`"))?;
             if shaft_node.is_none() {
                 return Err(cx.err(
-                    &gp,
+                    gp,
                     "an elastic bore fit needs `shaft_node` (the shaft's temperature)",
                 ));
             }
