@@ -2,7 +2,9 @@
 """Byte-for-byte comparison of two orbitlash binaries' outputs (for changes that must
 not move a number, e.g. a refactor): `run` (text, JSON, CSV, MCAP log), `margins --json`
 and `diagnose --json` on the shipped scenarios and example recordings (and on
-`../shared/cases` when it is there).
+`../shared/cases` when it is there); `params` listings and the `check --set` errors of
+every key at four values. Both binaries must have the same file name (usage texts
+quote it), e.g. `/tmp/before/orbitlash` and `target/release/orbitlash`.
 
     python3 tools/compare_outputs.py BEFORE_BINARY AFTER_BINARY [WORK_DIR]
 
@@ -61,6 +63,30 @@ def cases(out: pathlib.Path):
                                           str(shared / case / "recording.csv"), "--json", f"{p}.json"], [f"{p}.json"]
 
 
+def check_cases(binary: str):
+    """`params` of every shipped scenario, and `check --set KEY=V` on the reference for
+    every key `params` lists at four values (huge, tiny, zero, negative): the check
+    errors of the spec layer, byte for byte."""
+    sc = ROOT / "scenarios"
+    for f in sorted(sc.glob("*.toml")):
+        yield f"params {f.stem}", ["params", str(f)]
+    listing = subprocess.run([binary, "params"], capture_output=True, text=True).stdout
+    keys = sorted({line.split()[0] for line in listing.splitlines()
+                   if len(line.split()) > 1 and line.split()[1] == "="})
+    for k in keys:
+        for v in ["-1e30", "1e30", "0", "-0.5"]:
+            yield f"check {k}={v}", ["check", str(sc / "reference-hinge.toml"), "--set", f"{k}={v}"]
+
+
+def run_checks(binary: str):
+    """Exit status and output of each of `check_cases`, as one dictionary."""
+    out = {}
+    for label, args in check_cases(binary):
+        r = subprocess.run([binary, *args], capture_output=True)
+        out[label] = (r.returncode, r.stdout, r.stderr)
+    return out
+
+
 def run_all(binary: str, out: pathlib.Path):
     out.mkdir(parents=True, exist_ok=True)
     results = {}
@@ -94,6 +120,14 @@ def main():
                 bad += 1
                 print(f"DIFFERENT  {label}: {k}")
         print(f"{'same' if all(before[label][k] == after[label].get(k) for k in before[label]) else 'DIFF'}  {label}")
+    # The binaries must be called by the same name: usage texts quote it.
+    cb = run_checks(str(pathlib.Path(sys.argv[1]).resolve()))
+    ca = run_checks(str(pathlib.Path(sys.argv[2]).resolve()))
+    differing = [k for k in cb if cb[k] != ca.get(k)]
+    for k in differing:
+        print(f"DIFFERENT  {k}")
+    bad += len(differing)
+    print(f"{'same' if not differing else 'DIFF'}  params listings and {len(cb)} check --set errors")
     return 1 if bad else 0
 
 
