@@ -141,6 +141,10 @@ fn core_every_quantity_bound_agrees_across_toml_set_set_param_and_dispersion() {
             read("scenarios/hinge-90-day-drift.toml"),
         ),
         ("reference-hinge with ε × A and a dα/dT", split_text),
+        (
+            "scenarios/hinge-tle-year.toml",
+            read("scenarios/hinge-tle-year.toml"),
+        ),
     ] {
         let (n, q) = check_scenario(file, &text);
         checked += n;

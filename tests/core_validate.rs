@@ -81,11 +81,18 @@ fn core_broken_models_are_refused_naming_what() {
         ),
         (
             "environment.albedo",
-            Box::new(|s| s.thermal.environment.circular_mut().albedo = 1.5),
+            Box::new(|s| s.thermal.environment.circular_mut().unwrap().albedo = 1.5),
         ),
         (
             "environment.orbit period",
-            Box::new(|s| s.thermal.environment.circular_mut().orbit.mu_m3_per_s2 = 1e9),
+            Box::new(|s| {
+                s.thermal
+                    .environment
+                    .circular_mut()
+                    .unwrap()
+                    .orbit
+                    .mu_m3_per_s2 = 1e9
+            }),
         ),
         (
             "modes[0]",

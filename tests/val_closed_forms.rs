@@ -154,7 +154,7 @@ fn val_published_eclipse_example() {
         "orbits = 3",
         "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1.0\ninitial_temperature_k = 300.0\n",
     );
-    let orbit = &sc.thermal.environment.circular().orbit;
+    let orbit = &sc.thermal.environment.circular().unwrap().orbit;
     let period = orbit.period_s();
     assert!((period - 5424.0).abs() < 5.0, "period {period} s");
     let f = orbit.eclipse_fraction(0.0);
@@ -181,7 +181,7 @@ fn val_published_eclipse_example() {
 #[test]
 fn val_reference_mechanism_period_and_eclipse() {
     let sc = orbitlash::io::scenario_toml::reference();
-    let orbit = &sc.thermal.environment.circular().orbit;
+    let orbit = &sc.thermal.environment.circular().unwrap().orbit;
     assert!(
         (orbit.period_s() - 5676.978).abs() < 5e-4,
         "period {}",
@@ -271,7 +271,7 @@ fn val_closed_form_eclipse_duration_with_drifting_beta() {
         "duration_days = 5.0",
         "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1.0\ninitial_temperature_k = 300.0\n",
     );
-    let env = sc.thermal.environment.circular();
+    let env = sc.thermal.environment.circular().unwrap();
     let mut ev = Events::default();
     simulate(
         &sc.thermal,
@@ -344,7 +344,7 @@ fn val_closed_form_orbit_averaged_environment_loads() {
         "orbits = 1\n[solver]\nmax_step_s = 20.0\ntolerance_k = 1e-4",
         "[[node]]\nname = \"n\"\ncapacitance_j_per_k = 1e9\ninitial_temperature_k = 300.0\n",
     );
-    let orbit = sc.thermal.environment.circular().orbit.clone();
+    let orbit = sc.thermal.environment.circular().unwrap().orbit.clone();
     // Period and view factor from their definitions (reference-mechanism.md §2).
     let a = orbit.earth_radius_m + orbit.altitude_m;
     let t = 2.0 * PI * (a.powi(3) / orbit.mu_m3_per_s2).sqrt();

@@ -6,7 +6,10 @@
 //! direction is `cos β e1 + sin β n`. The orbit angle θ is measured from `e1`
 //! (θ = 0 is orbit noon), so the radial unit vector is `cos θ e1 + sin θ e2`.
 
+pub mod dated;
+pub mod sun;
 pub mod table;
+pub mod tle;
 
 use std::f64::consts::PI;
 
@@ -233,20 +236,41 @@ pub enum Environment {
     /// A circular orbit about a spherical Earth with β and solar flux along a mission
     /// profile.
     Circular(CircularEnvironment),
+    /// A TLE orbit on its dates: the Sun where it is, β and eclipses from geometry.
+    Dated(dated::DatedEnvironment),
 }
 
 impl Environment {
-    /// The circular-orbit environment (the only kind so far).
-    pub fn circular(&self) -> &CircularEnvironment {
+    /// The circular-orbit environment, if the model has one.
+    pub fn circular(&self) -> Option<&CircularEnvironment> {
         match self {
-            Environment::Circular(c) => c,
+            Environment::Circular(c) => Some(c),
+            Environment::Dated(_) => None,
         }
     }
 
-    pub fn circular_mut(&mut self) -> &mut CircularEnvironment {
+    pub fn circular_mut(&mut self) -> Option<&mut CircularEnvironment> {
         match self {
-            Environment::Circular(c) => c,
+            Environment::Circular(c) => Some(c),
+            Environment::Dated(_) => None,
         }
+    }
+
+    /// The Earth's albedo coefficient, its infrared flux (W/m²) and the deep-space sink
+    /// (K), whatever the orbit.
+    pub fn earth_and_space_mut(&mut self) -> (&mut f64, &mut f64, &mut f64) {
+        match self {
+            Environment::Circular(c) => {
+                (&mut c.albedo, &mut c.earth_ir_w_per_m2, &mut c.space_sink_k)
+            }
+            Environment::Dated(d) => (&mut d.albedo, &mut d.earth_ir_w_per_m2, &mut d.space_sink_k),
+        }
+    }
+}
+
+impl From<dated::DatedEnvironment> for Environment {
+    fn from(d: dated::DatedEnvironment) -> Environment {
+        Environment::Dated(d)
     }
 }
 
@@ -261,6 +285,7 @@ macro_rules! each_kind {
     ($self:ident, $e:ident => $call:expr) => {
         match $self {
             Environment::Circular($e) => $call,
+            Environment::Dated($e) => $call,
         }
     };
 }

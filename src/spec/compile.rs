@@ -10,7 +10,9 @@ use crate::gear::disc::{BoreFit, DiscMaterial};
 use crate::gear::involute::{inv, shifted_tooth_thickness};
 use crate::gear::strain::StrainLaw;
 use crate::gear::{CenterDistance, Coating, Gear, GearPair, MAX_GEAR_NODES};
-use crate::orbit::{CircularEnvironment, Incidence, Orbit, Profile};
+use crate::orbit::dated::{DatedEnvironment, Shadow};
+use crate::orbit::tle::{TleError, TleOrbit};
+use crate::orbit::{CircularEnvironment, Environment, EnvironmentModel, Incidence, Orbit, Profile};
 use crate::spec::quantity::{self as q, Quantity, Rule};
 use crate::spec::scenario::SolverSettings;
 use crate::spec::scenario::{
@@ -291,10 +293,18 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let keys = element_keys(&raw);
     check_names(cx, &raw)?;
 
-    let (environment, space_sink_k) = environment(cx, &raw.orbit, raw.environment)?;
-    let period_s = environment.orbit.period_s();
-    let view_factor_default = environment.orbit.earth_view_factor();
+    let (mut environment, space_sink_k) = environment(cx, &raw.orbit, raw.environment)?;
+    let period_s = environment.mean_period_s();
+    let view_factor_default = match &environment {
+        Environment::Circular(c) => c.orbit.earth_view_factor(),
+        Environment::Dated(d) => d.mean_view_factor(),
+    };
     let run = run_control(cx, &raw.run, period_s)?;
+    if let Environment::Dated(d) = &mut environment {
+        // A decayed orbit or a diverging propagation fails now, not in the run.
+        d.set_horizon_s(run.duration_s)
+            .map_err(|m| cx.err(&KeyPath::new("orbit").key("tle"), m))?;
+    }
     let solver = solver_settings(cx, &raw.solver)?;
 
     let (table, nodes, boundaries) =
@@ -373,7 +383,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         name: raw.scenario.name,
         description: raw.scenario.description,
         thermal: ThermalModel {
-            environment: environment.into(),
+            environment,
             network,
             modes,
         },
@@ -869,20 +879,42 @@ fn sensors(
 }
 
 /// The orbit, its eclipses' geometry and the mission profile (β, solar flux, albedo,
-/// Earth infrared, the space sink): the environment and the sink temperature.
+/// Earth infrared, the space sink): the environment and the sink temperature. A TLE
+/// makes a dated environment ([`dated_environment`]); otherwise the orbit is circular.
 fn environment(
     cx: &Cx,
     orbit_spec: &OrbitSpec,
     environment_spec: EnvironmentSpec,
-) -> Result<(CircularEnvironment, f64), SpecError> {
-    // Orbit.
+) -> Result<(Environment, f64), SpecError> {
+    if orbit_spec.tle.is_some() {
+        return dated_environment(cx, orbit_spec, environment_spec);
+    }
     let op = KeyPath::new("orbit");
+    for (given, key) in [
+        (orbit_spec.start_utc.is_some(), "start_utc"),
+        (orbit_spec.start_offset_s.is_some(), "start_offset_s"),
+        (orbit_spec.shadow.is_some(), "shadow"),
+    ] {
+        if given {
+            return Err(cx.err(
+                &op.key(key),
+                "belongs to a real orbit: give `tle` too (or remove it for a circular orbit)",
+            ));
+        }
+    }
+    // Orbit.
     let earth_radius_m = cx.quantity_or_default(
         &q::EARTH_RADIUS_M,
         &op.key("earth_radius_m"),
         orbit_spec.earth_radius_m,
     )?;
-    let altitude_m = cx.quantity(&q::ALTITUDE_M, &op.key("altitude_m"), orbit_spec.altitude_m)?;
+    let Some(altitude_m) = orbit_spec.altitude_m else {
+        return Err(cx.err(
+            &op,
+            "give `altitude_m` (a circular orbit) or `tle` and `start_utc` (a real orbit)",
+        ));
+    };
+    let altitude_m = cx.quantity(&q::ALTITUDE_M, &op.key("altitude_m"), altitude_m)?;
     let orbit = Orbit {
         altitude_m,
         earth_radius_m,
@@ -920,7 +952,13 @@ fn environment(
     // Environment and mission profile.
     let ep = KeyPath::new("environment");
     let e = environment_spec;
-    let beta_deg = cx.profile(&ep.key("beta_deg"), e.beta_deg, &|p, v| {
+    let Some(beta_spec) = e.beta_deg else {
+        return Err(cx.err(
+            &ep,
+            "a circular orbit needs `beta_deg` (a number or a table over mission time)",
+        ));
+    };
+    let beta_deg = cx.profile(&ep.key("beta_deg"), beta_spec, &|p, v| {
         cx.quantity(&q::BETA_DEG, p, v)
     })?;
     let solar_flux = cx.profile(
@@ -944,7 +982,125 @@ fn environment(
         )?,
         space_sink_k,
     };
-    Ok((environment, space_sink_k))
+    Ok((environment.into(), space_sink_k))
+}
+
+/// A real orbit: the TLE (`orbit.tle`, two lines) from `orbit.start_utc` (shifted by
+/// `start_offset_s`), with its shadow model; β, eclipses and period follow from the
+/// geometry, and `environment.solar_flux_w_per_m2` is the flux at 1 AU.
+fn dated_environment(
+    cx: &Cx,
+    orbit_spec: &OrbitSpec,
+    e: EnvironmentSpec,
+) -> Result<(Environment, f64), SpecError> {
+    let op = KeyPath::new("orbit");
+    for (given, key) in [
+        (orbit_spec.altitude_m.is_some(), "altitude_m"),
+        (orbit_spec.mu_m3_per_s2.is_some(), "mu_m3_per_s2"),
+        (
+            orbit_spec.orbit_angle_at_start_deg.is_some(),
+            "orbit_angle_at_start_deg",
+        ),
+    ] {
+        if given {
+            return Err(cx.err(
+                &op.key(key),
+                "follows from the TLE; remove it (or remove `tle` for a circular orbit)",
+            ));
+        }
+    }
+    let ep = KeyPath::new("environment");
+    if e.beta_deg.is_some() {
+        return Err(cx.err(
+            &ep.key("beta_deg"),
+            "follows from the TLE and the dates; remove it (or remove `tle` for a circular orbit)",
+        ));
+    }
+    let tp = op.key("tle");
+    let lines = orbit_spec.tle.as_deref().unwrap_or_default();
+    let [l1, l2] = lines else {
+        return Err(cx.err(
+            &tp,
+            format!(
+                "lists {} line(s); a TLE is two: tle = [\"1 …\", \"2 …\"]",
+                lines.len()
+            ),
+        ));
+    };
+    let Some(start_text) = &orbit_spec.start_utc else {
+        return Err(cx.err(
+            &op,
+            "a TLE needs `start_utc`: when the run starts (e.g. \"2016-02-04T00:00:00Z\")",
+        ));
+    };
+    let start =
+        crate::orbit::tle::parse_utc(start_text).map_err(|m| cx.err(&op.key("start_utc"), m))?;
+    let offset_s = cx.quantity_or_default(
+        &q::START_OFFSET_S,
+        &op.key("start_offset_s"),
+        orbit_spec.start_offset_s,
+    )?;
+    let start = start + sgp4::chrono::Duration::nanoseconds((offset_s * 1e9).round() as i64);
+    let orbit = TleOrbit::new([l1, l2], start).map_err(|err| match err {
+        TleError::Line { line, message } => cx.err(&tp.at(line - 1), message),
+        TleError::Elements(m) => cx.err(&tp, m),
+        TleError::Start(m) => cx.err(&op.key("start_utc"), m),
+        TleError::Propagation(m) => cx.err(&tp, m),
+    })?;
+    let shadow = match orbit_spec.shadow.as_deref() {
+        None => Shadow::Cylindrical,
+        Some(name) => Shadow::from_name(name).ok_or_else(|| {
+            cx.err(
+                &op.key("shadow"),
+                format!(
+                    "unknown shadow `{name}` (known: {})",
+                    Shadow::NAMES.join(", ")
+                ),
+            )
+        })?,
+    };
+    let solar_flux = match e.solar_flux_w_per_m2 {
+        None => q::SOLAR_FLUX_W_PER_M2.default_value(),
+        Some(ProfileSpec::Constant(v)) => {
+            cx.quantity(&q::SOLAR_FLUX_W_PER_M2, &ep.key("solar_flux_w_per_m2"), v)?
+        }
+        Some(ProfileSpec::Table(_)) => {
+            return Err(cx.err(
+                &ep.key("solar_flux_w_per_m2"),
+                "with a TLE is one number, the flux at 1 AU (the Sun's distance on each date scales it)",
+            ));
+        }
+    };
+    let space_sink_k =
+        cx.quantity_or_default(&q::SPACE_SINK_K, &ep.key("space_sink_k"), e.space_sink_k)?;
+    let environment = DatedEnvironment {
+        orbit,
+        shadow,
+        solar_flux_1au_w_per_m2: solar_flux,
+        earth_radius_m: cx.quantity_or_default(
+            &q::EARTH_RADIUS_M,
+            &op.key("earth_radius_m"),
+            orbit_spec.earth_radius_m,
+        )?,
+        albedo: cx.quantity_or_default(&q::ALBEDO, &ep.key("albedo"), e.albedo)?,
+        earth_ir_w_per_m2: cx.quantity_or_default(
+            &q::EARTH_IR_W_PER_M2,
+            &ep.key("earth_ir_w_per_m2"),
+            e.earth_ir_w_per_m2,
+        )?,
+        space_sink_k,
+        horizon_s: 0.0,
+    };
+    let period_s = environment.mean_period_s();
+    if !(MIN_PERIOD_S..=MAX_PERIOD_S).contains(&period_s) {
+        return Err(cx.err(
+            &tp.at(1),
+            format!(
+                "gives an orbital period of {period_s:.3e} s; it must be within {MIN_PERIOD_S} … {MAX_PERIOD_S:.0} s (10 min … 30 days)"
+            ),
+        ));
+    }
+    Ok((environment.into(), space_sink_k))
 }
 
 /// The run's length and output interval.

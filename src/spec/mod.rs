@@ -208,18 +208,34 @@ pub struct MetaSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct OrbitSpec {
-    pub altitude_m: f64,
+    /// A circular orbit's altitude (absent with a TLE).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub altitude_m: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub earth_radius_m: Option<f64>,
     pub mu_m3_per_s2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub orbit_angle_at_start_deg: Option<f64>,
+    /// A real orbit: the two lines of a TLE (propagated by SGP4) …
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tle: Option<Vec<String>>,
+    /// … from this UTC time (RFC 3339, `2016-02-04T00:00:00Z`) …
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_utc: Option<String>,
+    /// … shifted by this many seconds (a number: settable and dispersible).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_offset_s: Option<f64>,
+    /// … with a `cylindrical` (default) or `conical` Earth shadow.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shadow: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentSpec {
-    pub beta_deg: ProfileSpec,
+    /// β of a circular orbit (derived from the geometry with a TLE).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beta_deg: Option<ProfileSpec>,
     pub solar_flux_w_per_m2: Option<ProfileSpec>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub space_sink_k: Option<f64>,

@@ -407,27 +407,33 @@ impl Model {
             Target::Albedo => {
                 let a = check::value(&q::ALBEDO, path, value)?;
                 self.spec.environment.albedo = Some(value);
-                sc.thermal.environment.circular_mut().albedo = a;
+                *sc.thermal.environment.earth_and_space_mut().0 = a;
             }
             Target::EarthIr => {
                 let q = check::value(&q::EARTH_IR_W_PER_M2, path, value)?;
                 self.spec.environment.earth_ir_w_per_m2 = Some(value);
-                sc.thermal.environment.circular_mut().earth_ir_w_per_m2 = q;
+                *sc.thermal.environment.earth_and_space_mut().1 = q;
             }
             Target::Sink => {
                 let t = check::value(&q::SPACE_SINK_K, path, value)?;
                 self.spec.environment.space_sink_k = Some(value);
-                sc.thermal.environment.circular_mut().space_sink_k = t;
+                *sc.thermal.environment.earth_and_space_mut().2 = t;
                 // the built-in boundary `space` sits at the sink temperature
                 net.boundaries[0].temperature_k = crate::orbit::Profile::Constant(t);
             }
             Target::BetaConstant
-                if matches!(self.spec.environment.beta_deg, ProfileSpec::Constant(_)) =>
+                if matches!(
+                    self.spec.environment.beta_deg,
+                    Some(ProfileSpec::Constant(_))
+                ) =>
             {
                 let b = check::value(&q::BETA_DEG, path, value)?;
-                self.spec.environment.beta_deg = ProfileSpec::Constant(value);
-                sc.thermal.environment.circular_mut().beta_rad =
-                    crate::orbit::Profile::Constant(b.to_radians());
+                self.spec.environment.beta_deg = Some(ProfileSpec::Constant(value));
+                sc.thermal
+                    .environment
+                    .circular_mut()
+                    .expect("β is a key of circular orbits")
+                    .beta_rad = crate::orbit::Profile::Constant(b.to_radians());
             }
             Target::FluxConstant
                 if !matches!(
@@ -437,8 +443,13 @@ impl Model {
             {
                 let s = check::value(&q::SOLAR_FLUX_W_PER_M2, path, value)?;
                 self.spec.environment.solar_flux_w_per_m2 = Some(ProfileSpec::Constant(value));
-                sc.thermal.environment.circular_mut().solar_flux_w_per_m2 =
-                    crate::orbit::Profile::Constant(s);
+                match &mut sc.thermal.environment {
+                    crate::orbit::Environment::Circular(c) => {
+                        c.solar_flux_w_per_m2 = crate::orbit::Profile::Constant(s)
+                    }
+                    // a dated orbit's flux is the flux at 1 AU
+                    crate::orbit::Environment::Dated(d) => d.solar_flux_1au_w_per_m2 = s,
+                }
             }
             Target::GearPair(g) => self.set_gear_value(id, *g, value)?,
             _ => return self.set(&id.path, value),

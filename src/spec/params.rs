@@ -115,16 +115,26 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
     let o = &mut spec.orbit;
     if section("orbit") {
         at!("orbit".into(); {
-            at!("altitude_m".into(); f(&path, Slot::Value(&mut o.altitude_m), of(&q::ALTITUDE_M)));
-            at!("earth_radius_m".into(); f(&path, Slot::Optional(&mut o.earth_radius_m, default_of(&q::EARTH_RADIUS_M)), of(&q::EARTH_RADIUS_M)));
-            at!("mu_m3_per_s2".into(); f(&path, Slot::Optional(&mut o.mu_m3_per_s2, default_of(&q::MU_M3_PER_S2)), of(&q::MU_M3_PER_S2)));
-            at!("orbit_angle_at_start_deg".into(); f(&path, Slot::Optional(&mut o.orbit_angle_at_start_deg, default_of(&q::ORBIT_ANGLE_AT_START_DEG)), of(&q::ORBIT_ANGLE_AT_START_DEG)));
+            if o.tle.is_some() {
+                // a real orbit: its numbers are the start's shift and the Earth's radius
+                at!("start_offset_s".into(); f(&path, Slot::Optional(&mut o.start_offset_s, default_of(&q::START_OFFSET_S)), of(&q::START_OFFSET_S)));
+                at!("earth_radius_m".into(); f(&path, Slot::Optional(&mut o.earth_radius_m, default_of(&q::EARTH_RADIUS_M)), of(&q::EARTH_RADIUS_M)));
+            } else {
+                if let Some(a) = &mut o.altitude_m {
+                    at!("altitude_m".into(); f(&path, Slot::Value(a), of(&q::ALTITUDE_M)));
+                }
+                at!("earth_radius_m".into(); f(&path, Slot::Optional(&mut o.earth_radius_m, default_of(&q::EARTH_RADIUS_M)), of(&q::EARTH_RADIUS_M)));
+                at!("mu_m3_per_s2".into(); f(&path, Slot::Optional(&mut o.mu_m3_per_s2, default_of(&q::MU_M3_PER_S2)), of(&q::MU_M3_PER_S2)));
+                at!("orbit_angle_at_start_deg".into(); f(&path, Slot::Optional(&mut o.orbit_angle_at_start_deg, default_of(&q::ORBIT_ANGLE_AT_START_DEG)), of(&q::ORBIT_ANGLE_AT_START_DEG)));
+            }
         });
     }
     let e = &mut spec.environment;
     if section("environment") {
         at!("environment".into(); {
-            at!("beta_deg".into(); profile(&mut path, &mut e.beta_deg, of(&q::BETA_DEG), f));
+            if let Some(b) = &mut e.beta_deg {
+                at!("beta_deg".into(); profile(&mut path, b, of(&q::BETA_DEG), f));
+            }
             match &mut e.solar_flux_w_per_m2 {
                 Some(p) => at!("solar_flux_w_per_m2".into(); profile(&mut path, p, of(&q::SOLAR_FLUX_W_PER_M2), f)),
                 None => {
@@ -649,7 +659,15 @@ fn earth_view_factor(spec: &ScenarioSpec) -> f64 {
         .orbit
         .earth_radius_m
         .unwrap_or(q::EARTH_RADIUS_M.default_value());
-    (r / (r + spec.orbit.altitude_m)).powi(2)
+    let radius = match (&spec.orbit.tle, spec.orbit.altitude_m) {
+        (Some(lines), _) => lines
+            .get(1)
+            .and_then(|l| crate::orbit::tle::mean_radius_m(l))
+            .unwrap_or(f64::NAN),
+        (None, Some(h)) => r + h,
+        (None, None) => f64::NAN,
+    };
+    (r / radius).powi(2)
 }
 
 /// Every number of `spec` by key path, with unit and range; optional values that are

@@ -249,6 +249,13 @@ pub const ALTITUDE_M: Quantity = q(
         got_unit: " m",
     },
 );
+/// A shift of a dated run's start, s (a TLE is good for about a month around its epoch).
+pub const START_OFFSET_S: Quantity = q(
+    "s",
+    "−30 … 30 days (in s)",
+    Some(0.0),
+    within(-2_592_000.0, 2_592_000.0, "start offset (s)"),
+);
 pub const ORBIT_ANGLE_AT_START_DEG: Quantity = q(
     "deg",
     "any (reduced modulo 360°)",
@@ -365,6 +372,7 @@ pub const SENSOR_OFFSET_K: Quantity = q(
 /// documentation).
 pub const TABLE: &[(&str, &Quantity)] = &[
     ("ALTITUDE_M", &ALTITUDE_M),
+    ("START_OFFSET_S", &START_OFFSET_S),
     ("PRESSURE_ANGLE_DEG", &PRESSURE_ANGLE_DEG),
     ("POISSON", &POISSON),
     ("TEMPERATURE_K", &TEMPERATURE_K),

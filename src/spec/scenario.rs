@@ -307,6 +307,9 @@ impl Scenario {
                 "gives a run of {d:.3e} s; runs last {MIN_DURATION_S} s … {MAX_DURATION_S:.0e} s (31.7 years)"
             ));
         }
+        if let crate::orbit::Environment::Dated(e) = &mut self.thermal.environment {
+            e.set_horizon_s(d)?;
+        }
         self.run.duration_s = d;
         Ok(self)
     }

@@ -86,6 +86,7 @@ fn profile(
 fn environment(e: &Environment) -> Result<(), Invalid> {
     match e {
         Environment::Circular(c) => circular(c),
+        Environment::Dated(d) => dated(d),
     }
 }
 
@@ -119,6 +120,28 @@ fn circular(e: &CircularEnvironment) -> Result<(), Invalid> {
         "environment.solar_flux_w_per_m2",
         &e.solar_flux_w_per_m2,
         &|w, v| within_q(w, v, &q::SOLAR_FLUX_W_PER_M2),
+    )?;
+    within_q("environment.albedo", e.albedo, &q::ALBEDO)?;
+    within_q(
+        "environment.earth_ir_w_per_m2",
+        e.earth_ir_w_per_m2,
+        &q::EARTH_IR_W_PER_M2,
+    )?;
+    within_q("environment.space_sink_k", e.space_sink_k, &q::SPACE_SINK_K)
+}
+
+fn dated(e: &crate::orbit::dated::DatedEnvironment) -> Result<(), Invalid> {
+    within("environment.earth_radius_m", e.earth_radius_m, 1e5, 1e8)?;
+    within(
+        "environment.orbit period (s)",
+        e.mean_period_s(),
+        MIN_PERIOD_S,
+        MAX_PERIOD_S,
+    )?;
+    within_q(
+        "environment.solar_flux_w_per_m2",
+        e.solar_flux_1au_w_per_m2,
+        &q::SOLAR_FLUX_W_PER_M2,
     )?;
     within_q("environment.albedo", e.albedo, &q::ALBEDO)?;
     within_q(

@@ -225,8 +225,19 @@ pub fn to_toml(model: &ThermalModel, name: &str, orbits: f64) -> String {
          [scenario]\nname = \"{name}\"\n\n[orbit]\naltitude_m = {}\n\n\
          [environment]\nbeta_deg = {}\n\n[run]\norbits = {orbits}\n\n",
         net.nodes.len(),
-        model.environment.circular().orbit.altitude_m,
-        model.environment.circular().beta_rad.at(0.0).to_degrees()
+        model
+            .environment
+            .circular()
+            .expect("synthetic networks fly a circular orbit")
+            .orbit
+            .altitude_m,
+        model
+            .environment
+            .circular()
+            .expect("synthetic networks fly a circular orbit")
+            .beta_rad
+            .at(0.0)
+            .to_degrees()
     );
     for n in &net.nodes {
         let _ = writeln!(

@@ -1,0 +1,459 @@
+//! A real orbit on real dates: a TLE propagated by SGP4 ([`super::tle`]), the Sun where
+//! it is on each date ([`super::sun`]), the solar flux scaled by the Sun's distance,
+//! and the Earth's shadow from geometry: cylindrical, or conical with the penumbra in
+//! which the flux ramps from full to none.
+//!
+//! β, the orbit angle, the eclipses and the period follow from the geometry; nothing is
+//! given. The orbit angle θ is measured as in the circular model, from the in-plane
+//! direction closest to the Sun (θ = 0 at orbit noon), so the incidence laws of
+//! body-fixed faces of a nadir-pointing spacecraft ([`super::Incidence`]) hold as they
+//! are. Eclipse edges are found by a scan of the shadow function (a step of
+//! [`SCAN_FRACTION`] of an orbit) refined by bisection to adjacent floating-point
+//! times; an eclipse shorter than a scan step (a grazing one, within about 0.1° of the
+//! critical β) can be missed.
+
+use std::f64::consts::PI;
+
+use super::sun::{AU_M, sun_at};
+use super::tle::TleOrbit;
+use super::{EnvState, EnvironmentModel, Incidence, LoadKink};
+
+/// Mean radius of the Sun, m (IAU 2015 nominal).
+pub const SUN_RADIUS_M: f64 = 6.957e8;
+
+/// Scan step of the root searches, as a fraction of the mean period (about 29 s in LEO).
+pub const SCAN_FRACTION: f64 = 1.0 / 200.0;
+
+/// The shape of the Earth's shadow.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shadow {
+    /// A cylinder of the Earth's radius behind it: sunlit or not.
+    Cylindrical,
+    /// The umbra and penumbra cones of the Sun's disc behind the Earth: in the penumbra
+    /// the flux is the visible fraction of the disc (uniform brightness).
+    Conical,
+}
+
+impl Shadow {
+    pub const NAMES: [&'static str; 2] = ["cylindrical", "conical"];
+
+    pub fn from_name(name: &str) -> Option<Shadow> {
+        match name {
+            "cylindrical" => Some(Shadow::Cylindrical),
+            "conical" => Some(Shadow::Conical),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Shadow::Cylindrical => "cylindrical",
+            Shadow::Conical => "conical",
+        }
+    }
+}
+
+/// The environment of a TLE orbit on its dates.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DatedEnvironment {
+    pub orbit: TleOrbit,
+    pub shadow: Shadow,
+    /// Solar flux at 1 AU, W/m²; the flux at the spacecraft is this / d².
+    pub solar_flux_1au_w_per_m2: f64,
+    pub earth_radius_m: f64,
+    pub albedo: f64,
+    pub earth_ir_w_per_m2: f64,
+    pub space_sink_k: f64,
+    /// How long the run lasts, s: the span `beta_range_rad` reports on.
+    pub horizon_s: f64,
+}
+
+/// The geometry at one instant.
+#[derive(Debug, Clone, Copy)]
+pub struct Geometry {
+    /// Spacecraft position, m (TEME).
+    pub r: [f64; 3],
+    /// Unit orbit normal (r × v).
+    pub normal: [f64; 3],
+    /// Unit vector toward the Sun (from the Earth's centre; the parallax of a LEO
+    /// orbit, 4e-5 rad, is neglected except in the shadow cones).
+    pub sun: [f64; 3],
+    pub sun_distance_au: f64,
+    pub beta_rad: f64,
+    /// Orbit angle from orbit noon, rad in (−π, π].
+    pub theta_rad: f64,
+    /// Fraction of the Sun's disc visible, 0 … 1.
+    pub sun_fraction: f64,
+    /// Umbra function: < 0 inside the umbra (or the cylinder).
+    pub umbra: f64,
+    /// Penumbra function: < 0 inside the penumbra's outer cone (conical shadow only;
+    /// equal to `umbra` for the cylinder).
+    pub penumbra: f64,
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = norm(a);
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// Area of overlap of two discs of angular radii `a` and `b` whose centres are `c`
+/// apart (small angles, flat sky).
+fn disc_overlap(a: f64, b: f64, c: f64) -> f64 {
+    if c >= a + b {
+        return 0.0;
+    }
+    if c <= (a - b).abs() {
+        return PI * a.min(b).powi(2);
+    }
+    let x = ((c * c + a * a - b * b) / (2.0 * c * a)).clamp(-1.0, 1.0);
+    let y = ((c * c + b * b - a * a) / (2.0 * c * b)).clamp(-1.0, 1.0);
+    a * a * x.acos() + b * b * y.acos()
+        - 0.5
+            * ((-c + a + b) * (c + a - b) * (c - a + b) * (c + a + b))
+                .max(0.0)
+                .sqrt()
+}
+
+/// The Earth's shadow at position `r` (m, geocentric) with the Sun in direction
+/// `sun` at `sun_distance_au`: the umbra function (< 0 inside the umbra, or the
+/// cylinder), the penumbra function (< 0 inside the penumbra's outer cone; the umbra
+/// function again for the cylinder) and the visible fraction of the Sun's disc.
+///
+/// Cylindrical: |r⊥| − R behind the Earth (r·s < 0), |r| − R in front, continuous
+/// where they meet. Conical: with a and b the apparent radii of the Sun and the Earth
+/// and c the angle between their centres seen from the spacecraft, the umbra is
+/// c < b − a and the penumbra c < a + b; the visible fraction is one less the
+/// overlap of the two discs over the Sun's disc.
+pub fn shadow_at(
+    r: [f64; 3],
+    sun: [f64; 3],
+    sun_distance_au: f64,
+    shadow: Shadow,
+    earth_radius_m: f64,
+) -> (f64, f64, f64) {
+    let rn = norm(r);
+    let rs = dot(r, sun);
+    match shadow {
+        Shadow::Cylindrical => {
+            let g = if rs >= 0.0 {
+                rn - earth_radius_m
+            } else {
+                (rn * rn - rs * rs).max(0.0).sqrt() - earth_radius_m
+            };
+            (g, g, if g >= 0.0 { 1.0 } else { 0.0 })
+        }
+        Shadow::Conical => {
+            let d = sun_distance_au * AU_M;
+            let to_sun = [d * sun[0] - r[0], d * sun[1] - r[1], d * sun[2] - r[2]];
+            let ds = norm(to_sun);
+            let a = (SUN_RADIUS_M / ds).asin();
+            let b = (earth_radius_m / rn).min(1.0).asin();
+            let to_earth = [-r[0] / rn, -r[1] / rn, -r[2] / rn];
+            let c = (dot(to_sun, to_earth) / ds).clamp(-1.0, 1.0).acos();
+            let visible = if c >= a + b {
+                1.0
+            } else {
+                1.0 - disc_overlap(a, b, c) / (PI * a * a)
+            };
+            (c - (b - a), c - (a + b), visible.clamp(0.0, 1.0))
+        }
+    }
+}
+
+impl DatedEnvironment {
+    /// (R / a)², a the mean orbit radius: the Earth view factor a nadir face's loads
+    /// take by default.
+    pub fn mean_view_factor(&self) -> f64 {
+        let a = (crate::constants::EARTH_MU_M3_PER_S2
+            * (self.orbit.period_s() / (2.0 * PI)).powi(2))
+        .cbrt();
+        (self.earth_radius_m / a).powi(2)
+    }
+
+    /// Sets the run's length, propagating the orbit over it first: the propagation's
+    /// failure (a decayed or diverging orbit) with its date.
+    pub fn set_horizon_s(&mut self, horizon_s: f64) -> Result<(), String> {
+        self.orbit.check_until(horizon_s)?;
+        self.horizon_s = horizon_s;
+        Ok(())
+    }
+
+    /// The geometry at `t_s` after the start.
+    pub fn geometry(&self, t_s: f64) -> Geometry {
+        let s6 = self.orbit.state(t_s);
+        let r = [s6[0], s6[1], s6[2]];
+        let v = [s6[3], s6[4], s6[5]];
+        let sun = sun_at(self.orbit.start_jd + t_s / 86_400.0);
+        let s = sun.direction;
+        let n = unit(cross(r, v));
+        let sn = dot(s, n).clamp(-1.0, 1.0);
+        let beta = sn.asin();
+        // In-plane direction closest to the Sun (any when the Sun is on the normal).
+        let sp = [s[0] - sn * n[0], s[1] - sn * n[1], s[2] - sn * n[2]];
+        let e1 = if norm(sp) > 1e-12 {
+            unit(sp)
+        } else {
+            unit(cross(n, [0.0, 0.0, 1.0]))
+        };
+        let e2 = cross(n, e1);
+        let theta = dot(r, e2).atan2(dot(r, e1));
+        let (umbra, penumbra, sun_fraction) =
+            shadow_at(r, s, sun.distance_au, self.shadow, self.earth_radius_m);
+        Geometry {
+            r,
+            normal: n,
+            sun: s,
+            sun_distance_au: sun.distance_au,
+            beta_rad: beta,
+            theta_rad: theta,
+            sun_fraction,
+            umbra,
+            penumbra,
+        }
+    }
+
+    /// The first root of `f` strictly after `t_s` and before `until_s`, with the sign
+    /// it changes to (`true`: from ≥ 0 to < 0): a scan in steps of
+    /// [`SCAN_FRACTION`] of an orbit, refined by bisection to adjacent floats.
+    fn next_root(&self, t_s: f64, until_s: f64, f: &dyn Fn(f64) -> f64) -> Option<(f64, bool)> {
+        let dt = self.mean_period_s() * SCAN_FRACTION;
+        let mut a = t_s;
+        let mut fa = f(a);
+        while a < until_s {
+            let b = (a + dt).min(until_s);
+            let fb = f(b);
+            if (fa >= 0.0) != (fb >= 0.0) {
+                let falling = fa >= 0.0;
+                let (mut lo, mut hi) = (a, b);
+                loop {
+                    let mid = 0.5 * (lo + hi);
+                    if mid <= lo || mid >= hi {
+                        break;
+                    }
+                    if (f(mid) >= 0.0) == falling {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                // `hi` is the first float on the new side; a root at `t_s` itself is not
+                // "after" it.
+                if hi > t_s {
+                    return Some((hi, falling));
+                }
+            }
+            a = b;
+            fa = fb;
+        }
+        None
+    }
+
+    /// The orbit and its environment as `orbitlash check` reports them.
+    pub fn report(&self) -> Vec<String> {
+        let o = &self.orbit;
+        let g = self.geometry(0.0);
+        let a_m =
+            (crate::constants::EARTH_MU_M3_PER_S2 * (o.period_s() / (2.0 * PI)).powi(2)).cbrt();
+        let perigee = a_m * (1.0 - o.eccentricity) - self.earth_radius_m;
+        let apogee = a_m * (1.0 + o.eccentricity) - self.earth_radius_m;
+        let age = o.epoch_age_days();
+        vec![
+            format!(
+                "  TLE orbit (SGP4)        epoch {}, {:.2} days {} the start",
+                o.epoch_utc.format("%Y-%m-%dT%H:%M:%SZ"),
+                age.abs(),
+                if age >= 0.0 { "before" } else { "after" }
+            ),
+            format!(
+                "  start                   {}",
+                o.start_utc.format("%Y-%m-%dT%H:%M:%SZ")
+            ),
+            format!(
+                "  period                  {:.3} s ({:.2} min)",
+                o.period_s(),
+                o.period_s() / 60.0
+            ),
+            format!(
+                "  inclination             {:.3}°, eccentricity {:.5}",
+                o.inclination_deg, o.eccentricity
+            ),
+            format!(
+                "  altitude                {:.1} … {:.1} km (perigee … apogee, mean elements)",
+                perigee / 1e3,
+                apogee / 1e3
+            ),
+            format!("  β at the start          {:.2}°", g.beta_rad.to_degrees()),
+            format!(
+                "  eclipse fraction        {:.4} (the first orbit; {} shadow)",
+                self.eclipse_fraction_at(0.0),
+                self.shadow.name()
+            ),
+            format!(
+                "  Sun distance            {:.5} AU, solar flux {:.1} W/m² ({:.1} at 1 AU)",
+                g.sun_distance_au,
+                self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2),
+                self.solar_flux_1au_w_per_m2
+            ),
+        ]
+    }
+}
+
+impl EnvironmentModel for DatedEnvironment {
+    fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
+        let g = self.geometry(t_s);
+        let flux = self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2);
+        EnvState {
+            t_s,
+            orbit_angle_rad: g.theta_rad,
+            beta_rad: g.beta_rad,
+            solar_flux_w_per_m2: if sunlit { flux * g.sun_fraction } else { flux },
+            sunlit,
+        }
+    }
+
+    fn sunlit(&self, t_s: f64) -> bool {
+        self.geometry(t_s).umbra >= 0.0
+    }
+
+    fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
+        self.next_root(t_s, until_s, &|t| self.geometry(t).umbra)
+    }
+
+    /// The terminator (θ = ±90°), noon and midnight (θ = 0°, 180°) and, with a
+    /// conical shadow, the penumbra's outer edges (where the flux starts to ramp).
+    fn next_load_kink(&self, t_s: f64, kinks: &[LoadKink]) -> f64 {
+        let until = t_s + 1.01 * self.mean_period_s();
+        let mut next = f64::INFINITY;
+        for k in kinks {
+            let f: Box<dyn Fn(f64) -> f64> = match k {
+                LoadKink::Terminator => Box::new(|t| {
+                    let g = self.geometry(t);
+                    g.theta_rad.cos()
+                }),
+                LoadKink::NoonMidnight => Box::new(|t| {
+                    let g = self.geometry(t);
+                    g.theta_rad.sin()
+                }),
+            };
+            if let Some((t, _)) = self.next_root(t_s, until, &*f) {
+                next = next.min(t);
+            }
+        }
+        if self.shadow == Shadow::Conical
+            && let Some((t, _)) = self.next_root(t_s, until, &|t| self.geometry(t).penumbra)
+        {
+            next = next.min(t);
+        }
+        next
+    }
+
+    /// Orbit k covers [(k − 1) T, k T) with T the mean period.
+    fn orbit_number(&self, t_s: f64) -> u64 {
+        (t_s / self.mean_period_s()).floor().max(0.0) as u64 + 1
+    }
+
+    fn orbit_phase_deg(&self, t_s: f64) -> f64 {
+        self.geometry(t_s).theta_rad.to_degrees().rem_euclid(360.0)
+    }
+
+    fn mean_period_s(&self) -> f64 {
+        self.orbit.period_s()
+    }
+
+    fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
+        if !s.sunlit {
+            return 0.0;
+        }
+        let factor = match incidence {
+            Incidence::Tracking => 1.0,
+            _ => incidence.factor(s.orbit_angle_rad, s.beta_rad),
+        };
+        absorptivity_area_m2 * s.solar_flux_w_per_m2 * factor
+    }
+
+    /// As the circular model: α·A · S · a · F · max(0, cos θ cos β), with S the flux on
+    /// the date (the same for the Earth as for the spacecraft).
+    fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64 {
+        let flux = if s.sunlit {
+            // the penumbra dims the Sun seen by the spacecraft, not the Earth below it
+            let g = self.geometry(s.t_s);
+            self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2)
+        } else {
+            s.solar_flux_w_per_m2
+        };
+        absorptivity_area_m2
+            * flux
+            * self.albedo
+            * view_factor
+            * (s.orbit_angle_rad.cos() * s.beta_rad.cos()).max(0.0)
+    }
+
+    fn earth_ir_w(&self, emissivity_area_m2: f64, view_factor: f64) -> f64 {
+        emissivity_area_m2 * self.earth_ir_w_per_m2 * view_factor
+    }
+
+    fn breakpoints_s(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// The fraction of the orbit starting at the orbit around `t_s` spent in the umbra
+    /// (the cylinder), from its crossings.
+    fn eclipse_fraction_at(&self, t_s: f64) -> f64 {
+        let period = self.mean_period_s();
+        let t0 = (t_s / period).floor() * period;
+        let t1 = t0 + period;
+        let mut t = t0;
+        let mut lit = self.sunlit(t0);
+        let mut dark = 0.0;
+        while let Some((tc, entering)) = self.next_shadow_crossing(t, t1) {
+            if !lit {
+                dark += tc - t;
+            }
+            lit = !entering;
+            t = tc;
+        }
+        if !lit {
+            dark += t1 - t;
+        }
+        dark / period
+    }
+
+    /// β over the run, sampled every six hours (and at its end) from SGP4 directly.
+    fn beta_range_rad(&self) -> (f64, f64) {
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        let n = (self.horizon_s / 21_600.0).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let t = (k as f64 * 21_600.0).min(self.horizon_s);
+            let Ok(s6) = self.orbit.propagate(t) else {
+                continue;
+            };
+            let normal = unit(cross([s6[0], s6[1], s6[2]], [s6[3], s6[4], s6[5]]));
+            let sun = sun_at(self.orbit.start_jd + t / 86_400.0).direction;
+            let b = dot(sun, normal).clamp(-1.0, 1.0).asin();
+            lo = lo.min(b);
+            hi = hi.max(b);
+        }
+        (lo, hi)
+    }
+
+    fn report(&self) -> Vec<String> {
+        DatedEnvironment::report(self)
+    }
+}
