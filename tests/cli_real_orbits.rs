@@ -1,0 +1,140 @@
+//! Real orbits from the command line: `check` reports what a TLE orbit derives (β,
+//! eclipse fraction, period, Sun distance), a dated run passes, and a bad TLE, a bad
+//! date, a wrong shadow or a circular orbit's key beside a TLE is refused with an error
+//! naming the file, line and key (exit 2, no panic).
+
+use std::path::Path;
+
+mod common;
+use common::{assert_error, bin, tmpdir};
+
+fn tle_text() -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-tle-year.toml"),
+    )
+    .unwrap()
+}
+
+/// `check` on the TLE scenario with `old` replaced by `new`; the line `old` is on.
+fn check_with(dir: &Path, case: &str, old: &str, new: &str) -> (std::process::Output, usize) {
+    let text = tle_text();
+    let at = text.find(old).unwrap_or_else(|| panic!("{case}: `{old}` not found"));
+    let line = text[..at].matches('\n').count() + 1;
+    let file = dir.join(format!("{case}.toml"));
+    std::fs::write(&file, text.replacen(old, new, 1)).unwrap();
+    (bin().arg("check").arg(&file).output().unwrap(), line)
+}
+
+#[test]
+fn cli_check_reports_the_derived_orbit() {
+    let out = bin()
+        .arg("check")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-tle-year.toml"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "TLE orbit (SGP4)        epoch 2016-02-04T09:10:54Z",
+        "period                  5834.5",
+        "β at the start          43.4",
+        "eclipse fraction        0.30",
+        "Sun distance            0.985",
+    ] {
+        assert!(text.contains(needle), "`{needle}` missing:\n{text}");
+    }
+}
+
+#[test]
+fn cli_bad_tles_and_dates_are_refused_with_key_and_line() {
+    let dir = tmpdir("real-orbits");
+    let l1 = "1 39444U 13066AE  16035.38257241  .00000865  00000-0  11531-3 0  9990";
+    let cases: [(&str, &str, &str, &[&str]); 8] = [
+        (
+            "checksum",
+            l1,
+            &l1.replace("0  9990", "0  9991"),
+            &["`orbit.tle[0]`", "checksum 1", "sum to 150"],
+        ),
+        (
+            "short",
+            "262.6940 14.80829622117779",
+            "262.6940 14.80829622",
+            &["`orbit.tle[1]`", "has 63 characters"],
+        ),
+        (
+            "one-line",
+            "  \"2 39444  97.7004  94.3150 0060634  98.1157 262.6940 14.80829622117779\",\n",
+            "",
+            &["`orbit.tle`", "lists 1 line(s)"],
+        ),
+        (
+            "date",
+            "2016-02-04T00:00:00Z",
+            "2016-02-30T00:00:00Z",
+            &["`orbit.start_utc`", "not a UTC time"],
+        ),
+        (
+            "far-from-epoch",
+            "2016-02-04T00:00:00Z",
+            "2016-06-04T00:00:00Z",
+            &["`orbit.start_utc`", "days after the TLE's epoch"],
+        ),
+        (
+            "shadow",
+            "shadow = \"conical\"",
+            "shadow = \"round\"",
+            &["`orbit.shadow`", "unknown shadow `round`"],
+        ),
+        (
+            "altitude-beside-tle",
+            "shadow = \"conical\"",
+            "altitude_m = 5.0e5",
+            &["`orbit.altitude_m`", "follows from the TLE"],
+        ),
+        (
+            "beta-beside-tle",
+            "space_sink_k = 3.0",
+            "space_sink_k = 3.0\nbeta_deg = 20.0",
+            &["`environment.beta_deg`", "follows from the TLE"],
+        ),
+    ];
+    for (case, old, new, needles) in cases {
+        let (out, line) = check_with(&dir, case, old, new);
+        let file = format!("{case}.toml:");
+        let mut all: Vec<&str> = needles.to_vec();
+        all.push(&file);
+        assert_error(case, &out, &all);
+        // the error points at the line the change is on (or the table holding it)
+        let first = common::first_error_line(&out);
+        let at: usize = first
+            .split(&file)
+            .nth(1)
+            .and_then(|s| s.split(':').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        assert!(
+            at > 0 && at.abs_diff(line) <= 6,
+            "{case}: error at line {at}, change at line {line}: {first}"
+        );
+    }
+}
+
+#[test]
+fn cli_a_dated_run_passes_and_reports_its_beta_range() {
+    let dir = tmpdir("real-orbit-run");
+    let out = bin()
+        .arg("run")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-tle-year.toml"))
+        .args(["--orbits", "20", "--json"])
+        .arg(dir.join("s.json"))
+        .arg("--no-log")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("beta 43.4"), "{text}");
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(json["verdict"], "pass");
+}
