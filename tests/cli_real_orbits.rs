@@ -18,7 +18,9 @@ fn tle_text() -> String {
 /// `check` on the TLE scenario with `old` replaced by `new`; the line `old` is on.
 fn check_with(dir: &Path, case: &str, old: &str, new: &str) -> (std::process::Output, usize) {
     let text = tle_text();
-    let at = text.find(old).unwrap_or_else(|| panic!("{case}: `{old}` not found"));
+    let at = text
+        .find(old)
+        .unwrap_or_else(|| panic!("{case}: `{old}` not found"));
     let line = text[..at].matches('\n').count() + 1;
     let file = dir.join(format!("{case}.toml"));
     std::fs::write(&file, text.replacen(old, new, 1)).unwrap();
@@ -131,7 +133,11 @@ fn cli_a_dated_run_passes_and_reports_its_beta_range() {
         .arg("--no-log")
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("beta 43.4"), "{text}");
     let json: serde_json::Value =

@@ -7,10 +7,10 @@
 //! given. The orbit angle θ is measured as in the circular model, from the in-plane
 //! direction closest to the Sun (θ = 0 at orbit noon), so the incidence laws of
 //! body-fixed faces of a nadir-pointing spacecraft ([`super::Incidence`]) hold as they
-//! are. Eclipse edges are found by a scan of the shadow function (a step of
-//! [`SCAN_FRACTION`] of an orbit) refined by bisection to adjacent floating-point
-//! times; an eclipse shorter than a scan step (a grazing one, within about 0.1° of the
-//! critical β) can be missed.
+//! are. Eclipse edges: on each night half of the orbit (cos θ < 0, found by a scan of
+//! an eighth of an orbit) the shadow function falls to one minimum near midnight and
+//! rises; the minimum is found by golden section and each edge by bisection to
+//! adjacent floating-point times, so grazing eclipses of any length are found.
 
 use std::f64::consts::PI;
 
@@ -20,9 +20,6 @@ use super::{EnvState, EnvironmentModel, Incidence, LoadKink};
 
 /// Mean radius of the Sun, m (IAU 2015 nominal).
 pub const SUN_RADIUS_M: f64 = 6.957e8;
-
-/// Scan step of the root searches, as a fraction of the mean period (about 29 s in LEO).
-pub const SCAN_FRACTION: f64 = 1.0 / 200.0;
 
 /// The shape of the Earth's shadow.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -130,6 +127,85 @@ fn disc_overlap(a: f64, b: f64, c: f64) -> f64 {
                 .sqrt()
 }
 
+/// The first float in (`lo`, `hi`] on the far side of `f`'s sign change from `lo`
+/// (`falling`: `f(lo)` ≥ 0 and `f(hi)` < 0): the Illinois form of regula falsi until
+/// the bracket is a microsecond wide, then bisection to adjacent floats (the same
+/// float as bisection alone: there is one sign change between adjacent floats).
+fn bisect(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, falling: bool) -> f64 {
+    let (mut lo, mut hi) = (lo, hi);
+    let (mut f_lo, mut f_hi) = (f(lo), f(hi));
+    let mut side = 0i8;
+    for _ in 0..60 {
+        if hi - lo <= 1e-6 || !(f_lo.is_finite() && f_hi.is_finite()) {
+            break;
+        }
+        let mut c = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+        if !(c > lo && c < hi) {
+            c = 0.5 * (lo + hi);
+        }
+        let fc = f(c);
+        if (fc >= 0.0) == falling {
+            lo = c;
+            f_lo = fc;
+            if side == -1 {
+                f_hi *= 0.5;
+            }
+            side = -1;
+        } else {
+            hi = c;
+            f_hi = fc;
+            if side == 1 {
+                f_lo *= 0.5;
+            }
+            side = 1;
+        }
+    }
+    loop {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            return hi;
+        }
+        if (f(mid) >= 0.0) == falling {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+}
+
+/// The minimum of a unimodal `f` on [`a`, `b`] by golden section, to 1e-3 of the
+/// interval (a shadow function's minimum need not be exact: the roots on either side
+/// are bisected to the float).
+fn golden_minimum(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut a, mut b) = (a, b);
+    let tol = 1e-3 * (b - a).abs();
+    let mut c = b - r * (b - a);
+    let mut d = a + r * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    while (b - a).abs() > tol {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - r * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + r * (b - a);
+            fd = f(d);
+        }
+    }
+    let m = 0.5 * (a + b);
+    // the ends themselves when lower (a start past the minimum)
+    [a, m, b]
+        .into_iter()
+        .min_by(|x, y| f(*x).total_cmp(&f(*y)))
+        .unwrap()
+}
+
 /// The Earth's shadow at position `r` (m, geocentric) with the Sun in direction
 /// `sun` at `sun_distance_au`: the umbra function (< 0 inside the umbra, or the
 /// cylinder), the penumbra function (< 0 inside the penumbra's outer cone; the umbra
@@ -158,6 +234,9 @@ pub fn shadow_at(
             };
             (g, g, if g >= 0.0 { 1.0 } else { 0.0 })
         }
+        // In front of the Earth (r·s ≥ 0) the Sun is fully visible; the searches use
+        // only the sign there.
+        Shadow::Conical if rs >= 0.0 => (rn - earth_radius_m, rn - earth_radius_m, 1.0),
         Shadow::Conical => {
             let d = sun_distance_au * AU_M;
             let to_sun = [d * sun[0] - r[0], d * sun[1] - r[1], d * sun[2] - r[2]];
@@ -196,11 +275,11 @@ impl DatedEnvironment {
 
     /// The geometry at `t_s` after the start.
     pub fn geometry(&self, t_s: f64) -> Geometry {
-        let s6 = self.orbit.state(t_s);
-        let r = [s6[0], s6[1], s6[2]];
-        let v = [s6[3], s6[4], s6[5]];
-        let sun = sun_at(self.orbit.start_jd + t_s / 86_400.0);
-        let s = sun.direction;
+        let x = self.orbit.sample(t_s);
+        let r = [x[0], x[1], x[2]];
+        let v = [x[3], x[4], x[5]];
+        let s = [x[6], x[7], x[8]];
+        let sun_distance_au = x[9];
         let n = unit(cross(r, v));
         let sn = dot(s, n).clamp(-1.0, 1.0);
         let beta = sn.asin();
@@ -214,12 +293,12 @@ impl DatedEnvironment {
         let e2 = cross(n, e1);
         let theta = dot(r, e2).atan2(dot(r, e1));
         let (umbra, penumbra, sun_fraction) =
-            shadow_at(r, s, sun.distance_au, self.shadow, self.earth_radius_m);
+            shadow_at(r, s, sun_distance_au, self.shadow, self.earth_radius_m);
         Geometry {
             r,
             normal: n,
             sun: s,
-            sun_distance_au: sun.distance_au,
+            sun_distance_au,
             beta_rad: beta,
             theta_rad: theta,
             sun_fraction,
@@ -229,37 +308,88 @@ impl DatedEnvironment {
     }
 
     /// The first root of `f` strictly after `t_s` and before `until_s`, with the sign
-    /// it changes to (`true`: from ≥ 0 to < 0): a scan in steps of
-    /// [`SCAN_FRACTION`] of an orbit, refined by bisection to adjacent floats.
-    fn next_root(&self, t_s: f64, until_s: f64, f: &dyn Fn(f64) -> f64) -> Option<(f64, bool)> {
-        let dt = self.mean_period_s() * SCAN_FRACTION;
+    /// it changes to (`true`: from ≥ 0 to < 0): a scan in steps of `step_s`, refined
+    /// by bisection to adjacent floats. `f` must not change sign twice within a step.
+    fn next_root(
+        &self,
+        t_s: f64,
+        until_s: f64,
+        step_s: f64,
+        f: &dyn Fn(f64) -> f64,
+    ) -> Option<(f64, bool)> {
         let mut a = t_s;
         let mut fa = f(a);
         while a < until_s {
-            let b = (a + dt).min(until_s);
+            let b = (a + step_s).min(until_s);
             let fb = f(b);
             if (fa >= 0.0) != (fb >= 0.0) {
                 let falling = fa >= 0.0;
-                let (mut lo, mut hi) = (a, b);
-                loop {
-                    let mid = 0.5 * (lo + hi);
-                    if mid <= lo || mid >= hi {
-                        break;
-                    }
-                    if (f(mid) >= 0.0) == falling {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                // `hi` is the first float on the new side; a root at `t_s` itself is not
-                // "after" it.
+                let hi = bisect(f, a, b, falling);
+                // a root at `t_s` itself is not "after" it
                 if hi > t_s {
                     return Some((hi, falling));
                 }
             }
             a = b;
             fa = fb;
+        }
+        None
+    }
+
+    /// The next time after `t_s` (before `until_s`) at which cos θ changes sign with
+    /// the given direction (`falling`: entering the night half, θ = 90°); θ advances
+    /// monotonically, so a scan of an eighth of an orbit cannot step over two roots.
+    fn next_terminator(&self, t_s: f64, until_s: f64, falling: bool) -> Option<f64> {
+        let step = self.mean_period_s() / 8.0;
+        let mut t = t_s;
+        while let Some((tc, f)) =
+            self.next_root(t, until_s, step, &|t| self.geometry(t).theta_rad.cos())
+        {
+            if f == falling {
+                return Some(tc);
+            }
+            t = tc;
+        }
+        None
+    }
+
+    /// The first sign change of a shadow function `f` (the umbra's or the penumbra's)
+    /// after `t_s`. On the day half (cos θ ≥ 0) the spacecraft is in front of the Earth
+    /// and lit; on each night half `f` falls to one minimum near midnight and rises
+    /// again, so the minimum is found by golden section and each side's root by
+    /// bisection: a grazing eclipse of any length is found.
+    fn next_shadow_edge(
+        &self,
+        t_s: f64,
+        until_s: f64,
+        f: &dyn Fn(f64) -> f64,
+    ) -> Option<(f64, bool)> {
+        let mut t = t_s;
+        while t < until_s {
+            if self.geometry(t).theta_rad.cos() >= 0.0 {
+                t = self.next_terminator(t, until_s, true)?;
+            }
+            let night_end = self.next_terminator(t, until_s, false).unwrap_or(until_s);
+            let f_t = f(t);
+            let t_min = golden_minimum(f, t, night_end);
+            if f_t >= 0.0 {
+                if f(t_min) < 0.0 {
+                    let hi = bisect(f, t, t_min, true);
+                    if hi > t_s {
+                        return Some((hi, true));
+                    }
+                }
+            } else if f(night_end) >= 0.0 {
+                let lo = if t_min > t { t_min } else { t };
+                let hi = bisect(f, lo, night_end, false);
+                if hi > t_s {
+                    return Some((hi, false));
+                }
+            }
+            if night_end >= until_s {
+                return None;
+            }
+            t = night_end;
         }
         None
     }
@@ -332,31 +462,28 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
-        self.next_root(t_s, until_s, &|t| self.geometry(t).umbra)
+        self.next_shadow_edge(t_s, until_s, &|t| self.geometry(t).umbra)
     }
 
     /// The terminator (θ = ±90°), noon and midnight (θ = 0°, 180°) and, with a
     /// conical shadow, the penumbra's outer edges (where the flux starts to ramp).
     fn next_load_kink(&self, t_s: f64, kinks: &[LoadKink]) -> f64 {
         let until = t_s + 1.01 * self.mean_period_s();
+        // θ advances monotonically: an eighth of an orbit holds at most one root of
+        // cos θ or sin θ
+        let step = self.mean_period_s() / 8.0;
         let mut next = f64::INFINITY;
         for k in kinks {
             let f: Box<dyn Fn(f64) -> f64> = match k {
-                LoadKink::Terminator => Box::new(|t| {
-                    let g = self.geometry(t);
-                    g.theta_rad.cos()
-                }),
-                LoadKink::NoonMidnight => Box::new(|t| {
-                    let g = self.geometry(t);
-                    g.theta_rad.sin()
-                }),
+                LoadKink::Terminator => Box::new(|t| self.geometry(t).theta_rad.cos()),
+                LoadKink::NoonMidnight => Box::new(|t| self.geometry(t).theta_rad.sin()),
             };
-            if let Some((t, _)) = self.next_root(t_s, until, &*f) {
+            if let Some((t, _)) = self.next_root(t_s, until, step, &*f) {
                 next = next.min(t);
             }
         }
         if self.shadow == Shadow::Conical
-            && let Some((t, _)) = self.next_root(t_s, until, &|t| self.geometry(t).penumbra)
+            && let Some((t, _)) = self.next_shadow_edge(t_s, until, &|t| self.geometry(t).penumbra)
         {
             next = next.min(t);
         }
