@@ -144,3 +144,62 @@ fn cli_a_dated_run_passes_and_reports_its_beta_range() {
         serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
     assert_eq!(json["verdict"], "pass");
 }
+
+#[test]
+fn cli_environment_reports_eclipses_and_writes_the_series() {
+    let dir = tmpdir("environment");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // Circular reference: two eclipses of 2φ/ω = 0.36959 × 5676.978 s = 2098.16 s.
+    let out = bin()
+        .arg("environment")
+        .arg(root.join("scenarios/reference-hinge.toml"))
+        .args(["--orbits", "2", "--csv"])
+        .arg(dir.join("c.csv"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("eclipses: 2 (0.3696"), "{text}");
+    assert!(text.contains("2098.16"), "{text}");
+    let csv = std::fs::read_to_string(dir.join("c.csv")).unwrap();
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "time_s,orbit_angle_deg,sunlit,beta_deg,solar_flux_w_per_m2"
+    );
+    assert_eq!(csv.lines().count(), 1 + 721);
+    // TLE, conical shadow: a dated series with a penumbra ramp between full and none.
+    let out = bin()
+        .arg("environment")
+        .arg(root.join("scenarios/hinge-tle-year.toml"))
+        .args(["--orbits", "1", "--step-s", "1", "--csv"])
+        .arg(dir.join("t.csv"))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let csv = std::fs::read_to_string(dir.join("t.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,utc,orbit_angle_deg,sunlit,beta_deg,solar_flux_w_per_m2"
+    );
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert!(rows[0][1].starts_with("2016-02-04T00:00:00"));
+    let lit: Vec<f64> = rows.iter().map(|r| r[3].parse().unwrap()).collect();
+    let partial = lit.iter().filter(|&&f| f > 0.0 && f < 1.0).count();
+    // two penumbra crossings of about 12 s each at 1 s rows
+    assert!((16..=40).contains(&partial), "{partial} penumbra rows");
+    assert!(lit.iter().all(|f| (0.0..=1.0).contains(f)));
+    // the output may not be the scenario it reads
+    let copy = dir.join("s.toml");
+    std::fs::copy(root.join("scenarios/hinge-tle-year.toml"), &copy).unwrap();
+    let out = bin()
+        .arg("environment")
+        .arg(&copy)
+        .arg("--csv")
+        .arg(&copy)
+        .output()
+        .unwrap();
+    assert_error("clobber", &out, &["s.toml"]);
+}

@@ -12,6 +12,7 @@ mod backlash;
 mod bench;
 mod check;
 mod diagnose;
+mod environment;
 mod estimate;
 mod export;
 mod margins;
@@ -79,6 +80,9 @@ enum Command {
 (consistent, explained or unexplained); 2 on any error."
     )]
     Diagnose(diagnose::DiagnoseArgs),
+    /// The orbit's environment: β, eclipses (entry, exit, length), the Sun's distance
+    /// and flux, and with --csv their time series.
+    Environment(environment::EnvironmentArgs),
     /// Convert an MCAP log back to CSV (the layout of `run --csv`); a cut-off log is
     /// read up to its last whole message.
     ExportCsv(export::ExportArgs),
@@ -113,6 +117,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
         Command::Bench(a) => done(bench::bench(a)),
         Command::Backlash(a) => backlash::backlash(a),
         Command::Diagnose(a) => diagnose::diagnose(a),
+        Command::Environment(a) => done(environment::environment(a)),
         Command::ExportCsv(a) => done(export::export(a)),
         Command::Recover(a) => done(recover::recover(a)),
     }

@@ -583,4 +583,9 @@ impl EnvironmentModel for DatedEnvironment {
     fn report(&self) -> Vec<String> {
         DatedEnvironment::report(self)
     }
+
+    fn sun_fraction(&self, t_s: f64) -> f64 {
+        let g = self.geometry(t_s);
+        if g.umbra < 0.0 { 0.0 } else { g.sun_fraction }
+    }
 }

@@ -226,6 +226,11 @@ pub trait EnvironmentModel {
     fn beta_range_rad(&self) -> (f64, f64);
     /// The orbit and its eclipses as `orbitlash check` reports them, one line each.
     fn report(&self) -> Vec<String>;
+    /// The fraction of the Sun's disc the spacecraft sees at `t_s`: 1 sunlit, 0 in
+    /// the umbra, between in a penumbra.
+    fn sun_fraction(&self, t_s: f64) -> f64 {
+        if self.sunlit(t_s) { 1.0 } else { 0.0 }
+    }
 }
 
 /// The environment of a model: one of the implementations of [`EnvironmentModel`].
@@ -253,6 +258,14 @@ impl Environment {
         match self {
             Environment::Circular(c) => Some(c),
             Environment::Dated(_) => None,
+        }
+    }
+
+    /// When t = 0 is, for an environment on real dates.
+    pub fn start_utc(&self) -> Option<sgp4::chrono::NaiveDateTime> {
+        match self {
+            Environment::Circular(_) => None,
+            Environment::Dated(d) => Some(d.orbit.start_utc),
         }
     }
 
@@ -332,6 +345,9 @@ impl EnvironmentModel for Environment {
     }
     fn report(&self) -> Vec<String> {
         each_kind!(self, e => EnvironmentModel::report(e))
+    }
+    fn sun_fraction(&self, t_s: f64) -> f64 {
+        each_kind!(self, e => EnvironmentModel::sun_fraction(e, t_s))
     }
 }
 

@@ -1,0 +1,171 @@
+//! `orbitlash environment`: the orbit's heat-flux environment as the commercial tools
+//! report it: β, eclipses (entry, exit, length), the Sun's distance and flux, and a
+//! time series (`--csv`) of the orbit angle, the sunlit fraction and β.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use clap::Args;
+
+use orbitlash::io::atomic::{AtomicFile, OutputPolicy};
+use orbitlash::orbit::EnvironmentModel;
+
+use super::table::{self, Align};
+use super::{load_with, orbits_arg, print_out};
+
+/// The most rows `--csv` writes.
+const MAX_ROWS: f64 = 1e7;
+/// Eclipses listed one by one before the rest are summed up.
+const LISTED_ECLIPSES: usize = 8;
+
+#[derive(Args, Debug)]
+pub struct EnvironmentArgs {
+    /// Scenario file (TOML).
+    scenario: PathBuf,
+    /// Orbits to cover from the start.
+    #[arg(long, value_parser = orbits_arg, default_value = "1")]
+    orbits: f64,
+    /// Interval between CSV rows, s (default: 1/360 of an orbit).
+    #[arg(long, value_parser = orbits_arg)]
+    step_s: Option<f64>,
+    /// Write the time series here: time_s, utc (a dated scenario), orbit_angle_deg,
+    /// sunlit (0 … 1 in a penumbra), beta_deg, solar_flux_w_per_m2 (at the spacecraft,
+    /// before shadow).
+    #[arg(long)]
+    csv: Option<PathBuf>,
+    /// Change a number of the scenario by its key path (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    sets: Vec<String>,
+}
+
+pub fn environment(a: EnvironmentArgs) -> Result<()> {
+    let loaded = load_with(Some(&a.scenario), &a.sets)?;
+    // The output is checked and opened before any work: never an input, a device or
+    // a link.
+    let mut csv = match &a.csv {
+        Some(p) => Some(AtomicFile::create(
+            p,
+            &OutputPolicy::reading(&loaded.inputs()),
+        )?),
+        None => None,
+    };
+    let sc = loaded.scenario.with_orbits(a.orbits).map_err(|m| {
+        anyhow::anyhow!("--orbits {}: {m}", orbitlash::units::num(a.orbits))
+    })?;
+    let env = &sc.thermal.environment;
+    let period = env.mean_period_s();
+    let horizon = sc.run.duration_s;
+    let step = a.step_s.unwrap_or(period / 360.0);
+    if horizon / step > MAX_ROWS {
+        bail!(
+            "--step-s {step} over {horizon:.0} s gives {:.2e} rows; at most {MAX_ROWS:.0e}: use a longer step or fewer orbits",
+            horizon / step
+        );
+    }
+    let start = env.start_utc();
+    let utc = |t: f64| {
+        start.map(|s| {
+            (s + sgp4::chrono::Duration::nanoseconds((t * 1e9).round() as i64))
+                .format("%Y-%m-%dT%H:%M:%S%.3fZ")
+                .to_string()
+        })
+    };
+
+    let mut o = String::new();
+    outln!(o, "{}: {} ({:.3} orbits, {horizon:.1} s)", loaded.file, sc.name, a.orbits);
+    for line in env.report() {
+        outln!(o, "{line}");
+    }
+    let (b_lo, b_hi) = env.beta_range_rad();
+    outln!(
+        o,
+        "  β range                 {:.2}° … {:.2}°",
+        b_lo.to_degrees(),
+        b_hi.to_degrees()
+    );
+
+    // Eclipses: each entry and exit the run would land on.
+    let mut eclipses: Vec<(f64, f64)> = Vec::new();
+    let mut t = 0.0;
+    let mut lit = env.sunlit(0.0);
+    let mut entered = if lit { None } else { Some(0.0) };
+    while let Some((tc, entering)) = env.next_shadow_crossing(t, horizon) {
+        if entering {
+            entered = Some(tc);
+        } else if let Some(e) = entered.take() {
+            eclipses.push((e, tc));
+        }
+        lit = !entering;
+        t = tc;
+    }
+    if !lit && let Some(e) = entered {
+        eclipses.push((e, horizon));
+    }
+    let dark: f64 = eclipses.iter().map(|(a, b)| b - a).sum();
+    outln!(
+        o,
+        "\neclipses: {} ({:.4} of the time in the umbra)",
+        eclipses.len(),
+        dark / horizon
+    );
+    if !eclipses.is_empty() {
+        let head: Vec<&str> = if start.is_some() {
+            vec!["entry s", "exit s", "length s", "entry UTC"]
+        } else {
+            vec!["entry s", "exit s", "length s"]
+        };
+        let mut tb = table::new(&head, &[Align::Right, Align::Right, Align::Right, Align::Left]);
+        for (e, x) in eclipses.iter().take(LISTED_ECLIPSES) {
+            let mut row = vec![format!("{e:.3}"), format!("{x:.3}"), format!("{:.3}", x - e)];
+            if let Some(u) = utc(*e) {
+                row.push(u);
+            }
+            tb.add_row(row);
+        }
+        o += &table::render(&tb, "  ");
+        if eclipses.len() > LISTED_ECLIPSES {
+            let lengths: Vec<f64> = eclipses.iter().map(|(a, b)| b - a).collect();
+            let (lo, hi) = lengths
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+            outln!(
+                o,
+                "  … and {} more; lengths {lo:.1} … {hi:.1} s",
+                eclipses.len() - LISTED_ECLIPSES
+            );
+        }
+    }
+
+    if let (Some(file), Some(path)) = (csv.as_mut(), &a.csv) {
+        let mut header = vec!["time_s"];
+        if start.is_some() {
+            header.push("utc");
+        }
+        header.extend(["orbit_angle_deg", "sunlit", "beta_deg", "solar_flux_w_per_m2"]);
+        let mut text = header.join(",") + "\n";
+        let rows = (horizon / step).floor() as u64;
+        for k in 0..=rows {
+            let t = (k as f64 * step).min(horizon);
+            let s = env.state_with(t, true);
+            let mut cells = vec![orbitlash::units::exact(t)];
+            if let Some(u) = utc(t) {
+                cells.push(u);
+            }
+            cells.push(format!("{:.6}", env.orbit_phase_deg(t)));
+            cells.push(format!("{:.6}", env.sun_fraction(t)));
+            cells.push(format!("{:.6}", s.beta_rad.to_degrees()));
+            // the flux at the spacecraft before any shadow
+            let unshadowed = env.state_with(t, false).solar_flux_w_per_m2;
+            cells.push(format!("{unshadowed:.4}"));
+            text += &cells.join(",");
+            text.push('\n');
+        }
+        file.write_all(text.as_bytes())?;
+        outln!(o, "\ncsv: {} ({} rows every {step:.3} s)", path.display(), rows + 1);
+    }
+    if let Some(f) = csv {
+        f.commit()?;
+    }
+    print_out(&o)
+}
