@@ -157,7 +157,11 @@ fn cli_environment_reports_eclipses_and_writes_the_series() {
         .arg(dir.join("c.csv"))
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("eclipses: 2 (0.3696"), "{text}");
     assert!(text.contains("2098.16"), "{text}");
@@ -175,7 +179,11 @@ fn cli_environment_reports_eclipses_and_writes_the_series() {
         .arg(dir.join("t.csv"))
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let csv = std::fs::read_to_string(dir.join("t.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(

@@ -50,9 +50,10 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         )?),
         None => None,
     };
-    let sc = loaded.scenario.with_orbits(a.orbits).map_err(|m| {
-        anyhow::anyhow!("--orbits {}: {m}", orbitlash::units::num(a.orbits))
-    })?;
+    let sc = loaded
+        .scenario
+        .with_orbits(a.orbits)
+        .map_err(|m| anyhow::anyhow!("--orbits {}: {m}", orbitlash::units::num(a.orbits)))?;
     let env = &sc.thermal.environment;
     let period = env.mean_period_s();
     let horizon = sc.run.duration_s;
@@ -73,7 +74,13 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     };
 
     let mut o = String::new();
-    outln!(o, "{}: {} ({:.3} orbits, {horizon:.1} s)", loaded.file, sc.name, a.orbits);
+    outln!(
+        o,
+        "{}: {} ({:.3} orbits, {horizon:.1} s)",
+        loaded.file,
+        sc.name,
+        a.orbits
+    );
     for line in env.report() {
         outln!(o, "{line}");
     }
@@ -115,9 +122,16 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         } else {
             vec!["entry s", "exit s", "length s"]
         };
-        let mut tb = table::new(&head, &[Align::Right, Align::Right, Align::Right, Align::Left]);
+        let mut tb = table::new(
+            &head,
+            &[Align::Right, Align::Right, Align::Right, Align::Left],
+        );
         for (e, x) in eclipses.iter().take(LISTED_ECLIPSES) {
-            let mut row = vec![format!("{e:.3}"), format!("{x:.3}"), format!("{:.3}", x - e)];
+            let mut row = vec![
+                format!("{e:.3}"),
+                format!("{x:.3}"),
+                format!("{:.3}", x - e),
+            ];
             if let Some(u) = utc(*e) {
                 row.push(u);
             }
@@ -128,7 +142,9 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
             let lengths: Vec<f64> = eclipses.iter().map(|(a, b)| b - a).collect();
             let (lo, hi) = lengths
                 .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+                    (l.min(*x), h.max(*x))
+                });
             outln!(
                 o,
                 "  … and {} more; lengths {lo:.1} … {hi:.1} s",
@@ -142,7 +158,12 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         if start.is_some() {
             header.push("utc");
         }
-        header.extend(["orbit_angle_deg", "sunlit", "beta_deg", "solar_flux_w_per_m2"]);
+        header.extend([
+            "orbit_angle_deg",
+            "sunlit",
+            "beta_deg",
+            "solar_flux_w_per_m2",
+        ]);
         let mut text = header.join(",") + "\n";
         let rows = (horizon / step).floor() as u64;
         for k in 0..=rows {
@@ -162,7 +183,12 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
             text.push('\n');
         }
         file.write_all(text.as_bytes())?;
-        outln!(o, "\ncsv: {} ({} rows every {step:.3} s)", path.display(), rows + 1);
+        outln!(
+            o,
+            "\ncsv: {} ({} rows every {step:.3} s)",
+            path.display(),
+            rows + 1
+        );
     }
     if let Some(f) = csv {
         f.commit()?;
