@@ -145,6 +145,10 @@ fn core_every_quantity_bound_agrees_across_toml_set_set_param_and_dispersion() {
             "scenarios/hinge-tle-year.toml",
             read("scenarios/hinge-tle-year.toml"),
         ),
+        (
+            "scenarios/cubesat-1u.toml",
+            read("scenarios/cubesat-1u.toml"),
+        ),
     ] {
         let (n, q) = check_scenario(file, &text);
         checked += n;

@@ -454,6 +454,7 @@ impl EnvironmentModel for DatedEnvironment {
             beta_rad: g.beta_rad,
             solar_flux_w_per_m2: if sunlit { flux * g.sun_fraction } else { flux },
             sunlit,
+            radius_m: norm(g.r),
         }
     }
 
@@ -582,6 +583,20 @@ impl EnvironmentModel for DatedEnvironment {
 
     fn report(&self) -> Vec<String> {
         DatedEnvironment::report(self)
+    }
+
+    fn face_environment(&self, s: &EnvState) -> super::faces::FaceEnvironment {
+        let g = self.geometry(s.t_s);
+        let flux = self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2);
+        super::faces::FaceEnvironment {
+            sun_lvlh: super::faces::sun_lvlh(s.orbit_angle_rad, s.beta_rad),
+            solar_w_per_m2: if s.sunlit { s.solar_flux_w_per_m2 } else { 0.0 },
+            solar_on_earth_w_per_m2: flux,
+            radius_m: s.radius_m,
+            earth_radius_m: self.earth_radius_m,
+            albedo: self.albedo,
+            earth_ir_w_per_m2: self.earth_ir_w_per_m2,
+        }
     }
 
     fn sun_fraction(&self, t_s: f64) -> f64 {

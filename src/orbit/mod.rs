@@ -7,6 +7,7 @@
 //! (θ = 0 is orbit noon), so the radial unit vector is `cos θ e1 + sin θ e2`.
 
 pub mod dated;
+pub mod faces;
 pub mod sun;
 pub mod table;
 pub mod tle;
@@ -173,6 +174,8 @@ pub struct EnvState {
     pub beta_rad: f64,
     pub solar_flux_w_per_m2: f64,
     pub sunlit: bool,
+    /// Distance from the Earth's centre, m.
+    pub radius_m: f64,
 }
 
 /// Where a load's slope jumps as the spacecraft goes round: the solver lands its steps
@@ -226,6 +229,8 @@ pub trait EnvironmentModel {
     fn beta_range_rad(&self) -> (f64, f64);
     /// The orbit and its eclipses as `orbitlash check` reports them, one line each.
     fn report(&self) -> Vec<String>;
+    /// What body-fixed faces see at the instant `s` (see [`faces`]).
+    fn face_environment(&self, s: &EnvState) -> faces::FaceEnvironment;
     /// The fraction of the Sun's disc the spacecraft sees at `t_s`: 1 sunlit, 0 in
     /// the umbra, between in a penumbra.
     fn sun_fraction(&self, t_s: f64) -> f64 {
@@ -348,6 +353,9 @@ impl EnvironmentModel for Environment {
     }
     fn sun_fraction(&self, t_s: f64) -> f64 {
         each_kind!(self, e => EnvironmentModel::sun_fraction(e, t_s))
+    }
+    fn face_environment(&self, s: &EnvState) -> faces::FaceEnvironment {
+        each_kind!(self, e => EnvironmentModel::face_environment(e, s))
     }
 }
 
@@ -558,6 +566,7 @@ impl EnvironmentModel for CircularEnvironment {
             beta_rad: self.beta_rad.at(t_s),
             solar_flux_w_per_m2: self.solar_flux_w_per_m2.at(t_s),
             sunlit,
+            radius_m: self.orbit.radius_m(),
         }
     }
 
@@ -656,6 +665,18 @@ impl EnvironmentModel for CircularEnvironment {
 
     fn report(&self) -> Vec<String> {
         CircularEnvironment::report(self)
+    }
+
+    fn face_environment(&self, s: &EnvState) -> faces::FaceEnvironment {
+        faces::FaceEnvironment {
+            sun_lvlh: faces::sun_lvlh(s.orbit_angle_rad, s.beta_rad),
+            solar_w_per_m2: if s.sunlit { s.solar_flux_w_per_m2 } else { 0.0 },
+            solar_on_earth_w_per_m2: s.solar_flux_w_per_m2,
+            radius_m: self.orbit.radius_m(),
+            earth_radius_m: self.orbit.earth_radius_m,
+            albedo: self.albedo,
+            earth_ir_w_per_m2: self.earth_ir_w_per_m2,
+        }
     }
 }
 

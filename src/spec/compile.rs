@@ -321,6 +321,16 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     };
     let (loads, bindings) = loads(cx, &keys, &table, sections, &modes, view_factor_default)?;
     let heaters = heaters(cx, &keys, &table, raw.heater)?;
+    let (mut loads, mut radiators) = (loads, radiators);
+    faces(
+        cx,
+        &keys,
+        &table,
+        raw.attitude,
+        raw.face,
+        &mut loads,
+        &mut radiators,
+    )?;
 
     // Gear pairs.
     let mut gears = Vec::new();
@@ -770,6 +780,91 @@ fn loads(
         });
     }
     Ok((loads, bindings))
+}
+
+/// `[attitude]` and `[[face]]`: each face a load on its node (direct Sun, albedo,
+/// Earth infrared from its orientation) and a radiative coupling εA to space, after the
+/// spec's own loads and couplings (their indices stay those of the spec).
+fn faces(
+    cx: &Cx,
+    keys: &ElementKeys,
+    table: &NodeTable,
+    attitude: Option<AttitudeSpec>,
+    specs: Vec<FaceSpec>,
+    loads: &mut Vec<Load>,
+    radiators: &mut Vec<Radiator>,
+) -> Result<(), SpecError> {
+    use crate::orbit::faces::{Attitude, Face};
+    let ap = KeyPath::new("attitude");
+    let a = attitude.unwrap_or_default();
+    let yaw_deg = cx.quantity_or_default(&q::YAW_DEG, &ap.key("yaw_deg"), a.yaw_deg)?;
+    let attitude = match a.mode.as_deref() {
+        None | Some("nadir") => Attitude::Nadir {
+            yaw_rad: yaw_deg.to_radians(),
+        },
+        Some(m) if a.yaw_deg.is_some() => {
+            return Err(cx.err(
+                &ap.key("yaw_deg"),
+                format!("turns a nadir-pointing body; mode `{m}` has no yaw"),
+            ));
+        }
+        Some("sun") => Attitude::Sun,
+        Some("tumble") => Attitude::Tumble,
+        Some(other) => {
+            return Err(cx.err(
+                &ap.key("mode"),
+                format!(
+                    "unknown attitude `{other}` (known: {})",
+                    Attitude::NAMES.join(", ")
+                ),
+            ));
+        }
+    };
+    let space = table.lookup(cx, &KeyPath::new("boundary"), SPACE)?;
+    for (i, f) in specs.into_iter().enumerate() {
+        let p = KeyPath::new("face").elem(i, &keys.face[i]);
+        let node = table.diffusion(cx, &p.key("node"), &f.node)?;
+        let np = p.key("normal");
+        let [x, y, z] = f.normal[..] else {
+            return Err(cx.err(
+                &np,
+                format!(
+                    "lists {} number(s); a normal is [x, y, z] in the body frame",
+                    f.normal.len()
+                ),
+            ));
+        };
+        for (k, v) in [x, y, z].into_iter().enumerate() {
+            cx.finite(&np.at(k), v)?;
+        }
+        let len = (x * x + y * y + z * z).sqrt();
+        if len <= 1e-9 {
+            return Err(cx.err(&np, "is the zero vector; a face needs a direction"));
+        }
+        let area = cx.quantity(&q::AREA_M2, &p.key("area_m2"), f.area_m2)?;
+        let absorptivity = cx.quantity(&q::ABSORPTIVITY, &p.key("absorptivity"), f.absorptivity)?;
+        let emissivity = cx.quantity(&q::EMISSIVITY, &p.key("emissivity"), f.emissivity)?;
+        loads.push(Load {
+            name: f
+                .name
+                .clone()
+                .unwrap_or_else(|| crate::spec::keys::face_name(&f.node, i)),
+            node,
+            kind: LoadKind::Face(Face {
+                normal_body: [x / len, y / len, z / len],
+                area_m2: area,
+                absorptivity,
+                emissivity,
+                attitude,
+            }),
+        });
+        radiators.push(Radiator {
+            a: NodeRef::Diffusion(node),
+            b: space,
+            emissivity_area_m2: emissivity * area,
+        });
+    }
+    Ok(())
 }
 
 /// `[[heater]]`: thermostat-controlled heaters.
@@ -1250,6 +1345,7 @@ fn check_names(cx: &Cx, raw: &ScenarioSpec) -> Result<(), SpecError> {
             "gear_pair",
             raw.gear_pair.iter().map(|x| x.name.as_deref()).collect(),
         ),
+        ("face", raw.face.iter().map(|x| x.name.as_deref()).collect()),
     ];
     for (section, names) in optional {
         for (i, n) in names.into_iter().enumerate() {

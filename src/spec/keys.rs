@@ -182,6 +182,7 @@ pub struct ElementKeys {
     pub mode: Vec<String>,
     pub sensor: Vec<String>,
     pub gear_pair: Vec<String>,
+    pub face: Vec<String>,
 }
 
 impl ElementKeys {
@@ -200,6 +201,7 @@ impl ElementKeys {
             "mode" => &self.mode,
             "sensor" => &self.sensor,
             "gear_pair" => &self.gear_pair,
+            "face" => &self.face,
             _ => return None,
         })
     }
@@ -218,6 +220,11 @@ fn unique(keys: impl Iterator<Item = String>) -> Vec<String> {
         out.push(key);
     }
     out
+}
+
+/// The name of face `i` on `node` when none is given: `<node>.face<i>`.
+pub fn face_name(node: &str, i: usize) -> String {
+    format!("{node}.face{i}")
 }
 
 /// The element keys of `spec` (see the module docs).
@@ -256,6 +263,12 @@ pub fn element_keys(spec: &ScenarioSpec) -> ElementKeys {
                 .map(|h| h.name.clone().unwrap_or(h.node.clone())),
         ),
         mode: unique(spec.mode.iter().map(|m| m.name.clone())),
+        face: unique(
+            spec.face
+                .iter()
+                .enumerate()
+                .map(|(i, f)| f.name.clone().unwrap_or_else(|| face_name(&f.node, i))),
+        ),
         sensor: unique(spec.sensor.iter().map(|s| s.column.clone())),
         gear_pair: unique(spec.gear_pair.iter().enumerate().map(|(i, g)| {
             g.name.clone().unwrap_or_else(|| {

@@ -54,6 +54,12 @@ pub struct ScenarioSpec {
     pub sensor: Vec<SensorSpec>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub gear_pair: Vec<GearPairSpec>,
+    /// How the body frame is oriented (for `[[face]]`s); nadir-pointing when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attitude: Option<AttitudeSpec>,
+    /// Body-fixed faces of nodes, loaded from their geometry.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub face: Vec<FaceSpec>,
     /// How numbers scatter in `orbitlash margins` (the nominal run ignores them).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub dispersion: Vec<DispersionSpec>,
@@ -381,6 +387,30 @@ pub struct DissipationSpec {
     pub power_w: ProfileSpec,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub when: Option<String>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct AttitudeSpec {
+    /// `nadir` (default), `sun` or `tumble`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mode: Option<String>,
+    /// Nadir pointing: the body frame turned about nadir, degrees.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub yaw_deg: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaceSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    pub node: String,
+    /// Outward normal in the body frame (normalised).
+    pub normal: Vec<f64>,
+    pub area_m2: f64,
+    pub absorptivity: f64,
+    pub emissivity: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

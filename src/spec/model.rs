@@ -516,7 +516,7 @@ impl Model {
             LoadKind::EarthIr {
                 emissivity_area_m2, ..
             } => *emissivity_area_m2 = product,
-            LoadKind::Dissipation { .. } => unreachable!("not an area load"),
+            LoadKind::Dissipation { .. } | LoadKind::Face(_) => unreachable!("not an area load"),
         }
         Ok(())
     }

@@ -246,6 +246,33 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
             at!("off_k".into(); f(&path, Slot::Value(&mut h.off_k), of(&q::HEATER_OFF_K)));
         });
     }
+    // A nadir-pointing body's yaw, where there are faces to turn (an absent
+    // [attitude] table is only written when the yaw is set).
+    let nadir = spec
+        .attitude
+        .as_ref()
+        .is_none_or(|a| matches!(a.mode.as_deref(), None | Some("nadir")));
+    if nadir && !spec.face.is_empty() && section("attitude") {
+        let mut yaw = spec.attitude.as_ref().and_then(|a| a.yaw_deg);
+        at!("attitude".into(); {
+            at!("yaw_deg".into(); f(&path, Slot::Optional(&mut yaw, default_of(&q::YAW_DEG)), of(&q::YAW_DEG)));
+        });
+        if yaw.is_some() {
+            spec.attitude
+                .get_or_insert_with(crate::spec::AttitudeSpec::default)
+                .yaw_deg = yaw;
+        }
+    }
+    for (fc, key) in spec.face.iter_mut().zip(&keys.face) {
+        if !element("face", key) {
+            continue;
+        }
+        at!("face".into(), key.as_str().into(); {
+            at!("area_m2".into(); f(&path, Slot::Value(&mut fc.area_m2), of(&q::AREA_M2)));
+            at!("absorptivity".into(); f(&path, Slot::Value(&mut fc.absorptivity), of(&q::ABSORPTIVITY)));
+            at!("emissivity".into(); f(&path, Slot::Value(&mut fc.emissivity), of(&q::EMISSIVITY)));
+        });
+    }
     for (md, key) in spec.mode.iter_mut().zip(&keys.mode) {
         if !element("mode", key) {
             continue;
@@ -593,7 +620,7 @@ fn join(path: &[Cow<'_, str>]) -> String {
 }
 
 /// The sections whose elements are addressed by key.
-const ELEMENT_SECTIONS: [&str; 12] = [
+const ELEMENT_SECTIONS: [&str; 13] = [
     "node",
     "boundary",
     "conductor",
@@ -606,6 +633,7 @@ const ELEMENT_SECTIONS: [&str; 12] = [
     "mode",
     "sensor",
     "gear_pair",
+    "face",
 ];
 
 /// The canonical form of a path the user typed: element keys unquoted for comparison,

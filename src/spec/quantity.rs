@@ -249,6 +249,13 @@ pub const ALTITUDE_M: Quantity = q(
         got_unit: " m",
     },
 );
+/// The yaw of a nadir-pointing body about nadir.
+pub const YAW_DEG: Quantity = q(
+    "deg",
+    "−180 … 180",
+    Some(0.0),
+    within(-180.0, 180.0, "yaw angle (deg)"),
+);
 /// A shift of a dated run's start, s (a TLE is good for about a month around its epoch).
 pub const START_OFFSET_S: Quantity = q(
     "s",
@@ -373,6 +380,7 @@ pub const SENSOR_OFFSET_K: Quantity = q(
 pub const TABLE: &[(&str, &Quantity)] = &[
     ("ALTITUDE_M", &ALTITUDE_M),
     ("START_OFFSET_S", &START_OFFSET_S),
+    ("YAW_DEG", &YAW_DEG),
     ("PRESSURE_ANGLE_DEG", &PRESSURE_ANGLE_DEG),
     ("POISSON", &POISSON),
     ("TEMPERATURE_K", &TEMPERATURE_K),

@@ -273,6 +273,15 @@ impl ThermalModel {
                     area(*emissivity_area_m2)?;
                     within_q(&w, *view_factor, &q::VIEW_FACTOR)?;
                 }
+                LoadKind::Face(f) => {
+                    area(f.area_m2)?;
+                    within_q(&w, f.absorptivity, &q::ABSORPTIVITY)?;
+                    within_q(&w, f.emissivity, &q::EMISSIVITY)?;
+                    let n2: f64 = f.normal_body.iter().map(|x| x * x).sum();
+                    if (n2 - 1.0).abs() > 1e-9 {
+                        return Err(bad(w, "a face's normal must be a unit vector"));
+                    }
+                }
                 LoadKind::Dissipation { power_w, when } => {
                     profile(&w, power_w, &|ww, v| within_q(ww, v, &q::POWER_W))?;
                     if let When::Mode(m) = when

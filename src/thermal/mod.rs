@@ -80,6 +80,9 @@ pub enum LoadKind {
         power_w: Profile,
         when: When,
     },
+    /// A body-fixed face: direct Sun, albedo and Earth infrared from its orientation
+    /// (its emission is a radiative coupling to space beside it).
+    Face(crate::orbit::faces::Face),
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -395,6 +398,10 @@ fn load_w(env: &Environment, s: &EnvState, kind: &LoadKind, modes_active: &[bool
             emissivity_area_m2,
             view_factor,
         } => (env.earth_ir_w(*emissivity_area_m2, *view_factor), true),
+        LoadKind::Face(face) => (
+            crate::orbit::faces::absorbed_w(face, &env.face_environment(s)),
+            true,
+        ),
         LoadKind::Dissipation { power_w, when } => {
             let on = match when {
                 When::Always => true,

@@ -1,0 +1,263 @@
+//! Body-fixed faces and the attitude that orients them: the direct solar, Earth-albedo
+//! and Earth-infrared flux each face receives.
+//!
+//! Frames. LVLH (local vertical, local horizontal): +x along the track (ram, in the
+//! orbit plane, perpendicular to the radius), +y the negative orbit normal, +z nadir.
+//! In it the Sun is `(−sin θ cos β, −sin β, −cos θ cos β)` for the orbit angle θ from
+//! orbit noon and β, for circular and real orbits alike. The body frame follows the
+//! attitude ([`Attitude`]); face normals are given in the body frame.
+//!
+//! Fluxes are incident, before absorptivity or emissivity:
+//! - direct Sun: S cos⁺ of the Sun's angle on the face, S already dimmed in a penumbra
+//!   and zero in the umbra;
+//! - Earth infrared: q F, with F the view factor of a tilted plate to a sphere, closed
+//!   form (Howell, *A Catalog of Radiation Heat Transfer Configuration Factors*, factor
+//!   B-? "differential planar element to sphere, plane tilted"; the same in Gilmore,
+//!   *Spacecraft Thermal Control Handbook*, vol. 1, ch. 2);
+//! - Earth albedo: the sunlight the sunlit part of the Earth the face sees reflects, a
+//!   Lambertian surface of uniform albedo a: E = ∫ (a S cos⁺ζ / π) cos⁺(n·u) dΩ over the
+//!   Earth's disc as seen from the spacecraft, ζ the solar zenith angle where the
+//!   direction u meets the ground; integrated numerically ([`ALBEDO_RINGS`] ×
+//!   [`ALBEDO_SECTORS`] cells of the disc). Unlike the common shortcut a S F cos ζ at the
+//!   sub-satellite point, this holds at high β and near the terminator.
+
+use std::f64::consts::PI;
+
+/// Rings (in the nadir angle) and sectors (in azimuth) of the albedo integral.
+pub const ALBEDO_RINGS: usize = 24;
+pub const ALBEDO_SECTORS: usize = 48;
+
+/// How the spacecraft's body frame is oriented.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Attitude {
+    /// Body axes on LVLH (+x ram, +y −orbit normal, +z nadir), turned by `yaw_rad`
+    /// about +z (nadir).
+    Nadir { yaw_rad: f64 },
+    /// Body +z on the Sun, body +x as close to nadir as it can be (toward the ram when
+    /// the Sun is at the zenith or nadir).
+    Sun,
+    /// Passively stabilised and tumbling: every face sees the average over all
+    /// orientations (each orientation equally likely): S/4 of direct Sun, the Earth's
+    /// solid angle over 4π of its infrared, a quarter of the albedo radiance
+    /// integrated over the Earth's disc. Fits a slowly tumbling small satellite over an
+    /// orbit, not its instants.
+    Tumble,
+}
+
+impl Attitude {
+    pub const NAMES: [&'static str; 3] = ["nadir", "sun", "tumble"];
+}
+
+/// A body-fixed flat face.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Face {
+    /// Outward unit normal, body frame.
+    pub normal_body: [f64; 3],
+    pub area_m2: f64,
+    /// Solar absorptivity α (direct Sun and albedo).
+    pub absorptivity: f64,
+    /// Infrared emissivity ε (Earth infrared absorbed; the face's own emission is a
+    /// radiative coupling to space).
+    pub emissivity: f64,
+    pub attitude: Attitude,
+}
+
+/// What a face receives, W/m², before absorptivity.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Incident {
+    pub solar_w_per_m2: f64,
+    pub albedo_w_per_m2: f64,
+    pub earth_ir_w_per_m2: f64,
+}
+
+/// The environment of the faces at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FaceEnvironment {
+    /// Unit Sun direction in LVLH.
+    pub sun_lvlh: [f64; 3],
+    /// Direct solar flux at the spacecraft, W/m²: dimmed in a penumbra, 0 in the umbra.
+    pub solar_w_per_m2: f64,
+    /// Solar flux on the Earth, W/m² (no shadow).
+    pub solar_on_earth_w_per_m2: f64,
+    /// Orbit radius and Earth radius, m.
+    pub radius_m: f64,
+    pub earth_radius_m: f64,
+    pub albedo: f64,
+    pub earth_ir_w_per_m2: f64,
+}
+
+/// The Sun in LVLH for the orbit angle θ from orbit noon and β.
+pub fn sun_lvlh(theta_rad: f64, beta_rad: f64) -> [f64; 3] {
+    let (st, ct) = theta_rad.sin_cos();
+    let (sb, cb) = beta_rad.sin_cos();
+    [-st * cb, -sb, -ct * cb]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// The body axes (x, y, z) in LVLH under `attitude` with the Sun at `sun`.
+pub fn body_axes(attitude: Attitude, sun: [f64; 3]) -> [[f64; 3]; 3] {
+    match attitude {
+        Attitude::Nadir { yaw_rad } => {
+            let (s, c) = yaw_rad.sin_cos();
+            [[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]]
+        }
+        Attitude::Sun | Attitude::Tumble => {
+            let z = sun;
+            let nadir = [0.0, 0.0, 1.0];
+            let along = |v: [f64; 3]| {
+                let k = dot(v, z);
+                [v[0] - k * z[0], v[1] - k * z[1], v[2] - k * z[2]]
+            };
+            let mut x = along(nadir);
+            if dot(x, x) < 1e-12 {
+                x = along([1.0, 0.0, 0.0]);
+            }
+            let x = unit(x);
+            let y = cross(z, x);
+            [x, y, z]
+        }
+    }
+}
+
+/// View factor from a plate whose normal makes angle ω with the direction to the
+/// centre of a sphere seen at H = r/R radii (closed form, Howell's catalog).
+pub fn plate_to_sphere_view_factor(cos_omega: f64, h: f64) -> f64 {
+    let c = cos_omega.clamp(-1.0, 1.0);
+    let omega = c.acos();
+    let phi = (1.0 / h).asin();
+    if omega <= PI / 2.0 - phi {
+        return c / (h * h);
+    }
+    if omega >= PI / 2.0 + phi {
+        return 0.0;
+    }
+    let x = (h * h - 1.0).sqrt();
+    let s = omega.sin();
+    let cot = c / s;
+    let first = (x / (h * s)).clamp(-1.0, 1.0).asin();
+    let second = (-x * cot).clamp(-1.0, 1.0).acos();
+    let root = (1.0 - h * h * c * c).max(0.0).sqrt();
+    (0.5 - first / PI + (c * second - x * root) / (PI * h * h)).max(0.0)
+}
+
+/// ∫ L(u) w(u) dΩ over the Earth's disc seen from radius `r` (LVLH: the Earth's centre
+/// along +z), by the midpoint rule on [`ALBEDO_RINGS`] rings of nadir angle and
+/// [`ALBEDO_SECTORS`] sectors: `radiance(point normal)` and `weight(direction)`.
+pub fn over_earth_disc(
+    r: f64,
+    earth_r: f64,
+    radiance: &dyn Fn([f64; 3]) -> f64,
+    weight: &dyn Fn([f64; 3]) -> f64,
+) -> f64 {
+    let eta_max = (earth_r / r).min(1.0).asin();
+    let d_eta = eta_max / ALBEDO_RINGS as f64;
+    let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
+    let mut sum = 0.0;
+    for i in 0..ALBEDO_RINGS {
+        let eta = (i as f64 + 0.5) * d_eta;
+        let (se, ce) = eta.sin_cos();
+        // distance along u to the ground, and the ground point's unit normal
+        let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
+        let cell = se * d_eta * d_phi;
+        for j in 0..ALBEDO_SECTORS {
+            let phi = (j as f64 + 0.5) * d_phi;
+            let (sp, cp) = phi.sin_cos();
+            let u = [se * cp, se * sp, ce];
+            // ground point relative to the Earth's centre: spacecraft at −r ẑ
+            let p = [
+                d * u[0] / earth_r,
+                d * u[1] / earth_r,
+                (d * u[2] - r) / earth_r,
+            ];
+            let w = weight(u);
+            if w > 0.0 {
+                sum += radiance(p) * w * cell;
+            }
+        }
+    }
+    sum
+}
+
+/// What `face` receives in environment `e`.
+pub fn incident(face: &Face, e: &FaceEnvironment) -> Incident {
+    let h = e.radius_m / e.earth_radius_m;
+    let sun = e.sun_lvlh;
+    let albedo_radiance =
+        |p: [f64; 3]| e.albedo * e.solar_on_earth_w_per_m2 * dot(p, sun).max(0.0) / PI;
+    if let Attitude::Tumble = face.attitude {
+        let cap = 1.0 - (1.0 - 1.0 / (h * h)).max(0.0).sqrt();
+        let albedo_all = over_earth_disc(e.radius_m, e.earth_radius_m, &albedo_radiance, &|_| 1.0);
+        return Incident {
+            solar_w_per_m2: e.solar_w_per_m2 / 4.0,
+            albedo_w_per_m2: albedo_all / 4.0,
+            earth_ir_w_per_m2: e.earth_ir_w_per_m2 * cap / 2.0,
+        };
+    }
+    let axes = body_axes(face.attitude, sun);
+    let nb = face.normal_body;
+    let n = [
+        nb[0] * axes[0][0] + nb[1] * axes[1][0] + nb[2] * axes[2][0],
+        nb[0] * axes[0][1] + nb[1] * axes[1][1] + nb[2] * axes[2][1],
+        nb[0] * axes[0][2] + nb[1] * axes[1][2] + nb[2] * axes[2][2],
+    ];
+    let albedo = if e.albedo > 0.0 && e.solar_on_earth_w_per_m2 > 0.0 {
+        over_earth_disc(e.radius_m, e.earth_radius_m, &albedo_radiance, &|u| {
+            dot(n, u)
+        })
+    } else {
+        0.0
+    };
+    Incident {
+        solar_w_per_m2: e.solar_w_per_m2 * dot(n, sun).max(0.0),
+        albedo_w_per_m2: albedo,
+        earth_ir_w_per_m2: e.earth_ir_w_per_m2 * plate_to_sphere_view_factor(n[2], h),
+    }
+}
+
+/// The power `face` absorbs, W.
+pub fn absorbed_w(face: &Face, e: &FaceEnvironment) -> f64 {
+    let i = incident(face, e);
+    face.area_m2
+        * (face.absorptivity * (i.solar_w_per_m2 + i.albedo_w_per_m2)
+            + face.emissivity * i.earth_ir_w_per_m2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The numerical disc integral of a uniform radiance against the closed-form view
+    /// factor: two methods for F, every orientation from nadir to zenith.
+    #[test]
+    fn view_factor_closed_form_agrees_with_the_disc_integral() {
+        for h in [1.05, 1.1, 1.3, 2.0] {
+            for k in 0..=36 {
+                let omega = (k as f64 * 5.0).to_radians();
+                let n = [omega.sin(), 0.0, omega.cos()];
+                let numeric = over_earth_disc(h, 1.0, &|_| 1.0 / PI, &|u| dot(n, u)).max(0.0);
+                let closed = plate_to_sphere_view_factor(omega.cos(), h);
+                assert!(
+                    (numeric - closed).abs() < 2e-3 * (1.0 / (h * h)),
+                    "H {h}, ω {}°: {numeric} vs {closed}",
+                    k * 5
+                );
+            }
+        }
+    }
+}
