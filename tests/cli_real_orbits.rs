@@ -211,3 +211,45 @@ fn cli_environment_reports_eclipses_and_writes_the_series() {
         .unwrap();
     assert_error("clobber", &out, &["s.toml"]);
 }
+
+#[test]
+fn cli_environment_writes_each_faces_fluxes() {
+    let dir = tmpdir("environment-faces");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = bin()
+        .arg("environment")
+        .arg(root.join("scenarios/cubesat-1u.toml"))
+        .args(["--orbits", "1", "--step-s", "60", "--csv"])
+        .arg(dir.join("f.csv"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("f.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    assert_eq!(header.len(), 6 + 6 * 3);
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (ir_pz, ir_mz, sol_my) = (
+        col("panel_pz.pz.earth_ir_w_per_m2"),
+        col("panel_mz.mz.earth_ir_w_per_m2"),
+        col("panel_my.my.solar_w_per_m2"),
+    );
+    for line in csv.lines().skip(1) {
+        let v: Vec<&str> = line.split(',').collect();
+        let num = |i: usize| v[i].parse::<f64>().unwrap();
+        // nadir face: q (R/r)² with r within FUNcube-1's 6960 … 7050 km
+        assert!((190.0..=202.0).contains(&num(ir_pz)), "{line}");
+        assert_eq!(num(ir_mz), 0.0);
+        // the −Y face (toward +orbit normal) sees S sin β in sunlight, none in eclipse
+        let lit: f64 = num(3);
+        let flux: f64 = num(5);
+        let beta = num(4).to_radians();
+        assert!(
+            (num(sol_my) - lit * flux * beta.sin()).abs() < 0.5,
+            "{line}"
+        );
+    }
+}

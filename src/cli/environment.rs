@@ -1,6 +1,7 @@
 //! `orbitlash environment`: the orbit's heat-flux environment as the commercial tools
 //! report it: β, eclipses (entry, exit, length), the Sun's distance and flux, and a
-//! time series (`--csv`) of the orbit angle, the sunlit fraction and β.
+//! time series (`--csv`) of the orbit angle, the sunlit fraction, β and each face's
+//! incident solar, albedo and Earth-infrared flux.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -10,6 +11,8 @@ use clap::Args;
 
 use orbitlash::io::atomic::{AtomicFile, OutputPolicy};
 use orbitlash::orbit::EnvironmentModel;
+use orbitlash::orbit::faces::{Face, incident};
+use orbitlash::thermal::LoadKind;
 
 use super::table::{self, Align};
 use super::{load_with, orbits_arg, print_out};
@@ -31,7 +34,8 @@ pub struct EnvironmentArgs {
     step_s: Option<f64>,
     /// Write the time series here: time_s, utc (a dated scenario), orbit_angle_deg,
     /// sunlit (0 … 1 in a penumbra), beta_deg, solar_flux_w_per_m2 (at the spacecraft,
-    /// before shadow).
+    /// before shadow), and per face `<node>.<face>.solar_w_per_m2`, `.albedo_w_per_m2`,
+    /// `.earth_ir_w_per_m2` (incident, before absorptivity).
     #[arg(long)]
     csv: Option<PathBuf>,
     /// Change a number of the scenario by its key path (repeatable).
@@ -64,6 +68,16 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
             horizon / step
         );
     }
+    // The faces (load name, geometry) and their nodes' names, in the scenario's order.
+    let net = &sc.thermal.network;
+    let faces: Vec<((String, Face), String)> = net
+        .loads
+        .iter()
+        .filter_map(|l| match &l.kind {
+            LoadKind::Face(f) => Some(((l.name.clone(), *f), net.nodes[l.node].name.clone())),
+            _ => None,
+        })
+        .collect();
     let start = env.start_utc();
     let utc = |t: f64| {
         start.map(|s| {
@@ -164,6 +178,12 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
             "beta_deg",
             "solar_flux_w_per_m2",
         ]);
+        let mut header: Vec<String> = header.into_iter().map(String::from).collect();
+        for ((face, _), node) in &faces {
+            for q in ["solar", "albedo", "earth_ir"] {
+                header.push(format!("{node}.{face}.{q}_w_per_m2"));
+            }
+        }
         let mut text = header.join(",") + "\n";
         let rows = (horizon / step).floor() as u64;
         for k in 0..=rows {
@@ -179,6 +199,15 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
             // the flux at the spacecraft before any shadow
             let unshadowed = env.state_with(t, false).solar_flux_w_per_m2;
             cells.push(format!("{unshadowed:.4}"));
+            if !faces.is_empty() {
+                let fe = env.face_environment(&env.state_with(t, env.sunlit(t)));
+                for ((_, face), _) in &faces {
+                    let i = incident(face, &fe);
+                    for v in [i.solar_w_per_m2, i.albedo_w_per_m2, i.earth_ir_w_per_m2] {
+                        cells.push(format!("{v:.4}"));
+                    }
+                }
+            }
             text += &cells.join(",");
             text.push('\n');
         }
