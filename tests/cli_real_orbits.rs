@@ -253,3 +253,33 @@ fn cli_environment_writes_each_faces_fluxes() {
         );
     }
 }
+
+#[test]
+fn cli_a_start_days_from_the_epoch_is_a_warning() {
+    let dir = tmpdir("epoch-warning");
+    let (out, _) = check_with(
+        &dir,
+        "six-days",
+        "2016-02-04T00:00:00Z",
+        "2016-02-10T00:00:00Z",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("1 warning(s)"), "{text}");
+    assert!(
+        text.contains("starts 5.6 days from the TLE's epoch"),
+        "{text}"
+    );
+    // a day from it is not
+    let (out, _) = check_with(
+        &dir,
+        "one-day",
+        "2016-02-04T00:00:00Z",
+        "2016-02-05T00:00:00Z",
+    );
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("warning(s)"));
+}

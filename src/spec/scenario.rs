@@ -226,6 +226,18 @@ impl Scenario {
                 ),
             });
         }
+        if let crate::orbit::Environment::Dated(d) = &self.thermal.environment {
+            let days = d.orbit.epoch_age_days();
+            if days.abs() > crate::orbit::tle::EPOCH_WARN_DAYS {
+                w.push(Warning {
+                    key: "orbit.start_utc".into(),
+                    message: format!(
+                        "starts {:.1} days from the TLE's epoch; a LEO TLE's along-track error grows to tens of km within a few days (β and eclipse lengths stay close, the minute of each eclipse drifts): a TLE nearer the start is better",
+                        days.abs()
+                    ),
+                });
+            }
+        }
         if !self.solver.adaptive {
             let temps = net.initial_temperatures_k();
             let tau = node_time_constants_s(&self.thermal, &temps, 0.0);
