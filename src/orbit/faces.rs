@@ -194,15 +194,79 @@ pub fn over_earth_disc(
     sum
 }
 
+/// The albedo radiance of every cell of the Earth's disc seen in environment `e`:
+/// (direction from the spacecraft, radiance × the cell's solid angle), cells with no
+/// sunlit ground left out. The faces of one instant share it: it is kept per thread
+/// for the last environment asked for.
+fn albedo_cells(e: &FaceEnvironment, out: &mut Vec<([f64; 3], f64)>) {
+    use std::sync::OnceLock;
+    static SECTORS: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    let sectors = SECTORS.get_or_init(|| {
+        let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
+        (0..ALBEDO_SECTORS)
+            .map(|j| ((j as f64 + 0.5) * d_phi).sin_cos())
+            .collect()
+    });
+    out.clear();
+    let (r, earth_r, sun) = (e.radius_m, e.earth_radius_m, e.sun_lvlh);
+    let scale = e.albedo * e.solar_on_earth_w_per_m2 / PI;
+    let eta_max = (earth_r / r).min(1.0).asin();
+    let d_eta = eta_max / ALBEDO_RINGS as f64;
+    let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
+    for i in 0..ALBEDO_RINGS {
+        let eta = (i as f64 + 0.5) * d_eta;
+        let (se, ce) = eta.sin_cos();
+        let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
+        let cell = se * d_eta * d_phi;
+        for &(sp, cp) in sectors {
+            let u = [se * cp, se * sp, ce];
+            let p = [
+                d * u[0] / earth_r,
+                d * u[1] / earth_r,
+                (d * u[2] - r) / earth_r,
+            ];
+            let cos_zenith = dot(p, sun);
+            if cos_zenith > 0.0 {
+                out.push((u, scale * cos_zenith * cell));
+            }
+        }
+    }
+}
+
+/// Σ over the albedo cells of `e` of radiance × cell × weight(direction).
+fn albedo_sum(e: &FaceEnvironment, weight: &dyn Fn([f64; 3]) -> f64) -> f64 {
+    use std::cell::RefCell;
+    type Cells = (Option<FaceEnvironment>, Vec<([f64; 3], f64)>);
+    thread_local! {
+        static CELLS: RefCell<Cells> = const { RefCell::new((None, Vec::new())) };
+    }
+    CELLS.with(|c| {
+        let mut c = c.borrow_mut();
+        if c.0.as_ref() != Some(e) {
+            albedo_cells(e, &mut c.1);
+            c.0 = Some(*e);
+        }
+        c.1.iter()
+            .map(|(u, l)| {
+                let w = weight(*u);
+                if w > 0.0 { l * w } else { 0.0 }
+            })
+            .sum()
+    })
+}
+
 /// What `face` receives in environment `e`.
 pub fn incident(face: &Face, e: &FaceEnvironment) -> Incident {
     let h = e.radius_m / e.earth_radius_m;
     let sun = e.sun_lvlh;
-    let albedo_radiance =
-        |p: [f64; 3]| e.albedo * e.solar_on_earth_w_per_m2 * dot(p, sun).max(0.0) / PI;
+    let lit_earth = e.albedo > 0.0 && e.solar_on_earth_w_per_m2 > 0.0;
     if let Attitude::Tumble = face.attitude {
         let cap = 1.0 - (1.0 - 1.0 / (h * h)).max(0.0).sqrt();
-        let albedo_all = over_earth_disc(e.radius_m, e.earth_radius_m, &albedo_radiance, &|_| 1.0);
+        let albedo_all = if lit_earth {
+            albedo_sum(e, &|_| 1.0)
+        } else {
+            0.0
+        };
         return Incident {
             solar_w_per_m2: e.solar_w_per_m2 / 4.0,
             albedo_w_per_m2: albedo_all / 4.0,
@@ -216,10 +280,8 @@ pub fn incident(face: &Face, e: &FaceEnvironment) -> Incident {
         nb[0] * axes[0][1] + nb[1] * axes[1][1] + nb[2] * axes[2][1],
         nb[0] * axes[0][2] + nb[1] * axes[1][2] + nb[2] * axes[2][2],
     ];
-    let albedo = if e.albedo > 0.0 && e.solar_on_earth_w_per_m2 > 0.0 {
-        over_earth_disc(e.radius_m, e.earth_radius_m, &albedo_radiance, &|u| {
-            dot(n, u)
-        })
+    let albedo = if lit_earth {
+        albedo_sum(e, &|u| dot(n, u))
     } else {
         0.0
     };
