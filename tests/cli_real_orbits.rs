@@ -283,3 +283,43 @@ fn cli_a_start_days_from_the_epoch_is_a_warning() {
     );
     assert!(!String::from_utf8_lossy(&out.stdout).contains("warning(s)"));
 }
+
+#[test]
+fn cli_a_dated_log_is_on_utc_and_reads_back_from_zero() {
+    let dir = tmpdir("utc-log");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let log = dir.join("tle.mcap");
+    let out = bin()
+        .arg("run")
+        .arg(root.join("scenarios/hinge-tle-year.toml"))
+        .args(["--orbits", "1", "--out"])
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = orbitlash::io::mcap_read::read_log(&log).unwrap();
+    // 2016-02-04T00:00:00Z
+    let start_ns = 1_454_544_000u64 * 1_000_000_000;
+    assert_eq!(table.time_origin_ns, start_ns);
+    assert_eq!(table.rows[0].0, start_ns);
+    assert!(table.rows.last().unwrap().0 > start_ns + 5_000 * 1_000_000_000);
+    // the CSV export counts from the start
+    let csv = dir.join("tle.csv");
+    let out = bin()
+        .arg("export-csv")
+        .arg(&log)
+        .arg("--out")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        text.lines().nth(1).unwrap().starts_with("0.000,"),
+        "{text:.200}"
+    );
+}

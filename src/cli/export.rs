@@ -120,7 +120,11 @@ pub fn export(a: ExportArgs) -> Result<()> {
     text.push('\n');
     for (t_ns, row) in &table.rows {
         use std::fmt::Write as _;
-        let _ = write!(text, "{:.3}", *t_ns as f64 * 1e-9);
+        let _ = write!(
+            text,
+            "{:.3}",
+            t_ns.saturating_sub(table.time_origin_ns) as f64 * 1e-9
+        );
         for (_, i) in &cols {
             let _ = write!(text, ",{:.6}", row[*i]);
         }

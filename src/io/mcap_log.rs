@@ -157,6 +157,8 @@ struct SceneState {
 /// own thread once the run has started, so the simulation only copies numbers per
 /// sample; records arrive in order, so the file is the same as if written inline.
 struct LogWriter {
+    /// Log time of t = 0, ns (see `LogDescription::time_origin_ns`).
+    origin_ns: u64,
     path: PathBuf,
     writer: mcap::Writer<AtomicFile>,
     ch: Channels,
@@ -184,6 +186,9 @@ struct LogDescription {
     pair_names: Vec<String>,
     pairs: Vec<PairLayout>,
     outlines: Vec<[scene::PlacedOutline; 2]>,
+    /// Log time of t = 0, ns since the Unix epoch: the start's UTC for a dated
+    /// scenario (viewers then show real dates), 0 otherwise.
+    time_origin_ns: u64,
 }
 
 /// Layout of one sample in a batch: t, sunlit, temperatures, heater states, mode
@@ -262,6 +267,10 @@ pub struct McapLog {
 }
 
 /// Seconds to MCAP nanoseconds (never negative).
+/// Key of the provenance record holding the log time of t = 0 (ns since the Unix
+/// epoch) in a dated scenario's log; absent, log times count from t = 0.
+pub const TIME_ORIGIN_KEY: &str = "time_origin_unix_ns";
+
 pub(crate) fn ns(t_s: f64) -> u64 {
     (t_s * 1e9).round().max(0.0) as u64
 }
@@ -276,8 +285,8 @@ impl LogWriter {
         let header = mcap::records::MessageHeader {
             channel_id: channel,
             sequence: self.seq,
-            log_time: ns(t_s),
-            publish_time: ns(t_s),
+            log_time: self.origin_ns + ns(t_s),
+            publish_time: self.origin_ns + ns(t_s),
         };
         let r = self.writer.write_to_known_channel(&header, &self.enc.buf);
         self.enc.clear();
@@ -299,7 +308,7 @@ impl LogWriter {
 
     fn event(&mut self, t_s: f64, level: i64, message: &str) -> Result<(), OutputError> {
         let log = foxglove::messages::Log {
-            timestamp: Some(scene::timestamp(t_s)),
+            timestamp: Some(scene::timestamp_at(self.origin_ns, t_s)),
             level: level as i32,
             message: message.into(),
             name: "orbitlash".into(),
@@ -705,6 +714,7 @@ fn write_provenance(
     p: Provenance,
     cadence: LogCadence,
     t_end_s: f64,
+    time_origin_ns: u64,
 ) -> Result<(), OutputError> {
     let cadence = match cadence {
         LogCadence::Steps(n) => format!("every {n} step(s)"),
@@ -734,6 +744,11 @@ fn write_provenance(
     .into_iter()
     .map(|(k, v)| (k.to_string(), v))
     .collect();
+    let mut metadata = metadata;
+    if time_origin_ns != 0 {
+        // log times are UTC: t = 0 is this many ns after the Unix epoch
+        metadata.insert(TIME_ORIGIN_KEY.to_string(), time_origin_ns.to_string());
+    }
     w.write_metadata(&mcap::records::Metadata {
         name: "orbitlash.provenance".into(),
         metadata,
@@ -862,7 +877,7 @@ fn open_log_writer(
     let s = foxglove_schema::<foxglove::messages::Log>(w, path)?;
     let log = channel(w, s, "/events", &empty)?;
 
-    write_provenance(w, path, provenance, cadence, t_end_s)?;
+    write_provenance(w, path, provenance, cadence, t_end_s, d.time_origin_ns)?;
     let ch = Channels {
         temperature,
         heat,
@@ -872,6 +887,7 @@ fn open_log_writer(
         log,
     };
     Ok(LogWriter {
+        origin_ns: d.time_origin_ns,
         path: path.to_path_buf(),
         writer: *writer,
         ch,
@@ -916,6 +932,12 @@ impl Observer for McapLog {
             } else {
                 vec![]
             },
+            time_origin_ns: r
+                .model
+                .environment
+                .start_utc()
+                .and_then(|u| u.and_utc().timestamp_nanos_opt())
+                .map_or(0, |n| n.max(0) as u64),
         };
         let (path, provenance, cadence, t_end_s, scene_interval_s) = (
             self.path.clone(),

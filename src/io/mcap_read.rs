@@ -33,6 +33,9 @@ pub struct LogTable {
     pub columns: Vec<String>,
     /// (log time ns, values; NaN where a column has no value at that time).
     pub rows: Vec<(u64, Vec<f64>)>,
+    /// The log time of t = 0, ns (a dated run's UTC start; 0 otherwise): a row's
+    /// simulated time is its log time less this.
+    pub time_origin_ns: u64,
     /// Channel metadata by topic.
     pub channel_metadata: HashMap<String, BTreeMap<String, String>>,
     /// Metadata records by name.
@@ -117,10 +120,11 @@ fn flatten(msg: &DynamicMessage, prefix: &str, out: &mut Vec<(String, f64)>, dep
 /// time is not plausible: earlier than the message before it (logs are written in
 /// time order) or beyond the run's end (`t_end_s` of the provenance record).
 pub fn keep_valid_messages(scan: &mut super::mcap_scan::Scan<'_>) {
+    let origin_ns = scan.time_origin_ns();
     let t_end_ns = scan
         .metadata_value("orbitlash.provenance", "t_end_s")
         .and_then(|v| v.parse::<f64>().ok())
-        .map(|t| ((t + 1.0) * 1e9) as u64)
+        .map(|t| origin_ns + ((t + 1.0) * 1e9) as u64)
         .unwrap_or(u64::MAX);
     let schemas = scan.schemas.clone();
     let channels = scan.channels.clone();
@@ -172,6 +176,7 @@ pub fn drop_undecodable(scan: &mut super::mcap_scan::Scan<'_>) -> Vec<Undecodabl
     let mut types: HashMap<u16, Option<MessageDescriptor>> = HashMap::new();
     let mut flat = Vec::new();
     let mut bad = Vec::new();
+    let origin_ns = scan.time_origin_ns();
     let (schemas, channels) = (&scan.schemas, &scan.channels);
     let mut keep = Vec::with_capacity(scan.messages.len());
     for (k, m) in scan.messages.iter().enumerate() {
@@ -198,7 +203,7 @@ pub fn drop_undecodable(scan: &mut super::mcap_scan::Scan<'_>) -> Vec<Undecodabl
                     || format!("channel {}", m.header.channel_id),
                     |c| c.topic.clone(),
                 ),
-                t_s: m.header.log_time as f64 * 1e-9,
+                t_s: m.header.log_time.saturating_sub(origin_ns) as f64 * 1e-9,
             });
         }
         keep.push(ok);
@@ -255,7 +260,10 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
             ),
         });
     }
-    let mut table = LogTable::default();
+    let mut table = LogTable {
+        time_origin_ns: scan.time_origin_ns(),
+        ..LogTable::default()
+    };
     for ch in scan.channels.values() {
         table
             .channel_metadata
@@ -315,7 +323,9 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
             recovered_bytes: scan.recovered_bytes,
             file_bytes: scan.file_bytes,
             messages: scan.messages.len(),
-            t_end_s: scan.time_span_ns().map_or(0.0, |(_, b)| b as f64 * 1e-9),
+            t_end_s: scan.time_span_ns().map_or(0.0, |(_, b)| {
+                b.saturating_sub(scan.time_origin_ns()) as f64 * 1e-9
+            }),
         });
     }
     let n = table.columns.len();

@@ -78,6 +78,14 @@ impl Scan<'_> {
         Some(it.fold((first, first), |(a, b), t| (a.min(t), b.max(t))))
     }
 
+    /// The log time of t = 0, ns: a dated run's start (`time_origin_unix_ns` of the
+    /// provenance record), else 0.
+    pub fn time_origin_ns(&self) -> u64 {
+        self.metadata_value("orbitlash.provenance", super::mcap_log::TIME_ORIGIN_KEY)
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0)
+    }
+
     /// The value of `key` in the metadata record `name`, if any.
     pub fn metadata_value(&self, name: &str, key: &str) -> Option<&str> {
         self.metadata
@@ -369,7 +377,7 @@ pub fn recover(
     let original_status = scan
         .metadata_value("orbitlash.run_end", "status")
         .map(str::to_string);
-    let t_end_s = last_ns as f64 * 1e-9;
+    let t_end_s = last_ns.saturating_sub(scan.time_origin_ns()) as f64 * 1e-9;
     let end: BTreeMap<String, String> = match scan
         .metadata
         .iter()

@@ -125,6 +125,19 @@ pub fn scene_update(
     }
 }
 
+/// A simulated time as a `foxglove` timestamp: `t_s` after `origin_ns` (ns since the
+/// Unix epoch; 0: seconds since t = 0).
+pub fn timestamp_at(origin_ns: u64, t_s: f64) -> Timestamp {
+    if origin_ns == 0 {
+        return timestamp(t_s);
+    }
+    let total = origin_ns + super::mcap_log::ns(t_s);
+    Timestamp::new(
+        (total / 1_000_000_000).min(u64::from(u32::MAX)) as u32,
+        (total % 1_000_000_000) as u32,
+    )
+}
+
 /// A simulated time as a `foxglove` timestamp (seconds since t = 0, not the epoch).
 pub fn timestamp(t_s: f64) -> Timestamp {
     let secs = t_s.max(0.0).floor();
