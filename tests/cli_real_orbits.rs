@@ -323,3 +323,66 @@ fn cli_a_dated_log_is_on_utc_and_reads_back_from_zero() {
         "{text:.200}"
     );
 }
+
+#[test]
+fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
+    let dir = tmpdir("faces-bad");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
+    )
+    .unwrap();
+    let cases: [(&str, &str, &str, &[&str]); 7] = [
+        (
+            "mode",
+            "mode = \"nadir\"",
+            "mode = \"spinning\"",
+            &["`attitude.mode`", "unknown attitude `spinning`"],
+        ),
+        (
+            "yaw-not-nadir",
+            "mode = \"nadir\"",
+            "mode = \"sun\"",
+            &["`attitude.yaw_deg`", "mode `sun` has no yaw"],
+        ),
+        (
+            "no-quaternion",
+            "mode = \"nadir\"\nyaw_deg = 0.0",
+            "mode = \"inertial\"",
+            &["`attitude`", "needs `quaternion"],
+        ),
+        (
+            "short-quaternion",
+            "mode = \"nadir\"\nyaw_deg = 0.0",
+            "mode = \"inertial\"\nquaternion = [1.0, 0.0]",
+            &["`attitude.quaternion`", "lists 2 number(s)"],
+        ),
+        (
+            "zero-normal",
+            "normal = [1.0, 0.0, 0.0]",
+            "normal = [0.0, 0.0, 0.0]",
+            &["`face.px.normal`", "zero vector"],
+        ),
+        (
+            "emissivity",
+            "emissivity = 0.85",
+            "emissivity = 1.5",
+            &["`face.px.emissivity`", "emissivity must be within 0 … 1"],
+        ),
+        (
+            "node",
+            "node = \"panel_px\"\nname = \"px\"",
+            "node = \"panel_qx\"\nname = \"px\"",
+            &["`face.px.node`", "unknown node `panel_qx`"],
+        ),
+    ];
+    for (case, old, new, needles) in cases {
+        assert!(text.contains(old), "{case}");
+        let file = dir.join(format!("{case}.toml"));
+        std::fs::write(&file, text.replacen(old, new, 1)).unwrap();
+        let out = bin().arg("check").arg(&file).output().unwrap();
+        let name = format!("{case}.toml:");
+        let mut all = needles.to_vec();
+        all.push(&name);
+        assert_error(case, &out, &all);
+    }
+}

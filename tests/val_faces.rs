@@ -6,7 +6,7 @@
 //! nadir face under the Sun.
 
 use orbitlash::orbit::faces::{
-    Attitude, Face, FaceEnvironment, incident, plate_to_sphere_view_factor, sun_lvlh,
+    Attitude, Face, FaceEnvironment, incident, lvlh_axes, plate_to_sphere_view_factor, sun_lvlh,
 };
 
 const R: f64 = 6_378_137.0;
@@ -20,6 +20,15 @@ fn env(theta_deg: f64, beta_deg: f64, h_m: f64) -> FaceEnvironment {
         earth_radius_m: R,
         albedo: 0.3,
         earth_ir_w_per_m2: 237.0,
+        // the orbit frame of a circular orbit: x toward orbit noon, z the normal
+        lvlh_axes: lvlh_axes(
+            [
+                theta_deg.to_radians().cos(),
+                theta_deg.to_radians().sin(),
+                0.0,
+            ],
+            [0.0, 0.0, 1.0],
+        ),
     }
 }
 
@@ -81,7 +90,7 @@ fn val_closed_form_sun_pointing_face_and_cube_projected_area() {
                     let by = -sy * s[0] + cy * s[1];
                     bx.abs() + by.abs() + s[2].abs()
                 }
-                Attitude::Tumble => unreachable!(),
+                Attitude::Tumble | Attitude::Inertial { .. } => unreachable!(),
             };
             assert!(
                 (total - 1361.0 * projected).abs() < 1e-9 * 1361.0,
@@ -153,4 +162,43 @@ fn val_albedo_dark_earth_and_subsolar_peak() {
     // and falls as the spacecraft goes round toward the terminator
     let later = incident(&face([0.0, 0.0, 1.0], NADIR), &env(60.0, 0.0, 600e3));
     assert!(later.albedo_w_per_m2 < noon.albedo_w_per_m2);
+}
+
+/// An inertially fixed face pointed at the Sun (in the orbit frame the Sun is
+/// (cos β, 0, sin β)) sees S all round the orbit; one along the orbit normal sees
+/// S sin β, as the nadir-pointing body's −Y face does; a quaternion of 90° about z
+/// turns body +x onto inertial +y.
+#[test]
+fn val_closed_form_inertial_attitude() {
+    let identity = Attitude::Inertial {
+        quaternion: [1.0, 0.0, 0.0, 0.0],
+    };
+    let quarter = Attitude::Inertial {
+        quaternion: [
+            std::f64::consts::FRAC_1_SQRT_2,
+            0.0,
+            0.0,
+            std::f64::consts::FRAC_1_SQRT_2,
+        ],
+    };
+    for beta in [0.0f64, 25.0, 60.0] {
+        let b = beta.to_radians();
+        for theta in [0.0, 45.0, 100.0, 200.0, 300.0] {
+            let e = env(theta, beta, 600e3);
+            let at_sun = incident(&face([b.cos(), 0.0, b.sin()], identity), &e);
+            assert!(
+                (at_sun.solar_w_per_m2 - 1361.0).abs() < 1e-9,
+                "θ {theta}, β {beta}"
+            );
+            let normal = incident(&face([0.0, 0.0, 1.0], identity), &e);
+            let minus_y = incident(&face([0.0, -1.0, 0.0], NADIR), &e);
+            assert!((normal.solar_w_per_m2 - minus_y.solar_w_per_m2).abs() < 1e-9);
+            assert!((normal.earth_ir_w_per_m2 - minus_y.earth_ir_w_per_m2).abs() < 1e-9);
+            // body +x turned onto inertial +y, which is the Sun-less in-plane axis
+            let turned = incident(&face([1.0, 0.0, 0.0], quarter), &e);
+            let plain = incident(&face([0.0, 1.0, 0.0], identity), &e);
+            assert!((turned.solar_w_per_m2 - plain.solar_w_per_m2).abs() < 1e-9);
+            assert!((turned.albedo_w_per_m2 - plain.albedo_w_per_m2).abs() < 1e-9);
+        }
+    }
 }

@@ -596,6 +596,7 @@ impl EnvironmentModel for DatedEnvironment {
             earth_radius_m: self.earth_radius_m,
             albedo: self.albedo,
             earth_ir_w_per_m2: self.earth_ir_w_per_m2,
+            lvlh_axes: super::faces::lvlh_axes(g.r, g.normal),
         }
     }
 

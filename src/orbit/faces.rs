@@ -42,10 +42,14 @@ pub enum Attitude {
     /// integrated over the Earth's disc. Fits a slowly tumbling small satellite over an
     /// orbit, not its instants.
     Tumble,
+    /// Inertially fixed: the unit quaternion `[w, x, y, z]` turning body axes into the
+    /// inertial frame (TEME for a TLE orbit; for a circular orbit the orbit frame: +x
+    /// toward orbit noon, +z the orbit normal).
+    Inertial { quaternion: [f64; 4] },
 }
 
 impl Attitude {
-    pub const NAMES: [&'static str; 3] = ["nadir", "sun", "tumble"];
+    pub const NAMES: [&'static str; 4] = ["nadir", "sun", "tumble", "inertial"];
 }
 
 /// A body-fixed flat face.
@@ -84,6 +88,39 @@ pub struct FaceEnvironment {
     pub earth_radius_m: f64,
     pub albedo: f64,
     pub earth_ir_w_per_m2: f64,
+    /// The LVLH axes (x, y, z) in the inertial frame.
+    pub lvlh_axes: [[f64; 3]; 3],
+}
+
+/// The LVLH axes in the inertial frame of a spacecraft at `r` with orbit normal
+/// `normal` (unit): z = −r̂, y = −normal, x = y × z.
+pub fn lvlh_axes(r: [f64; 3], normal: [f64; 3]) -> [[f64; 3]; 3] {
+    let z = unit([-r[0], -r[1], -r[2]]);
+    let y = [-normal[0], -normal[1], -normal[2]];
+    [cross(y, z), y, z]
+}
+
+/// The rotation matrix (columns: body axes in the inertial frame) of the unit
+/// quaternion `[w, x, y, z]`.
+pub fn quaternion_axes(q: [f64; 4]) -> [[f64; 3]; 3] {
+    let [w, x, y, z] = q;
+    [
+        [
+            1.0 - 2.0 * (y * y + z * z),
+            2.0 * (x * y + w * z),
+            2.0 * (x * z - w * y),
+        ],
+        [
+            2.0 * (x * y - w * z),
+            1.0 - 2.0 * (x * x + z * z),
+            2.0 * (y * z + w * x),
+        ],
+        [
+            2.0 * (x * z + w * y),
+            2.0 * (y * z - w * x),
+            1.0 - 2.0 * (x * x + y * y),
+        ],
+    ]
 }
 
 /// The Sun in LVLH for the orbit angle θ from orbit noon and β.
@@ -110,9 +147,14 @@ fn unit(a: [f64; 3]) -> [f64; 3] {
     [a[0] / n, a[1] / n, a[2] / n]
 }
 
-/// The body axes (x, y, z) in LVLH under `attitude` with the Sun at `sun`.
-pub fn body_axes(attitude: Attitude, sun: [f64; 3]) -> [[f64; 3]; 3] {
+/// The body axes (x, y, z) in LVLH under `attitude` with the Sun at `sun` and the
+/// LVLH axes `lvlh` in the inertial frame.
+pub fn body_axes(attitude: Attitude, sun: [f64; 3], lvlh: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     match attitude {
+        Attitude::Inertial { quaternion } => {
+            let b = quaternion_axes(quaternion);
+            b.map(|axis| [dot(axis, lvlh[0]), dot(axis, lvlh[1]), dot(axis, lvlh[2])])
+        }
         Attitude::Nadir { yaw_rad } => {
             let (s, c) = yaw_rad.sin_cos();
             [[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]]
@@ -273,7 +315,7 @@ pub fn incident(face: &Face, e: &FaceEnvironment) -> Incident {
             earth_ir_w_per_m2: e.earth_ir_w_per_m2 * cap / 2.0,
         };
     }
-    let axes = body_axes(face.attitude, sun);
+    let axes = body_axes(face.attitude, sun, &e.lvlh_axes);
     let nb = face.normal_body;
     let n = [
         nb[0] * axes[0][0] + nb[1] * axes[1][0] + nb[2] * axes[2][0],

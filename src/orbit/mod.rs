@@ -676,6 +676,11 @@ impl EnvironmentModel for CircularEnvironment {
             earth_radius_m: self.orbit.earth_radius_m,
             albedo: self.albedo,
             earth_ir_w_per_m2: self.earth_ir_w_per_m2,
+            // the orbit frame as the inertial one: x toward orbit noon, z the normal
+            lvlh_axes: faces::lvlh_axes(
+                [s.orbit_angle_rad.cos(), s.orbit_angle_rad.sin(), 0.0],
+                [0.0, 0.0, 1.0],
+            ),
         }
     }
 }

@@ -798,11 +798,17 @@ fn faces(
     let ap = KeyPath::new("attitude");
     let a = attitude.unwrap_or_default();
     let yaw_deg = cx.quantity_or_default(&q::YAW_DEG, &ap.key("yaw_deg"), a.yaw_deg)?;
+    if a.quaternion.is_some() && a.mode.as_deref() != Some("inertial") {
+        return Err(cx.err(
+            &ap.key("quaternion"),
+            "orients an inertially fixed body: give mode = \"inertial\"",
+        ));
+    }
     let attitude = match a.mode.as_deref() {
         None | Some("nadir") => Attitude::Nadir {
             yaw_rad: yaw_deg.to_radians(),
         },
-        Some(m) if a.yaw_deg.is_some() => {
+        Some(m) if a.yaw_deg.is_some() && Attitude::NAMES.contains(&m) => {
             return Err(cx.err(
                 &ap.key("yaw_deg"),
                 format!("turns a nadir-pointing body; mode `{m}` has no yaw"),
@@ -810,6 +816,31 @@ fn faces(
         }
         Some("sun") => Attitude::Sun,
         Some("tumble") => Attitude::Tumble,
+        Some("inertial") => {
+            let qp = ap.key("quaternion");
+            let Some(q) = &a.quaternion else {
+                return Err(cx.err(
+                    &ap,
+                    "an inertial attitude needs `quaternion = [w, x, y, z]` (body to inertial)",
+                ));
+            };
+            let [w, x, y, z] = q[..] else {
+                return Err(cx.err(
+                    &qp,
+                    format!("lists {} number(s); a quaternion is [w, x, y, z]", q.len()),
+                ));
+            };
+            for (k, v) in [w, x, y, z].into_iter().enumerate() {
+                cx.finite(&qp.at(k), v)?;
+            }
+            let n = (w * w + x * x + y * y + z * z).sqrt();
+            if n <= 1e-9 {
+                return Err(cx.err(&qp, "is zero; a rotation needs a unit quaternion"));
+            }
+            Attitude::Inertial {
+                quaternion: [w / n, x / n, y / n, z / n],
+            }
+        }
         Some(other) => {
             return Err(cx.err(
                 &ap.key("mode"),

@@ -398,6 +398,9 @@ pub struct AttitudeSpec {
     /// Nadir pointing: the body frame turned about nadir, degrees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub yaw_deg: Option<f64>,
+    /// Inertially fixed: `[w, x, y, z]`, body to inertial (normalised).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quaternion: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
