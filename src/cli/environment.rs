@@ -10,8 +10,8 @@ use anyhow::{Result, bail};
 use clap::Args;
 
 use orbitlash::io::atomic::{AtomicFile, OutputPolicy};
-use orbitlash::orbit::EnvironmentModel;
 use orbitlash::orbit::faces::{Face, incident};
+use orbitlash::orbit::{Environment, EnvironmentModel};
 use orbitlash::thermal::LoadKind;
 
 use super::table::{self, Align};
@@ -106,23 +106,7 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         b_hi.to_degrees()
     );
 
-    // Eclipses: each entry and exit the run would land on.
-    let mut eclipses: Vec<(f64, f64)> = Vec::new();
-    let mut t = 0.0;
-    let mut lit = env.sunlit(0.0);
-    let mut entered = if lit { None } else { Some(0.0) };
-    while let Some((tc, entering)) = env.next_shadow_crossing(t, horizon) {
-        if entering {
-            entered = Some(tc);
-        } else if let Some(e) = entered.take() {
-            eclipses.push((e, tc));
-        }
-        lit = !entering;
-        t = tc;
-    }
-    if !lit && let Some(e) = entered {
-        eclipses.push((e, horizon));
-    }
+    let eclipses = eclipses(env, horizon);
     let dark: f64 = eclipses.iter().map(|(a, b)| b - a).sum();
     outln!(
         o,
@@ -168,49 +152,8 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     }
 
     if let (Some(file), Some(path)) = (csv.as_mut(), &a.csv) {
-        let mut header = vec!["time_s"];
-        if start.is_some() {
-            header.push("utc");
-        }
-        header.extend([
-            "orbit_angle_deg",
-            "sunlit",
-            "beta_deg",
-            "solar_flux_w_per_m2",
-        ]);
-        let mut header: Vec<String> = header.into_iter().map(String::from).collect();
-        for ((face, _), node) in &faces {
-            for q in ["solar", "albedo", "earth_ir"] {
-                header.push(format!("{node}.{face}.{q}_w_per_m2"));
-            }
-        }
-        let mut text = header.join(",") + "\n";
         let rows = (horizon / step).floor() as u64;
-        for k in 0..=rows {
-            let t = (k as f64 * step).min(horizon);
-            let s = env.state_with(t, true);
-            let mut cells = vec![orbitlash::units::exact(t)];
-            if let Some(u) = utc(t) {
-                cells.push(u);
-            }
-            cells.push(format!("{:.6}", env.orbit_phase_deg(t)));
-            cells.push(format!("{:.6}", env.sun_fraction(t)));
-            cells.push(format!("{:.6}", s.beta_rad.to_degrees()));
-            // the flux at the spacecraft before any shadow
-            let unshadowed = env.state_with(t, false).solar_flux_w_per_m2;
-            cells.push(format!("{unshadowed:.4}"));
-            if !faces.is_empty() {
-                let fe = env.face_environment(&env.state_with(t, env.sunlit(t)));
-                for ((_, face), _) in &faces {
-                    let i = incident(face, &fe);
-                    for v in [i.solar_w_per_m2, i.albedo_w_per_m2, i.earth_ir_w_per_m2] {
-                        cells.push(format!("{v:.4}"));
-                    }
-                }
-            }
-            text += &cells.join(",");
-            text.push('\n');
-        }
+        let text = series(env, &faces, horizon, step, &utc);
         file.write_all(text.as_bytes())?;
         outln!(
             o,
@@ -223,4 +166,82 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         f.commit()?;
     }
     print_out(&o)
+}
+
+/// Every eclipse (umbra entry, exit) from 0 to `horizon_s`, as the run would land on
+/// them; one in progress at either end is cut there.
+fn eclipses(env: &Environment, horizon: f64) -> Vec<(f64, f64)> {
+    let mut eclipses: Vec<(f64, f64)> = Vec::new();
+    let mut t = 0.0;
+    let mut lit = env.sunlit(0.0);
+    let mut entered = if lit { None } else { Some(0.0) };
+    while let Some((tc, entering)) = env.next_shadow_crossing(t, horizon) {
+        if entering {
+            entered = Some(tc);
+        } else if let Some(e) = entered.take() {
+            eclipses.push((e, tc));
+        }
+        lit = !entering;
+        t = tc;
+    }
+    if !lit && let Some(e) = entered {
+        eclipses.push((e, horizon));
+    }
+    eclipses
+}
+
+/// The CSV text of `--csv`: a row every `step` s from 0 to `horizon` (see
+/// `EnvironmentArgs::csv` for the columns).
+fn series(
+    env: &Environment,
+    faces: &[((String, Face), String)],
+    horizon: f64,
+    step: f64,
+    utc: &dyn Fn(f64) -> Option<String>,
+) -> String {
+    let start = env.start_utc();
+    let mut header = vec!["time_s"];
+    if start.is_some() {
+        header.push("utc");
+    }
+    header.extend([
+        "orbit_angle_deg",
+        "sunlit",
+        "beta_deg",
+        "solar_flux_w_per_m2",
+    ]);
+    let mut header: Vec<String> = header.into_iter().map(String::from).collect();
+    for ((face, _), node) in faces {
+        for q in ["solar", "albedo", "earth_ir"] {
+            header.push(format!("{node}.{face}.{q}_w_per_m2"));
+        }
+    }
+    let mut text = header.join(",") + "\n";
+    let rows = (horizon / step).floor() as u64;
+    for k in 0..=rows {
+        let t = (k as f64 * step).min(horizon);
+        let s = env.state_with(t, true);
+        let mut cells = vec![orbitlash::units::exact(t)];
+        if let Some(u) = utc(t) {
+            cells.push(u);
+        }
+        cells.push(format!("{:.6}", env.orbit_phase_deg(t)));
+        cells.push(format!("{:.6}", env.sun_fraction(t)));
+        cells.push(format!("{:.6}", s.beta_rad.to_degrees()));
+        // the flux at the spacecraft before any shadow
+        let unshadowed = env.state_with(t, false).solar_flux_w_per_m2;
+        cells.push(format!("{unshadowed:.4}"));
+        if !faces.is_empty() {
+            let fe = env.face_environment(&env.state_with(t, env.sunlit(t)));
+            for ((_, face), _) in faces {
+                let i = incident(face, &fe);
+                for v in [i.solar_w_per_m2, i.albedo_w_per_m2, i.earth_ir_w_per_m2] {
+                    cells.push(format!("{v:.4}"));
+                }
+            }
+        }
+        text += &cells.join(",");
+        text.push('\n');
+    }
+    text
 }

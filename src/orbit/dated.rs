@@ -14,6 +14,7 @@
 
 use std::f64::consts::PI;
 
+use super::faces::{cross, dot, norm, unit};
 use super::sun::{AU_M, sun_at};
 use super::tle::TleOrbit;
 use super::{EnvState, EnvironmentModel, Incidence, LoadKink};
@@ -86,27 +87,6 @@ pub struct Geometry {
     /// Penumbra function: < 0 inside the penumbra's outer cone (conical shadow only;
     /// equal to `umbra` for the cylinder).
     pub penumbra: f64,
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    let n = norm(a);
-    [a[0] / n, a[1] / n, a[2] / n]
 }
 
 /// Area of overlap of two discs of angular radii `a` and `b` whose centres are `c`
@@ -505,14 +485,7 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
-        if !s.sunlit {
-            return 0.0;
-        }
-        let factor = match incidence {
-            Incidence::Tracking => 1.0,
-            _ => incidence.factor(s.orbit_angle_rad, s.beta_rad),
-        };
-        absorptivity_area_m2 * s.solar_flux_w_per_m2 * factor
+        super::direct_sun_w(s, absorptivity_area_m2, incidence)
     }
 
     /// As the circular model: α·A · S · a · F · max(0, cos θ cos β), with S the flux on

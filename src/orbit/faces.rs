@@ -130,11 +130,11 @@ pub fn sun_lvlh(theta_rad: f64, beta_rad: f64) -> [f64; 3] {
     [-st * cb, -sb, -ct * cb]
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -142,7 +142,11 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn unit(a: [f64; 3]) -> [f64; 3] {
+pub(crate) fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+pub(crate) fn unit(a: [f64; 3]) -> [f64; 3] {
     let n = dot(a, a).sqrt();
     [a[0] / n, a[1] / n, a[2] / n]
 }
@@ -288,12 +292,11 @@ fn albedo_sum(e: &FaceEnvironment, weight: &dyn Fn([f64; 3]) -> f64) -> f64 {
             albedo_cells(e, &mut c.1);
             c.0 = Some(*e);
         }
-        c.1.iter()
-            .map(|(u, l)| {
-                let w = weight(*u);
-                if w > 0.0 { l * w } else { 0.0 }
-            })
-            .sum()
+        // a fold from +0: an empty sum is 0, not the −0 of `Iterator::sum`
+        c.1.iter().fold(0.0, |acc, (u, l)| {
+            let w = weight(*u);
+            if w > 0.0 { acc + l * w } else { acc }
+        })
     })
 }
 

@@ -178,6 +178,21 @@ pub struct EnvState {
     pub radius_m: f64,
 }
 
+/// Heat absorbed from direct Sun, W, by α·A `absorptivity_area_m2` facing as
+/// `incidence` says, at the instant `s` (the same law for every kind of orbit: the
+/// orbit angle from noon and β place the Sun).
+#[inline]
+pub(crate) fn direct_sun_w(s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
+    if !s.sunlit {
+        return 0.0;
+    }
+    let factor = match incidence {
+        Incidence::Tracking => 1.0,
+        _ => incidence.factor(s.orbit_angle_rad, s.beta_rad),
+    };
+    absorptivity_area_m2 * s.solar_flux_w_per_m2 * factor
+}
+
 /// Where a load's slope jumps as the spacecraft goes round: the solver lands its steps
 /// there.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -619,14 +634,7 @@ impl EnvironmentModel for CircularEnvironment {
     }
 
     fn sun_w(&self, s: &EnvState, absorptivity_area_m2: f64, incidence: Incidence) -> f64 {
-        if !s.sunlit {
-            return 0.0;
-        }
-        let factor = match incidence {
-            Incidence::Tracking => 1.0,
-            _ => incidence.factor(s.orbit_angle_rad, s.beta_rad),
-        };
-        absorptivity_area_m2 * s.solar_flux_w_per_m2 * factor
+        direct_sun_w(s, absorptivity_area_m2, incidence)
     }
 
     /// α·A · S · a · F · max(0, cos θ cos β). Not inlined, so that its trigonometry is

@@ -1094,21 +1094,37 @@ fn environment(
         )),
         &|p, v| cx.quantity(&q::SOLAR_FLUX_W_PER_M2, p, v),
     )?;
-    let space_sink_k =
-        cx.quantity_or_default(&q::SPACE_SINK_K, &ep.key("space_sink_k"), e.space_sink_k)?;
+    let (space_sink_k, albedo, earth_ir_w_per_m2) =
+        earth_and_space(cx, e.space_sink_k, e.albedo, e.earth_ir_w_per_m2)?;
     let environment = CircularEnvironment {
         orbit,
         beta_rad: beta_deg.map(f64::to_radians),
         solar_flux_w_per_m2: solar_flux,
-        albedo: cx.quantity_or_default(&q::ALBEDO, &ep.key("albedo"), e.albedo)?,
-        earth_ir_w_per_m2: cx.quantity_or_default(
-            &q::EARTH_IR_W_PER_M2,
-            &ep.key("earth_ir_w_per_m2"),
-            e.earth_ir_w_per_m2,
-        )?,
+        albedo,
+        earth_ir_w_per_m2,
         space_sink_k,
     };
     Ok((environment.into(), space_sink_k))
+}
+
+/// The environment's numbers every orbit has, in the order they are checked: the
+/// space sink (K), the Earth's albedo and its infrared flux (W/m²).
+fn earth_and_space(
+    cx: &Cx,
+    space_sink_k: Option<f64>,
+    albedo: Option<f64>,
+    earth_ir_w_per_m2: Option<f64>,
+) -> Result<(f64, f64, f64), SpecError> {
+    let ep = KeyPath::new("environment");
+    Ok((
+        cx.quantity_or_default(&q::SPACE_SINK_K, &ep.key("space_sink_k"), space_sink_k)?,
+        cx.quantity_or_default(&q::ALBEDO, &ep.key("albedo"), albedo)?,
+        cx.quantity_or_default(
+            &q::EARTH_IR_W_PER_M2,
+            &ep.key("earth_ir_w_per_m2"),
+            earth_ir_w_per_m2,
+        )?,
+    ))
 }
 
 /// A real orbit: the TLE (`orbit.tle`, two lines) from `orbit.start_utc` (shifted by
@@ -1197,8 +1213,8 @@ fn dated_environment(
             ));
         }
     };
-    let space_sink_k =
-        cx.quantity_or_default(&q::SPACE_SINK_K, &ep.key("space_sink_k"), e.space_sink_k)?;
+    let (space_sink_k, albedo, earth_ir_w_per_m2) =
+        earth_and_space(cx, e.space_sink_k, e.albedo, e.earth_ir_w_per_m2)?;
     let environment = DatedEnvironment {
         orbit,
         shadow,
@@ -1208,12 +1224,8 @@ fn dated_environment(
             &op.key("earth_radius_m"),
             orbit_spec.earth_radius_m,
         )?,
-        albedo: cx.quantity_or_default(&q::ALBEDO, &ep.key("albedo"), e.albedo)?,
-        earth_ir_w_per_m2: cx.quantity_or_default(
-            &q::EARTH_IR_W_PER_M2,
-            &ep.key("earth_ir_w_per_m2"),
-            e.earth_ir_w_per_m2,
-        )?,
+        albedo,
+        earth_ir_w_per_m2,
         space_sink_k,
         horizon_s: 0.0,
     };

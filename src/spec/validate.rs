@@ -121,13 +121,18 @@ fn circular(e: &CircularEnvironment) -> Result<(), Invalid> {
         &e.solar_flux_w_per_m2,
         &|w, v| within_q(w, v, &q::SOLAR_FLUX_W_PER_M2),
     )?;
-    within_q("environment.albedo", e.albedo, &q::ALBEDO)?;
+    earth_and_space(e.albedo, e.earth_ir_w_per_m2, e.space_sink_k)
+}
+
+/// The albedo, the Earth's infrared flux and the space sink of any environment.
+fn earth_and_space(albedo: f64, earth_ir_w_per_m2: f64, space_sink_k: f64) -> Result<(), Invalid> {
+    within_q("environment.albedo", albedo, &q::ALBEDO)?;
     within_q(
         "environment.earth_ir_w_per_m2",
-        e.earth_ir_w_per_m2,
+        earth_ir_w_per_m2,
         &q::EARTH_IR_W_PER_M2,
     )?;
-    within_q("environment.space_sink_k", e.space_sink_k, &q::SPACE_SINK_K)
+    within_q("environment.space_sink_k", space_sink_k, &q::SPACE_SINK_K)
 }
 
 fn dated(e: &crate::orbit::dated::DatedEnvironment) -> Result<(), Invalid> {
@@ -143,13 +148,7 @@ fn dated(e: &crate::orbit::dated::DatedEnvironment) -> Result<(), Invalid> {
         e.solar_flux_1au_w_per_m2,
         &q::SOLAR_FLUX_W_PER_M2,
     )?;
-    within_q("environment.albedo", e.albedo, &q::ALBEDO)?;
-    within_q(
-        "environment.earth_ir_w_per_m2",
-        e.earth_ir_w_per_m2,
-        &q::EARTH_IR_W_PER_M2,
-    )?;
-    within_q("environment.space_sink_k", e.space_sink_k, &q::SPACE_SINK_K)
+    earth_and_space(e.albedo, e.earth_ir_w_per_m2, e.space_sink_k)
 }
 
 impl ThermalModel {
