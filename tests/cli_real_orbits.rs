@@ -331,7 +331,7 @@ fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
     )
     .unwrap();
-    let cases: [(&str, &str, &str, &[&str]); 7] = [
+    let cases: [(&str, &str, &str, &[&str]); 11] = [
         (
             "mode",
             "mode = \"nadir\"",
@@ -355,6 +355,30 @@ fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
             "mode = \"nadir\"\nyaw_deg = 0.0",
             "mode = \"inertial\"\nquaternion = [1.0, 0.0]",
             &["`attitude.quaternion`", "lists 2 number(s)"],
+        ),
+        (
+            "spin-no-axis",
+            "mode = \"nadir\"\nyaw_deg = 0.0",
+            "mode = \"spin\"\nspin_rate_deg_per_s = 3.0",
+            &["`attitude`", "needs `spin_axis"],
+        ),
+        (
+            "spin-zero-axis",
+            "mode = \"nadir\"\nyaw_deg = 0.0",
+            "mode = \"spin\"\nspin_axis = [0.0, 0.0, 0.0]\nspin_rate_deg_per_s = 3.0",
+            &["`attitude.spin_axis`", "zero vector"],
+        ),
+        (
+            "spin-rate",
+            "mode = \"nadir\"\nyaw_deg = 0.0",
+            "mode = \"spin\"\nspin_axis = [0.0, 0.0, 1.0]\nspin_rate_deg_per_s = 1000.0",
+            &["`attitude.spin_rate_deg_per_s`", "must be within -720 … 720"],
+        ),
+        (
+            "spin-key-not-spin",
+            "mode = \"nadir\"\nyaw_deg = 0.0",
+            "mode = \"sun\"\nspin_axis = [0.0, 0.0, 1.0]",
+            &["`attitude.spin_axis`", "give mode = \"spin\""],
         ),
         (
             "zero-normal",

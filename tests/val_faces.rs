@@ -29,6 +29,7 @@ fn env(theta_deg: f64, beta_deg: f64, h_m: f64) -> FaceEnvironment {
             ],
             [0.0, 0.0, 1.0],
         ),
+        t_s: 0.0,
     }
 }
 
@@ -90,7 +91,9 @@ fn val_closed_form_sun_pointing_face_and_cube_projected_area() {
                     let by = -sy * s[0] + cy * s[1];
                     bx.abs() + by.abs() + s[2].abs()
                 }
-                Attitude::Tumble | Attitude::Inertial { .. } => unreachable!(),
+                Attitude::Tumble | Attitude::Inertial { .. } | Attitude::Spin { .. } => {
+                    unreachable!()
+                }
             };
             assert!(
                 (total - 1361.0 * projected).abs() < 1e-9 * 1361.0,
@@ -201,4 +204,59 @@ fn val_closed_form_inertial_attitude() {
             assert!((turned.albedo_w_per_m2 - plain.albedo_w_per_m2).abs() < 1e-9);
         }
     }
+}
+
+/// A body spinning about the orbit normal (the inertial z of a circular orbit): at
+/// each instant its faces see what the inertially fixed body turned by the spin angle
+/// sees (Rodrigues against the quaternion of that turn); a face along the spin axis
+/// sees what it sees without the spin; spin-averaged, a face on the equator of the
+/// spin sees the direct Sun S/π with the Sun in the spin plane (β = 0) — the mean of
+/// max(cos, 0) over a turn.
+#[test]
+fn val_closed_form_spin_attitude() {
+    let rate = 7f64.to_radians();
+    let spin = |averaged| Attitude::Spin {
+        quaternion: [1.0, 0.0, 0.0, 0.0],
+        axis_body: [0.0, 0.0, 1.0],
+        rate_rad_per_s: rate,
+        averaged,
+    };
+    let fixed = Attitude::Inertial {
+        quaternion: [1.0, 0.0, 0.0, 0.0],
+    };
+    for t in [0.0, 3.0, 11.5, 40.0] {
+        let phi: f64 = rate * t;
+        let turned = Attitude::Inertial {
+            quaternion: [(phi / 2.0).cos(), 0.0, 0.0, (phi / 2.0).sin()],
+        };
+        for theta in [0.0, 70.0, 150.0] {
+            let mut e = env(theta, 30.0, 600e3);
+            e.t_s = t;
+            for n in [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.6, 0.0, 0.8]] {
+                let a = incident(&face(n, spin(false)), &e);
+                let b = incident(&face(n, turned), &e);
+                for (x, y) in [
+                    (a.solar_w_per_m2, b.solar_w_per_m2),
+                    (a.albedo_w_per_m2, b.albedo_w_per_m2),
+                    (a.earth_ir_w_per_m2, b.earth_ir_w_per_m2),
+                ] {
+                    assert!(
+                        (x - y).abs() < 1e-9 * (1.0 + y.abs()),
+                        "t {t}, θ {theta}, n {n:?}"
+                    );
+                }
+            }
+            let along = incident(&face([0.0, 0.0, 1.0], spin(false)), &e);
+            let still = incident(&face([0.0, 0.0, 1.0], fixed), &e);
+            assert!((along.solar_w_per_m2 - still.solar_w_per_m2).abs() < 1e-9);
+            assert!((along.earth_ir_w_per_m2 - still.earth_ir_w_per_m2).abs() < 1e-9);
+        }
+    }
+    let mean = incident(&face([1.0, 0.0, 0.0], spin(true)), &env(40.0, 0.0, 600e3));
+    let want = 1361.0 / std::f64::consts::PI;
+    assert!(
+        (mean.solar_w_per_m2 - want).abs() < 1e-3 * want,
+        "{} vs {want}",
+        mean.solar_w_per_m2
+    );
 }

@@ -107,7 +107,7 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     );
 
     let eclipses = eclipses(env, horizon);
-    let dark: f64 = eclipses.iter().map(|(a, b)| b - a).sum();
+    let dark = eclipses.iter().fold(0.0, |acc, (a, b)| acc + (b - a));
     outln!(
         o,
         "\neclipses: {} ({:.4} of the time in the umbra)",

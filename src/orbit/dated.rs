@@ -570,6 +570,7 @@ impl EnvironmentModel for DatedEnvironment {
             albedo: self.albedo,
             earth_ir_w_per_m2: self.earth_ir_w_per_m2,
             lvlh_axes: super::faces::lvlh_axes(g.r, g.normal),
+            t_s: s.t_s,
         }
     }
 

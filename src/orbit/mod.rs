@@ -689,6 +689,7 @@ impl EnvironmentModel for CircularEnvironment {
                 [s.orbit_angle_rad.cos(), s.orbit_angle_rad.sin(), 0.0],
                 [0.0, 0.0, 1.0],
             ),
+            t_s: s.t_s,
         }
     }
 }

@@ -782,6 +782,27 @@ fn loads(
     Ok((loads, bindings))
 }
 
+/// `v` as a unit vector of `N` finite numbers (`shape` says what they are when the
+/// count is wrong); an error naming `path` when it is short, long or zero.
+fn unit_vector<const N: usize>(
+    cx: &Cx,
+    path: &KeyPath,
+    v: &[f64],
+    shape: &str,
+) -> Result<[f64; N], SpecError> {
+    let Ok(arr) = <[f64; N]>::try_from(v) else {
+        return Err(cx.err(path, format!("lists {} number(s); {shape}", v.len())));
+    };
+    for (k, x) in arr.iter().enumerate() {
+        cx.finite(&path.at(k), *x)?;
+    }
+    let n = arr.iter().map(|x| x * x).sum::<f64>().sqrt();
+    if n <= 1e-9 {
+        return Err(cx.err(path, "is the zero vector; it needs a direction"));
+    }
+    Ok(arr.map(|x| x / n))
+}
+
 /// `[attitude]` and `[[face]]`: each face a load on its node (direct Sun, albedo,
 /// Earth infrared from its orientation) and a radiative coupling εA to space, after the
 /// spec's own loads and couplings (their indices stay those of the spec).
@@ -798,11 +819,24 @@ fn faces(
     let ap = KeyPath::new("attitude");
     let a = attitude.unwrap_or_default();
     let yaw_deg = cx.quantity_or_default(&q::YAW_DEG, &ap.key("yaw_deg"), a.yaw_deg)?;
-    if a.quaternion.is_some() && a.mode.as_deref() != Some("inertial") {
+    let spinning = a.mode.as_deref() == Some("spin");
+    if a.quaternion.is_some() && a.mode.as_deref() != Some("inertial") && !spinning {
         return Err(cx.err(
             &ap.key("quaternion"),
-            "orients an inertially fixed body: give mode = \"inertial\"",
+            "orients an inertially fixed or spinning body: give mode = \"inertial\" or \"spin\"",
         ));
+    }
+    for (given, key) in [
+        (a.spin_axis.is_some(), "spin_axis"),
+        (a.spin_rate_deg_per_s.is_some(), "spin_rate_deg_per_s"),
+        (a.spin_averaged.is_some(), "spin_averaged"),
+    ] {
+        if given && !spinning {
+            return Err(cx.err(
+                &ap.key(key),
+                "describes a spinning body: give mode = \"spin\"",
+            ));
+        }
     }
     let attitude = match a.mode.as_deref() {
         None | Some("nadir") => Attitude::Nadir {
@@ -817,28 +851,49 @@ fn faces(
         Some("sun") => Attitude::Sun,
         Some("tumble") => Attitude::Tumble,
         Some("inertial") => {
-            let qp = ap.key("quaternion");
             let Some(q) = &a.quaternion else {
                 return Err(cx.err(
                     &ap,
                     "an inertial attitude needs `quaternion = [w, x, y, z]` (body to inertial)",
                 ));
             };
-            let [w, x, y, z] = q[..] else {
+            Attitude::Inertial {
+                quaternion: unit_vector::<4>(
+                    cx,
+                    &ap.key("quaternion"),
+                    q,
+                    "a quaternion is [w, x, y, z]",
+                )?,
+            }
+        }
+        Some("spin") => {
+            let quaternion = match &a.quaternion {
+                Some(q) => {
+                    unit_vector::<4>(cx, &ap.key("quaternion"), q, "a quaternion is [w, x, y, z]")?
+                }
+                None => [1.0, 0.0, 0.0, 0.0],
+            };
+            let Some(axis) = &a.spin_axis else {
                 return Err(cx.err(
-                    &qp,
-                    format!("lists {} number(s); a quaternion is [w, x, y, z]", q.len()),
+                    &ap,
+                    "a spinning body needs `spin_axis = [x, y, z]` (body frame)",
                 ));
             };
-            for (k, v) in [w, x, y, z].into_iter().enumerate() {
-                cx.finite(&qp.at(k), v)?;
-            }
-            let n = (w * w + x * x + y * y + z * z).sqrt();
-            if n <= 1e-9 {
-                return Err(cx.err(&qp, "is zero; a rotation needs a unit quaternion"));
-            }
-            Attitude::Inertial {
-                quaternion: [w / n, x / n, y / n, z / n],
+            let axis_body =
+                unit_vector::<3>(cx, &ap.key("spin_axis"), axis, "an axis is [x, y, z]")?;
+            let Some(rate) = a.spin_rate_deg_per_s else {
+                return Err(cx.err(&ap, "a spinning body needs `spin_rate_deg_per_s`"));
+            };
+            let rate = cx.quantity(
+                &q::SPIN_RATE_DEG_PER_S,
+                &ap.key("spin_rate_deg_per_s"),
+                rate,
+            )?;
+            Attitude::Spin {
+                quaternion,
+                axis_body,
+                rate_rad_per_s: rate.to_radians(),
+                averaged: a.spin_averaged.unwrap_or(false),
             }
         }
         Some(other) => {
@@ -855,23 +910,12 @@ fn faces(
     for (i, f) in specs.into_iter().enumerate() {
         let p = KeyPath::new("face").elem(i, &keys.face[i]);
         let node = table.diffusion(cx, &p.key("node"), &f.node)?;
-        let np = p.key("normal");
-        let [x, y, z] = f.normal[..] else {
-            return Err(cx.err(
-                &np,
-                format!(
-                    "lists {} number(s); a normal is [x, y, z] in the body frame",
-                    f.normal.len()
-                ),
-            ));
-        };
-        for (k, v) in [x, y, z].into_iter().enumerate() {
-            cx.finite(&np.at(k), v)?;
-        }
-        let len = (x * x + y * y + z * z).sqrt();
-        if len <= 1e-9 {
-            return Err(cx.err(&np, "is the zero vector; a face needs a direction"));
-        }
+        let normal_body = unit_vector::<3>(
+            cx,
+            &p.key("normal"),
+            &f.normal,
+            "a normal is [x, y, z] in the body frame",
+        )?;
         let area = cx.quantity(&q::AREA_M2, &p.key("area_m2"), f.area_m2)?;
         let absorptivity = cx.quantity(&q::ABSORPTIVITY, &p.key("absorptivity"), f.absorptivity)?;
         let emissivity = cx.quantity(&q::EMISSIVITY, &p.key("emissivity"), f.emissivity)?;
@@ -882,7 +926,7 @@ fn faces(
                 .unwrap_or_else(|| crate::spec::keys::face_name(&f.node, i)),
             node,
             kind: LoadKind::Face(Face {
-                normal_body: [x / len, y / len, z / len],
+                normal_body,
                 area_m2: area,
                 absorptivity,
                 emissivity,

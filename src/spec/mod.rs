@@ -392,15 +392,25 @@ pub struct DissipationSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct AttitudeSpec {
-    /// `nadir` (default), `sun` or `tumble`.
+    /// `nadir` (default), `sun`, `tumble`, `inertial` or `spin`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mode: Option<String>,
     /// Nadir pointing: the body frame turned about nadir, degrees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub yaw_deg: Option<f64>,
-    /// Inertially fixed: `[w, x, y, z]`, body to inertial (normalised).
+    /// Inertially fixed: `[w, x, y, z]`, body to inertial (normalised); spinning: the
+    /// orientation at t = 0 (identity when absent).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub quaternion: Option<Vec<f64>>,
+    /// Spinning: the body axis it spins about, `[x, y, z]` (normalised).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spin_axis: Option<Vec<f64>>,
+    /// Spinning: the rate about `spin_axis`, degrees per second (right-handed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spin_rate_deg_per_s: Option<f64>,
+    /// Spinning: faces see the mean over a turn instead of the instant.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spin_averaged: Option<bool>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

@@ -263,6 +263,17 @@ fn walk(spec: &mut ScenarioSpec, keys: &ElementKeys, only: Option<&[String]>, f:
                 .yaw_deg = yaw;
         }
     }
+    // A spinning body's rate (required for that mode, so always given).
+    let spinning = spec
+        .attitude
+        .as_ref()
+        .is_some_and(|a| a.mode.as_deref() == Some("spin"));
+    if spinning && !spec.face.is_empty() && section("attitude") {
+        let a = spec.attitude.as_mut().expect("spinning");
+        at!("attitude".into(); {
+            at!("spin_rate_deg_per_s".into(); f(&path, Slot::Optional(&mut a.spin_rate_deg_per_s, Default::Absent), of(&q::SPIN_RATE_DEG_PER_S)));
+        });
+    }
     for (fc, key) in spec.face.iter_mut().zip(&keys.face) {
         if !element("face", key) {
             continue;

@@ -256,6 +256,14 @@ pub const YAW_DEG: Quantity = q(
     Some(0.0),
     within(-180.0, 180.0, "yaw angle (deg)"),
 );
+/// A spinning body's rate about its spin axis (two turns a second at most: faster
+/// spins are spin-averaged, `spin_averaged = true`).
+pub const SPIN_RATE_DEG_PER_S: Quantity = q(
+    "deg/s",
+    "−720 … 720",
+    None,
+    within(-720.0, 720.0, "spin rate (deg/s)"),
+);
 /// A shift of a dated run's start, s (a TLE is good for about a month around its epoch).
 pub const START_OFFSET_S: Quantity = q(
     "s",
@@ -381,6 +389,7 @@ pub const TABLE: &[(&str, &Quantity)] = &[
     ("ALTITUDE_M", &ALTITUDE_M),
     ("START_OFFSET_S", &START_OFFSET_S),
     ("YAW_DEG", &YAW_DEG),
+    ("SPIN_RATE_DEG_PER_S", &SPIN_RATE_DEG_PER_S),
     ("PRESSURE_ANGLE_DEG", &PRESSURE_ANGLE_DEG),
     ("POISSON", &POISSON),
     ("TEMPERATURE_K", &TEMPERATURE_K),

@@ -238,6 +238,29 @@ impl Scenario {
                 });
             }
         }
+        // A resolved spin needs steps shorter than its turn.
+        let spin = net.loads.iter().find_map(|l| match l.kind {
+            crate::thermal::LoadKind::Face(crate::orbit::faces::Face {
+                attitude:
+                    crate::orbit::faces::Attitude::Spin {
+                        rate_rad_per_s,
+                        averaged: false,
+                        ..
+                    },
+                ..
+            }) if rate_rad_per_s != 0.0 => Some(2.0 * std::f64::consts::PI / rate_rad_per_s.abs()),
+            _ => None,
+        });
+        if let Some(turn_s) = spin.filter(|t| self.solver.max_step_s > t / 8.0) {
+            w.push(Warning {
+                key: "attitude.spin_rate_deg_per_s".into(),
+                message: format!(
+                    "one turn takes {turn_s:.1} s but steps may be {} s long: the faces' loads are sampled, not followed; set solver.max_step_s ≤ {:.2} s or spin_averaged = true",
+                    self.solver.max_step_s,
+                    turn_s / 8.0
+                ),
+            });
+        }
         if !self.solver.adaptive {
             let temps = net.initial_temperatures_k();
             let tau = node_time_constants_s(&self.thermal, &temps, 0.0);
