@@ -372,7 +372,10 @@ fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
             "spin-rate",
             "mode = \"nadir\"\nyaw_deg = 0.0",
             "mode = \"spin\"\nspin_axis = [0.0, 0.0, 1.0]\nspin_rate_deg_per_s = 1000.0",
-            &["`attitude.spin_rate_deg_per_s`", "must be within -720 … 720"],
+            &[
+                "`attitude.spin_rate_deg_per_s`",
+                "must be within -720 … 720",
+            ],
         ),
         (
             "spin-key-not-spin",
@@ -409,4 +412,78 @@ fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
         all.push(&name);
         assert_error(case, &out, &all);
     }
+}
+
+/// Energy in the log: each face's load on `/thermal/heat` equals A (α (solar + albedo)
+/// + ε Earth IR) from its incident fluxes on `/orbit/faces`, at every logged instant, and
+/// the network's absorbed power is their sum (the CubeSat has no other absorbed load).
+/// The optical properties are moved by `--set` so that a log ignoring them would fail.
+#[test]
+fn cli_the_logged_face_fluxes_account_for_the_face_loads() {
+    let dir = tmpdir("face-energy");
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml");
+    let log = dir.join("cube.mcap");
+    let out = bin()
+        .args(["run", "--quiet", "--orbits", "1", "--log-every", "120s"])
+        .args(["--set", "face.px.absorptivity=0.5"])
+        .args(["--set", "face.mz.emissivity=0.3"])
+        .arg(&scenario)
+        .arg("--out")
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let spec: toml::Table = std::fs::read_to_string(&scenario).unwrap().parse().unwrap();
+    let faces = spec["face"].as_array().unwrap();
+    assert_eq!(faces.len(), 6);
+    let table = orbitlash::io::mcap_read::read_log(&log).unwrap();
+    let col = |name: &str| {
+        table
+            .columns
+            .iter()
+            .position(|c| c == name)
+            .unwrap_or_else(|| panic!("no column {name}"))
+    };
+    let absorbed = col("/thermal/heat.absorbed_w");
+    let mut rows = 0;
+    for (_, v) in &table.rows {
+        if v[absorbed].is_nan() {
+            continue;
+        }
+        rows += 1;
+        let mut sum = 0.0;
+        for f in faces {
+            let f = f.as_table().unwrap();
+            let (node, name) = (f["node"].as_str().unwrap(), f["name"].as_str().unwrap());
+            let area = f["area_m2"].as_float().unwrap();
+            let alpha = if name == "px" {
+                0.5
+            } else {
+                f["absorptivity"].as_float().unwrap()
+            };
+            let eps = if name == "mz" {
+                0.3
+            } else {
+                f["emissivity"].as_float().unwrap()
+            };
+            let q = |k: &str| v[col(&format!("/orbit/faces.{node}_{name}_{k}_w_per_m2"))];
+            let want = area * (alpha * (q("solar") + q("albedo")) + eps * q("earth_ir"));
+            let load = v[col(&format!("/thermal/heat.{name}_w"))];
+            assert!(
+                (load - want).abs() <= 1e-9 * (1.0 + want.abs()),
+                "{name}: {load} vs {want}"
+            );
+            sum += load;
+        }
+        assert!(
+            (v[absorbed] - sum).abs() <= 1e-9 * (1.0 + sum),
+            "{} vs {sum}",
+            v[absorbed]
+        );
+    }
+    assert!(rows > 40, "{rows} rows");
 }

@@ -260,3 +260,147 @@ fn val_closed_form_spin_attitude() {
         mean.solar_w_per_m2
     );
 }
+
+/// The albedo a face with LVLH normal `n` receives, by an independent method: a
+/// surface integral over the visible cap of a Lambertian Earth (ground area elements,
+/// cosines at both ends, 1/d²), not the solid-angle integral over the disc the code
+/// uses.
+fn albedo_by_surface_integral(n: [f64; 3], sun: [f64; 3], r: f64) -> f64 {
+    let (a, s) = (0.3, 1361.0);
+    let gamma_max = (R / r).acos();
+    let (ng, np) = (120, 240);
+    let (dg, dp) = (
+        gamma_max / ng as f64,
+        2.0 * std::f64::consts::PI / np as f64,
+    );
+    let mut sum = 0.0;
+    for i in 0..ng {
+        let g = (i as f64 + 0.5) * dg;
+        let (sg, cg) = g.sin_cos();
+        for j in 0..np {
+            let (sp, cp) = ((j as f64 + 0.5) * dp).sin_cos();
+            // ground normal; the Earth's centre at the origin, the spacecraft at −r ẑ
+            let p = [sg * cp, sg * sp, -cg];
+            let cos_zenith = p[0] * sun[0] + p[1] * sun[1] + p[2] * sun[2];
+            if cos_zenith <= 0.0 {
+                continue;
+            }
+            let d = [R * p[0], R * p[1], R * p[2] + r];
+            let dd = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let cos_face = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]) / dd;
+            let cos_ground = -(p[0] * d[0] + p[1] * d[1] + p[2] * d[2]) / dd;
+            if cos_face <= 0.0 || cos_ground <= 0.0 {
+                continue;
+            }
+            sum += a * s * cos_zenith / std::f64::consts::PI * cos_face * cos_ground / (dd * dd)
+                * R
+                * R
+                * sg
+                * dg
+                * dp;
+        }
+    }
+    sum
+}
+
+/// Orbit-averaged loads of a nadir-pointing cube (six unit faces, α = ε = 1) on a
+/// circular orbit with a cylindrical shadow, against closed forms and a second method:
+/// - direct Sun: S (cos β (6 − 2 cos a − 2 sin a) + 2a sin β) / 2π, the sunlit arc
+///   being |θ| < a (from A (|sx| + |sy| + |sz|) of the projected cube);
+/// - Earth infrared: q (F(0°) + 4 F(90°)), F(0°) = 1/H² and, for a plate whose normal
+///   is tangent to the sphere, F(90°) = (atan(1/X) − X/H²)/π with X = √(H² − 1)
+///   (Howell's catalog, plate tangent to a sphere);
+/// - albedo: each face's orbit average within 1 % of the nadir face's peak of the
+///   surface integral over the Earth's cap, and each face's RMS difference over the
+///   orbit within 1.5 % of that peak (the aim the issue sets against industry tools).
+#[test]
+fn val_closed_form_orbit_averaged_cube() {
+    let normals: [[f64; 3]; 6] = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ];
+    // direct Sun and infrared at every sample, albedo at every 40th
+    let (samples, every) = (7200, 40);
+    for (h, beta) in [(500e3, 0.0f64), (500e3, 40.0), (1000e3, 70.0)] {
+        let r = R + h;
+        let hh = r / R;
+        let b = beta.to_radians();
+        // sunlit when cos θ cos β > 0 or the Sun's line misses the Earth's cylinder
+        let cos_half = (1.0 - 1.0 / (hh * hh)).sqrt() / b.cos();
+        let a = if cos_half >= 1.0 {
+            std::f64::consts::PI
+        } else {
+            std::f64::consts::PI - cos_half.acos()
+        };
+        let (mut sun, mut ir) = (0.0, 0.0);
+        let mut albedo = [0.0; 6];
+        let mut truth = [0.0; 6];
+        let mut sq = [0.0; 6];
+        let mut peak: f64 = 0.0;
+        for k in 0..samples {
+            let theta = (k as f64 + 0.5) * 360.0 / samples as f64;
+            let th = theta.to_radians();
+            let lit =
+                th.cos() * b.cos() > 0.0 || r * (1.0 - (th.cos() * b.cos()).powi(2)).sqrt() > R;
+            let mut e = env(theta, beta, h);
+            if !lit {
+                e.solar_w_per_m2 = 0.0;
+            }
+            for (f, n) in normals.iter().enumerate() {
+                let i = incident(&face(*n, NADIR), &e);
+                sun += i.solar_w_per_m2;
+                ir += i.earth_ir_w_per_m2;
+                if k % every != every / 2 {
+                    continue;
+                }
+                let t = albedo_by_surface_integral(*n, e.sun_lvlh, r);
+                albedo[f] += i.albedo_w_per_m2;
+                truth[f] += t;
+                sq[f] += (i.albedo_w_per_m2 - t).powi(2);
+                peak = peak.max(t);
+            }
+        }
+        let n = samples as f64;
+        let want_sun = 1361.0
+            * (b.cos() * (6.0 - 2.0 * a.cos() - 2.0 * a.sin()) + 2.0 * a * b.sin())
+            / (2.0 * std::f64::consts::PI);
+        assert!(
+            (sun / n - want_sun).abs() < 2e-3 * want_sun,
+            "h {h}, β {beta}: Sun {} vs {want_sun}",
+            sun / n
+        );
+        let x = (hh * hh - 1.0).sqrt();
+        let side = ((1.0 / x).atan() - x / (hh * hh)) / std::f64::consts::PI;
+        let want_ir = 237.0 * (1.0 / (hh * hh) + 4.0 * side);
+        assert!(
+            (ir / n - want_ir).abs() < 1e-9 * want_ir,
+            "h {h}: IR {} vs {want_ir}",
+            ir / n
+        );
+        let m = (samples / every) as f64;
+        for f in 0..6 {
+            let (got, want) = (albedo[f] / m, truth[f] / m);
+            assert!(
+                (got - want).abs() < 0.01 * peak,
+                "h {h}, β {beta}, face {:?}: albedo {got} vs {want} (peak {peak})",
+                normals[f]
+            );
+            let rms = (sq[f] / m).sqrt();
+            eprintln!(
+                "h {:.0} km, β {beta}°, face {:?}: albedo mean {got:.3} vs {want:.3} W/m², RMS {:.3} % of peak",
+                h / 1e3,
+                normals[f],
+                100.0 * rms / peak
+            );
+            assert!(
+                rms < 0.015 * peak,
+                "h {h}, β {beta}, face {:?}: RMS {rms} of peak {peak}",
+                normals[f]
+            );
+        }
+    }
+}

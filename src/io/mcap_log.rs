@@ -10,6 +10,10 @@
 //!   `<load>_w` for every load and `<heater>_w` for every heater;
 //! - `/orbit/state`: `orbit_angle_deg` (from orbit noon), `beta_deg`,
 //!   `solar_flux_w_per_m2`, `sunlit` (1/0), `orbit_number`;
+//! - `/orbit/faces` (scenarios with `[[face]]`s): per face the incident flux before
+//!   absorptivity, `<node>_<face>_solar_w_per_m2`, `…_albedo_w_per_m2`,
+//!   `…_earth_ir_w_per_m2` (as `orbitlash environment --csv` writes them; the channel
+//!   metadata maps each field to `<node>.<face>.…` as `face:<field>`);
 //! - `/gears/<pair>`: exact / closed-form / paper backlash and margin (µm),
 //!   operating pressure angle, centre distance, contact ratio, and per gear (`pinion`,
 //!   `wheel`) the base-circle displacement, base radius, base pitch, base tooth
@@ -107,7 +111,15 @@ pub fn estimated_bytes_per_sample(model: &ThermalModel, gears: &[GearPair]) -> f
     let temperature = doubles(net.nodes.len() as u64 + 1);
     let heat = doubles((2 + net.boundaries.len() + net.loads.len() + net.heaters.len()) as u64);
     let orbit = doubles(5);
+    let faces = net
+        .loads
+        .iter()
+        .filter(|l| matches!(l.kind, crate::thermal::LoadKind::Face(_)))
+        .count() as u64;
     let mut total = 3 * record + temperature + heat + orbit;
+    if faces > 0 {
+        total += record + doubles(3 * faces);
+    }
     for pair in gears {
         let mut body = doubles(7);
         for (k, g) in pair.gears.iter().enumerate() {
@@ -138,6 +150,8 @@ struct Channels {
     temperature: u16,
     heat: u16,
     orbit: u16,
+    /// `/orbit/faces`, when the model has faces.
+    faces: Option<u16>,
     gears: Vec<u16>,
     scenes: Vec<u16>,
     log: u16,
@@ -183,6 +197,8 @@ struct LogDescription {
     boundaries: Vec<String>,
     loads: Vec<String>,
     heaters: Vec<String>,
+    /// Each face as `<node>.<face>`, in load order.
+    faces: Vec<String>,
     pair_names: Vec<String>,
     pairs: Vec<PairLayout>,
     outlines: Vec<[scene::PlacedOutline; 2]>,
@@ -193,7 +209,8 @@ struct LogDescription {
 
 /// Layout of one sample in a batch: t, sunlit, temperatures, heater states, mode
 /// states, heat flows (absorbed, dissipated, to each boundary, each load, each
-/// heater), orbit (angle, β, solar flux, orbit number).
+/// heater), orbit (angle, β, solar flux, orbit number), then per face its solar,
+/// albedo and Earth-IR flux.
 #[derive(Debug, Clone, Copy, Default)]
 struct Layout {
     nodes: usize,
@@ -201,6 +218,7 @@ struct Layout {
     modes: usize,
     boundaries: usize,
     loads: usize,
+    faces: usize,
 }
 
 impl Layout {
@@ -208,7 +226,7 @@ impl Layout {
         2 + self.boundaries + self.loads + self.heaters
     }
     fn stride(&self) -> usize {
-        2 + self.nodes + self.heaters + self.modes + self.flows() + 4
+        2 + self.nodes + self.heaters + self.modes + self.flows() + 4 + 3 * self.faces
     }
 }
 
@@ -329,7 +347,8 @@ impl LogWriter {
         let temps = &v[2..2 + layout.nodes];
         let flows_at = 2 + layout.nodes + layout.heaters + layout.modes;
         let flows = &v[flows_at..flows_at + layout.flows()];
-        let orbit = &v[flows_at + layout.flows()..];
+        let orbit = &v[flows_at + layout.flows()..flows_at + layout.flows() + 4];
+        let faces = &v[flows_at + layout.flows() + 4..];
         // Temperatures.
         self.enc.clear();
         self.enc.double(1, t_s);
@@ -351,6 +370,13 @@ impl LogWriter {
         self.enc.double(4, v[1]);
         self.enc.double(5, orbit[3]);
         self.write_encoded(self.ch.orbit, t_s)?;
+        if let Some(ch) = self.ch.faces {
+            self.enc.clear();
+            for (f, &q) in faces.iter().enumerate() {
+                self.enc.double(f as u32 + 1, q);
+            }
+            self.write_encoded(ch, t_s)?;
+        }
 
         // Gear pairs.
         for (k, m) in meshes.iter().enumerate() {
@@ -566,6 +592,9 @@ fn push_sample(batch: &mut Batch, s: &Sample) {
     v.push(env.beta_rad.to_degrees());
     v.push(env.solar_flux_w_per_m2);
     v.push(s.orbit_number as f64);
+    for i in &s.faces {
+        v.extend([i.solar_w_per_m2, i.albedo_w_per_m2, i.earth_ir_w_per_m2]);
+    }
     let mesh = batch.meshes.len();
     batch.meshes.extend_from_slice(&s.mesh);
     batch.items.push(Item::Sample(at, mesh));
@@ -844,6 +873,28 @@ fn open_log_writer(
         &descriptor_set("OrbitState", &[orbit]),
     )?;
     let orbit = channel(w, s, "/orbit/state", &empty)?;
+    let faces = if d.faces.is_empty() {
+        None
+    } else {
+        let mut taken = Vec::new();
+        let mut message = MessageType::new("FaceFluxes");
+        let mut meta = BTreeMap::new();
+        for face in &d.faces {
+            for q in ["solar", "albedo", "earth_ir"] {
+                let name = format!("{face}.{q}");
+                let field =
+                    field_names(std::iter::once(name.clone()), "w_per_m2", &mut taken).remove(0);
+                message = message.with(&field, Kind::Double);
+                meta.insert(format!("face:{field}"), format!("{name}_w_per_m2"));
+            }
+        }
+        let s = schema(
+            w,
+            "orbitlash.FaceFluxes",
+            &descriptor_set("FaceFluxes", &[message]),
+        )?;
+        Some(channel(w, s, "/orbit/faces", &meta)?)
+    };
     let mut gears = Vec::new();
     if !d.pairs.is_empty() {
         let s = schema(
@@ -882,6 +933,7 @@ fn open_log_writer(
         temperature,
         heat,
         orbit,
+        faces,
         gears,
         scenes,
         log,
@@ -917,6 +969,12 @@ impl Observer for McapLog {
             boundaries: names(&mut net.boundaries.iter().map(|b| &b.name)),
             loads: names(&mut net.loads.iter().map(|l| &l.name)),
             heaters: names(&mut net.heaters.iter().map(|h| &h.name)),
+            faces: net
+                .loads
+                .iter()
+                .filter(|l| matches!(l.kind, crate::thermal::LoadKind::Face(_)))
+                .map(|l| format!("{}.{}", net.nodes[l.node].name, l.name))
+                .collect(),
             pair_names: names(&mut r.gears.iter().map(|g| &g.name)),
             pairs: r
                 .gears
@@ -957,6 +1015,11 @@ impl Observer for McapLog {
             modes: r.model.modes.len(),
             boundaries: net.boundaries.len(),
             loads: net.loads.len(),
+            faces: net
+                .loads
+                .iter()
+                .filter(|l| matches!(l.kind, crate::thermal::LoadKind::Face(_)))
+                .count(),
         };
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.

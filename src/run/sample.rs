@@ -10,6 +10,7 @@
 //! through it, so "the temperature at 3600 s" is the same number in every output.
 
 use crate::gear::{GearPair, MeshState};
+use crate::orbit::faces::Incident;
 use crate::orbit::{EnvState, EnvironmentModel};
 pub use crate::run::sim::{Probe, ProbeWork};
 use crate::run::sim::{RunStart, StepView, mesh_or_nan};
@@ -74,6 +75,9 @@ pub struct Sample {
     pub mesh: Vec<MeshState>,
     /// When wanted.
     pub flows: HeatFlows,
+    /// What each face receives before absorptivity (the face loads in
+    /// `Network::loads` order), when flows are wanted.
+    pub faces: Vec<Incident>,
 }
 
 impl<'a> Probe<'a> {
@@ -102,10 +106,21 @@ impl<'a> Probe<'a> {
                 ),
             }
         }
+        out.faces.clear();
         if want.flows {
+            let net = &self.model.network;
+            let mut faces = net.loads.iter().filter_map(|l| match &l.kind {
+                crate::thermal::LoadKind::Face(f) => Some(f),
+                _ => None,
+            });
+            if let Some(first) = faces.next() {
+                let fe = env_model.face_environment(&env);
+                out.faces.push(crate::orbit::faces::incident(first, &fe));
+                out.faces
+                    .extend(faces.map(|f| crate::orbit::faces::incident(f, &fe)));
+            }
             let mut w = self.work.borrow_mut();
             let w = &mut *w;
-            let net = &self.model.network;
             let compiled = w.compiled.get_or_insert_with(|| Compiled::new(net));
             w.scratch_w.resize(net.nodes.len(), 0.0);
             compiled.set_time(
