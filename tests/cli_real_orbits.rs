@@ -122,6 +122,40 @@ fn cli_bad_tles_and_dates_are_refused_with_key_and_line() {
     }
 }
 
+/// A step that ends on the umbra's edge of a cylindrical shadow sees the Sun at its
+/// end, as in the circular model: the TLE orbit then steps through an eclipse entry
+/// without retrying (before the fix every entry was retried about 15 times, the first
+/// shadowed float at the step's end being a jump inside the step).
+#[test]
+fn cli_a_cylindrical_eclipse_edge_is_not_a_jump_inside_the_step() {
+    let dir = tmpdir("cylinder-edge");
+    let file = dir.join("cyl.toml");
+    let text = tle_text();
+    assert!(text.contains("shadow = \"conical\""));
+    std::fs::write(
+        &file,
+        text.replacen("shadow = \"conical\"", "shadow = \"cylindrical\"", 1),
+    )
+    .unwrap();
+    let out = bin()
+        .arg("run")
+        .arg(&file)
+        .args(["--orbits", "20", "--no-log", "--quiet", "--json"])
+        .arg(dir.join("s.json"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
+    assert_eq!(json["events"]["eclipse_entries"], 20);
+    let rejected = json["solver"]["rejected_steps"].as_u64().unwrap();
+    assert!(rejected <= 20, "{rejected} rejected steps over 20 eclipses");
+}
+
 #[test]
 fn cli_a_dated_run_passes_and_reports_its_beta_range() {
     let dir = tmpdir("real-orbit-run");
@@ -414,8 +448,8 @@ fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
     }
 }
 
-/// Energy in the log: each face's load on `/thermal/heat` equals A (α (solar + albedo)
-/// + ε Earth IR) from its incident fluxes on `/orbit/faces`, at every logged instant, and
+/// Energy in the log: each face's load on `/thermal/heat` equals
+/// A (α (solar + albedo) + ε Earth IR) from its incident fluxes on `/orbit/faces`, at every logged instant, and
 /// the network's absorbed power is their sum (the CubeSat has no other absorbed load).
 /// The optical properties are moved by `--set` so that a log ignoring them would fail.
 #[test]

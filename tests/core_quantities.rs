@@ -149,6 +149,14 @@ fn core_every_quantity_bound_agrees_across_toml_set_set_param_and_dispersion() {
             "scenarios/cubesat-1u.toml",
             read("scenarios/cubesat-1u.toml"),
         ),
+        (
+            "cubesat-1u spinning",
+            read("scenarios/cubesat-1u.toml").replacen(
+                "mode = \"nadir\"\nyaw_deg = 0.0",
+                "mode = \"spin\"\nspin_axis = [0.0, 0.0, 1.0]\nspin_rate_deg_per_s = 2.0\nspin_averaged = true",
+                1,
+            ),
+        ),
     ] {
         let (n, q) = check_scenario(file, &text);
         checked += n;

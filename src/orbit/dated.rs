@@ -107,16 +107,17 @@ fn disc_overlap(a: f64, b: f64, c: f64) -> f64 {
                 .sqrt()
 }
 
-/// The first float in (`lo`, `hi`] on the far side of `f`'s sign change from `lo`
-/// (`falling`: `f(lo)` ≥ 0 and `f(hi)` < 0): the Illinois form of regula falsi until
-/// the bracket is a microsecond wide, then bisection to adjacent floats (the same
-/// float as bisection alone: there is one sign change between adjacent floats).
-fn bisect(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, falling: bool) -> f64 {
+/// How closely the terminator is found when it only brackets a night half, s.
+const TERMINATOR_TOL_S: f64 = 1e-3;
+
+/// Illinois regula falsi on a sign change of `f` in [`lo`, `hi`] until the bracket is
+/// `tol_s` wide: the bracket, its `hi` end on the side `f` changes to.
+fn narrow(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, falling: bool, tol_s: f64) -> (f64, f64) {
     let (mut lo, mut hi) = (lo, hi);
     let (mut f_lo, mut f_hi) = (f(lo), f(hi));
     let mut side = 0i8;
     for _ in 0..60 {
-        if hi - lo <= 1e-6 || !(f_lo.is_finite() && f_hi.is_finite()) {
+        if hi - lo <= tol_s || !(f_lo.is_finite() && f_hi.is_finite()) {
             break;
         }
         let mut c = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
@@ -140,6 +141,15 @@ fn bisect(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, falling: bool) -> f64 {
             side = 1;
         }
     }
+    (lo, hi)
+}
+
+/// The first float in (`lo`, `hi`] on the far side of `f`'s sign change from `lo`
+/// (`falling`: `f(lo)` ≥ 0 and `f(hi)` < 0): the Illinois form of regula falsi until
+/// the bracket is a microsecond wide, then bisection to adjacent floats (the same
+/// float as bisection alone: there is one sign change between adjacent floats).
+fn bisect(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, falling: bool) -> f64 {
+    let (mut lo, mut hi) = narrow(f, lo, hi, falling, 1e-6);
     loop {
         let mid = 0.5 * (lo + hi);
         if mid <= lo || mid >= hi {
@@ -287,14 +297,39 @@ impl DatedEnvironment {
         }
     }
 
+    /// r · ŝ at `t_s` (m): ≥ 0 on the day half of the orbit (cos θ ≥ 0), < 0 on the
+    /// night half. Cheaper than [`Self::geometry`] (no orbit normal, β or θ) for the
+    /// searches that only need the sign.
+    fn sun_side(&self, t_s: f64) -> f64 {
+        let x = self.orbit.sample(t_s);
+        dot([x[0], x[1], x[2]], [x[6], x[7], x[8]])
+    }
+
+    /// The umbra and penumbra functions of [`shadow_at`] at `t_s`: the same numbers as
+    /// [`Self::geometry`]'s, without the orbit normal, β and θ.
+    fn shadow_functions(&self, t_s: f64) -> (f64, f64) {
+        let x = self.orbit.sample(t_s);
+        let (umbra, penumbra, _) = shadow_at(
+            [x[0], x[1], x[2]],
+            [x[6], x[7], x[8]],
+            x[9],
+            self.shadow,
+            self.earth_radius_m,
+        );
+        (umbra, penumbra)
+    }
+
     /// The first root of `f` strictly after `t_s` and before `until_s`, with the sign
     /// it changes to (`true`: from ≥ 0 to < 0): a scan in steps of `step_s`, refined
-    /// by bisection to adjacent floats. `f` must not change sign twice within a step.
+    /// by bisection to adjacent floats, or only to within `tol_s` when given (the
+    /// time returned is then on the far side of the root, at most `tol_s` past it).
+    /// `f` must not change sign twice within a step.
     fn next_root(
         &self,
         t_s: f64,
         until_s: f64,
         step_s: f64,
+        tol_s: Option<f64>,
         f: &dyn Fn(f64) -> f64,
     ) -> Option<(f64, bool)> {
         let mut a = t_s;
@@ -304,7 +339,10 @@ impl DatedEnvironment {
             let fb = f(b);
             if (fa >= 0.0) != (fb >= 0.0) {
                 let falling = fa >= 0.0;
-                let hi = bisect(f, a, b, falling);
+                let hi = match tol_s {
+                    None => bisect(f, a, b, falling),
+                    Some(tol) => narrow(f, a, b, falling, tol).1,
+                };
                 // a root at `t_s` itself is not "after" it
                 if hi > t_s {
                     return Some((hi, falling));
@@ -317,14 +355,17 @@ impl DatedEnvironment {
     }
 
     /// The next time after `t_s` (before `until_s`) at which cos θ changes sign with
-    /// the given direction (`falling`: entering the night half, θ = 90°); θ advances
-    /// monotonically, so a scan of an eighth of an orbit cannot step over two roots.
+    /// the given direction (`falling`: entering the night half, θ = 90°), within
+    /// [`TERMINATOR_TOL_S`] past it; θ advances monotonically, so a scan of an eighth
+    /// of an orbit cannot step over two roots. It only brackets a night half for the
+    /// shadow searches (the spacecraft is lit on either side of the terminator; their
+    /// roots are bisected to the float), so it need not be exact.
     fn next_terminator(&self, t_s: f64, until_s: f64, falling: bool) -> Option<f64> {
         let step = self.mean_period_s() / 8.0;
         let mut t = t_s;
-        while let Some((tc, f)) =
-            self.next_root(t, until_s, step, &|t| self.geometry(t).theta_rad.cos())
-        {
+        while let Some((tc, f)) = self.next_root(t, until_s, step, Some(TERMINATOR_TOL_S), &|t| {
+            self.sun_side(t)
+        }) {
             if f == falling {
                 return Some(tc);
             }
@@ -346,7 +387,7 @@ impl DatedEnvironment {
     ) -> Option<(f64, bool)> {
         let mut t = t_s;
         while t < until_s {
-            if self.geometry(t).theta_rad.cos() >= 0.0 {
+            if self.sun_side(t) >= 0.0 {
                 t = self.next_terminator(t, until_s, true)?;
             }
             let night_end = self.next_terminator(t, until_s, false).unwrap_or(until_s);
@@ -432,7 +473,14 @@ impl EnvironmentModel for DatedEnvironment {
             t_s,
             orbit_angle_rad: g.theta_rad,
             beta_rad: g.beta_rad,
-            solar_flux_w_per_m2: if sunlit { flux * g.sun_fraction } else { flux },
+            // A step flagged sunlit sees the Sun from the lit side up to and at its end,
+            // which lands on the edge: the cylinder's full flux (its first shadowed
+            // float would be a jump inside the step), the penumbra's dimming (which
+            // falls continuously to 0 at the umbra).
+            solar_flux_w_per_m2: match (sunlit, self.shadow) {
+                (false, _) | (true, Shadow::Cylindrical) => flux,
+                (true, Shadow::Conical) => flux * g.sun_fraction,
+            },
             sunlit,
             radius_m: norm(g.r),
         }
@@ -443,7 +491,7 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
-        self.next_shadow_edge(t_s, until_s, &|t| self.geometry(t).umbra)
+        self.next_shadow_edge(t_s, until_s, &|t| self.shadow_functions(t).0)
     }
 
     /// The terminator (θ = ±90°), noon and midnight (θ = 0°, 180°) and, with a
@@ -459,18 +507,17 @@ impl EnvironmentModel for DatedEnvironment {
                 LoadKink::Terminator => Box::new(|t| self.geometry(t).theta_rad.cos()),
                 LoadKink::NoonMidnight => Box::new(|t| self.geometry(t).theta_rad.sin()),
             };
-            if let Some((t, _)) = self.next_root(t_s, until, step, &*f) {
+            if let Some((t, _)) = self.next_root(t_s, until, step, None, &*f) {
                 next = next.min(t);
             }
         }
         if self.shadow == Shadow::Conical
-            && let Some((t, _)) = self.next_shadow_edge(t_s, until, &|t| self.geometry(t).penumbra)
+            && let Some((t, _)) = self.next_shadow_edge(t_s, until, &|t| self.shadow_functions(t).1)
         {
             next = next.min(t);
         }
         next
     }
-
     /// Orbit k covers [(k − 1) T, k T) with T the mean period.
     fn orbit_number(&self, t_s: f64) -> u64 {
         (t_s / self.mean_period_s()).floor().max(0.0) as u64 + 1
