@@ -14,6 +14,11 @@ pub struct Recording {
     pub values: Vec<Vec<Option<f64>>>,
     /// Where each row is in the file: its line (CSV) or message number (MCAP), 1-based.
     pub rows_at: Vec<u64>,
+    /// Lines whose cells repeat the previous row's, dropped as a ground segment's fill
+    /// (their rows are kept, every cell missing).
+    pub fill_rows: Vec<u64>,
+    /// Lines merged into the row before them (the same time stamp).
+    pub merged_rows: Vec<u64>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -46,6 +51,16 @@ impl Recording {
         Some(&self.values[k])
     }
 
+    /// Renames the columns the scenario's sensors read to those sensors' channel names
+    /// (telemetry's `Black Chassis deg. C` becomes the sensor's `chassis_black_c`).
+    pub fn name_channels(&mut self, sensors: &[Sensor]) {
+        for c in &mut self.columns {
+            if let Some(s) = sensors.iter().find(|s| s.source_column == *c) {
+                c.clone_from(&s.column);
+            }
+        }
+    }
+
     /// For each channel, the index of the sensor of that column: every channel must be
     /// a sensor of the scenario.
     pub fn match_sensors(&self, sensors: &[Sensor]) -> Result<Vec<usize>, RecordingError> {
@@ -57,7 +72,7 @@ impl Recording {
                     RecordingError::File {
                         file: self.file.clone(),
                         message: format!(
-                            "channel `{c}` is not a sensor of the scenario ({known}); add a [[sensor]] with column = \"{c}\"",
+                            "channel `{c}` is not a sensor of the scenario ({known}); add a [[sensor]] with column = \"{c}\", or list it in [recording] ignore_columns",
                             c = crate::units::shown(c),
                             known = if known.is_empty() {
                                 "it has none".to_string()
@@ -69,5 +84,57 @@ impl Recording {
                 })
             })
             .collect()
+    }
+}
+
+/// How a scenario's recordings are laid out (`[recording]`): which column holds the
+/// time and how, which columns are not channels, and what repeated rows and repeated
+/// time stamps mean. The default is the layout of `reference-mechanism.md` §4.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordingFormat {
+    /// The time column's name.
+    pub time_column: String,
+    pub time: TimeFormat,
+    /// Columns that are neither the time nor a sensor (read, kept out of the channels).
+    pub ignore_columns: Vec<String>,
+    /// Rows whose cells all repeat the previous row's are a ground segment's fill, not
+    /// measurements: their cells are dropped (reported in [`Recording::fill_rows`]).
+    pub repeated_rows_are_fill: bool,
+    pub duplicate_times: DuplicateTimes,
+}
+
+/// How a recording gives its time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TimeFormat {
+    /// Seconds since t = 0 of the scenario.
+    Seconds,
+    /// UTC date-times (`2016-02-04 00:01:00.0`, or RFC 3339), counted from `origin`
+    /// (the scenario's `start_utc`).
+    Utc { origin: sgp4::chrono::NaiveDateTime },
+}
+
+/// What two rows with the same time stamp mean when their cells differ (equal rows are
+/// always merged).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DuplicateTimes {
+    /// An error naming both lines.
+    Refuse,
+    /// Two readings within one time stamp: their mean.
+    Mean,
+}
+
+impl DuplicateTimes {
+    pub const NAMES: [&'static str; 2] = ["refuse", "mean"];
+}
+
+impl Default for RecordingFormat {
+    fn default() -> Self {
+        RecordingFormat {
+            time_column: TIME_COLUMN.to_string(),
+            time: TimeFormat::Seconds,
+            ignore_columns: Vec::new(),
+            repeated_rows_are_fill: false,
+            duplicate_times: DuplicateTimes::Refuse,
+        }
     }
 }

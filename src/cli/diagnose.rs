@@ -61,8 +61,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
             outs.file(&format!("--out ({name})"), &dir.join(name))?;
         }
     }
-    let rec = match Recording::read(&a.recording) {
-        Ok(r) => r,
+    let rec = match Recording::read_with(&a.recording, &loaded.scenario.recording) {
+        Ok(mut r) => {
+            r.name_channels(&loaded.scenario.sensors);
+            r
+        }
         // An orbitlash run log: its node temperatures and backlash as the sensors read.
         Err(e) => match recording_from_log(&a.recording, &loaded.scenario) {
             Some(r) => r,
@@ -276,6 +279,24 @@ fn unit_of(name: &str) -> &'static str {
 /// Long by choice (about 170 lines): the report's sections printed in order
 /// (verdict, noise, baseline, mismatches, findings, candidates, notes), no logic
 /// beyond formatting; read top to bottom it is the report.
+/// ` (lines 3, 7, 9, …)`: the first few of `lines`, or nothing.
+fn lines_shown(lines: &[u64]) -> String {
+    if lines.is_empty() {
+        return String::new();
+    }
+    let first: Vec<String> = lines.iter().take(6).map(u64::to_string).collect();
+    format!(
+        " (line{} {}{})",
+        if lines.len() > 1 { "s" } else { "" },
+        first.join(", "),
+        if lines.len() > first.len() {
+            ", …"
+        } else {
+            ""
+        }
+    )
+}
+
 pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
     let mut o = String::new();
     let verdict = match d.verdict {
@@ -299,6 +320,19 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
             s.train_orbits,
             s.train_orbits + 1,
             s.orbits
+        );
+    }
+    let r = &d.recording;
+    if !r.plain() {
+        outln!(
+            o,
+            "recording: {} rows, {} measured; {} fill (rows repeating the row before, kept out of noise, fits and scores){}; {} merged into the row before (a repeated time stamp){}",
+            r.rows,
+            r.measured_rows,
+            r.fill_rows.len(),
+            lines_shown(&r.fill_rows),
+            r.merged_rows.len(),
+            lines_shown(&r.merged_rows)
         );
     }
     for n in &d.notes {
@@ -506,6 +540,8 @@ fn recording_from_log(path: &Path, sc: &orbitlash::spec::scenario::Scenario) -> 
         time_s: Vec::new(),
         values: vec![Vec::new(); cols.len()],
         rows_at: Vec::new(),
+        fill_rows: Vec::new(),
+        merged_rows: Vec::new(),
     };
     for (k, (_, row)) in table.rows.iter().enumerate() {
         let t = row[t_col];

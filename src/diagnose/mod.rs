@@ -326,6 +326,10 @@ pub struct Diagnosis {
     /// Where the corrected model's residual still sits.
     pub remaining: Vec<Mismatch>,
     pub split: data::Split,
+    /// What the recording's rows were: measured, a ground segment's fill, merged
+    /// (only in the JSON when there was fill or a merged row).
+    #[serde(skip_serializing_if = "RecordingRows::plain")]
+    pub recording: RecordingRows,
     pub candidates: Vec<CandidateReport>,
     pub notes: Vec<String>,
     /// Reasons to doubt the verdict (a channel whose noise is far larger than its
@@ -338,6 +342,24 @@ pub struct Diagnosis {
     pub series: Series,
     #[serde(skip)]
     pub corrected: Option<Model>,
+}
+
+/// The recording's rows: how many, and the lines kept out as fill (rows repeating the
+/// row before, `[recording] repeated_rows = "fill"`) or merged into the row before (a
+/// repeated time stamp).
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct RecordingRows {
+    pub rows: usize,
+    pub measured_rows: usize,
+    pub fill_rows: Vec<u64>,
+    pub merged_rows: Vec<u64>,
+}
+
+impl RecordingRows {
+    /// Every row a measurement of its own.
+    pub fn plain(&self) -> bool {
+        self.fill_rows.is_empty() && self.merged_rows.is_empty()
+    }
 }
 
 /// Recorded, baseline and corrected values per channel at the recording's times.
@@ -558,6 +580,7 @@ fn baseline_report(
         rmse: cmap(&rms),
         remaining: mismatches,
         split: obs.split.clone(),
+        recording: RecordingRows::default(),
         candidates: Vec::new(),
         notes,
         warnings,
@@ -812,6 +835,12 @@ pub fn diagnose(
     let warnings = noise_warnings(&obs, &base, validate);
     let problem = Problem::new(&obs, base.noise.clone(), base.steps);
     let (mut report, mut series) = baseline_report(&obs, &base, &problem, opts, notes, warnings);
+    report.recording = RecordingRows {
+        rows: recording.time_s.len(),
+        measured_rows: recording.time_s.len() - recording.fill_rows.len(),
+        fill_rows: recording.fill_rows.clone(),
+        merged_rows: recording.merged_rows.clone(),
+    };
     progress("baseline", 1, 1);
     if !validate {
         report.series = series;

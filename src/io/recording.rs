@@ -15,11 +15,72 @@
 
 use std::path::Path;
 
-pub use crate::recording::{Recording, RecordingError, TIME_COLUMN};
+pub use crate::recording::{
+    DuplicateTimes, Recording, RecordingError, RecordingFormat, TIME_COLUMN, TimeFormat,
+};
+
+/// A time cell as seconds since t = 0: a number of seconds, or a UTC date-time
+/// (`2016-02-04 00:01:00.0`, `2016-02-04T00:01:00Z`, RFC 3339 with an offset) less the
+/// origin. `err` makes the error at the cell.
+fn time_of(
+    cell: &str,
+    format: &TimeFormat,
+    column: &str,
+    err: impl Fn(String) -> RecordingError,
+) -> Result<f64, RecordingError> {
+    if cell.is_empty() {
+        return Err(err(format!("the time (`{column}`) is missing")));
+    }
+    match format {
+        TimeFormat::Seconds => {
+            let t: f64 = cell
+                .parse()
+                .map_err(|_| err(format!("`{cell}` in column `{column}` is not a number")))?;
+            if !t.is_finite() {
+                return Err(err(format!(
+                    "`{cell}` in column `{column}` is not a finite number"
+                )));
+            }
+            Ok(t)
+        }
+        TimeFormat::Utc { origin } => {
+            use sgp4::chrono::{DateTime, NaiveDateTime};
+            let utc = DateTime::parse_from_rfc3339(cell)
+                .map(|d| d.naive_utc())
+                .or_else(|_| NaiveDateTime::parse_from_str(cell, "%Y-%m-%d %H:%M:%S%.f"))
+                .or_else(|_| NaiveDateTime::parse_from_str(cell, "%Y-%m-%dT%H:%M:%S%.f"))
+                .or_else(|_| NaiveDateTime::parse_from_str(cell.trim_end_matches('Z'), "%Y-%m-%dT%H:%M:%S%.f"))
+                .map_err(|_| {
+                    err(format!(
+                        "`{cell}` in column `{column}` is not a UTC date-time (`2016-02-04 00:01:00`, or RFC 3339)"
+                    ))
+                })?;
+            let ns = (utc - *origin).num_nanoseconds().ok_or_else(|| {
+                err(format!(
+                    "`{cell}` is centuries from the scenario's start_utc"
+                ))
+            })?;
+            let t = ns as f64 / 1e9;
+            if t < 0.0 {
+                return Err(err(format!(
+                    "`{cell}` is before the scenario's start_utc ({}): the run starts at the recording's first row or earlier",
+                    origin.format("%Y-%m-%dT%H:%M:%SZ")
+                )));
+            }
+            Ok(t)
+        }
+    }
+}
 
 impl Recording {
     /// Reads a CSV or MCAP recording (told apart by the MCAP magic bytes).
     pub fn read(path: &Path) -> Result<Recording, RecordingError> {
+        Recording::read_with(path, &RecordingFormat::default())
+    }
+
+    /// Reads a recording laid out as `fmt` says (CSV; an MCAP recording is always
+    /// `time_s` and its channels).
+    pub fn read_with(path: &Path, fmt: &RecordingFormat) -> Result<Recording, RecordingError> {
         let file = path.display().to_string();
         let bytes = super::output::check_input(path)
             .and_then(|()| std::fs::read(path))
@@ -53,15 +114,25 @@ impl Recording {
                 },
             });
         }
-        Recording::from_csv(&bytes, &file)
+        Recording::from_csv_with(&bytes, &file, fmt)
     }
 
-    /// Parses CSV text; `file` names it in errors.
-    ///
-    /// Long by choice (about 170 lines): one pass over the rows that checks each
-    /// cell where it is read (header, column names, numbers, times increasing), so an
-    /// error names its line and column.
+    /// Parses CSV text in the layout of `reference-mechanism.md` §4; `file` names it in
+    /// errors.
     pub fn from_csv(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
+        Recording::from_csv_with(bytes, file, &RecordingFormat::default())
+    }
+
+    /// Parses CSV text laid out as `fmt` says; `file` names it in errors.
+    ///
+    /// Long by choice (about 230 lines): one pass over the rows that checks each
+    /// cell where it is read (header, column names, numbers, times increasing, repeated
+    /// stamps and rows), so an error names its line and column.
+    pub fn from_csv_with(
+        bytes: &[u8],
+        file: &str,
+        fmt: &RecordingFormat,
+    ) -> Result<Recording, RecordingError> {
         let at = |line: u64, column: usize, message: String| RecordingError::At {
             file: file.to_string(),
             line,
@@ -139,21 +210,39 @@ impl Recording {
                 ));
             }
         }
-        let Some(time_col) = names.iter().position(|n| n == TIME_COLUMN) else {
+        let time_name = fmt.time_column.as_str();
+        let Some(time_col) = names.iter().position(|n| n == time_name) else {
+            return Err(at(
+                header_line,
+                0,
+                if time_name == TIME_COLUMN {
+                    format!(
+                        "no `{TIME_COLUMN}` column (the header is {}): a recording gives its time in seconds since t = 0 of the scenario (or name its time column in the scenario's [recording] time_column)",
+                        crate::units::shown(&names.join(","))
+                    )
+                } else {
+                    format!(
+                        "no `{}` column, the time column the scenario's [recording] names (the header is {})",
+                        crate::units::shown(time_name),
+                        crate::units::shown(&names.join(","))
+                    )
+                },
+            ));
+        };
+        if let Some(missing) = fmt.ignore_columns.iter().find(|c| !names.contains(c)) {
             return Err(at(
                 header_line,
                 0,
                 format!(
-                    "no `{TIME_COLUMN}` column (the header is {}): a recording gives its time in seconds since t = 0 of the scenario",
-                    crate::units::shown(&names.join(","))
+                    "no `{}` column, which the scenario's [recording] ignore_columns names",
+                    crate::units::shown(missing)
                 ),
             ));
-        };
-        let columns: Vec<String> = names
-            .iter()
-            .enumerate()
-            .filter(|&(k, _)| k != time_col)
-            .map(|(_, n)| n.clone())
+        }
+        let is_channel = |k: usize| k != time_col && !fmt.ignore_columns.contains(&names[k]);
+        let columns: Vec<String> = (0..names.len())
+            .filter(|&k| is_channel(k))
+            .map(|k| names[k].clone())
             .collect();
         let mut rec = Recording {
             file: file.into(),
@@ -161,8 +250,14 @@ impl Recording {
             columns,
             time_s: Vec::new(),
             rows_at: Vec::new(),
+            fill_rows: Vec::new(),
+            merged_rows: Vec::new(),
         };
         let mut row = csv::StringRecord::new();
+        // the previous row's cells (time excluded), and how many rows its values average
+        let mut previous: Vec<String> = Vec::new();
+        let mut averaged = 1.0;
+        let mut values: Vec<Option<f64>> = Vec::new();
         loop {
             match reader.read_record(&mut row) {
                 Ok(false) => break,
@@ -170,10 +265,16 @@ impl Recording {
                 Err(e) => return Err(csv_error(e)),
             }
             let line = line_of(row.position());
-            let mut channel = 0;
+            let t = time_of(row.get(time_col).unwrap_or(""), &fmt.time, time_name, |m| {
+                at(line, time_col + 1, m)
+            })?;
+            values.clear();
             for (k, cell) in row.iter().enumerate() {
+                if !is_channel(k) {
+                    continue;
+                }
                 let name = &names[k];
-                let value = if cell.is_empty() {
+                values.push(if cell.is_empty() {
                     None
                 } else {
                     let v: f64 = cell.parse().map_err(|_| {
@@ -193,34 +294,71 @@ impl Recording {
                         ));
                     }
                     Some(v)
-                };
-                if k == time_col {
-                    let Some(t) = value else {
+                });
+            }
+            let same_cells = row
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| k != time_col)
+                .map(|(_, c)| c)
+                .eq(previous.iter().map(String::as_str));
+            if let Some(&last) = rec.time_s.last() {
+                let last_line = rec.rows_at.last().copied().unwrap_or(0);
+                if t < last {
+                    return Err(at(
+                        line,
+                        time_col + 1,
+                        format!("time does not increase: {t} s after {last} s on line {last_line}"),
+                    ));
+                }
+                if t == last {
+                    if !same_cells && fmt.duplicate_times == DuplicateTimes::Refuse {
                         return Err(at(
                             line,
-                            k + 1,
-                            format!("the time (`{TIME_COLUMN}`) is missing"),
-                        ));
-                    };
-                    if let Some(&last) = rec.time_s.last()
-                        && t <= last
-                    {
-                        return Err(at(
-                            line,
-                            k + 1,
-                            format!(
-                                "time does not increase: {t} s after {last} s on line {}",
-                                rec.rows_at.last().copied().unwrap_or(0)
-                            ),
+                            time_col + 1,
+                            if fmt.time == TimeFormat::Seconds && time_name == TIME_COLUMN {
+                                format!(
+                                    "time does not increase: {t} s after {last} s on line {last_line}"
+                                )
+                            } else {
+                                format!(
+                                    "the same time stamp as line {last_line} with other readings; if they are two readings within one stamp, set [recording] duplicate_times = \"mean\""
+                                )
+                            },
                         ));
                     }
-                    rec.time_s.push(t);
-                } else {
-                    rec.values[channel].push(value);
-                    channel += 1;
+                    if !same_cells {
+                        // the mean of the rows sharing the stamp, cell by cell
+                        for (ch, v) in rec.values.iter_mut().zip(&values) {
+                            let old = ch.last_mut().expect("a row before");
+                            *old = match (*old, v) {
+                                (Some(a), Some(b)) => Some((a * averaged + b) / (averaged + 1.0)),
+                                (a, b) => a.or(*b),
+                            };
+                        }
+                        averaged += 1.0;
+                    }
+                    rec.merged_rows.push(line);
+                    continue;
                 }
             }
+            averaged = 1.0;
+            let fill = fmt.repeated_rows_are_fill && !rec.time_s.is_empty() && same_cells;
+            if fill {
+                rec.fill_rows.push(line);
+            }
+            for (ch, v) in rec.values.iter_mut().zip(&values) {
+                ch.push(if fill { None } else { *v });
+            }
+            rec.time_s.push(t);
             rec.rows_at.push(line);
+            previous.clear();
+            previous.extend(
+                row.iter()
+                    .enumerate()
+                    .filter(|&(k, _)| k != time_col)
+                    .map(|(_, c)| c.to_string()),
+            );
         }
         if rec.time_s.is_empty() {
             return Err(RecordingError::File {
@@ -295,6 +433,8 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
         time_s: Vec::new(),
         values: Vec::new(),
         rows_at: Vec::new(),
+        fill_rows: Vec::new(),
+        merged_rows: Vec::new(),
     };
     let mut descriptor = None;
     let mut flat: Vec<(String, Option<f64>)> = Vec::new();

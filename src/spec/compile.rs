@@ -322,6 +322,13 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     let (loads, bindings) = loads(cx, &keys, &table, sections, &modes, view_factor_default)?;
     let heaters = heaters(cx, &keys, &table, raw.heater)?;
     let (mut loads, mut radiators) = (loads, radiators);
+    // Each face's key and node, for the sensors that read a face.
+    let face_nodes: Vec<(String, String)> = keys
+        .face
+        .iter()
+        .zip(&raw.face)
+        .map(|(k, f)| (k.clone(), f.node.clone()))
+        .collect();
     faces(
         cx,
         &keys,
@@ -347,7 +354,15 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     }
 
     // Sensors (after the gear pairs they may name).
-    let sensors = sensors(cx, raw.sensor, &keys.sensor, &gears, &diffusion)?;
+    let sensors = sensors(
+        cx,
+        raw.sensor,
+        &keys.sensor,
+        &gears,
+        &face_nodes,
+        &diffusion,
+    )?;
+    let recording = recording_format(cx, raw.recording, &environment)?;
 
     let network = Network {
         nodes,
@@ -400,7 +415,83 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         run,
         solver,
         sensors,
+        recording,
     })
+}
+
+/// `[recording]`: the layout of this spacecraft's recordings. UTC time needs a dated
+/// scenario (its `start_utc` is the recording's t = 0).
+fn recording_format(
+    cx: &Cx,
+    spec: Option<RecordingSpec>,
+    environment: &Environment,
+) -> Result<crate::recording::RecordingFormat, SpecError> {
+    use crate::recording::{DuplicateTimes, RecordingFormat, TimeFormat};
+    let p = KeyPath::new("recording");
+    let Some(spec) = spec else {
+        return Ok(RecordingFormat::default());
+    };
+    let mut f = RecordingFormat::default();
+    if let Some(c) = spec.time_column {
+        if c.trim().is_empty() {
+            return Err(cx.err(&p.key("time_column"), "is empty"));
+        }
+        f.time_column = c;
+    }
+    f.time = match spec.time_format.as_deref() {
+        None | Some("seconds") => TimeFormat::Seconds,
+        Some("utc") => match environment.start_utc() {
+            Some(origin) => TimeFormat::Utc { origin },
+            None => {
+                return Err(cx.err(
+                    &p.key("time_format"),
+                    "\"utc\" needs a dated scenario: give [orbit] tle and start_utc (the recording's t = 0)",
+                ));
+            }
+        },
+        Some(other) => {
+            return Err(cx.err(
+                &p.key("time_format"),
+                format!("unknown time format `{other}` (known: seconds, utc)"),
+            ));
+        }
+    };
+    f.ignore_columns = spec.ignore_columns.unwrap_or_default();
+    if let Some(dup) = f
+        .ignore_columns
+        .iter()
+        .enumerate()
+        .find(|(i, c)| f.ignore_columns[..*i].contains(c) || **c == f.time_column)
+    {
+        return Err(cx.err(
+            &p.key("ignore_columns").at(dup.0),
+            format!("`{}` is listed twice or is the time column", dup.1),
+        ));
+    }
+    f.repeated_rows_are_fill = match spec.repeated_rows.as_deref() {
+        None | Some("data") => false,
+        Some("fill") => true,
+        Some(other) => {
+            return Err(cx.err(
+                &p.key("repeated_rows"),
+                format!("unknown meaning `{other}` (known: data, fill)"),
+            ));
+        }
+    };
+    f.duplicate_times = match spec.duplicate_times.as_deref() {
+        None | Some("refuse") => DuplicateTimes::Refuse,
+        Some("mean") => DuplicateTimes::Mean,
+        Some(other) => {
+            return Err(cx.err(
+                &p.key("duplicate_times"),
+                format!(
+                    "unknown policy `{other}` (known: {})",
+                    DuplicateTimes::NAMES.join(", ")
+                ),
+            ));
+        }
+    };
+    Ok(f)
 }
 
 /// The names of a network's nodes, diffusion and boundary, as the spec's elements
@@ -981,18 +1072,58 @@ fn sensors(
     specs: Vec<SensorSpec>,
     keys: &[String],
     gears: &[GearPair],
+    face_nodes: &[(String, String)],
     diffusion: &dyn Fn(&KeyPath, &str) -> Result<usize, SpecError>,
 ) -> Result<Vec<Sensor>, SpecError> {
     let mut sensors: Vec<Sensor> = Vec::new();
     for (i, s) in specs.into_iter().enumerate() {
         let p = KeyPath::new("sensor").elem(i, &keys[i]);
-        if sensors.iter().any(|x| x.column == s.column) {
+        if sensors.iter().any(|x| x.source_column == s.column) {
             return Err(cx.err(
                 &p.key("column"),
                 format!("column `{}` is defined twice", s.column),
             ));
         }
-        let target = match (s.node, s.quantity) {
+        let name = s
+            .name
+            .clone()
+            .unwrap_or_else(|| crate::spec::scenario::sensor_name_of(&s.column));
+        if let Some(other) = sensors.iter().find(|x| x.column == name) {
+            return Err(cx.err(
+                &p.key(if s.name.is_some() { "name" } else { "column" }),
+                format!(
+                    "names the channel `{name}`, as the sensor of column `{}` does; give each a `name`",
+                    other.source_column
+                ),
+            ));
+        }
+        let node = match (s.node, &s.face) {
+            (Some(_), Some(_)) => {
+                return Err(cx.err(&p.key("face"), "give `node` or `face`, not both"));
+            }
+            (None, Some(face)) => Some(
+                face_nodes
+                    .iter()
+                    .find(|(k, _)| k == face)
+                    .map(|(_, n)| n.clone())
+                    .ok_or_else(|| {
+                        let known: Vec<&str> = face_nodes.iter().map(|(k, _)| k.as_str()).collect();
+                        cx.err(
+                            &p.key("face"),
+                            format!(
+                                "unknown face `{face}` ({})",
+                                if known.is_empty() {
+                                    "the scenario has no [[face]]".to_string()
+                                } else {
+                                    format!("known: {}", known.join(", "))
+                                }
+                            ),
+                        )
+                    })?,
+            ),
+            (n, None) => n,
+        };
+        let target = match (node, s.quantity) {
             (Some(n), None) => {
                 if s.gear_pair.is_some() {
                     return Err(cx.err(
@@ -1033,16 +1164,37 @@ fn sensors(
                 };
                 SensorTarget::Backlash(pair)
             }
-            _ => return Err(cx.err(&p, "give exactly one of `node` or `quantity`")),
+            _ => {
+                return Err(cx.err(&p, "give exactly one of `node`, `face` or `quantity`"));
+            }
+        };
+        let unit_given = match s.unit.as_deref() {
+            None => None,
+            Some(_) if matches!(target, SensorTarget::Backlash(_)) => {
+                return Err(cx.err(
+                    &p.key("unit"),
+                    "applies to temperature sensors only (backlash is in µm)",
+                ));
+            }
+            Some("C" | "°C" | "degC") => Some(crate::spec::scenario::ColumnUnit::Celsius),
+            Some("K") => Some(crate::spec::scenario::ColumnUnit::Kelvin),
+            Some(other) => {
+                return Err(cx.err(
+                    &p.key("unit"),
+                    format!("unknown unit `{other}` (known: C, K)"),
+                ));
+            }
         };
         let tau_s = cx.quantity_or_default(&q::SENSOR_TAU_S, &p.key("tau_s"), s.tau_s)?;
         let offset_k =
             cx.quantity_or_default(&q::SENSOR_OFFSET_K, &p.key("offset_k"), s.offset_k)?;
         sensors.push(Sensor {
-            column: s.column,
+            column: name,
+            source_column: s.column,
             target,
             offset_k,
             tau_s,
+            unit_given,
         });
     }
     Ok(sensors)
@@ -1441,12 +1593,22 @@ fn check_names(cx: &Cx, raw: &ScenarioSpec) -> Result<(), SpecError> {
             }
         }
     }
-    all.extend(raw.sensor.iter().enumerate().map(|(i, x)| {
-        (
-            KeyPath::new("sensor").at(i).key("column"),
-            x.column.as_str(),
-        )
+    all.extend(raw.sensor.iter().enumerate().filter_map(|(i, x)| {
+        x.name
+            .as_deref()
+            .map(|n| (KeyPath::new("sensor").at(i).key("name"), n))
     }));
+    // A recording's own column names may hold spaces and signs (telemetry), not
+    // control characters.
+    for (i, x) in raw.sensor.iter().enumerate() {
+        let c = &x.column;
+        if c.trim().is_empty() || c.len() > 200 || c.chars().any(char::is_control) {
+            return Err(cx.err(
+                &KeyPath::new("sensor").at(i).key("column"),
+                "must be 1 … 200 characters of text (no control characters)",
+            ));
+        }
+    }
     for (p, name) in all {
         crate::spec::scenario::check_name(name).map_err(|m| cx.err(&p, m))?;
     }

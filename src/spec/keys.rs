@@ -269,7 +269,11 @@ pub fn element_keys(spec: &ScenarioSpec) -> ElementKeys {
                 .enumerate()
                 .map(|(i, f)| f.name.clone().unwrap_or_else(|| face_name(&f.node, i))),
         ),
-        sensor: unique(spec.sensor.iter().map(|s| s.column.clone())),
+        sensor: unique(spec.sensor.iter().map(|s| {
+            s.name
+                .clone()
+                .unwrap_or_else(|| crate::spec::scenario::sensor_name_of(&s.column))
+        })),
         gear_pair: unique(spec.gear_pair.iter().enumerate().map(|(i, g)| {
             g.name.clone().unwrap_or_else(|| {
                 if i == 0 {

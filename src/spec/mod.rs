@@ -63,6 +63,9 @@ pub struct ScenarioSpec {
     /// How numbers scatter in `orbitlash margins` (the nominal run ignores them).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub dispersion: Vec<DispersionSpec>,
+    /// How recordings of this spacecraft are laid out (`diagnose --recording`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recording: Option<RecordingSpec>,
 }
 
 /// One dispersed number: a key path and its distribution (the `dispersion` module
@@ -413,6 +416,28 @@ pub struct AttitudeSpec {
     pub spin_averaged: Option<bool>,
 }
 
+/// `[recording]`: the layout of the recordings `diagnose` reads for this scenario.
+#[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecordingSpec {
+    /// The time column (default `time_s`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_column: Option<String>,
+    /// `"seconds"` since t = 0 (default) or `"utc"` date-times (a dated scenario's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_format: Option<String>,
+    /// Columns that are neither the time nor a sensor.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ignore_columns: Option<Vec<String>>,
+    /// `"data"` (default) or `"fill"`: a row repeating every cell of the row before is
+    /// a ground segment's fill, not a measurement.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeated_rows: Option<String>,
+    /// `"refuse"` (default) or `"mean"`: rows sharing a time stamp with other readings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duplicate_times: Option<String>,
+}
+
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct FaceSpec {
@@ -452,7 +477,13 @@ pub struct ModeSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorSpec {
+    /// The recording's column, as the file spells it.
     pub column: String,
+    /// The channel's name in reports, plots, logs and key paths (default: the column
+    /// when it is a valid name, else one made from it, see
+    /// [`crate::spec::scenario::sensor_name_of`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub node: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -466,6 +497,13 @@ pub struct SensorSpec {
     /// Temperature sensors: constant bias, K.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub offset_k: Option<f64>,
+    /// A face whose node the sensor reads (instead of `node`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub face: Option<String>,
+    /// Temperature sensors: the column's unit, `"C"` or `"K"` (default: K when the
+    /// column ends in `_k`, else °C).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit: Option<String>,
 }
 
 /// A whole number, also when written as a float (`20.0`); any other number is refused

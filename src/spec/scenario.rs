@@ -20,6 +20,8 @@ pub struct Scenario {
     /// Where the compiler put each element of the spec that the model writes into
     /// directly (`Model::set_param`).
     pub bindings: Bindings,
+    /// How this spacecraft's recordings are laid out (`[recording]`).
+    pub recording: crate::recording::RecordingFormat,
 }
 
 /// Per load element of the spec (`[[sun]]`, `[[albedo]]`, `[[earth_ir]]`,
@@ -44,13 +46,18 @@ pub struct RunControl {
 /// A recording column and what it measures.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sensor {
+    /// The channel's name (a valid name: reports, plots, logs, key paths).
     pub column: String,
+    /// The column as the recording spells it (telemetry's own names).
+    pub source_column: String,
     pub target: SensorTarget,
     /// Constant bias added to the reading, K (temperature sensors; 0 for none).
     pub offset_k: f64,
     /// First-order time constant of the instrument, s (temperature sensors; 0: it
     /// reads its node's temperature instantly).
     pub tau_s: f64,
+    /// The column's unit when the scenario says it (`unit`); else from the name.
+    pub unit_given: Option<ColumnUnit>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -75,16 +82,23 @@ pub enum ColumnUnit {
 impl Sensor {
     /// A sensor reading `target` directly (no offset, no lag).
     pub fn new(column: impl Into<String>, target: SensorTarget) -> Sensor {
+        let column = column.into();
         Sensor {
-            column: column.into(),
+            source_column: column.clone(),
+            column,
             target,
             offset_k: 0.0,
             tau_s: 0.0,
+            unit_given: None,
         }
     }
 
-    /// Temperatures are in °C unless the column name ends in `_k`; backlash in µm.
+    /// As the scenario says (`unit`), else: temperatures in °C unless the column name
+    /// ends in `_k`; backlash in µm.
     pub fn unit(&self) -> ColumnUnit {
+        if let Some(u) = self.unit_given {
+            return u;
+        }
         match self.target {
             SensorTarget::Backlash(_) => ColumnUnit::Micrometre,
             SensorTarget::Node(_) if self.column.ends_with("_k") => ColumnUnit::Kelvin,
@@ -189,6 +203,35 @@ pub fn key_segment(name: &str) -> String {
     } else {
         name.to_string()
     }
+}
+
+/// The channel name of a recording column: the column itself when it is a valid name
+/// ([`check_name`]), else lower-cased with each run of other characters made one `_`,
+/// a sign before a letter or digit kept as `p` or `m` (`Solar Panel -X deg. C` →
+/// `solar_panel_mx_deg_c`).
+pub fn sensor_name_of(column: &str) -> String {
+    if check_name(column).is_ok() {
+        return column.to_string();
+    }
+    let chars: Vec<char> = column.chars().collect();
+    let mut out = String::new();
+    for (i, &c) in chars.iter().enumerate() {
+        let next_alnum = chars.get(i + 1).is_some_and(|n| n.is_ascii_alphanumeric());
+        let prev_alnum = i > 0 && chars[i - 1].is_ascii_alphanumeric();
+        if c.is_ascii_alphanumeric() || c == '_' {
+            out.push(c.to_ascii_lowercase());
+        } else if matches!(c, '+' | '-') && next_alnum && !prev_alnum {
+            out.push(if c == '+' { 'p' } else { 'm' });
+        } else if !out.ends_with('_') {
+            out.push('_');
+        }
+    }
+    let out = out.trim_matches('_');
+    let mut out: String = out.chars().take(MAX_NAME_LEN).collect();
+    if out.is_empty() {
+        out.push_str("channel");
+    }
+    out
 }
 
 /// Temperatures (K) below which a node's initial or reference temperature or a heater

@@ -1,0 +1,133 @@
+//! Telemetry in the scenario: `[recording]` and sensors that name a recording's own
+//! columns; bad definitions are refused naming the file, line and key; and FUNcube-1's
+//! day of flight telemetry reads with its fill and repeated stamps reported.
+
+mod common;
+use common::{assert_error, bin, shared, tmpdir};
+use std::path::Path;
+
+fn funcube_text() -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml"))
+        .unwrap()
+}
+
+#[test]
+fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
+    let dir = tmpdir("telemetry-bad");
+    let text = funcube_text();
+    let cases: [(&str, &str, &str, &[&str]); 7] = [
+        (
+            "time-format",
+            "time_format = \"utc\"",
+            "time_format = \"gps\"",
+            &["`recording.time_format`", "unknown time format `gps`"],
+        ),
+        (
+            "repeated",
+            "repeated_rows = \"fill\"",
+            "repeated_rows = \"maybe\"",
+            &["`recording.repeated_rows`", "known: data, fill"],
+        ),
+        (
+            "duplicates",
+            "duplicate_times = \"mean\"",
+            "duplicate_times = \"last\"",
+            &["`recording.duplicate_times`", "known: refuse, mean"],
+        ),
+        (
+            "unit",
+            "name = \"chassis_black_c\"\nnode = \"chassis\"\nunit = \"C\"",
+            "name = \"chassis_black_c\"\nnode = \"chassis\"\nunit = \"F\"",
+            &["`sensor.chassis_black_c.unit`", "unknown unit `F`"],
+        ),
+        (
+            "face",
+            "face = \"px\"",
+            "face = \"qx\"",
+            &["`sensor.panel_px_c.face`", "unknown face `qx`", "known: px"],
+        ),
+        (
+            "node-and-face",
+            "face = \"px\"",
+            "face = \"px\"\nnode = \"chassis\"",
+            &["`sensor.panel_px_c.face`", "not both"],
+        ),
+        (
+            "same-name",
+            "name = \"chassis_silver_c\"",
+            "name = \"chassis_black_c\"",
+            &["`sensor", "names the channel `chassis_black_c`"],
+        ),
+    ];
+    for (case, old, new, needles) in cases {
+        assert!(text.contains(old), "{case}: `{old}` not in the scenario");
+        let file = dir.join(format!("{case}.toml"));
+        std::fs::write(&file, text.replacen(old, new, 1)).unwrap();
+        let out = bin().arg("check").arg(&file).output().unwrap();
+        let name = format!("{case}.toml:");
+        let mut all = needles.to_vec();
+        all.push(&name);
+        assert_error(case, &out, &all);
+    }
+    // UTC time needs a dated scenario
+    let reference = common::reference_text() + "\n[recording]\ntime_format = \"utc\"\n";
+    let file = dir.join("utc-circular.toml");
+    std::fs::write(&file, reference).unwrap();
+    let out = bin().arg("check").arg(&file).output().unwrap();
+    assert_error(
+        "utc-circular",
+        &out,
+        &["`recording.time_format`", "needs a dated scenario"],
+    );
+}
+
+/// FUNcube-1's day: 1394 rows, 226 of them the warehouse's fill and two time stamps
+/// given twice (lines 392 and 638), reported by `diagnose` and kept out of its numbers.
+#[test]
+fn cli_funcube_telemetry_reads_with_its_fill_and_repeated_stamps() {
+    let Some(csv) = shared("data/funcube-1/funcube1_wod_2016-02-04.csv") else {
+        return;
+    };
+    let format = orbitlash::io::scenario_toml::parse(&funcube_text(), "funcube-1.toml")
+        .unwrap()
+        .recording;
+    let mut rec = orbitlash::io::recording::Recording::read_with(&csv, &format).unwrap();
+    assert_eq!(rec.time_s.len() + rec.merged_rows.len(), 1394);
+    assert_eq!(rec.merged_rows, vec![392, 638]);
+    assert_eq!(rec.fill_rows.len(), 226);
+    assert_eq!(rec.columns.len(), 8);
+    let scenario = orbitlash::io::scenario_toml::parse(&funcube_text(), "funcube-1.toml").unwrap();
+    rec.name_channels(&scenario.sensors);
+    assert!(rec.columns.contains(&"chassis_black_c".to_string()));
+    rec.match_sensors(&scenario.sensors).unwrap();
+    // a fill row has no readings
+    let k = rec
+        .rows_at
+        .iter()
+        .position(|&l| l == rec.fill_rows[0])
+        .unwrap();
+    assert!(rec.values.iter().all(|c| c[k].is_none()));
+    // refused without the scenario's policy for repeated stamps, naming both lines
+    let dir = tmpdir("telemetry-refuse");
+    let file = dir.join("refuse.toml");
+    std::fs::write(
+        &file,
+        funcube_text().replacen("duplicate_times = \"mean\"", "", 1),
+    )
+    .unwrap();
+    let out = bin()
+        .args(["diagnose"])
+        .arg(&file)
+        .arg("--recording")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert_error(
+        "refuse",
+        &out,
+        &[
+            "funcube1_wod_2016-02-04.csv:392:1",
+            "same time stamp as line 391",
+        ],
+    );
+}

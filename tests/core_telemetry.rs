@@ -1,0 +1,153 @@
+//! Recordings as satellites send them (`[recording]`): a UTC time column counted from
+//! the scenario's start, columns that are not sensors, repeated time stamps merged when
+//! equal and refused (or averaged, when the scenario says so) when not, and the rows a
+//! ground segment repeats where no packet arrived kept out as fill.
+
+use orbitlash::io::recording::{DuplicateTimes, Recording, RecordingFormat, TimeFormat};
+use orbitlash::spec::scenario::sensor_name_of;
+use sgp4::chrono::NaiveDate;
+
+fn utc_format() -> RecordingFormat {
+    RecordingFormat {
+        time_column: "UTC".into(),
+        time: TimeFormat::Utc {
+            origin: NaiveDate::from_ymd_opt(2016, 2, 4)
+                .unwrap()
+                .and_hms_opt(0, 0, 0)
+                .unwrap(),
+        },
+        ignore_columns: vec!["Battery mV".into()],
+        repeated_rows_are_fill: true,
+        duplicate_times: DuplicateTimes::Refuse,
+    }
+}
+
+fn read(text: &str, f: &RecordingFormat) -> Result<Recording, String> {
+    Recording::from_csv_with(text.as_bytes(), "wod.csv", f).map_err(|e| e.to_string())
+}
+
+#[test]
+fn core_utc_time_counts_from_the_start_and_ignored_columns_are_no_channels() {
+    let text = "UTC,Panel deg. C,Battery mV\n\
+                2016-02-04 00:00:00.0,1.5,8200\n\
+                2016-02-04T00:01:00Z,2.5,8210\n\
+                2016-02-04 01:00:30.5,3.5,8220\n";
+    let r = read(text, &utc_format()).unwrap();
+    assert_eq!(r.columns, vec!["Panel deg. C".to_string()]);
+    assert_eq!(r.time_s, vec![0.0, 60.0, 3630.5]);
+    assert_eq!(r.values[0], vec![Some(1.5), Some(2.5), Some(3.5)]);
+    // before the start, and not a date
+    let e = read(
+        "UTC,Panel deg. C,Battery mV\n2016-02-03 23:59:00,1,2\n",
+        &utc_format(),
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("wod.csv:2:1") && e.contains("before the scenario's start_utc"),
+        "{e}"
+    );
+    let e = read(
+        "UTC,Panel deg. C,Battery mV\nyesterday,1,2\n",
+        &utc_format(),
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("wod.csv:2:1") && e.contains("not a UTC date-time"),
+        "{e}"
+    );
+    // the time column and the ignored columns must be there
+    let e = read("time,Panel deg. C,Battery mV\n", &utc_format()).unwrap_err();
+    assert!(
+        e.contains("no `UTC` column") && e.contains("[recording]"),
+        "{e}"
+    );
+    let e = read("UTC,Panel deg. C\n2016-02-04 00:00:00,1\n", &utc_format()).unwrap_err();
+    assert!(
+        e.contains("ignore_columns names") && e.contains("Battery mV"),
+        "{e}"
+    );
+}
+
+#[test]
+fn core_repeated_time_stamps_merge_when_equal_and_are_refused_or_averaged_when_not() {
+    let equal = "UTC,a,Battery mV\n\
+                 2016-02-04 00:00:00,1,5\n\
+                 2016-02-04 00:01:00,2,6\n\
+                 2016-02-04 00:01:00,2,6\n\
+                 2016-02-04 00:02:00,3,7\n";
+    let r = read(equal, &utc_format()).unwrap();
+    assert_eq!(r.time_s, vec![0.0, 60.0, 120.0]);
+    assert_eq!(r.merged_rows, vec![4]);
+    assert!(r.fill_rows.is_empty());
+    let differ = equal.replacen(
+        "00:01:00,2,6\n2016-02-04 00:01:00,2,6",
+        "00:01:00,2,6\n2016-02-04 00:01:00,4,6",
+        1,
+    );
+    let e = read(&differ, &utc_format()).unwrap_err();
+    assert!(
+        e.contains("wod.csv:4:1")
+            && e.contains("same time stamp as line 3")
+            && e.contains("duplicate_times = \"mean\""),
+        "{e}"
+    );
+    let mean = RecordingFormat {
+        duplicate_times: DuplicateTimes::Mean,
+        ..utc_format()
+    };
+    let r = read(&differ, &mean).unwrap();
+    assert_eq!(r.values[0], vec![Some(1.0), Some(3.0), Some(3.0)]);
+    assert_eq!(r.merged_rows, vec![4]);
+    // time going back is an error in any case
+    let back = "UTC,a,Battery mV\n2016-02-04 00:02:00,1,5\n2016-02-04 00:01:00,2,6\n";
+    let e = read(back, &mean).unwrap_err();
+    assert!(
+        e.contains("wod.csv:3:1") && e.contains("does not increase"),
+        "{e}"
+    );
+}
+
+/// Fill: a row whose every cell (ignored columns included) repeats the row before is
+/// kept as a time with no readings; a row that differs in any cell is data.
+#[test]
+fn core_rows_repeating_the_row_before_are_fill() {
+    let text = "UTC,a,b,Battery mV\n\
+                2016-02-04 00:00:00,1,2,8200\n\
+                2016-02-04 00:01:00,1,2,8200\n\
+                2016-02-04 00:02:00,1,2,8200\n\
+                2016-02-04 00:03:00,1,2,8201\n\
+                2016-02-04 00:04:00,5,6,8202\n";
+    let r = read(text, &utc_format()).unwrap();
+    assert_eq!(r.fill_rows, vec![3, 4]);
+    assert_eq!(
+        r.values[0],
+        vec![Some(1.0), None, None, Some(1.0), Some(5.0)]
+    );
+    assert_eq!(
+        r.values[1],
+        vec![Some(2.0), None, None, Some(2.0), Some(6.0)]
+    );
+    // as data when the scenario does not say otherwise
+    let data = RecordingFormat {
+        repeated_rows_are_fill: false,
+        ..utc_format()
+    };
+    let r = read(text, &data).unwrap();
+    assert!(r.fill_rows.is_empty());
+    assert_eq!(r.values[0][1], Some(1.0));
+}
+
+#[test]
+fn core_telemetry_columns_get_channel_names() {
+    for (column, name) in [
+        ("housing_c", "housing_c"),
+        ("Black Chassis deg. C", "black_chassis_deg_c"),
+        ("Solar Panel +X deg. C", "solar_panel_px_deg_c"),
+        ("Solar Panel -X deg. C", "solar_panel_mx_deg_c"),
+        ("Tot. Photo Curr. mA", "tot_photo_curr_ma"),
+        ("  ", "channel"),
+    ] {
+        assert_eq!(sensor_name_of(column), name, "{column}");
+        orbitlash::spec::scenario::check_name(&sensor_name_of(column)).unwrap();
+    }
+}
