@@ -207,7 +207,8 @@ fn cli_diagnose_bad_recordings_name_file_line_and_column() {
         ),
         (
             "time.csv",
-            format!("{header}0,20,33\n30,20,33\n30,20,33\n"),
+            // the same stamp twice with other readings (equal rows are merged)
+            format!("{header}0,20,33\n30,20,33\n30,21,33\n"),
             vec!["time.csv:4", "increas"],
         ),
         (

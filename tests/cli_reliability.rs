@@ -155,16 +155,16 @@ fn cli_names_that_become_paths_are_checked() {
     let dir = tmpdir("rel-names");
     for (case, old, new, needles) in [
         (
-            "column escapes",
+            "name escapes",
             "column = \"housing_c\"",
-            "column = \"../../../escaped_c\"",
-            vec!["sensor[0].column", "escaped_c", "not a valid name"],
+            "column = \"housing_c\"\nname = \"../../../escaped_c\"",
+            vec!["sensor[0].name", "escaped_c", "not a valid name"],
         ),
         (
-            "column with a folder",
+            "name with a folder",
             "column = \"housing_c\"",
-            "column = \"sub/x_c\"",
-            vec!["sensor[0].column", "sub/x_c"],
+            "column = \"housing_c\"\nname = \"sub/x_c\"",
+            vec!["sensor[0].name", "sub/x_c"],
         ),
         (
             "empty column",
@@ -205,6 +205,22 @@ fn cli_names_that_become_paths_are_checked() {
         }
     }
     assert!(!dir.join("logs").exists());
+    // A recording's own column text may hold anything printable (telemetry names it):
+    // the channel takes a name made from it, which cannot leave a folder.
+    for (column, channel) in [("../../../escaped_c", "escaped_c"), ("sub/x_c", "sub_x_c")] {
+        std::fs::write(
+            dir.join("s.toml"),
+            reference_with(&[("column = \"housing_c\"", &format!("column = \"{column}\""))]),
+        )
+        .unwrap();
+        let out = run_in(&dir, &["check", "s.toml"]);
+        assert!(out.status.success(), "{column}: {}", stderr(&out));
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains(&format!("sensors: {channel},")),
+            "{column}: {text}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -1602,11 +1602,17 @@ fn check_names(cx: &Cx, raw: &ScenarioSpec) -> Result<(), SpecError> {
     // control characters.
     for (i, x) in raw.sensor.iter().enumerate() {
         let c = &x.column;
-        if c.trim().is_empty() || c.len() > 200 || c.chars().any(char::is_control) {
-            return Err(cx.err(
-                &KeyPath::new("sensor").at(i).key("column"),
-                "must be 1 … 200 characters of text (no control characters)",
-            ));
+        let problem = if c.trim().is_empty() {
+            Some("must not be empty".to_string())
+        } else if c.len() > 200 {
+            Some("is longer than 200 characters".to_string())
+        } else if c.chars().any(char::is_control) {
+            Some(format!("{c:?} holds a control character"))
+        } else {
+            None
+        };
+        if let Some(m) = problem {
+            return Err(cx.err(&KeyPath::new("sensor").at(i).key("column"), m));
         }
     }
     for (p, name) in all {

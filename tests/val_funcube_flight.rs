@@ -1,0 +1,90 @@
+//! FUNcube-1's flight telemetry of 2016-02-04 (`../shared/data/funcube-1`, AMSAT-UK Data
+//! Warehouse) against `scenarios/funcube-1.toml`: the eclipses the TLE, SGP4, the dated
+//! Sun and the conical shadow predict against the photo-current the satellite measured
+//! (≈ 0 in eclipse), minute by minute on the measured rows (the warehouse's fill
+//! left out); β and the eclipse fraction; the mean offset of entries and exits.
+
+mod common;
+
+use orbitlash::io::recording::Recording;
+use orbitlash::orbit::EnvironmentModel;
+
+const PHOTO: &str = "Tot. Photo Curr. mA";
+/// Photo-current below which a row is in eclipse, mA (the day's sunlit rows carry
+/// 100 … 412 mA; in eclipse it reads 0).
+const DARK_MA: f64 = 20.0;
+
+#[test]
+fn val_funcube_flight_eclipses_beta_and_fraction_from_the_tle() {
+    let Some(csv) = common::shared("data/funcube-1/funcube1_wod_2016-02-04.csv") else {
+        return;
+    };
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml"),
+    )
+    .unwrap();
+    let sc = orbitlash::io::scenario_toml::parse(&text, "funcube-1.toml").unwrap();
+    let mut format = sc.recording.clone();
+    format.ignore_columns.retain(|c| c != PHOTO);
+    let rec = Recording::read_with(&csv, &format).unwrap();
+    let photo = rec.channel(PHOTO).unwrap();
+    let env = &sc.thermal.environment;
+
+    // minute by minute on the measured rows
+    let (mut rows, mut agree, mut dark_measured, mut dark_model) = (0, 0, 0, 0);
+    for (j, &t) in rec.time_s.iter().enumerate() {
+        let Some(pc) = photo[j] else { continue };
+        let measured = pc < DARK_MA;
+        let model = env.sun_fraction(t) < 0.5;
+        rows += 1;
+        agree += usize::from(measured == model);
+        dark_measured += usize::from(measured);
+        dark_model += usize::from(model);
+    }
+    let agreement = agree as f64 / rows as f64;
+    let (f_measured, f_model) = (
+        dark_measured as f64 / rows as f64,
+        dark_model as f64 / rows as f64,
+    );
+    // entries and exits: where consecutive measured rows a minute apart change state,
+    // the middle of that minute against the predicted crossing
+    let (mut entries, mut exits) = (Vec::new(), Vec::new());
+    let mut last: Option<(f64, bool)> = None;
+    for (j, &t) in rec.time_s.iter().enumerate() {
+        let Some(pc) = photo[j] else { continue };
+        let dark = pc < DARK_MA;
+        if let Some((t0, d0)) = last
+            && d0 != dark
+            && t - t0 <= 61.0
+            && let Some((tc, entering)) = env.next_shadow_crossing(t0 - 120.0, t + 120.0)
+            && entering == dark
+        {
+            let offset = 0.5 * (t0 + t) - tc;
+            if dark {
+                entries.push(offset)
+            } else {
+                exits.push(offset)
+            }
+        }
+        last = Some((t, dark));
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let beta = env.state_with(43_200.0, true).beta_rad.to_degrees();
+    eprintln!(
+        "FUNcube-1 2016-02-04: {rows} measured rows, eclipse agreement {:.2} %, eclipse fraction {f_measured:.4} measured, {f_model:.4} predicted; β {beta:.2}°; {} entries mean offset {:+.1} s, {} exits {:+.1} s (measured − predicted; ±30 s from one-minute rows)",
+        100.0 * agreement,
+        entries.len(),
+        mean(&entries),
+        exits.len(),
+        mean(&exits)
+    );
+    assert!(rows > 1100, "{rows} measured rows");
+    assert!(agreement >= 0.97, "agreement {agreement}");
+    assert!((beta - 43.5).abs() < 1.0, "β {beta}");
+    assert!(
+        (f_measured - f_model).abs() < 0.01,
+        "{f_measured} vs {f_model}"
+    );
+    assert!(entries.len() >= 10 && exits.len() >= 10);
+    assert!(mean(&entries).abs() < 60.0 && mean(&exits).abs() < 60.0);
+}
