@@ -304,6 +304,9 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
             "CONSISTENT: the model fits the recording to its noise; nothing to add"
         }
         Verdict::Explained => "EXPLAINED: the model left out what the findings below add",
+        Verdict::Unexplained if !d.findings.is_empty() => {
+            "UNEXPLAINED: the findings below explain part of the residual; a structured residual remains that no effect of the vocabulary fits"
+        }
         Verdict::Unexplained => {
             "UNEXPLAINED: a structured residual remains that no effect of the vocabulary fits"
         }

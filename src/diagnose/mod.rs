@@ -16,11 +16,15 @@
 //!    training orbits, Jacobian by finite differences of whole simulations.
 //! 6. Selection: an effect is accepted when it wins BIC by [`Options::bic_margin`]
 //!    (with the estimated noise) *and* lowers the held-out χ² by
-//!    [`Options::holdout_margin`] *and* is material ([`Options::min_effect`]); pairs are tried when one effect leaves a
-//!    structured residual. The verdict is `explained` when the accepted effects bring
-//!    every channel's held-out RMS to [`Options::noise_ratio`] × its noise,
-//!    `consistent` when nothing is accepted and the baseline is at the noise, and
-//!    `unexplained` otherwise.
+//!    [`Options::holdout_margin`] *and* is material ([`Options::min_effect`]); pairs are
+//!    tried when one effect leaves a structured residual. The verdict is `explained`
+//!    when the accepted effects bring every channel's held-out RMS to
+//!    [`Options::noise_ratio`] × its noise, `consistent` when nothing is accepted and
+//!    the baseline is at the noise, and `unexplained` otherwise. An `unexplained`
+//!    report still lists the best accepted effects (a partial explanation) when the
+//!    baseline is not at the noise and they remove at least
+//!    [`Options::min_partial_share`] of its held-out χ², with the share each removes
+//!    and where the rest sits.
 //!
 //! Pure: no files, no terminal. The CLI (`cli/diagnose.rs`) reads and writes.
 
@@ -139,6 +143,11 @@ pub struct Options {
     pub fits: usize,
     /// Partners tried with the best effect when one is not enough.
     pub pair_partners: usize,
+    /// A partial explanation (findings that do not bring the residual to the noise)
+    /// must remove at least this share of the baseline's held-out χ²: an effect that
+    /// takes a fifth of a real residual away names physics worth modelling; one that
+    /// trims a few per cent mostly soaks up what it cannot model.
+    pub min_partial_share: f64,
 }
 
 impl Default for Options {
@@ -151,6 +160,7 @@ impl Default for Options {
             noise_ratio: 1.3,
             fits: 8,
             pair_partners: 5,
+            min_partial_share: 0.2,
         }
     }
 }
@@ -260,6 +270,9 @@ pub struct Finding {
     pub delta_bic: f64,
     /// Held-out χ² drop this effect brings.
     pub heldout_chi2_drop: f64,
+    /// The share of the baseline's held-out χ² (noise-weighted squared residual) this
+    /// effect removes.
+    pub heldout_share: f64,
     /// The key-path values written into the corrected scenario.
     pub set: BTreeMap<String, f64>,
 }
@@ -325,6 +338,10 @@ pub struct Diagnosis {
     pub rmse: ChannelMap,
     /// Where the corrected model's residual still sits.
     pub remaining: Vec<Mismatch>,
+    /// The share of the baseline's held-out χ² the findings remove (when there are
+    /// findings).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heldout_share: Option<f64>,
     pub split: data::Split,
     /// What the recording's rows were: measured, a ground segment's fill, merged
     /// (only in the JSON when there was fill or a merged row).
@@ -579,6 +596,7 @@ fn baseline_report(
         heldout_rmse: cmap(&rms_heldout),
         rmse: cmap(&rms),
         remaining: mismatches,
+        heldout_share: None,
         split: obs.split.clone(),
         recording: RecordingRows::default(),
         candidates: Vec::new(),
@@ -753,6 +771,7 @@ fn findings(
             heldout_rmse: heldout_rmse.clone(),
             delta_bic,
             heldout_chi2_drop: hdrop,
+            heldout_share: hdrop / base.holdout_chi2,
             set: c.values(theta).into_iter().collect(),
         });
         off += k;
@@ -888,26 +907,45 @@ pub fn diagnose(
         &problem, &reference, &cands, &ranked, &to_fit, &fitted, opts,
     );
     let mut best: Option<Hypothesis> = None;
+    let mut explained = false;
     if let Some(first) = singles.first() {
         if explains(&obs, &base.noise, opts, first) {
             best = Some(first.clone());
+            explained = true;
         } else {
-            match search::best_pair(&problem, model, &cands, &ranked, first, opts, progress) {
-                Some(p) if explains(&obs, &base.noise, opts, &p) => best = Some(p),
-                Some(p) => report.notes.push(format!(
-                    "{} with {} improves on either alone but leaves a structured residual",
-                    cands[p.members[0]].label(),
-                    cands[p.members[1]].label()
-                )),
-                None => {}
+            let pair = search::best_pair(&problem, model, &cands, &ranked, first, opts, progress);
+            match pair {
+                Some(p) if explains(&obs, &base.noise, opts, &p) => {
+                    best = Some(p);
+                    explained = true;
+                }
+                Some(p) => {
+                    report.notes.push(format!(
+                        "{} with {} improves on either alone but leaves a structured residual",
+                        cands[p.members[0]].label(),
+                        cands[p.members[1]].label()
+                    ));
+                    best = Some(p);
+                }
+                None => best = Some(first.clone()),
             }
-            if best.is_none() {
+            // A partial explanation: kept when it removes a material share of a real
+            // residual (the baseline not at the noise); the verdict stays unexplained.
+            let share = best
+                .as_ref()
+                .map_or(0.0, |h| 1.0 - h.holdout_chi2 / reference.holdout_chi2);
+            if !explained
+                && (report.verdict == Verdict::Consistent || share < opts.min_partial_share)
+            {
+                best = None;
                 report.notes.push(format!(
-                    "the best candidate, {}, improves the fit (BIC −{:.0}) but does not bring the \
-                     held-out orbits to the noise; no effect of the vocabulary, alone or in a \
-                     pair, explains the residual",
+                    "the best candidate, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of the \
+                     baseline's held-out residual (a partial finding needs {:.0} %) and does not \
+                     bring the held-out orbits to the noise",
                     cands[first.members[0]].label(),
-                    problem.bic_gain(first, reference.train_chi2, first.theta.len())
+                    problem.bic_gain(first, reference.train_chi2, first.theta.len()),
+                    100.0 * (1.0 - first.holdout_chi2 / reference.holdout_chi2),
+                    100.0 * opts.min_partial_share
                 ));
             }
         }
@@ -917,7 +955,20 @@ pub fn diagnose(
     if let Some(h) = &best {
         let names = channel_names(&obs);
         let res = obs.residuals(&h.pred);
-        report.verdict = Verdict::Explained;
+        report.verdict = if explained {
+            Verdict::Explained
+        } else {
+            Verdict::Unexplained
+        };
+        report.heldout_share = Some(1.0 - h.holdout_chi2 / reference.holdout_chi2);
+        if !explained {
+            report.notes.push(format!(
+                "a partial explanation: the findings remove {:.0} % of the baseline's held-out \
+                 residual; the rest, below, is physics outside the vocabulary or parameters it \
+                 does not fit",
+                100.0 * report.heldout_share.unwrap_or(0.0)
+            ));
+        }
         report.heldout_rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Holdout));
         report.rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Train));
         report.remaining = data::mismatches(&obs, &res, &base.noise, opts.noise_ratio);
