@@ -26,7 +26,8 @@ pub struct DiagnoseArgs {
     /// Also write into this folder (created if missing; a default-free name, any
     /// place that is not an input): `corrected.toml` (the scenario with the accepted
     /// effects, runnable as it is), `diagnose.mcap` (recording, baseline, corrected and
-    /// residuals side by side) and `residuals-<channel>.svg` (before and after).
+    /// residuals side by side), `series.csv` (the same series as CSV, for any plotting
+    /// tool) and `residuals-<channel>.svg` (before and after).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Whole orbits held out at the end of the recording for validation (default: a
@@ -57,7 +58,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     }
     if let Some(dir) = &a.out {
         outs.folder("--out", dir, true)?;
-        for name in ["corrected.toml", "diagnose.mcap"] {
+        for name in ["corrected.toml", "diagnose.mcap", "series.csv"] {
             outs.file(&format!("--out ({name})"), &dir.join(name))?;
         }
     }
@@ -242,6 +243,10 @@ fn out_files(
         anyhow::anyhow!("cannot write {}: {e}", dir.join("diagnose.mcap").display())
     })?;
     files.push((dir.join("diagnose.mcap"), mcap));
+    files.push((
+        dir.join("series.csv"),
+        orbitlash::io::diagnose_out::series_csv(d).into_bytes(),
+    ));
     for (c, name) in d.series.channels.iter().enumerate() {
         let svg = orbitlash::io::svg::residuals(&d.series, c);
         files.push((dir.join(residual_plot_name(name)), svg.into_bytes()));

@@ -109,3 +109,40 @@ pub fn mcap_bytes(d: &Diagnosis) -> Result<Vec<u8>, mcap::McapError> {
     w.finish().map_err(err)?;
     Ok(w.into_inner().into_inner())
 }
+
+/// The series of `diagnose --out` as CSV (`series.csv`): `time_s`, `part` (`train`,
+/// `holdout`, or `tail` after the last whole orbit), then per channel
+/// `<channel>.recorded` (empty where the recording has no reading), `.baseline` and
+/// `.corrected`, in the channel's unit (°C, K or µm, as the recording).
+pub fn series_csv(d: &Diagnosis) -> String {
+    use std::fmt::Write;
+    let s = &d.series;
+    let mut o = String::from("time_s,part");
+    for name in &s.channels {
+        for f in ["recorded", "baseline", "corrected"] {
+            let _ = write!(o, ",{name}.{f}");
+        }
+    }
+    o.push('\n');
+    for (j, &t) in s.time_s.iter().enumerate() {
+        let part = if t <= s.train_end_s {
+            "train"
+        } else if t <= s.holdout_end_s {
+            "holdout"
+        } else {
+            "tail"
+        };
+        let _ = write!(o, "{t},{part}");
+        for c in 0..s.channels.len() {
+            match s.recorded[c][j] {
+                Some(v) => {
+                    let _ = write!(o, ",{v}");
+                }
+                None => o.push(','),
+            }
+            let _ = write!(o, ",{},{}", s.baseline[c][j], s.corrected[c][j]);
+        }
+        o.push('\n');
+    }
+    o
+}
