@@ -131,3 +131,61 @@ fn cli_funcube_telemetry_reads_with_its_fill_and_repeated_stamps() {
         ],
     );
 }
+
+/// User-declared uncertain numbers become calibration candidates within their bounds
+/// (`[[uncertain]]`, and the `[[dispersion]]` entries: a uniform range, a normal's
+/// mean ± 3 sd); a bad declaration is refused naming its line and key.
+#[test]
+fn cli_uncertain_numbers_are_calibration_candidates() {
+    use orbitlash::diagnose::effects::{Hints, candidates};
+    let text = funcube_text()
+        + "\n[[uncertain]]\npath = \"conductor.panel_px-chassis.conductance_w_per_k\"\nmin = 0.1\nmax = 2.0\n\
+           \n[[dispersion]]\npath = \"dissipation.electronics.power_w\"\ndistribution = \"normal\"\nmean = 1.3\nsd = 0.1\n";
+    let spec = orbitlash::io::scenario_toml::parse_spec(&text, "u.toml").unwrap();
+    let model = orbitlash::spec::model::Model::new(spec).unwrap();
+    let cands = candidates(&model, &[], &Hints::default());
+    let declared: Vec<_> = cands
+        .iter()
+        .filter(|c| c.effect.id() == "uncertain_parameter")
+        .map(|c| (c.label(), c.params[0].lower, c.params[0].upper))
+        .collect();
+    assert_eq!(declared.len(), 2, "{declared:?}");
+    assert_eq!(
+        declared[0].0,
+        "uncertain_parameter on conductor.panel_px-chassis.conductance_w_per_k"
+    );
+    assert_eq!((declared[0].1, declared[0].2), (0.1, 2.0));
+    assert!((declared[1].1 - 1.0).abs() < 1e-12 && (declared[1].2 - 1.6).abs() < 1e-12);
+    // the new calibrations: every node's thermal mass, every face's α and ε
+    let count = |id: &str| cands.iter().filter(|c| c.effect.id() == id).count();
+    assert_eq!(count("capacitance_scale"), 8);
+    assert_eq!(count("emissivity_scale"), 6);
+    assert!(count("absorptivity_scale") >= 6);
+
+    let dir = tmpdir("uncertain-bad");
+    for (case, block, needles) in [
+        (
+            "path",
+            "path = \"conductor.panel_px-chassis.conductanc_w_per_k\"\nmin = 0.1\nmax = 2.0",
+            &["`uncertain[0].path`", "no such number"][..],
+        ),
+        (
+            "bounds",
+            "path = \"conductor.panel_px-chassis.conductance_w_per_k\"\nmin = 2.0\nmax = 0.1",
+            &["`uncertain[0].max`", "min < max"][..],
+        ),
+        (
+            "range",
+            "path = \"conductor.panel_px-chassis.conductance_w_per_k\"\nmin = -1.0\nmax = 2.0",
+            &["`uncertain[0].min`", "cannot be -1"][..],
+        ),
+    ] {
+        let file = dir.join(format!("{case}.toml"));
+        std::fs::write(&file, funcube_text() + "\n[[uncertain]]\n" + block + "\n").unwrap();
+        let out = bin().arg("check").arg(&file).output().unwrap();
+        let name = format!("{case}.toml:");
+        let mut all = needles.to_vec();
+        all.push(&name);
+        assert_error(case, &out, &all);
+    }
+}

@@ -467,3 +467,24 @@ fn val_generator_null_recordings_no_false_discoveries() {
     );
     assert_eq!(false_discoveries, 0);
 }
+
+/// A calibration the field moves most: a node's thermal mass (issue 19), here the
+/// housing's at 0.6 × the model's.
+#[test]
+fn val_generator_capacitance_scale_housing() {
+    let r = e(
+        vec![Effect::CapacitanceScale {
+            node: "housing".into(),
+            scale: 0.6,
+        }],
+        25,
+    );
+    check(
+        "capacitance",
+        &r,
+        Some(Want {
+            effects: &[("capacitance_scale", "housing")],
+            params: &[("scale", 0.6, REL)],
+        }),
+    );
+}

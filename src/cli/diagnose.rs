@@ -261,6 +261,8 @@ fn finding_target(f: &diagnose::Finding) -> String {
         ("channel", &f.channel),
         ("conductor", &f.conductor),
         ("load", &f.load),
+        ("face", &f.face),
+        ("key path", &f.path),
         ("gear", &f.gear),
         ("gear pair", &f.gear_pair),
         ("schedule", &f.schedule),

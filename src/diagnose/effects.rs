@@ -29,6 +29,9 @@ pub enum Effect {
     AbsorptivityScale,
     ConductanceScale,
     CteScale,
+    CapacitanceScale,
+    EmissivityScale,
+    UncertainParameter,
 }
 
 /// What an effect is: physics the model left out, a sensor's own behaviour, or a
@@ -59,7 +62,7 @@ impl std::fmt::Display for EffectKind {
 }
 
 impl Effect {
-    pub const ALL: [Effect; 11] = [
+    pub const ALL: [Effect; 14] = [
         Effect::EarthAlbedoIr,
         Effect::HeaterThermostat,
         Effect::InternalDissipation,
@@ -71,6 +74,9 @@ impl Effect {
         Effect::AbsorptivityScale,
         Effect::ConductanceScale,
         Effect::CteScale,
+        Effect::CapacitanceScale,
+        Effect::EmissivityScale,
+        Effect::UncertainParameter,
     ];
 
     pub fn id(self) -> &'static str {
@@ -86,15 +92,21 @@ impl Effect {
             Effect::AbsorptivityScale => "absorptivity_scale",
             Effect::ConductanceScale => "conductance_scale",
             Effect::CteScale => "cte_scale",
+            Effect::CapacitanceScale => "capacitance_scale",
+            Effect::EmissivityScale => "emissivity_scale",
+            Effect::UncertainParameter => "uncertain_parameter",
         }
     }
 
     pub fn kind(self) -> EffectKind {
         match self {
             Effect::SensorLag | Effect::SensorOffset => EffectKind::Sensor,
-            Effect::AbsorptivityScale | Effect::ConductanceScale | Effect::CteScale => {
-                EffectKind::Calibration
-            }
+            Effect::AbsorptivityScale
+            | Effect::ConductanceScale
+            | Effect::CteScale
+            | Effect::CapacitanceScale
+            | Effect::EmissivityScale
+            | Effect::UncertainParameter => EffectKind::Calibration,
             _ => EffectKind::Physics,
         }
     }
@@ -182,6 +194,11 @@ pub enum Target {
     Load(String),
     /// A conductor or radiative coupling.
     Conductor(String),
+    /// A face (its absorptivity or emissivity).
+    Face(String),
+    /// A number the user declared uncertain (`[[uncertain]]`, `[[dispersion]]`), by its
+    /// key path.
+    Path(String),
 }
 
 impl Target {
@@ -209,6 +226,18 @@ impl Target {
     pub fn load(&self) -> Option<String> {
         match self {
             Target::Load(l) => Some(l.clone()),
+            _ => None,
+        }
+    }
+    pub fn face(&self) -> Option<String> {
+        match self {
+            Target::Face(f) => Some(f.clone()),
+            _ => None,
+        }
+    }
+    pub fn path(&self) -> Option<String> {
+        match self {
+            Target::Path(p) => Some(p.clone()),
             _ => None,
         }
     }
@@ -241,6 +270,8 @@ impl Target {
             self.channel(),
             self.conductor(),
             self.load(),
+            self.face(),
+            self.path(),
             self.gear(),
             self.gear_pair(),
         ]
@@ -783,6 +814,47 @@ impl<'a> Generator<'a> {
     /// absorptivity scaled, a conductor's or radiative coupling's conductance scaled.
     fn calibrations(&self) -> Vec<Candidate> {
         let mut out = Vec::new();
+        // Thermal masses, and the faces' optical properties (within 0 … 1).
+        for p in self.model.params() {
+            if p.value.is_nan() || p.value <= 0.0 {
+                continue;
+            }
+            let (effect, target, param, starts) =
+                if p.path.starts_with("node.") && p.path.ends_with(".capacitance_j_per_k") {
+                    (
+                        Effect::CapacitanceScale,
+                        Target::Node(element_of(&p.path)),
+                        ParamDef::new("scale", 0.2, 5.0, 0.005),
+                        vec![0.5, 0.8, 1.25, 2.0],
+                    )
+                } else if p.path.starts_with("face.") && p.path.ends_with(".emissivity") {
+                    let upper = 1.0 / p.value;
+                    (
+                        Effect::EmissivityScale,
+                        Target::Face(element_of(&p.path)),
+                        ParamDef::new("scale", 0.05, upper, 0.003),
+                        vec![0.6, 0.85, 1.1f64.min(upper), 1.25f64.min(upper)],
+                    )
+                } else if p.path.starts_with("face.") && p.path.ends_with(".absorptivity") {
+                    let upper = 1.0 / p.value;
+                    (
+                        Effect::AbsorptivityScale,
+                        Target::Face(element_of(&p.path)),
+                        ParamDef::new("scale", 0.05, upper, 0.003),
+                        vec![0.8, 0.9, 1.1f64.min(upper), 1.25f64.min(upper)],
+                    )
+                } else {
+                    continue;
+                };
+            out.push(Candidate {
+                params: vec![param],
+                setters: vec![Setter::scaled(p.path.clone(), 0, p.value)],
+                starts: starts.into_iter().map(|s| vec![s]).collect(),
+                null: Some(vec![1.0]),
+                ..Candidate::new(effect, target, None)
+            });
+        }
+        out.extend(self.uncertain());
         for p in self.model.params() {
             let is_load = p.path.starts_with("sun.")
                 && (p.path.ends_with(".absorptivity") || p.path.ends_with(".absorptivity_area_m2"));
@@ -821,6 +893,59 @@ impl<'a> Generator<'a> {
                 starts: starts.into_iter().map(|s| vec![s]).collect(),
                 null: Some(vec![1.0]),
                 ..Candidate::new(effect, target, None)
+            });
+        }
+        out
+    }
+}
+
+impl Generator<'_> {
+    /// The numbers the user declared uncertain, each a calibration candidate within
+    /// its bounds: `[[uncertain]]` (a key path, `min`, `max`) and the `[[dispersion]]`
+    /// entries (uniform and triangular: their range; normal: mean ± 3 sd; log-normal:
+    /// median × / ÷ e^(3σ)). A path the model does not have is skipped (the scenario's
+    /// compile has refused it already).
+    fn uncertain(&self) -> Vec<Candidate> {
+        let mut declared: Vec<(String, f64, f64)> = self
+            .spec
+            .uncertain
+            .iter()
+            .map(|u| (u.path.clone(), u.min, u.max))
+            .collect();
+        for d in &self.spec.dispersion {
+            let range = match (d.min, d.max, d.mean, d.sd, d.median, d.sigma) {
+                (Some(lo), Some(hi), ..) => Some((lo, hi)),
+                (_, _, Some(m), Some(sd), ..) => Some((m - 3.0 * sd, m + 3.0 * sd)),
+                (.., Some(med), Some(sg)) => {
+                    Some((med * (-3.0 * sg).exp(), med * (3.0 * sg).exp()))
+                }
+                _ => None,
+            };
+            if let Some((lo, hi)) = range
+                && !declared.iter().any(|(p, ..)| *p == d.path)
+            {
+                declared.push((d.path.clone(), lo, hi));
+            }
+        }
+        let mut out = Vec::new();
+        for (path, lo, hi) in declared {
+            let Ok(now) = self.model.get(&path) else {
+                continue;
+            };
+            if lo >= hi || lo.is_nan() || hi.is_nan() || !now.is_finite() {
+                continue;
+            }
+            let span = hi - lo;
+            let null = now.clamp(lo, hi);
+            out.push(Candidate {
+                params: vec![ParamDef::new("value", lo, hi, 1e-3 * span)],
+                setters: vec![Setter::scaled(path.clone(), 0, 1.0)],
+                starts: [0.1, 0.35, 0.65, 0.9]
+                    .iter()
+                    .map(|f| vec![lo + f * span])
+                    .collect(),
+                null: Some(vec![null]),
+                ..Candidate::new(Effect::UncertainParameter, Target::Path(path), None)
             });
         }
         out

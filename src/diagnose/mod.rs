@@ -250,6 +250,12 @@ pub struct Finding {
     pub conductor: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load: Option<String>,
+    /// A face (its absorptivity or emissivity).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub face: Option<String>,
+    /// A number declared uncertain, by key path.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub path: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gear_pair: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -756,6 +762,8 @@ fn findings(
             channel: c.target.channel(),
             conductor: c.target.conductor(),
             load: c.target.load(),
+            face: c.target.face(),
+            path: c.target.path(),
             gear_pair: c.target.gear_pair(),
             gear: c.target.gear(),
             schedule: c.target.schedule(),

@@ -66,6 +66,10 @@ pub struct ScenarioSpec {
     /// How recordings of this spacecraft are laid out (`diagnose --recording`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub recording: Option<RecordingSpec>,
+    /// Numbers the user is unsure of, with bounds: calibration candidates for
+    /// `diagnose` (as are the `[[dispersion]]` entries).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub uncertain: Vec<UncertainSpec>,
 }
 
 /// One dispersed number: a key path and its distribution (the `dispersion` module
@@ -414,6 +418,16 @@ pub struct AttitudeSpec {
     /// Spinning: faces see the mean over a turn instead of the instant.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spin_averaged: Option<bool>,
+}
+
+/// `[[uncertain]]`: a number (by key path) the user is unsure of, between `min` and
+/// `max`: `diagnose` may calibrate it.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct UncertainSpec {
+    pub path: String,
+    pub min: f64,
+    pub max: f64,
 }
 
 /// `[recording]`: the layout of the recordings `diagnose` reads for this scenario.

@@ -55,12 +55,43 @@ impl Model {
     /// Compiles `spec` (see [`crate::spec::compile`]).
     pub fn new(spec: ScenarioSpec) -> Result<Model, SpecError> {
         let scenario = compile(spec.clone())?;
-        Ok(Model {
+        let model = Model {
             keys: element_keys(&spec),
             spec,
             scenario,
             shape: new_shape(),
-        })
+        };
+        model.check_uncertain()?;
+        Ok(model)
+    }
+
+    /// Each `[[uncertain]]` names a number of the model, with finite bounds min < max
+    /// that the model accepts at both ends.
+    fn check_uncertain(&self) -> Result<(), SpecError> {
+        use crate::spec::keys::KeyPath;
+        for (i, u) in self.spec.uncertain.iter().enumerate() {
+            let at = KeyPath::new("uncertain").at(i);
+            let err = |key: &'static str, message: String| SpecError {
+                key: at.key(key),
+                message,
+            };
+            self.get(&u.path).map_err(|e| err("path", e.to_string()))?;
+            if !(u.min.is_finite() && u.max.is_finite() && u.min < u.max) {
+                return Err(err(
+                    "max",
+                    format!(
+                        "the bounds must be finite with min < max (got {} … {})",
+                        u.min, u.max
+                    ),
+                ));
+            }
+            for (key, v) in [("min", u.min), ("max", u.max)] {
+                let mut m = self.clone();
+                m.set(&u.path, v)
+                    .map_err(|e| err(key, format!("`{}` cannot be {v}: {e}", u.path)))?;
+            }
+        }
+        Ok(())
     }
 
     pub fn spec(&self) -> &ScenarioSpec {

@@ -111,6 +111,8 @@ pub enum Effect {
     /// Both gears' α × scale (the whole strain law, dα/dT included; with a bore fit the
     /// shafts too, being the same 17-4PH). Shaft and housing conduction are unaffected.
     CteScale { scale: f64 },
+    /// A node's heat capacity × scale.
+    CapacitanceScale { node: String, scale: f64 },
     /// Outside the vocabulary: heat A sin(2π t / P) into `node`.
     PeriodicDisturbance {
         node: String,
@@ -284,6 +286,10 @@ fn build(recipe: &Recipe) -> Model {
             Effect::AbsorptivityScale { scale } => sun_scale *= scale,
             Effect::ConductanceScale { a, b, scale } => net.conductor_mut(a, b).g *= scale,
             Effect::CteScale { scale } => cte_scale *= scale,
+            Effect::CapacitanceScale { node, scale } => {
+                let i = net.index(node);
+                net.cap[i] *= scale;
+            }
             Effect::PeriodicDisturbance {
                 node,
                 amplitude_w,
