@@ -488,3 +488,52 @@ fn val_generator_capacitance_scale_housing() {
         }),
     );
 }
+
+/// Robust fits (issue 19): thermostat heaters whose cost surface is not smooth in
+/// their set points (each on/off switch moves in steps). A 9 W heater switching on at
+/// −16 °C and off at −11 °C, and a 5 W one with the same set points, from the
+/// independent generator: power within 5 %, set points within 0.5 K.
+fn heater_within_tolerance(name: &str, power_w: f64, seed: u64) {
+    let r = e(
+        vec![Effect::Heater {
+            node: "housing".into(),
+            power_w,
+            on_k: k(-16.0),
+            off_k: k(-11.0),
+        }],
+        seed,
+    );
+    let d = run(name, &r);
+    let f = d
+        .findings
+        .iter()
+        .find(|f| f.effect == "heater_thermostat")
+        .unwrap_or_else(|| panic!("{}", summary(name, &d)));
+    assert_eq!(f.node.as_deref(), Some("housing"), "{}", summary(name, &d));
+    let p = &f.parameters;
+    eprintln!(
+        "{name}: power {:.3} W (truth {power_w}), on {:.3} °C (−16), off {:.3} °C (−11); verdict {}",
+        p["power_w"],
+        p["on_c"],
+        p["off_c"],
+        d.verdict.as_str()
+    );
+    assert!(
+        (p["power_w"] / power_w - 1.0).abs() <= 0.05,
+        "{}",
+        summary(name, &d)
+    );
+    assert!((p["on_c"] + 16.0).abs() <= 0.5, "{}", summary(name, &d));
+    assert!((p["off_c"] + 11.0).abs() <= 0.5, "{}", summary(name, &d));
+    assert_eq!(d.verdict.as_str(), "explained", "{}", summary(name, &d));
+}
+
+#[test]
+fn val_generator_heater_9w_cycling_in_eclipse() {
+    heater_within_tolerance("heater-9w", 9.0, 31);
+}
+
+#[test]
+fn val_generator_heater_5w_same_set_points() {
+    heater_within_tolerance("heater-5w", 5.0, 32);
+}

@@ -298,6 +298,14 @@ pub struct Candidate {
     /// The elements the effect adds to the scenario (none for a change of existing
     /// numbers); applied in order to build a model with several effects.
     pub edits: Vec<Edit>,
+    /// How many of its best ranked points it is fitted from (1: the best only). More
+    /// than one where the cost is not smooth in the parameters (a thermostat's set
+    /// points move its switchings in steps) and a local minimum is likely.
+    pub multi_start: usize,
+    /// Points of a coarse global stage evaluated when the candidate is fitted (not when
+    /// it is ranked): its best `multi_start − 1` start the fit besides the best ranked
+    /// point.
+    pub grid: Vec<Vec<f64>>,
 }
 
 /// A change of the scenario's elements.
@@ -314,6 +322,8 @@ impl Candidate {
             starts: Vec::new(),
             null: None,
             edits: edit.into_iter().collect(),
+            multi_start: 1,
+            grid: Vec::new(),
         }
     }
 
@@ -365,6 +375,11 @@ pub struct Hints {
 }
 
 const C_TO_K: f64 = 273.15;
+
+/// A thermostat is fitted from its best ranked points, this many: one long on-period
+/// and several short cycles are separate basins of its cost (measured in
+/// `docs/performance.md`).
+pub const HEATER_STARTS: usize = 3;
 
 /// Every candidate of the vocabulary on every element of `model` that the recording's
 /// `channels` (sensor columns) can see, in a fixed order: per node (Earth albedo and
@@ -567,6 +582,18 @@ impl<'a> Generator<'a> {
             ],
             starts,
             null: Some(vec![0.0, on_c, 5.0]),
+            multi_start: HEATER_STARTS,
+            grid: {
+                let mut g = Vec::new();
+                for d in [-3.0, -2.0, -1.0, 0.0, 1.0] {
+                    for h in [2.0, 3.5, 5.0, 7.0] {
+                        for p in [2.0, 4.0, 6.5, 9.5, 14.0] {
+                            g.push(vec![p, on_c + d, h]);
+                        }
+                    }
+                }
+                g
+            },
             ..Candidate::new(Effect::HeaterThermostat, Target::Node(n.into()), Some(edit))
         })
     }

@@ -213,6 +213,9 @@ pub(super) struct Hypothesis {
 /// simulated), the last error, and the wall time, s.
 pub(super) struct Ranking {
     pub best: Option<(f64, Vec<f64>)>,
+    /// The runners-up after `best`, best first (distinct points): further starts for a
+    /// candidate fitted from several ([`Candidate::multi_start`]).
+    pub runners_up: Vec<(f64, Vec<f64>)>,
     pub error: String,
     pub time_s: f64,
 }
@@ -302,7 +305,27 @@ fn best_start(
     fixed_theta: &[f64],
     r0: &[f64],
 ) -> (Option<(f64, Vec<f64>)>, String) {
-    let mut best: Option<(f64, Vec<f64>)> = None;
+    let (mut all, err) = ranked_starts(problem, comp, c, fixed_theta, r0);
+    (
+        if all.is_empty() {
+            None
+        } else {
+            Some(all.remove(0))
+        },
+        err,
+    )
+}
+
+/// Every point [`best_start`] evaluates, best first (a stable sort: ties keep the
+/// order of the start points), without repeats.
+fn ranked_starts(
+    problem: &Problem<'_>,
+    comp: &Composite,
+    c: &Candidate,
+    fixed_theta: &[f64],
+    r0: &[f64],
+) -> (Vec<(f64, Vec<f64>)>, String) {
+    let mut all: Vec<(f64, Vec<f64>)> = Vec::new();
     let mut err = String::new();
     for s in &c.starts {
         let mut theta = fixed_theta.to_vec();
@@ -310,15 +333,16 @@ fn best_start(
         match problem.train_residuals_at(comp, &theta) {
             Ok(r1) => {
                 for (x2, th) in rank_point(r0, &r1, c, s) {
-                    if best.as_ref().is_none_or(|b| x2 < b.0) {
-                        best = Some((x2, th));
+                    if !x2.is_nan() && !all.iter().any(|(_, t)| *t == th) {
+                        all.push((x2, th));
                     }
                 }
             }
             Err(e) => err = e,
         }
     }
-    (best, err)
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    (all, err)
 }
 
 /// Step 4: every candidate's training χ² at its start points, and along the line
@@ -336,13 +360,20 @@ pub(super) fn rank(
         .par_iter()
         .map(|c| {
             let t0 = Instant::now();
-            let (best, error) = match Composite::new(model, &[c]) {
-                Err(e) => (None, e.to_string()),
-                Ok(comp) => best_start(problem, &comp, c, &[], r0),
+            let (mut all, error) = match Composite::new(model, &[c]) {
+                Err(e) => (Vec::new(), e.to_string()),
+                Ok(comp) => ranked_starts(problem, &comp, c, &[], r0),
             };
             counter.tick();
+            let best = if all.is_empty() {
+                None
+            } else {
+                Some(all.remove(0))
+            };
+            all.truncate(c.multi_start.saturating_sub(1));
             Ranking {
                 best,
+                runners_up: all,
                 error,
                 time_s: t0.elapsed().as_secs_f64(),
             }
@@ -361,17 +392,139 @@ pub(super) fn fit_leading(
     progress: Progress<'_>,
 ) -> Vec<(Result<Hypothesis, String>, f64)> {
     let counter = Counter::new("fitting", to_fit.len(), progress);
+    // The global stage for the leading rugged candidates only (`to_fit` is best
+    // first): it costs a few hundred runs each.
+    let robust: Vec<usize> = to_fit
+        .iter()
+        .copied()
+        .filter(|&i| !cands[i].grid.is_empty())
+        .take(GLOBAL_CANDIDATES)
+        .collect();
     to_fit
         .par_iter()
         .map(|&i| {
             let t0 = Instant::now();
-            let start = ranked[i].best.as_ref().unwrap().1.clone();
-            let h = fit(problem, model, cands, &[i], &start);
+            // From the best ranked point, and for a candidate whose cost is not smooth
+            // in its parameters from the runners-up too: the lowest training χ² wins
+            // (the first on a tie).
+            let c = &cands[i];
+            let best_ranked = ranked[i].best.as_ref().unwrap().clone();
+            let mut others: Vec<(f64, Vec<f64>)> = Vec::new();
+            if robust.contains(&i)
+                && let Ok(comp) = Composite::new(model, &[c])
+            {
+                others = global_stage(
+                    problem,
+                    &comp,
+                    c,
+                    best_ranked.clone(),
+                    ranked[i].runners_up.clone(),
+                );
+                others.retain(|o| o.1 != best_ranked.1);
+                others.truncate(c.multi_start.saturating_sub(1));
+            }
+            let starts = std::iter::once(&best_ranked)
+                .chain(&others)
+                .map(|(_, th)| th.clone());
+            let mut best: Option<Result<Hypothesis, String>> = None;
+            for start in starts {
+                let h = fit(problem, model, cands, &[i], &start);
+                best = match (best, h) {
+                    (None, h) => Some(h),
+                    (Some(Ok(b)), Ok(h)) if h.train_chi2 < b.train_chi2 => Some(Ok(h)),
+                    (Some(Err(_)), Ok(h)) => Some(Ok(h)),
+                    (b, _) => b,
+                };
+            }
             counter.tick();
-            (h, t0.elapsed().as_secs_f64())
+            (
+                best.expect("one start at least"),
+                t0.elapsed().as_secs_f64(),
+            )
         })
         .collect()
 }
+
+/// The global stage of a candidate whose cost is rugged (a thermostat): its grid and
+/// ranked points evaluated, then each of the best [`GLOBAL_SEEDS`] refined by a compass
+/// search (each parameter stepped up and down, steps halved when neither helps), which
+/// needs no derivative and so crosses the steps a switching heater puts in the cost.
+/// Returns the refined points, best first (LM starts from them).
+fn global_stage(
+    problem: &Problem<'_>,
+    comp: &Composite,
+    c: &Candidate,
+    best: (f64, Vec<f64>),
+    mut points: Vec<(f64, Vec<f64>)>,
+) -> Vec<(f64, Vec<f64>)> {
+    let cost = |th: &[f64]| {
+        problem
+            .train_residuals_at(comp, th)
+            .map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum())
+    };
+    let mut grid: Vec<(f64, Vec<f64>)> = c.grid.iter().map(|g| (cost(g), g.clone())).collect();
+    grid.sort_by(|a, b| a.0.total_cmp(&b.0));
+    points.push(best);
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // Seeds: the best points overall, and the best grid point of each value of the
+    // first parameter (a heater's power), so that every basin the grid touches is
+    // searched, not only the deepest at its coarse points.
+    let mut seeds: Vec<(f64, Vec<f64>)> = Vec::new();
+    for p in points
+        .into_iter()
+        .chain(grid.iter().cloned())
+        .take(GLOBAL_SEEDS)
+    {
+        if !seeds.iter().any(|s| s.1 == p.1) {
+            seeds.push(p);
+        }
+    }
+    for g in &grid {
+        if !seeds.iter().any(|s| s.1[0] == g.1[0]) {
+            seeds.push(g.clone());
+        }
+    }
+    let mut refined = Vec::new();
+    for (x0, th0) in seeds {
+        let (mut x, mut th) = (x0, th0);
+        let mut step: Vec<f64> = th
+            .iter()
+            .zip(&c.params)
+            .map(|(v, p)| (0.15 * v.abs()).max(10.0 * p.step))
+            .collect();
+        for _ in 0..COMPASS_EVALUATIONS / (2 * th.len()) {
+            let mut moved = false;
+            for k in 0..th.len() {
+                for sign in [1.0, -1.0] {
+                    let mut t = th.clone();
+                    t[k] = (t[k] + sign * step[k]).clamp(c.params[k].lower, c.params[k].upper);
+                    let xt = cost(&t);
+                    if xt < x {
+                        (x, th) = (xt, t);
+                        moved = true;
+                        break;
+                    }
+                }
+            }
+            if !moved {
+                if step.iter().zip(&c.params).all(|(s, p)| *s <= 2.0 * p.step) {
+                    break;
+                }
+                step.iter_mut().for_each(|s| *s *= 0.5);
+            }
+        }
+        refined.push((x, th));
+    }
+    refined.sort_by(|a, b| a.0.total_cmp(&b.0));
+    refined
+}
+
+/// Seeds of the global stage refined by compass search (besides the best grid point
+/// of each power), its evaluations per seed, and how many of the fitted candidates
+/// get it (the best ranked rugged ones).
+const GLOBAL_SEEDS: usize = 2;
+const COMPASS_EVALUATIONS: usize = 36;
+const GLOBAL_CANDIDATES: usize = 2;
 
 /// Forward selection when the best single effect `first` does not explain the
 /// residual: every other candidate ranked again on the residual `first` leaves, the
