@@ -189,3 +189,88 @@ fn cli_uncertain_numbers_are_calibration_candidates() {
         assert_error(case, &out, &all);
     }
 }
+
+/// Telemetry-driven inputs (`[[input]]`): a dissipation's power follows the system
+/// current (W = 0.00825 × mA − 0.3), a boundary's temperature a channel in °C; the
+/// driving channels leave the recording (inputs are not fitted); a bad `drives` or a
+/// missing column is refused.
+#[test]
+fn cli_inputs_follow_recording_channels() {
+    use orbitlash::spec::ProfileSpec;
+    // a boundary's temperature, on the reference hinge
+    let text = common::reference_text()
+        + "\n[[input]]\ncolumn = \"bus_c\"\ndrives = \"boundary.bus.temperature_k\"\noffset = 273.15\n";
+    let spec = orbitlash::io::scenario_toml::parse_spec(&text, "in.toml").unwrap();
+    let mut model = orbitlash::spec::model::Model::new(spec).unwrap();
+    let mut rec = orbitlash::io::recording::Recording::from_csv(
+        b"time_s,housing_c,bus_c\n0,20,10\n60,21,\n120,22,12\n",
+        "rec.csv",
+    )
+    .unwrap();
+    let done = model.follow_inputs(&mut rec).unwrap();
+    assert_eq!(done.len(), 1, "{done:?}");
+    assert_eq!(rec.columns, vec!["housing_c".to_string()]);
+    let bus = model
+        .spec()
+        .boundary
+        .iter()
+        .find(|b| b.name == "bus")
+        .unwrap();
+    match &bus.temperature_k {
+        ProfileSpec::Table(t) => {
+            assert_eq!(t.time_s.as_deref(), Some(&[0.0, 120.0][..]));
+            assert_eq!(t.value, vec![283.15, 285.15]);
+        }
+        other => panic!("{other:?}"),
+    }
+    // a missing column
+    let mut rec =
+        orbitlash::io::recording::Recording::from_csv(b"time_s,housing_c\n0,20\n", "r.csv")
+            .unwrap();
+    let e = model.follow_inputs(&mut rec).unwrap_err();
+    assert!(e.contains("no column `bus_c`"), "{e}");
+
+    // FUNcube-1's dissipation from its system current
+    let Some(csv) = shared("data/funcube-1/funcube1_wod_2016-02-04.csv") else {
+        return;
+    };
+    let text = funcube_text().replacen("  \"Tot. System Curr. mA\",\n", "", 1)
+        + "\n[[input]]\ncolumn = \"Tot. System Curr. mA\"\ndrives = \"dissipation.electronics.power_w\"\nscale = 0.00825\noffset = -0.3\n";
+    let dir = tmpdir("inputs");
+    let file = dir.join("fin.toml");
+    std::fs::write(&file, &text).unwrap();
+    let spec = orbitlash::io::scenario_toml::parse_spec(&text, "fin.toml").unwrap();
+    let mut model = orbitlash::spec::model::Model::new(spec).unwrap();
+    let mut rec =
+        orbitlash::io::recording::Recording::read_with(&csv, &model.scenario().recording).unwrap();
+    model.follow_inputs(&mut rec).unwrap();
+    assert_eq!(rec.columns.len(), 8);
+    match &model.spec().dissipation[0].power_w {
+        ProfileSpec::Table(t) => {
+            assert_eq!(t.value.len(), 1166);
+            // the first row: 215 mA
+            assert!((t.value[0] - (0.00825 * 215.0 - 0.3)).abs() < 1e-12);
+        }
+        other => panic!("{other:?}"),
+    }
+    // a bad target, named with its line
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        text.replace(
+            "dissipation.electronics.power_w",
+            "dissipation.electrons.power_w",
+        ),
+    )
+    .unwrap();
+    let out = bin().arg("check").arg(&bad).output().unwrap();
+    assert_error(
+        "bad-input",
+        &out,
+        &[
+            "bad.toml:",
+            "`input[0].drives`",
+            "not a boundary's temperature or a dissipation's power",
+        ],
+    );
+}

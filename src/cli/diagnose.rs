@@ -62,8 +62,14 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
             outs.file(&format!("--out ({name})"), &dir.join(name))?;
         }
     }
+    // Inputs that follow the recording ([[input]]) are set in the model diagnosed.
+    let mut model = loaded.model.clone();
+    let mut followed = Vec::new();
     let rec = match Recording::read_with(&a.recording, &loaded.scenario.recording) {
         Ok(mut r) => {
+            followed = model
+                .follow_inputs(&mut r)
+                .map_err(|m| anyhow::anyhow!(m))?;
             r.name_channels(&loaded.scenario.sensors);
             r
         }
@@ -75,7 +81,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     };
     // The recording against the model (channels, values, time base, the held-out
     // split), before the cost estimate: what cannot be judged is refused first.
-    diagnose::data::Observations::new(&rec, &loaded.scenario, a.holdout_orbits)?;
+    diagnose::data::Observations::new(&rec, model.scenario(), a.holdout_orbits)?;
     if let Some(dir) = &a.out {
         for c in &rec.columns {
             let name = residual_plot_name(c);
@@ -86,7 +92,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     super::estimate::diagnose(
         &loaded.scenario,
         span_s,
-        diagnose::expected_runs(&loaded.model),
+        diagnose::expected_runs(&model),
         a.force,
     )?;
     let opts = Options {
@@ -113,8 +119,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
             b.set_position(done as u64);
         }
     };
-    let d = diagnose::diagnose(&loaded.model, &rec, &opts, &progress)
+    let mut d = diagnose::diagnose(&model, &rec, &opts, &progress)
         .with_context(|| format!("diagnose {} against {}", rec.file, loaded.file))?;
+    for f in followed.iter().rev() {
+        d.notes.insert(0, format!("input: {f}"));
+    }
     if let Some(b) = bar {
         b.finish_and_clear();
     }

@@ -70,6 +70,9 @@ pub struct ScenarioSpec {
     /// `diagnose` (as are the `[[dispersion]]` entries).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub uncertain: Vec<UncertainSpec>,
+    /// Inputs that follow a recording channel instead of the model (`diagnose`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub input: Vec<InputSpec>,
 }
 
 /// One dispersed number: a key path and its distribution (the `dispersion` module
@@ -418,6 +421,22 @@ pub struct AttitudeSpec {
     /// Spinning: faces see the mean over a turn instead of the instant.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spin_averaged: Option<bool>,
+}
+
+/// `[[input]]`: a boundary's temperature or a dissipation's power that follows a
+/// recording channel (value = `scale` × reading + `offset`, in the key's unit) where
+/// operations prefer telemetry to a model.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct InputSpec {
+    /// The recording's column, as the file spells it.
+    pub column: String,
+    /// `boundary.<name>.temperature_k` or `dissipation.<name>.power_w`.
+    pub drives: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<f64>,
 }
 
 /// `[[uncertain]]`: a number (by key path) the user is unsure of, between `min` and

@@ -5,6 +5,7 @@
 //! everything that depends on the changed value (a view factor on the altitude, a run
 //! length in orbits on the period, a tooth thickness on its thinning) follows.
 
+use crate::recording::Recording;
 use crate::spec::keys::{ElementKeys, element_keys};
 use crate::spec::params::{self, Param, ParamError};
 use crate::spec::quantity::{self as q, Quantity};
@@ -62,7 +63,91 @@ impl Model {
             shape: new_shape(),
         };
         model.check_uncertain()?;
+        model.check_inputs()?;
         Ok(model)
+    }
+
+    /// Each `[[input]]` drives a boundary's temperature or a dissipation's power that
+    /// the scenario has, with finite scale and offset.
+    fn check_inputs(&self) -> Result<(), SpecError> {
+        use crate::spec::keys::KeyPath;
+        for (i, inp) in self.spec.input.iter().enumerate() {
+            let at = KeyPath::new("input").at(i);
+            if inp.column.trim().is_empty() {
+                return Err(SpecError {
+                    key: at.key("column"),
+                    message: "must not be empty".into(),
+                });
+            }
+            if input_target(&self.spec, &inp.drives).is_none() {
+                return Err(SpecError {
+                    key: at.key("drives"),
+                    message: format!(
+                        "`{}` is not a boundary's temperature or a dissipation's power of this scenario (`boundary.<name>.temperature_k`, `dissipation.<name>.power_w`)",
+                        inp.drives
+                    ),
+                });
+            }
+            for (key, v) in [("scale", inp.scale), ("offset", inp.offset)] {
+                if v.is_some_and(|v| !v.is_finite()) {
+                    return Err(SpecError {
+                        key: at.key(key),
+                        message: "must be a finite number".into(),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Makes every `[[input]]` follow its channel of `rec`: the driven profile becomes
+    /// the table of `scale` × reading + `offset` at the rows that have a reading
+    /// (linear between them), and the channel leaves the recording (it is an input, not
+    /// a measurement to fit). Returns what it did, a line per input.
+    pub fn follow_inputs(&mut self, rec: &mut Recording) -> Result<Vec<String>, String> {
+        let mut done = Vec::new();
+        for inp in self.spec.input.clone() {
+            let Some(k) = rec.columns.iter().position(|c| *c == inp.column) else {
+                return Err(format!(
+                    "{}: no column `{}`, which [[input]] drives `{}` from",
+                    rec.file, inp.column, inp.drives
+                ));
+            };
+            let (scale, offset) = (inp.scale.unwrap_or(1.0), inp.offset.unwrap_or(0.0));
+            let (mut time_s, mut value) = (Vec::new(), Vec::new());
+            for (t, v) in rec.time_s.iter().zip(&rec.values[k]) {
+                if let Some(v) = v {
+                    time_s.push(*t);
+                    value.push(scale * v + offset);
+                }
+            }
+            if value.is_empty() {
+                return Err(format!(
+                    "{}: column `{}` has no readings",
+                    rec.file, inp.column
+                ));
+            }
+            let n = value.len();
+            let table = ProfileSpec::Table(crate::spec::TableSpec {
+                time_s: Some(time_s),
+                time_days: None,
+                value,
+            });
+            let drives = inp.drives.clone();
+            self.modify(|s| {
+                if let Some(p) = input_target_mut(s, &drives) {
+                    *p = table;
+                }
+            })
+            .map_err(|e| format!("[[input]] `{}` from `{}`: {e}", inp.drives, inp.column))?;
+            rec.columns.remove(k);
+            rec.values.remove(k);
+            done.push(format!(
+                "`{}` follows `{}` ({n} readings × {scale} + {offset})",
+                inp.drives, inp.column
+            ));
+        }
+        Ok(done)
     }
 
     /// Each `[[uncertain]]` names a number of the model, with finite bounds min < max
@@ -662,4 +747,53 @@ fn area_product(
             x.expect("the fraction is given with the area") * a.expect("checked")
         }
     })
+}
+
+/// The profile an `[[input]]`'s `drives` names, if the scenario has it.
+fn input_target<'s>(spec: &'s ScenarioSpec, drives: &str) -> Option<&'s ProfileSpec> {
+    let parts = crate::spec::keys::parse_path(drives).ok()?;
+    let key = |i: usize| match parts.get(i) {
+        Some(crate::spec::keys::Part::Key(k)) => Some(k.as_str()),
+        _ => None,
+    };
+    match (key(0)?, key(2)?, parts.len()) {
+        ("boundary", "temperature_k", 3) => spec
+            .boundary
+            .iter()
+            .find(|b| Some(b.name.as_str()) == key(1))
+            .map(|b| &b.temperature_k),
+        ("dissipation", "power_w", 3) => {
+            let keys = crate::spec::keys::element_keys(spec);
+            let i = keys
+                .dissipation
+                .iter()
+                .position(|k| Some(k.as_str()) == key(1))?;
+            spec.dissipation.get(i).map(|d| &d.power_w)
+        }
+        _ => None,
+    }
+}
+
+fn input_target_mut<'s>(spec: &'s mut ScenarioSpec, drives: &str) -> Option<&'s mut ProfileSpec> {
+    let parts = crate::spec::keys::parse_path(drives).ok()?;
+    let key = |i: usize| match parts.get(i) {
+        Some(crate::spec::keys::Part::Key(k)) => Some(k.clone()),
+        _ => None,
+    };
+    match (key(0)?.as_str(), key(2)?.as_str()) {
+        ("boundary", "temperature_k") => {
+            let name = key(1)?;
+            spec.boundary
+                .iter_mut()
+                .find(|b| b.name == name)
+                .map(|b| &mut b.temperature_k)
+        }
+        ("dissipation", "power_w") => {
+            let keys = crate::spec::keys::element_keys(spec);
+            let name = key(1)?;
+            let i = keys.dissipation.iter().position(|k| *k == name)?;
+            spec.dissipation.get_mut(i).map(|d| &mut d.power_w)
+        }
+        _ => None,
+    }
 }
