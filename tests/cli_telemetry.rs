@@ -274,3 +274,93 @@ fn cli_inputs_follow_recording_channels() {
         ],
     );
 }
+
+/// The eclipse flag from a channel (`drives = "sunlit"`, dark `below` a reading): each
+/// change of state halfway between the readings around it; across a gap of more than
+/// ten minutes the last whole eclipse repeats every orbit; the run then steps on those
+/// edges instead of the shadow's. Refused without `below`, with `below` elsewhere, and
+/// on a circular orbit.
+#[test]
+fn cli_the_eclipse_flag_follows_a_channel() {
+    use orbitlash::orbit::EnvironmentModel;
+    let text = funcube_text().replacen("  \"Tot. Photo Curr. mA\",\n", "", 1)
+        + "\n[[input]]\ncolumn = \"Tot. Photo Curr. mA\"\ndrives = \"sunlit\"\nbelow = 20.0\n";
+    let spec = orbitlash::io::scenario_toml::parse_spec(&text, "sun.toml").unwrap();
+    let mut model = orbitlash::spec::model::Model::new(spec).unwrap();
+    let period = model.scenario().thermal.environment.mean_period_s();
+    // lit, dark from 150 s (between 120 and 180) to 330 s, then a gap of two hours
+    // (distinct readings: a row repeating the one before would be fill)
+    let mut csv = String::from("UTC,Tot. Photo Curr. mA\n");
+    for (t, pc) in [
+        (60, 300),
+        (120, 301),
+        (180, 0),
+        (240, 1),
+        (300, 2),
+        (360, 310),
+        (7560, 300),
+    ] {
+        csv += &format!(
+            "2016-02-04T{:02}:{:02}:{:02}Z,{pc}\n",
+            t / 3600,
+            t / 60 % 60,
+            t % 60
+        );
+    }
+    let format = orbitlash::recording::RecordingFormat {
+        time_column: "UTC".into(),
+        ignore_columns: Vec::new(),
+        ..model.scenario().recording.clone()
+    };
+    let mut rec =
+        orbitlash::io::recording::Recording::from_csv_with(csv.as_bytes(), "pc.csv", &format)
+            .unwrap();
+    model.follow_inputs(&mut rec).unwrap();
+    assert!(rec.columns.is_empty());
+    let w = model.spec().orbit.eclipses_s.clone().unwrap();
+    assert_eq!(w[0], vec![150.0, 330.0]);
+    assert_eq!(w[1], vec![150.0 + period, 330.0 + period], "{w:?}");
+    assert_eq!(w.len(), 2, "{w:?}");
+    let env = &model.scenario().thermal.environment;
+    assert!(env.sunlit(149.0) && !env.sunlit(150.0) && !env.sunlit(329.9) && env.sunlit(330.0));
+    assert_eq!(env.next_shadow_crossing(0.0, 1e6), Some((150.0, true)));
+    assert_eq!(env.next_shadow_crossing(150.0, 1e6), Some((330.0, false)));
+
+    let dir = tmpdir("sunlit-bad");
+    for (case, text, needles) in [
+        (
+            "no-below",
+            text.replace("below = 20.0\n", ""),
+            &["`input[0].below`", "needs `below`"][..],
+        ),
+        (
+            "below-elsewhere",
+            funcube_text()
+                + "\n[[input]]\ncolumn = \"x\"\ndrives = \"dissipation.electronics.power_w\"\nbelow = 1.0\n",
+            &["`input[0].below`", "sunlit\" only"][..],
+        ),
+        (
+            "windows",
+            funcube_text().replacen(
+                "shadow = \"conical\"",
+                "shadow = \"conical\"\neclipses_s = [[100.0, 50.0]]",
+                1,
+            ),
+            &["`orbit.eclipses_s[0]`", "entry before its exit"][..],
+        ),
+    ] {
+        let file = dir.join(format!("{case}.toml"));
+        std::fs::write(&file, text).unwrap();
+        let out = bin().arg("check").arg(&file).output().unwrap();
+        let name = format!("{case}.toml:");
+        let mut all = needles.to_vec();
+        all.push(&name);
+        assert_error(case, &out, &all);
+    }
+    let circular =
+        common::reference_text().replacen("[orbit]", "[orbit]\neclipses_s = [[0.0, 10.0]]", 1);
+    let file = dir.join("circular.toml");
+    std::fs::write(&file, circular).unwrap();
+    let out = bin().arg("check").arg(&file).output().unwrap();
+    assert_error("circular", &out, &["`orbit.eclipses_s`"]);
+}

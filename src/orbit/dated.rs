@@ -64,7 +64,14 @@ pub struct DatedEnvironment {
     pub space_sink_k: f64,
     /// How long the run lasts, s: the span `beta_range_rad` reports on.
     pub horizon_s: f64,
+    /// Eclipses as given (`[orbit] eclipses_s`, or a telemetry channel through
+    /// `[[input]] drives = "sunlit"`): [entry, exit) windows, increasing, in place of
+    /// the shadow's geometry (sunlit outside them at the full flux, dark inside).
+    pub eclipses_s: Option<GivenEclipses>,
 }
+
+/// Eclipse windows [entry, exit), s, increasing.
+pub type GivenEclipses = std::sync::Arc<[(f64, f64)]>;
 
 /// The geometry at one instant.
 #[derive(Debug, Clone, Copy)]
@@ -465,10 +472,36 @@ impl DatedEnvironment {
     }
 }
 
+impl DatedEnvironment {
+    /// With given eclipses: whether `t_s` is inside one.
+    fn in_given_eclipse(w: &[(f64, f64)], t_s: f64) -> bool {
+        let k = w.partition_point(|&(a, _)| a <= t_s);
+        k > 0 && t_s < w[k - 1].1
+    }
+
+    /// With given eclipses: the next entry or exit after `t_s`, before `until_s`.
+    fn next_given_edge(w: &[(f64, f64)], t_s: f64, until_s: f64) -> Option<(f64, bool)> {
+        w.iter()
+            .flat_map(|&(a, b)| [(a, true), (b, false)])
+            .find(|&(t, _)| t > t_s)
+            .filter(|&(t, _)| t < until_s)
+    }
+}
+
 impl EnvironmentModel for DatedEnvironment {
     fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
         let g = self.geometry(t_s);
         let flux = self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2);
+        if self.eclipses_s.is_some() {
+            return EnvState {
+                t_s,
+                orbit_angle_rad: g.theta_rad,
+                beta_rad: g.beta_rad,
+                solar_flux_w_per_m2: flux,
+                sunlit,
+                radius_m: norm(g.r),
+            };
+        }
         EnvState {
             t_s,
             orbit_angle_rad: g.theta_rad,
@@ -487,10 +520,16 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     fn sunlit(&self, t_s: f64) -> bool {
+        if let Some(w) = &self.eclipses_s {
+            return !Self::in_given_eclipse(w, t_s);
+        }
         self.geometry(t_s).umbra >= 0.0
     }
 
     fn next_shadow_crossing(&self, t_s: f64, until_s: f64) -> Option<(f64, bool)> {
+        if let Some(w) = &self.eclipses_s {
+            return Self::next_given_edge(w, t_s, until_s);
+        }
         self.next_shadow_edge(t_s, until_s, &|t| self.shadow_functions(t).0)
     }
 
@@ -512,6 +551,7 @@ impl EnvironmentModel for DatedEnvironment {
             }
         }
         if self.shadow == Shadow::Conical
+            && self.eclipses_s.is_none()
             && let Some((t, _)) = self.next_shadow_edge(t_s, until, &|t| self.shadow_functions(t).1)
         {
             next = next.min(t);
@@ -622,6 +662,9 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     fn sun_fraction(&self, t_s: f64) -> f64 {
+        if self.eclipses_s.is_some() {
+            return if self.sunlit(t_s) { 1.0 } else { 0.0 };
+        }
         let g = self.geometry(t_s);
         if g.umbra < 0.0 { 0.0 } else { g.sun_fraction }
     }

@@ -419,6 +419,32 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     })
 }
 
+/// `[orbit] eclipses_s`: [entry, exit] windows, finite, ≥ 0, each entry before its exit
+/// and before the next entry.
+fn given_eclipses(
+    cx: &Cx,
+    op: &KeyPath,
+    w: Option<&[Vec<f64>]>,
+) -> Result<Option<crate::orbit::dated::GivenEclipses>, SpecError> {
+    let Some(w) = w else { return Ok(None) };
+    let p = op.key("eclipses_s");
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for (i, pair) in w.iter().enumerate() {
+        let [a, b] = pair[..] else {
+            return Err(cx.err(&p.at(i), "an eclipse is [entry, exit] in s"));
+        };
+        let after = out.last().map_or(0.0, |l| l.1);
+        if !(a.is_finite() && b.is_finite() && a >= after && b > a) {
+            return Err(cx.err(
+                &p.at(i),
+                format!("[{a}, {b}]: windows must be finite, from 0 on, each entry before its exit and after the last exit"),
+            ));
+        }
+        out.push((a, b));
+    }
+    Ok(Some(out.into()))
+}
+
 /// `[recording]`: the layout of this spacecraft's recordings. UTC time needs a dated
 /// scenario (its `start_utc` is the recording's t = 0).
 fn recording_format(
@@ -1215,6 +1241,7 @@ fn environment(
     for (given, key) in [
         (orbit_spec.start_utc.is_some(), "start_utc"),
         (orbit_spec.start_offset_s.is_some(), "start_offset_s"),
+        (orbit_spec.eclipses_s.is_some(), "eclipses_s"),
         (orbit_spec.shadow.is_some(), "shadow"),
     ] {
         if given {
@@ -1424,6 +1451,7 @@ fn dated_environment(
         earth_ir_w_per_m2,
         space_sink_k,
         horizon_s: 0.0,
+        eclipses_s: given_eclipses(cx, &op, orbit_spec.eclipses_s.as_deref())?,
     };
     let period_s = environment.mean_period_s();
     if !(MIN_PERIOD_S..=MAX_PERIOD_S).contains(&period_s) {

@@ -244,6 +244,11 @@ pub struct OrbitSpec {
     /// … with a `cylindrical` (default) or `conical` Earth shadow.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shadow: Option<String>,
+    /// Eclipses given instead of the shadow's geometry: [entry, exit] windows in s
+    /// (a TLE orbit only; `diagnose` sets them from a telemetry channel through
+    /// `[[input]] drives = "sunlit"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eclipses_s: Option<Vec<Vec<f64>>>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -431,12 +436,15 @@ pub struct AttitudeSpec {
 pub struct InputSpec {
     /// The recording's column, as the file spells it.
     pub column: String,
-    /// `boundary.<name>.temperature_k` or `dissipation.<name>.power_w`.
+    /// `boundary.<name>.temperature_k`, `dissipation.<name>.power_w` or `sunlit`.
     pub drives: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub scale: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub offset: Option<f64>,
+    /// `drives = "sunlit"`: the spacecraft is in eclipse where the reading is below this.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub below: Option<f64>,
 }
 
 /// `[[uncertain]]`: a number (by key path) the user is unsure of, between `min` and

@@ -79,7 +79,26 @@ impl Model {
                     message: "must not be empty".into(),
                 });
             }
-            if input_target(&self.spec, &inp.drives).is_none() {
+            if inp.drives == "sunlit" {
+                if self.spec.orbit.tle.is_none() {
+                    return Err(SpecError {
+                        key: at.key("drives"),
+                        message: "\"sunlit\" needs a dated scenario ([orbit] tle and start_utc)"
+                            .into(),
+                    });
+                }
+                if !inp.below.is_some_and(f64::is_finite) {
+                    return Err(SpecError {
+                        key: at.key("below"),
+                        message: "\"sunlit\" needs `below`: the reading under which the spacecraft is in eclipse".into(),
+                    });
+                }
+            } else if inp.below.is_some() {
+                return Err(SpecError {
+                    key: at.key("below"),
+                    message: "applies to drives = \"sunlit\" only".into(),
+                });
+            } else if input_target(&self.spec, &inp.drives).is_none() {
                 return Err(SpecError {
                     key: at.key("drives"),
                     message: format!(
@@ -128,6 +147,23 @@ impl Model {
                 ));
             }
             let n = value.len();
+            if inp.drives == "sunlit" {
+                let below = inp.below.unwrap_or(f64::NAN);
+                let period = crate::orbit::EnvironmentModel::mean_period_s(
+                    &self.scenario.thermal.environment,
+                );
+                let windows = eclipse_windows(&time_s, &value, below, period);
+                let count = windows.len();
+                self.modify(|s| s.orbit.eclipses_s = Some(windows))
+                    .map_err(|e| format!("[[input]] sunlit from `{}`: {e}", inp.column))?;
+                rec.columns.remove(k);
+                rec.values.remove(k);
+                done.push(format!(
+                    "eclipses follow `{}` below {below} ({n} readings, {count} eclipses)",
+                    inp.column
+                ));
+                continue;
+            }
             let table = ProfileSpec::Table(crate::spec::TableSpec {
                 time_s: Some(time_s),
                 time_days: None,
@@ -796,4 +832,69 @@ fn input_target_mut<'s>(spec: &'s mut ScenarioSpec, drives: &str) -> Option<&'s 
         }
         _ => None,
     }
+}
+
+/// Longest step between two readings that an eclipse edge is placed inside, s; a
+/// longer gap (a ground segment's fill, no pass) is bridged from the orbit's period.
+pub const INPUT_MAX_GAP_S: f64 = 600.0;
+
+/// Eclipse windows from readings `value` at `time_s` (dark below `below`): each change
+/// of state halfway between the two readings around it. Across a gap longer than
+/// [`INPUT_MAX_GAP_S`] the readings say nothing, and the last whole eclipse before it
+/// is repeated every `period_s`. A recording that starts (ends) dark starts (ends) an
+/// eclipse at its first (last) reading.
+fn eclipse_windows(time_s: &[f64], value: &[f64], below: f64, period_s: f64) -> Vec<Vec<f64>> {
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut entry: Option<f64> = None;
+    let mut template: Option<(f64, f64)> = None;
+    let mut last: Option<(f64, bool)> = None;
+    for (&t, &v) in time_s.iter().zip(value) {
+        let dark = v < below;
+        match last {
+            None if dark => {
+                entry = Some(if t <= INPUT_MAX_GAP_S { 0.0 } else { t });
+            }
+            None => {}
+            Some((t0, _)) if t - t0 > INPUT_MAX_GAP_S => {
+                // close what is open at the gap's start, bridge the gap, reopen after
+                if let Some(a) = entry.take() {
+                    out.push((a, t0));
+                }
+                if let Some((a, b)) = template {
+                    let mut k = 1.0;
+                    while a + k * period_s < t {
+                        out.push((a + k * period_s, b + k * period_s));
+                        k += 1.0;
+                    }
+                }
+                if dark {
+                    entry = Some(t);
+                }
+            }
+            Some((t0, d0)) if d0 != dark => {
+                let mid = 0.5 * (t0 + t);
+                if dark {
+                    entry = Some(mid);
+                } else if let Some(a) = entry.take() {
+                    out.push((a, mid));
+                    template = Some((a, mid));
+                }
+            }
+            _ => {}
+        }
+        last = Some((t, dark));
+    }
+    if let (Some(a), Some((t, _))) = (entry, last) {
+        out.push((a, t));
+    }
+    // in order, overlaps (a bridged eclipse meeting a measured one) merged
+    out.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let mut merged: Vec<(f64, f64)> = Vec::new();
+    for (a, b) in out {
+        match merged.last_mut() {
+            Some(l) if a <= l.1 => l.1 = l.1.max(b),
+            _ => merged.push((a, b)),
+        }
+    }
+    merged.into_iter().map(|(a, b)| vec![a, b]).collect()
 }
