@@ -2,6 +2,7 @@
 //! each row came from (for messages). Reading files into one is `io::recording`'s job;
 //! `diagnose` and the sensors work on this type only.
 
+use crate::spec::model::Model;
 use crate::spec::scenario::Sensor;
 
 /// A recording: `values[k][j]` is channel `columns[k]` at `time_s[j]` (None: missing).
@@ -41,14 +42,42 @@ pub enum RecordingError {
     File { file: String, message: String },
 }
 
-/// The column every recording gives its time in.
-pub const TIME_COLUMN: &str = "time_s";
-
 impl Recording {
     /// The values of channel `name`.
     pub fn channel(&self, name: &str) -> Option<&[Option<f64>]> {
         let k = self.columns.iter().position(|c| c == name)?;
         Some(&self.values[k])
+    }
+
+    /// Takes each of `model`'s `[[input]]` channels out of the recording (an input, not
+    /// a measurement to fit) and makes the model follow its readings
+    /// ([`Model::follow_input`]). Returns what it did, a line per input.
+    pub fn feed_inputs(&mut self, model: &mut Model) -> Result<Vec<String>, String> {
+        let mut done = Vec::new();
+        for (i, inp) in model.spec().input.clone().iter().enumerate() {
+            let Some(k) = self.columns.iter().position(|c| *c == inp.column) else {
+                return Err(format!(
+                    "{}: no column `{}`, which [[input]] drives `{}` from",
+                    self.file, inp.column, inp.drives
+                ));
+            };
+            let readings: Vec<(f64, f64)> = self
+                .time_s
+                .iter()
+                .zip(&self.values[k])
+                .filter_map(|(t, v)| v.map(|v| (*t, v)))
+                .collect();
+            if readings.is_empty() {
+                return Err(format!(
+                    "{}: column `{}` has no readings",
+                    self.file, inp.column
+                ));
+            }
+            done.push(model.follow_input(i, &readings)?);
+            self.columns.remove(k);
+            self.values.remove(k);
+        }
+        Ok(done)
     }
 
     /// Renames the columns the scenario's sensors read to those sensors' channel names
@@ -87,54 +116,4 @@ impl Recording {
     }
 }
 
-/// How a scenario's recordings are laid out (`[recording]`): which column holds the
-/// time and how, which columns are not channels, and what repeated rows and repeated
-/// time stamps mean. The default is the layout of `reference-mechanism.md` §4.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RecordingFormat {
-    /// The time column's name.
-    pub time_column: String,
-    pub time: TimeFormat,
-    /// Columns that are neither the time nor a sensor (read, kept out of the channels).
-    pub ignore_columns: Vec<String>,
-    /// Rows whose cells all repeat the previous row's are a ground segment's fill, not
-    /// measurements: their cells are dropped (reported in [`Recording::fill_rows`]).
-    pub repeated_rows_are_fill: bool,
-    pub duplicate_times: DuplicateTimes,
-}
-
-/// How a recording gives its time.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum TimeFormat {
-    /// Seconds since t = 0 of the scenario.
-    Seconds,
-    /// UTC date-times (`2016-02-04 00:01:00.0`, or RFC 3339), counted from `origin`
-    /// (the scenario's `start_utc`).
-    Utc { origin: sgp4::chrono::NaiveDateTime },
-}
-
-/// What two rows with the same time stamp mean when their cells differ (equal rows are
-/// always merged).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum DuplicateTimes {
-    /// An error naming both lines.
-    Refuse,
-    /// Two readings within one time stamp: their mean.
-    Mean,
-}
-
-impl DuplicateTimes {
-    pub const NAMES: [&'static str; 2] = ["refuse", "mean"];
-}
-
-impl Default for RecordingFormat {
-    fn default() -> Self {
-        RecordingFormat {
-            time_column: TIME_COLUMN.to_string(),
-            time: TimeFormat::Seconds,
-            ignore_columns: Vec::new(),
-            repeated_rows_are_fill: false,
-            duplicate_times: DuplicateTimes::Refuse,
-        }
-    }
-}
+pub use crate::spec::scenario::{DuplicateTimes, RecordingFormat, TIME_COLUMN, TimeFormat};

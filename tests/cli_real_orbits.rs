@@ -6,7 +6,7 @@
 use std::path::Path;
 
 mod common;
-use common::{assert_error, bin, tmpdir};
+use common::{assert_check_refuses, assert_error, bin, tmpdir};
 
 fn tle_text() -> String {
     std::fs::read_to_string(
@@ -438,13 +438,7 @@ fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
     ];
     for (case, old, new, needles) in cases {
         assert!(text.contains(old), "{case}");
-        let file = dir.join(format!("{case}.toml"));
-        std::fs::write(&file, text.replacen(old, new, 1)).unwrap();
-        let out = bin().arg("check").arg(&file).output().unwrap();
-        let name = format!("{case}.toml:");
-        let mut all = needles.to_vec();
-        all.push(&name);
-        assert_error(case, &out, &all);
+        assert_check_refuses(&dir, case, &text.replacen(old, new, 1), needles);
     }
 }
 

@@ -3,7 +3,7 @@
 //! day of flight telemetry reads with its fill and repeated stamps reported.
 
 mod common;
-use common::{assert_error, bin, shared, tmpdir};
+use common::{assert_check_refuses, assert_error, bin, shared, tmpdir};
 use std::path::Path;
 
 fn funcube_text() -> String {
@@ -61,13 +61,7 @@ fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
     ];
     for (case, old, new, needles) in cases {
         assert!(text.contains(old), "{case}: `{old}` not in the scenario");
-        let file = dir.join(format!("{case}.toml"));
-        std::fs::write(&file, text.replacen(old, new, 1)).unwrap();
-        let out = bin().arg("check").arg(&file).output().unwrap();
-        let name = format!("{case}.toml:");
-        let mut all = needles.to_vec();
-        all.push(&name);
-        assert_error(case, &out, &all);
+        assert_check_refuses(&dir, case, &text.replacen(old, new, 1), needles);
     }
     // UTC time needs a dated scenario
     let reference = common::reference_text() + "\n[recording]\ntime_format = \"utc\"\n";
@@ -180,13 +174,12 @@ fn cli_uncertain_numbers_are_calibration_candidates() {
             &["`uncertain[0].min`", "cannot be -1"][..],
         ),
     ] {
-        let file = dir.join(format!("{case}.toml"));
-        std::fs::write(&file, funcube_text() + "\n[[uncertain]]\n" + block + "\n").unwrap();
-        let out = bin().arg("check").arg(&file).output().unwrap();
-        let name = format!("{case}.toml:");
-        let mut all = needles.to_vec();
-        all.push(&name);
-        assert_error(case, &out, &all);
+        assert_check_refuses(
+            &dir,
+            case,
+            &(funcube_text() + "\n[[uncertain]]\n" + block + "\n"),
+            needles,
+        );
     }
 }
 
@@ -207,7 +200,7 @@ fn cli_inputs_follow_recording_channels() {
         "rec.csv",
     )
     .unwrap();
-    let done = model.follow_inputs(&mut rec).unwrap();
+    let done = rec.feed_inputs(&mut model).unwrap();
     assert_eq!(done.len(), 1, "{done:?}");
     assert_eq!(rec.columns, vec!["housing_c".to_string()]);
     let bus = model
@@ -227,7 +220,7 @@ fn cli_inputs_follow_recording_channels() {
     let mut rec =
         orbitlash::io::recording::Recording::from_csv(b"time_s,housing_c\n0,20\n", "r.csv")
             .unwrap();
-    let e = model.follow_inputs(&mut rec).unwrap_err();
+    let e = rec.feed_inputs(&mut model).unwrap_err();
     assert!(e.contains("no column `bus_c`"), "{e}");
 
     // FUNcube-1's dissipation from its system current
@@ -243,7 +236,7 @@ fn cli_inputs_follow_recording_channels() {
     let mut model = orbitlash::spec::model::Model::new(spec).unwrap();
     let mut rec =
         orbitlash::io::recording::Recording::read_with(&csv, &model.scenario().recording).unwrap();
-    model.follow_inputs(&mut rec).unwrap();
+    rec.feed_inputs(&mut model).unwrap();
     assert_eq!(rec.columns.len(), 8);
     match &model.spec().dissipation[0].power_w {
         ProfileSpec::Table(t) => {
@@ -315,7 +308,7 @@ fn cli_the_eclipse_flag_follows_a_channel() {
     let mut rec =
         orbitlash::io::recording::Recording::from_csv_with(csv.as_bytes(), "pc.csv", &format)
             .unwrap();
-    model.follow_inputs(&mut rec).unwrap();
+    rec.feed_inputs(&mut model).unwrap();
     assert!(rec.columns.is_empty());
     let w = model.spec().orbit.eclipses_s.clone().unwrap();
     assert_eq!(w[0], vec![150.0, 330.0]);
@@ -349,13 +342,7 @@ fn cli_the_eclipse_flag_follows_a_channel() {
             &["`orbit.eclipses_s[0]`", "entry before its exit"][..],
         ),
     ] {
-        let file = dir.join(format!("{case}.toml"));
-        std::fs::write(&file, text).unwrap();
-        let out = bin().arg("check").arg(&file).output().unwrap();
-        let name = format!("{case}.toml:");
-        let mut all = needles.to_vec();
-        all.push(&name);
-        assert_error(case, &out, &all);
+        assert_check_refuses(&dir, case, &text, needles);
     }
     let circular =
         common::reference_text().replacen("[orbit]", "[orbit]\neclipses_s = [[0.0, 10.0]]", 1);

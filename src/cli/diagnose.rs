@@ -67,9 +67,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     let mut followed = Vec::new();
     let rec = match Recording::read_with(&a.recording, &loaded.scenario.recording) {
         Ok(mut r) => {
-            followed = model
-                .follow_inputs(&mut r)
-                .map_err(|m| anyhow::anyhow!(m))?;
+            followed = r.feed_inputs(&mut model).map_err(|m| anyhow::anyhow!(m))?;
             r.name_channels(&loaded.scenario.sensors);
             r
         }

@@ -12,7 +12,6 @@ use clap::Args;
 use orbitlash::io::atomic::{AtomicFile, OutputPolicy};
 use orbitlash::orbit::faces::{Face, incident};
 use orbitlash::orbit::{Environment, EnvironmentModel};
-use orbitlash::thermal::LoadKind;
 
 use super::table::{self, Align};
 use super::{load_with, orbits_arg, print_out};
@@ -71,12 +70,8 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     // The faces (load name, geometry) and their nodes' names, in the scenario's order.
     let net = &sc.thermal.network;
     let faces: Vec<((String, Face), String)> = net
-        .loads
-        .iter()
-        .filter_map(|l| match &l.kind {
-            LoadKind::Face(f) => Some(((l.name.clone(), *f), net.nodes[l.node].name.clone())),
-            _ => None,
-        })
+        .face_loads()
+        .map(|(l, f)| ((l.name.clone(), *f), net.nodes[l.node].name.clone()))
         .collect();
     let start = env.start_utc();
     let utc = |t: f64| {

@@ -840,90 +840,84 @@ impl<'a> Generator<'a> {
     /// Calibrations, in the order of the model's parameters: a sun load's
     /// absorptivity scaled, a conductor's or radiative coupling's conductance scaled.
     fn calibrations(&self) -> Vec<Candidate> {
-        let mut out = Vec::new();
-        // Thermal masses, and the faces' optical properties (within 0 … 1).
-        for p in self.model.params() {
-            if p.value.is_nan() || p.value <= 0.0 {
-                continue;
-            }
-            let (effect, target, param, starts) =
-                if p.path.starts_with("node.") && p.path.ends_with(".capacitance_j_per_k") {
-                    (
-                        Effect::CapacitanceScale,
-                        Target::Node(element_of(&p.path)),
-                        ParamDef::new("scale", 0.2, 5.0, 0.005),
-                        vec![0.5, 0.8, 1.25, 2.0],
-                    )
-                } else if p.path.starts_with("face.") && p.path.ends_with(".emissivity") {
-                    let upper = 1.0 / p.value;
-                    (
-                        Effect::EmissivityScale,
-                        Target::Face(element_of(&p.path)),
-                        ParamDef::new("scale", 0.05, upper, 0.003),
-                        vec![0.6, 0.85, 1.1f64.min(upper), 1.25f64.min(upper)],
-                    )
-                } else if p.path.starts_with("face.") && p.path.ends_with(".absorptivity") {
-                    let upper = 1.0 / p.value;
-                    (
-                        Effect::AbsorptivityScale,
-                        Target::Face(element_of(&p.path)),
-                        ParamDef::new("scale", 0.05, upper, 0.003),
-                        vec![0.8, 0.9, 1.1f64.min(upper), 1.25f64.min(upper)],
-                    )
-                } else {
-                    continue;
-                };
-            out.push(Candidate {
-                params: vec![param],
-                setters: vec![Setter::scaled(p.path.clone(), 0, p.value)],
-                starts: starts.into_iter().map(|s| vec![s]).collect(),
-                null: Some(vec![1.0]),
-                ..Candidate::new(effect, target, None)
-            });
-        }
+        // Thermal masses and faces, the declared numbers, then loads and links (the
+        // order breaks ties in the ranking).
+        let params = self.model.params();
+        let mut out: Vec<Candidate> = params.iter().filter_map(|p| scale_of(p, true)).collect();
         out.extend(self.uncertain());
-        for p in self.model.params() {
-            let is_load = p.path.starts_with("sun.")
-                && (p.path.ends_with(".absorptivity") || p.path.ends_with(".absorptivity_area_m2"));
-            let is_conductor = (p.path.starts_with("conductor.")
-                && p.path.ends_with(".conductance_w_per_k"))
-                || (p.path.starts_with("radiation.")
-                    && (p.path.ends_with(".emissivity_area_m2")
-                        || p.path.ends_with(".emissivity")));
-            if !(is_load || is_conductor) || p.value.is_nan() || p.value <= 0.0 {
-                continue;
-            }
-            let name = element_of(&p.path);
-            let upper = if p.path.ends_with(".absorptivity") || p.path.ends_with(".emissivity") {
-                1.0 / p.value
-            } else {
-                20.0
-            };
-            let (effect, target, param, starts) = if is_load {
-                (
-                    Effect::AbsorptivityScale,
-                    Target::Load(name),
-                    ParamDef::new("scale", 0.05, upper, 0.003),
-                    vec![0.8, 0.9, 1.1f64.min(upper), 1.25f64.min(upper)],
-                )
-            } else {
-                (
-                    Effect::ConductanceScale,
-                    Target::Conductor(name),
-                    ParamDef::new("scale", 0.02, upper, 0.01),
-                    vec![0.3, 0.6, 1.5f64.min(upper), 3.0f64.min(upper)],
-                )
-            };
-            out.push(Candidate {
-                params: vec![param],
-                setters: vec![Setter::scaled(p.path.clone(), 0, p.value)],
-                starts: starts.into_iter().map(|s| vec![s]).collect(),
-                null: Some(vec![1.0]),
-                ..Candidate::new(effect, target, None)
-            });
-        }
+        out.extend(params.iter().filter_map(|p| scale_of(p, false)));
         out
     }
+}
+
+/// The scale calibration of number `p`, when it is one the vocabulary scales: a node's
+/// thermal mass or a face's ε or α (`first`), a Sun load's α or a link's conductance
+/// (not `first`). Optical properties stay within 0 … 1.
+fn scale_of(p: &crate::spec::params::Param, first: bool) -> Option<Candidate> {
+    if p.value.is_nan() || p.value <= 0.0 {
+        return None;
+    }
+    let (path, name) = (p.path.as_str(), element_of(&p.path));
+    let optical = path.ends_with(".absorptivity") || path.ends_with(".emissivity");
+    let upper = if optical { 1.0 / p.value } else { 20.0 };
+    let alpha_starts = vec![0.8, 0.9, 1.1f64.min(upper), 1.25f64.min(upper)];
+    let alpha = ParamDef::new("scale", 0.05, upper, 0.003);
+    let (in_first, effect, target, param, starts) =
+        if path.starts_with("node.") && path.ends_with(".capacitance_j_per_k") {
+            (
+                true,
+                Effect::CapacitanceScale,
+                Target::Node(name),
+                ParamDef::new("scale", 0.2, 5.0, 0.005),
+                vec![0.5, 0.8, 1.25, 2.0],
+            )
+        } else if path.starts_with("face.") && path.ends_with(".emissivity") {
+            (
+                true,
+                Effect::EmissivityScale,
+                Target::Face(name),
+                alpha,
+                vec![0.6, 0.85, 1.1f64.min(upper), 1.25f64.min(upper)],
+            )
+        } else if path.starts_with("face.") && path.ends_with(".absorptivity") {
+            (
+                true,
+                Effect::AbsorptivityScale,
+                Target::Face(name),
+                alpha,
+                alpha_starts,
+            )
+        } else if path.starts_with("sun.")
+            && (path.ends_with(".absorptivity") || path.ends_with(".absorptivity_area_m2"))
+        {
+            (
+                false,
+                Effect::AbsorptivityScale,
+                Target::Load(name),
+                alpha,
+                alpha_starts,
+            )
+        } else if (path.starts_with("conductor.") && path.ends_with(".conductance_w_per_k"))
+            || (path.starts_with("radiation.")
+                && (path.ends_with(".emissivity_area_m2") || path.ends_with(".emissivity")))
+        {
+            (
+                false,
+                Effect::ConductanceScale,
+                Target::Conductor(name),
+                ParamDef::new("scale", 0.02, upper, 0.01),
+                vec![0.3, 0.6, 1.5f64.min(upper), 3.0f64.min(upper)],
+            )
+        } else {
+            return None;
+        };
+    (in_first == first).then(|| Candidate {
+        params: vec![param],
+        setters: vec![Setter::scaled(p.path.clone(), 0, p.value)],
+        starts: starts.into_iter().map(|s| vec![s]).collect(),
+        null: Some(vec![1.0]),
+        ..Candidate::new(effect, target, None)
+    })
 }
 
 impl Generator<'_> {

@@ -111,11 +111,7 @@ pub fn estimated_bytes_per_sample(model: &ThermalModel, gears: &[GearPair]) -> f
     let temperature = doubles(net.nodes.len() as u64 + 1);
     let heat = doubles((2 + net.boundaries.len() + net.loads.len() + net.heaters.len()) as u64);
     let orbit = doubles(5);
-    let faces = net
-        .loads
-        .iter()
-        .filter(|l| matches!(l.kind, crate::thermal::LoadKind::Face(_)))
-        .count() as u64;
+    let faces = net.face_loads().count() as u64;
     let mut total = 3 * record + temperature + heat + orbit;
     if faces > 0 {
         total += record + doubles(3 * faces);
@@ -970,10 +966,8 @@ impl Observer for McapLog {
             loads: names(&mut net.loads.iter().map(|l| &l.name)),
             heaters: names(&mut net.heaters.iter().map(|h| &h.name)),
             faces: net
-                .loads
-                .iter()
-                .filter(|l| matches!(l.kind, crate::thermal::LoadKind::Face(_)))
-                .map(|l| format!("{}.{}", net.nodes[l.node].name, l.name))
+                .face_loads()
+                .map(|(l, _)| format!("{}.{}", net.nodes[l.node].name, l.name))
                 .collect(),
             pair_names: names(&mut r.gears.iter().map(|g| &g.name)),
             pairs: r
@@ -1015,11 +1009,7 @@ impl Observer for McapLog {
             modes: r.model.modes.len(),
             boundaries: net.boundaries.len(),
             loads: net.loads.len(),
-            faces: net
-                .loads
-                .iter()
-                .filter(|l| matches!(l.kind, crate::thermal::LoadKind::Face(_)))
-                .count(),
+            faces: net.face_loads().count(),
         };
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.

@@ -492,28 +492,16 @@ impl EnvironmentModel for DatedEnvironment {
     fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
         let g = self.geometry(t_s);
         let flux = self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2);
-        if self.eclipses_s.is_some() {
-            return EnvState {
-                t_s,
-                orbit_angle_rad: g.theta_rad,
-                beta_rad: g.beta_rad,
-                solar_flux_w_per_m2: flux,
-                sunlit,
-                radius_m: norm(g.r),
-            };
-        }
+        // A step flagged sunlit sees the Sun from the lit side up to and at its end,
+        // which lands on the edge: only the penumbra dims it (falling continuously to 0
+        // at the umbra); the cylinder's first shadowed float would be a jump inside the
+        // step, and given eclipses have no penumbra.
+        let dimmed = sunlit && self.shadow == Shadow::Conical && self.eclipses_s.is_none();
         EnvState {
             t_s,
             orbit_angle_rad: g.theta_rad,
             beta_rad: g.beta_rad,
-            // A step flagged sunlit sees the Sun from the lit side up to and at its end,
-            // which lands on the edge: the cylinder's full flux (its first shadowed
-            // float would be a jump inside the step), the penumbra's dimming (which
-            // falls continuously to 0 at the umbra).
-            solar_flux_w_per_m2: match (sunlit, self.shadow) {
-                (false, _) | (true, Shadow::Cylindrical) => flux,
-                (true, Shadow::Conical) => flux * g.sun_fraction,
-            },
+            solar_flux_w_per_m2: if dimmed { flux * g.sun_fraction } else { flux },
             sunlit,
             radius_m: norm(g.r),
         }

@@ -109,13 +109,9 @@ impl<'a> Probe<'a> {
         out.faces.clear();
         if want.flows {
             let net = &self.model.network;
-            let mut faces = net.loads.iter().filter_map(|l| match &l.kind {
-                crate::thermal::LoadKind::Face(f) => Some(f),
-                _ => None,
-            });
-            if let Some(first) = faces.next() {
+            let mut faces = net.face_loads().map(|(_, f)| f).peekable();
+            if faces.peek().is_some() {
                 let fe = env_model.face_environment(&env);
-                out.faces.push(crate::orbit::faces::incident(first, &fe));
                 out.faces
                     .extend(faces.map(|f| crate::orbit::faces::incident(f, &fe)));
             }

@@ -451,8 +451,8 @@ fn recording_format(
     cx: &Cx,
     spec: Option<RecordingSpec>,
     environment: &Environment,
-) -> Result<crate::recording::RecordingFormat, SpecError> {
-    use crate::recording::{DuplicateTimes, RecordingFormat, TimeFormat};
+) -> Result<crate::spec::scenario::RecordingFormat, SpecError> {
+    use crate::spec::scenario::{DuplicateTimes, RecordingFormat, TimeFormat};
     let p = KeyPath::new("recording");
     let Some(spec) = spec else {
         return Ok(RecordingFormat::default());

@@ -5,7 +5,6 @@
 //! everything that depends on the changed value (a view factor on the altitude, a run
 //! length in orbits on the period, a tooth thickness on its thinning) follows.
 
-use crate::recording::Recording;
 use crate::spec::keys::{ElementKeys, element_keys};
 use crate::spec::params::{self, Param, ParamError};
 use crate::spec::quantity::{self as q, Quantity};
@@ -119,71 +118,44 @@ impl Model {
         Ok(())
     }
 
-    /// Makes every `[[input]]` follow its channel of `rec`: the driven profile becomes
-    /// the table of `scale` × reading + `offset` at the rows that have a reading
-    /// (linear between them), and the channel leaves the recording (it is an input, not
-    /// a measurement to fit). Returns what it did, a line per input.
-    pub fn follow_inputs(&mut self, rec: &mut Recording) -> Result<Vec<String>, String> {
-        let mut done = Vec::new();
-        for inp in self.spec.input.clone() {
-            let Some(k) = rec.columns.iter().position(|c| *c == inp.column) else {
-                return Err(format!(
-                    "{}: no column `{}`, which [[input]] drives `{}` from",
-                    rec.file, inp.column, inp.drives
-                ));
-            };
-            let (scale, offset) = (inp.scale.unwrap_or(1.0), inp.offset.unwrap_or(0.0));
-            let (mut time_s, mut value) = (Vec::new(), Vec::new());
-            for (t, v) in rec.time_s.iter().zip(&rec.values[k]) {
-                if let Some(v) = v {
-                    time_s.push(*t);
-                    value.push(scale * v + offset);
-                }
-            }
-            if value.is_empty() {
-                return Err(format!(
-                    "{}: column `{}` has no readings",
-                    rec.file, inp.column
-                ));
-            }
-            let n = value.len();
-            if inp.drives == "sunlit" {
-                let below = inp.below.unwrap_or(f64::NAN);
-                let period = crate::orbit::EnvironmentModel::mean_period_s(
-                    &self.scenario.thermal.environment,
-                );
-                let windows = eclipse_windows(&time_s, &value, below, period);
-                let count = windows.len();
-                self.modify(|s| s.orbit.eclipses_s = Some(windows))
-                    .map_err(|e| format!("[[input]] sunlit from `{}`: {e}", inp.column))?;
-                rec.columns.remove(k);
-                rec.values.remove(k);
-                done.push(format!(
-                    "eclipses follow `{}` below {below} ({n} readings, {count} eclipses)",
-                    inp.column
-                ));
-                continue;
-            }
-            let table = ProfileSpec::Table(crate::spec::TableSpec {
-                time_s: Some(time_s),
-                time_days: None,
-                value,
-            });
-            let drives = inp.drives.clone();
-            self.modify(|s| {
-                if let Some(p) = input_target_mut(s, &drives) {
-                    *p = table;
-                }
-            })
-            .map_err(|e| format!("[[input]] `{}` from `{}`: {e}", inp.drives, inp.column))?;
-            rec.columns.remove(k);
-            rec.values.remove(k);
-            done.push(format!(
-                "`{}` follows `{}` ({n} readings × {scale} + {offset})",
-                inp.drives, inp.column
+    /// Makes `[[input]]` number `i` follow `readings` (time s, value) of its channel:
+    /// the driven profile becomes the table of `scale` × reading + `offset` (linear
+    /// between readings), or, for `sunlit`, the eclipse windows of the readings below
+    /// `below`. Returns what it did, in a line.
+    pub fn follow_input(&mut self, i: usize, readings: &[(f64, f64)]) -> Result<String, String> {
+        let inp = self.spec.input[i].clone();
+        let (scale, offset) = (inp.scale.unwrap_or(1.0), inp.offset.unwrap_or(0.0));
+        let time_s: Vec<f64> = readings.iter().map(|r| r.0).collect();
+        let value: Vec<f64> = readings.iter().map(|r| scale * r.1 + offset).collect();
+        let n = value.len();
+        if inp.drives == "sunlit" {
+            let below = inp.below.unwrap_or(f64::NAN);
+            let period =
+                crate::orbit::EnvironmentModel::mean_period_s(&self.scenario.thermal.environment);
+            let windows = eclipse_windows(&time_s, &value, below, period);
+            let count = windows.len();
+            self.modify(|s| s.orbit.eclipses_s = Some(windows))
+                .map_err(|e| format!("[[input]] sunlit from `{}`: {e}", inp.column))?;
+            return Ok(format!(
+                "eclipses follow `{}` below {below} ({n} readings, {count} eclipses)",
+                inp.column
             ));
         }
-        Ok(done)
+        let table = ProfileSpec::Table(crate::spec::TableSpec {
+            time_s: Some(time_s),
+            time_days: None,
+            value,
+        });
+        self.modify(|s| {
+            if let Some(p) = input_target_mut(s, &inp.drives) {
+                *p = table;
+            }
+        })
+        .map_err(|e| format!("[[input]] `{}` from `{}`: {e}", inp.drives, inp.column))?;
+        Ok(format!(
+            "`{}` follows `{}` ({n} readings × {scale} + {offset})",
+            inp.drives, inp.column
+        ))
     }
 
     /// Each `[[uncertain]]` names a number of the model, with finite bounds min < max

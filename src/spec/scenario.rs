@@ -21,7 +21,7 @@ pub struct Scenario {
     /// directly (`Model::set_param`).
     pub bindings: Bindings,
     /// How this spacecraft's recordings are laid out (`[recording]`).
-    pub recording: crate::recording::RecordingFormat,
+    pub recording: RecordingFormat,
 }
 
 /// Per load element of the spec (`[[sun]]`, `[[albedo]]`, `[[earth_ir]]`,
@@ -390,5 +390,60 @@ impl Scenario {
         }
         self.run.duration_s = d;
         Ok(self)
+    }
+}
+
+/// The column every recording gives its time in (unless `[recording]` names another).
+pub const TIME_COLUMN: &str = "time_s";
+
+/// How a scenario's recordings are laid out (`[recording]`): which column holds the
+/// time and how, which columns are not channels, and what repeated rows and repeated
+/// time stamps mean. The default is the layout of `reference-mechanism.md` §4.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordingFormat {
+    /// The time column's name.
+    pub time_column: String,
+    pub time: TimeFormat,
+    /// Columns that are neither the time nor a sensor (read, kept out of the channels).
+    pub ignore_columns: Vec<String>,
+    /// Rows whose cells all repeat the previous row's are a ground segment's fill, not
+    /// measurements: their cells are dropped (reported in [`Recording::fill_rows`]).
+    pub repeated_rows_are_fill: bool,
+    pub duplicate_times: DuplicateTimes,
+}
+
+/// How a recording gives its time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TimeFormat {
+    /// Seconds since t = 0 of the scenario.
+    Seconds,
+    /// UTC date-times (`2016-02-04 00:01:00.0`, or RFC 3339), counted from `origin`
+    /// (the scenario's `start_utc`).
+    Utc { origin: sgp4::chrono::NaiveDateTime },
+}
+
+/// What two rows with the same time stamp mean when their cells differ (equal rows are
+/// always merged).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DuplicateTimes {
+    /// An error naming both lines.
+    Refuse,
+    /// Two readings within one time stamp: their mean.
+    Mean,
+}
+
+impl DuplicateTimes {
+    pub const NAMES: [&'static str; 2] = ["refuse", "mean"];
+}
+
+impl Default for RecordingFormat {
+    fn default() -> Self {
+        RecordingFormat {
+            time_column: TIME_COLUMN.to_string(),
+            time: TimeFormat::Seconds,
+            ignore_columns: Vec::new(),
+            repeated_rows_are_fill: false,
+            duplicate_times: DuplicateTimes::Refuse,
+        }
     }
 }

@@ -136,6 +136,14 @@ pub struct ThermalModel {
 }
 
 impl Network {
+    /// The loads that are faces, with their geometry, in load order.
+    pub fn face_loads(&self) -> impl Iterator<Item = (&Load, &crate::orbit::faces::Face)> {
+        self.loads.iter().filter_map(|l| match &l.kind {
+            LoadKind::Face(f) => Some((l, f)),
+            _ => None,
+        })
+    }
+
     pub fn node_index(&self, name: &str) -> Option<usize> {
         self.nodes.iter().position(|n| n.name == name)
     }
@@ -291,8 +299,10 @@ impl Compiled {
         self.load_w.iter_mut().for_each(|q| *q = 0.0);
         self.absorbed_w = 0.0;
         self.dissipated_w = 0.0;
+        // what faces see, evaluated once for all the faces of this instant
+        let mut faces_env = None;
         for (k, l) in net.loads.iter().enumerate() {
-            let (q, absorbed) = load_w(env, s, &l.kind, sw.modes_active);
+            let (q, absorbed) = load_w(env, s, &l.kind, sw.modes_active, &mut faces_env);
             self.each_load_w[k] = q;
             self.load_w[l.node] += q;
             if absorbed {
@@ -384,7 +394,13 @@ impl Compiled {
 
 /// A load's heat at one instant, W, and whether it is absorbed from the environment
 /// (true) or dissipated inside (false).
-fn load_w(env: &Environment, s: &EnvState, kind: &LoadKind, modes_active: &[bool]) -> (f64, bool) {
+fn load_w(
+    env: &Environment,
+    s: &EnvState,
+    kind: &LoadKind,
+    modes_active: &[bool],
+    faces_env: &mut Option<crate::orbit::faces::FaceEnvironment>,
+) -> (f64, bool) {
     match kind {
         LoadKind::Sun {
             absorptivity_area_m2,
@@ -399,7 +415,10 @@ fn load_w(env: &Environment, s: &EnvState, kind: &LoadKind, modes_active: &[bool
             view_factor,
         } => (env.earth_ir_w(*emissivity_area_m2, *view_factor), true),
         LoadKind::Face(face) => (
-            crate::orbit::faces::absorbed_w(face, &env.face_environment(s)),
+            crate::orbit::faces::absorbed_w(
+                face,
+                faces_env.get_or_insert_with(|| env.face_environment(s)),
+            ),
             true,
         ),
         LoadKind::Dissipation { power_w, when } => {

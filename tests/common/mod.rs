@@ -95,6 +95,18 @@ pub fn first_error_line(out: &std::process::Output) -> String {
 
 /// Asserts a command failed with exit status 2, no panic, and an error whose first
 /// line holds every needle.
+/// `check` refuses `text` written to `dir/<case>.toml`: its first error line names the
+/// file and holds every one of `needles`.
+pub fn assert_check_refuses(dir: &std::path::Path, case: &str, text: &str, needles: &[&str]) {
+    let file = dir.join(format!("{case}.toml"));
+    std::fs::write(&file, text).unwrap();
+    let out = bin().arg("check").arg(&file).output().unwrap();
+    let name = format!("{case}.toml:");
+    let mut all = needles.to_vec();
+    all.push(&name);
+    assert_error(case, &out, &all);
+}
+
 pub fn assert_error(case: &str, out: &std::process::Output, needles: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(
