@@ -2,7 +2,7 @@
 //! in `tests/cases/` (fixed-step RK4, its own disc and backlash code, optionally five
 //! radial gear nodes, noise, quantisation, jitter and drop-outs: not the fitting
 //! code's forward model): every effect of the vocabulary, most on other nodes,
-//! conductors and channels than the shared cases, one with two effects at once, and
+//! conductors and channels than the shared cases, two and three effects at once, and
 //! two outside the vocabulary that must come back `unexplained`. Plus the false
 //! discovery rate on null recordings of many kinds (it must be 0).
 
@@ -30,7 +30,12 @@ fn summary(name: &str, d: &Diagnosis) -> String {
             f.effect, f.node, f.channel, f.conductor, f.schedule, f.gear, f.parameters
         );
     }
-    for c in d.candidates.iter().take(3) {
+    for c in d.candidates.iter().take(
+        std::env::var("SUMMARY_ROWS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(3),
+    ) {
         s += &format!(
             "\n    {} {}: {} (ΔBIC {:?})",
             c.status, c.target, c.reason, c.delta_bic
@@ -392,6 +397,49 @@ fn val_generator_two_effects_heater_and_sensor_lag() {
                 ("on_c", -10.0, SET_POINT),
                 ("off_c", -5.0, SET_POINT),
                 ("tau_s", 90.0, REL),
+            ],
+        }),
+    );
+}
+
+/// Forward selection past pairs: three concealed effects on three elements, each
+/// added at its own step (a pair leaves the third's residual, so the search goes on).
+#[test]
+fn val_generator_three_effects_heater_lag_and_offset() {
+    let r = e(
+        vec![
+            Effect::Heater {
+                node: "housing".into(),
+                power_w: 4.0,
+                on_k: k(-10.0),
+                off_k: k(-5.0),
+            },
+            Effect::SensorLag {
+                channel: "gear1_c".into(),
+                tau_s: 90.0,
+            },
+            Effect::SensorOffset {
+                channel: "shaft2_c".into(),
+                offset_k: 0.6,
+            },
+        ],
+        26,
+    );
+    check(
+        "three",
+        &r,
+        Some(Want {
+            effects: &[
+                ("heater_thermostat", "housing"),
+                ("sensor_lag", "gear1_c"),
+                ("sensor_offset", "shaft2_c"),
+            ],
+            params: &[
+                ("power_w", 4.0, REL),
+                ("on_c", -10.0, SET_POINT),
+                ("off_c", -5.0, SET_POINT),
+                ("tau_s", 90.0, REL),
+                ("offset_k", 0.6, REL),
             ],
         }),
     );

@@ -16,8 +16,9 @@
 //!    training orbits, Jacobian by finite differences of whole simulations.
 //! 6. Selection: an effect is accepted when it wins BIC by [`Options::bic_margin`]
 //!    (with the estimated noise) *and* lowers the held-out χ² by
-//!    [`Options::holdout_margin`] *and* is material ([`Options::min_effect`]); pairs are
-//!    tried when one effect leaves a structured residual. The verdict is `explained`
+//!    [`Options::holdout_margin`] *and* is material ([`Options::min_effect`]); while the
+//!    accepted effects leave a structured residual, forward selection adds the next
+//!    effect that passes the same tests against them, up to [`Options::max_effects`]. The verdict is `explained`
 //!    when the accepted effects bring every channel's held-out RMS to
 //!    [`Options::noise_ratio`] × its noise, `consistent` when nothing is accepted and
 //!    the baseline is at the noise, and `unexplained` otherwise. An `unexplained`
@@ -141,8 +142,19 @@ pub struct Options {
     pub noise_ratio: f64,
     /// Candidates fitted by least squares after the ranking.
     pub fits: usize,
-    /// Partners tried with the best effect when one is not enough.
+    /// Partners fitted with the accepted effects at each step of forward selection
+    /// (the best ranked on the residual those leave). Four: the right partner has
+    /// ranked first or second in every case we have; four fits are two rounds on two
+    /// cores, where five took three.
     pub pair_partners: usize,
+    /// Forward selection stops at this many effects. Three: each step must pass the
+    /// same three tests against the set before it, so a null recording stops at the
+    /// first; past three, each step costs a ranking of every candidate and
+    /// `pair_partners` fits with all the set's parameters (on FUNcube-1, see
+    /// `docs/performance.md`), while the few held-out orbits that judge it (a third of
+    /// the recording) cannot tell a fourth effect's share from the data's own
+    /// orbit-to-orbit scatter.
+    pub max_effects: usize,
     /// A partial explanation (findings that do not bring the residual to the noise)
     /// must remove at least this share of the baseline's held-out χ²: an effect that
     /// takes a fifth of a real residual away names physics worth modelling; one that
@@ -159,7 +171,8 @@ impl Default for Options {
             min_effect: 0.05,
             noise_ratio: 1.3,
             fits: 8,
-            pair_partners: 5,
+            pair_partners: 4,
+            max_effects: 3,
             min_partial_share: 0.2,
         }
     }
@@ -708,17 +721,23 @@ fn judge_singles(
     (reports, singles)
 }
 
-/// The findings of the accepted hypothesis `h`, one per member, each with its
-/// parameters, their errors and correlations, and its own evidence: the hypothesis
-/// against the baseline (one member), or against the other member alone (a pair).
+/// The findings of the accepted hypothesis, the last of forward selection's `chain`,
+/// one per member, each with its parameters, their errors and correlations, and its
+/// own evidence: the hypothesis against the same set without that member where that
+/// set was fitted (the baseline for one member; a single accepted effect, or an
+/// earlier step, for more), else what the member earned at the step that added it.
 fn findings(
     problem: &Problem<'_>,
     base: &Reference<'_>,
     cands: &[Candidate],
     singles: &[Hypothesis],
-    h: &Hypothesis,
+    chain: &[Hypothesis],
     heldout_rmse: &ChannelMap,
 ) -> Vec<Finding> {
+    let h = chain
+        .last()
+        .expect("a finding needs an accepted hypothesis");
+    let same_set = |a: &[usize], b: &[usize]| a.len() == b.len() && a.iter().all(|x| b.contains(x));
     let cov = h.fit.covariance.as_ref().map(|c| {
         (0..c.nrows())
             .map(|i| (0..c.ncols()).map(|j| c[(i, j)]).collect::<Vec<f64>>())
@@ -737,23 +756,30 @@ fn findings(
                 .collect()
         });
         let params = c.report_params(theta, sub_cov.as_deref());
-        let against_baseline = || {
+        let without: Vec<usize> = h.members.iter().copied().filter(|&x| x != ci).collect();
+        let (delta_bic, hdrop) = if without.is_empty() {
             (
-                -problem.bic_gain(h, base.train_chi2, h.theta.len()),
+                -problem.bic_gain(h, base.train_chi2, k),
                 base.holdout_chi2 - h.holdout_chi2,
             )
-        };
-        let (delta_bic, hdrop) = if h.members.len() == 1 {
-            against_baseline()
+        } else if let Some(a) = singles
+            .iter()
+            .chain(chain)
+            .find(|s| same_set(&s.members, &without))
+        {
+            (
+                -problem.bic_gain(h, a.train_chi2, k),
+                a.holdout_chi2 - h.holdout_chi2,
+            )
         } else {
-            let other = h.members[1 - m];
-            match singles.iter().find(|s| s.members == [other]) {
-                Some(a) => (
-                    -problem.bic_gain(h, a.train_chi2, k),
-                    a.holdout_chi2 - h.holdout_chi2,
-                ),
-                None => against_baseline(),
-            }
+            // The step that added member m, against the step before it.
+            let step = &chain[m];
+            let (x2, hx2) = if m == 0 {
+                (base.train_chi2, base.holdout_chi2)
+            } else {
+                (chain[m - 1].train_chi2, chain[m - 1].holdout_chi2)
+            };
+            (-problem.bic_gain(step, x2, k), hx2 - step.holdout_chi2)
         };
         out.push(Finding {
             effect: c.effect.id(),
@@ -799,9 +825,16 @@ fn settle_candidates(
         match best {
             Some(h) if h.members.contains(&ci) => {
                 rep.status = CandidateStatus::Accepted;
-                rep.reason = match h.members.iter().find(|&&m| m != ci) {
-                    Some(&other) => format!("together with {}", cands[other].label()),
-                    None => String::new(),
+                let others: Vec<String> = h
+                    .members
+                    .iter()
+                    .filter(|&&m| m != ci)
+                    .map(|&m| cands[m].label())
+                    .collect();
+                rep.reason = if others.is_empty() {
+                    String::new()
+                } else {
+                    format!("together with {}", others.join(" and "))
                 };
             }
             Some(h) if rep.status == CandidateStatus::Accepted => {
@@ -910,54 +943,67 @@ pub fn diagnose(
         .collect();
     let fitted = search::fit_leading(&problem, model, &cands, &ranked, &to_fit, progress);
 
-    // 6. Selection: single effects, then a pair by forward selection.
+    // 6. Selection: single effects, then forward selection, one effect at a time.
     let (mut reports, singles) = judge_singles(
         &problem, &reference, &cands, &ranked, &to_fit, &fitted, opts,
     );
-    let mut best: Option<Hypothesis> = None;
+    // The accepted steps: chain[k] holds k + 1 effects.
+    let mut chain: Vec<Hypothesis> = Vec::new();
     let mut explained = false;
     if let Some(first) = singles.first() {
-        if explains(&obs, &base.noise, opts, first) {
-            best = Some(first.clone());
-            explained = true;
-        } else {
-            let pair = search::best_pair(&problem, model, &cands, &ranked, first, opts, progress);
-            match pair {
-                Some(p) if explains(&obs, &base.noise, opts, &p) => {
-                    best = Some(p);
-                    explained = true;
-                }
-                Some(p) => {
-                    report.notes.push(format!(
-                        "{} with {} improves on either alone but leaves a structured residual",
-                        cands[p.members[0]].label(),
-                        cands[p.members[1]].label()
-                    ));
-                    best = Some(p);
-                }
-                None => best = Some(first.clone()),
-            }
-            // A partial explanation: kept when it removes a material share of a real
-            // residual (the baseline not at the noise); the verdict stays unexplained.
-            let share = best
-                .as_ref()
-                .map_or(0.0, |h| 1.0 - h.holdout_chi2 / reference.holdout_chi2);
-            if !explained
-                && (report.verdict == Verdict::Consistent || share < opts.min_partial_share)
+        explained = explains(&obs, &base.noise, opts, first);
+        chain.push(first.clone());
+        while !explained && chain.len() < opts.max_effects {
+            let current = chain.last().expect("one step at least");
+            match search::best_extension(&problem, model, &cands, &ranked, current, opts, progress)
             {
-                best = None;
-                report.notes.push(format!(
-                    "the best candidate, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of the \
-                     baseline's held-out residual (a partial finding needs {:.0} %) and does not \
-                     bring the held-out orbits to the noise",
-                    cands[first.members[0]].label(),
-                    problem.bic_gain(first, reference.train_chi2, first.theta.len()),
-                    100.0 * (1.0 - first.holdout_chi2 / reference.holdout_chi2),
-                    100.0 * opts.min_partial_share
-                ));
+                Some(h) => {
+                    explained = explains(&obs, &base.noise, opts, &h);
+                    chain.push(h);
+                }
+                None => break,
             }
         }
+        let last = chain.last().expect("one step at least");
+        if !explained && chain.len() > 1 {
+            report.notes.push(format!(
+                "{} improve{} on {} but leave a structured residual",
+                last.members
+                    .iter()
+                    .map(|&m| cands[m].label())
+                    .collect::<Vec<_>>()
+                    .join(" with "),
+                if last.members.len() == 2 { "s" } else { "" },
+                if last.members.len() == 2 {
+                    "either alone"
+                } else {
+                    "each step before"
+                },
+            ));
+        }
+        if !explained && chain.len() == opts.max_effects {
+            report.notes.push(format!(
+                "forward selection stopped at its limit of {} effects",
+                opts.max_effects
+            ));
+        }
+        // A partial explanation: kept when it removes a material share of a real
+        // residual (the baseline not at the noise); the verdict stays unexplained.
+        let share = 1.0 - last.holdout_chi2 / reference.holdout_chi2;
+        if !explained && (report.verdict == Verdict::Consistent || share < opts.min_partial_share) {
+            chain.clear();
+            report.notes.push(format!(
+                "the best candidate, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of the \
+                 baseline's held-out residual (a partial finding needs {:.0} %) and does not \
+                 bring the held-out orbits to the noise",
+                cands[first.members[0]].label(),
+                problem.bic_gain(first, reference.train_chi2, first.theta.len()),
+                100.0 * (1.0 - first.holdout_chi2 / reference.holdout_chi2),
+                100.0 * opts.min_partial_share
+            ));
+        }
     }
+    let best = chain.last().cloned();
 
     // 7. The verdict, the findings and the corrected model.
     if let Some(h) = &best {
@@ -985,7 +1031,7 @@ pub fn diagnose(
             &reference,
             &cands,
             &singles,
-            h,
+            &chain,
             &report.heldout_rmse,
         );
         // The corrected series over the whole recording (tail included).
@@ -1004,7 +1050,7 @@ pub fn diagnose(
 }
 
 /// Thermostat start points: the channel with the most warming residual in the
-/// training orbits; in each orbit, where that residual starts (walking back from where
+/// training orbits that has a start; in each orbit, where that residual starts (walking back from where
 /// it clearly shows to where it was still at the noise); each node's baseline
 /// temperature then, the median over the orbits.
 fn heater_hints(
@@ -1017,7 +1063,8 @@ fn heater_hints(
         heater_on_k: vec![None; node_temps_k.len()],
     };
     let smooth: Vec<Vec<Option<f64>>> = res.iter().map(|r| data::smoothed(r, 5)).collect();
-    let mut best: Option<(usize, f64)> = None;
+    // Channels by their warming residual, most first.
+    let mut warming: Vec<(usize, f64)> = Vec::new();
     for (c, ch) in obs.channels.iter().enumerate() {
         if !ch.is_temperature {
             continue;
@@ -1031,38 +1078,48 @@ fn heater_hints(
             .filter(|v| *v > limit)
             .map(|v| v * v / (noise[c] * noise[c]))
             .sum();
-        if e > 0.0 && best.is_none_or(|b| e > b.1) {
-            best = Some((c, e));
+        if e > 0.0 {
+            warming.push((c, e));
         }
     }
-    let Some((c, _)) = best else { return hints };
-    let hi = 4.0 * noise[c] / 5f64.sqrt();
-    let lo = noise[c] / 5f64.sqrt();
-    let mut starts = Vec::new();
-    for orbit in 0..obs.split.train_orbits {
-        let idx: Vec<usize> = (0..obs.time_s.len())
-            .filter(|&j| obs.orbit[j] == orbit && obs.part[j] == Part::Train)
-            .collect();
-        let Some(pos) = idx
-            .iter()
-            .position(|&j| smooth[c][j].is_some_and(|v| v > hi))
-        else {
-            continue;
-        };
-        let mut k = pos;
-        while k > 0 && smooth[c][idx[k]].is_none_or(|v| v > lo) {
-            k -= 1;
-        }
-        if k > 0 || smooth[c][idx[0]].is_some_and(|v| v <= lo) {
-            starts.push(idx[k]);
-        }
-    }
-    if starts.is_empty() {
+    warming.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    // The first whose warming starts somewhere: a channel that is never at its noise
+    // (a sensor's offset) shows no start and gives way to the next.
+    let Some(starts) = warming
+        .iter()
+        .map(|&(c, _)| warming_starts(obs, &smooth[c], noise[c]))
+        .find(|s| !s.is_empty())
+    else {
         return hints;
-    }
+    };
     for (n, temps) in node_temps_k.iter().enumerate() {
         let mut v: Vec<f64> = starts.iter().map(|&j| temps[j]).collect();
         hints.heater_on_k[n] = Some(data::median(&mut v));
     }
     hints
+}
+
+/// Where a channel's warming residual (`smooth`, the smoothed residual) starts in
+/// each training orbit: walking back from where it clearly shows (4σ/√5) to where it
+/// was still at the noise (σ/√5); none in an orbit where it never was.
+fn warming_starts(obs: &Observations, smooth: &[Option<f64>], noise: f64) -> Vec<usize> {
+    let hi = 4.0 * noise / 5f64.sqrt();
+    let lo = noise / 5f64.sqrt();
+    let mut starts = Vec::new();
+    for orbit in 0..obs.split.train_orbits {
+        let idx: Vec<usize> = (0..obs.time_s.len())
+            .filter(|&j| obs.orbit[j] == orbit && obs.part[j] == Part::Train)
+            .collect();
+        let Some(pos) = idx.iter().position(|&j| smooth[j].is_some_and(|v| v > hi)) else {
+            continue;
+        };
+        let mut k = pos;
+        while k > 0 && smooth[idx[k]].is_none_or(|v| v > lo) {
+            k -= 1;
+        }
+        if k > 0 || smooth[idx[0]].is_some_and(|v| v <= lo) {
+            starts.push(idx[k]);
+        }
+    }
+    starts
 }

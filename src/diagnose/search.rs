@@ -1,7 +1,8 @@
 //! The candidate search of a diagnosis (steps 4–6 of the module doc): candidates
 //! ranked at their start points, the leading ones fitted, each fit judged against a
 //! reference (the baseline, or the best single effect when a second is tried with it),
-//! and forward selection of a pair when one effect leaves a structured residual.
+//! and forward selection, one effect at a time, while the accepted effects leave a
+//! structured residual.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -197,7 +198,7 @@ impl<'a> Problem<'a> {
     }
 }
 
-/// A fitted hypothesis (one or two candidates).
+/// A fitted hypothesis (one or more candidates, in the order they were added).
 #[derive(Debug, Clone)]
 pub(super) struct Hypothesis {
     pub members: Vec<usize>,
@@ -526,60 +527,77 @@ const GLOBAL_SEEDS: usize = 2;
 const COMPASS_EVALUATIONS: usize = 36;
 const GLOBAL_CANDIDATES: usize = 2;
 
-/// Forward selection when the best single effect `first` does not explain the
-/// residual: every other candidate ranked again on the residual `first` leaves, the
-/// leading `opts.pair_partners` fitted together with it, and the best pair that
-/// passes [`Problem::judge`] against `first` returned.
-pub(super) fn best_pair(
+/// One step of forward selection when the accepted effects `current` do not explain
+/// the residual: every other candidate ranked again on the residual `current` leaves
+/// (its own parameters from its start points, those of `current` held at their fit),
+/// the leading `opts.pair_partners` fitted together with `current`, and the best of
+/// them that passes [`Problem::judge`] against `current` returned (None: no further
+/// effect earns its place).
+pub(super) fn best_extension(
     problem: &Problem<'_>,
     model: &Model,
     cands: &[Candidate],
     ranked: &[Ranking],
-    first: &Hypothesis,
+    current: &Hypothesis,
     opts: &Options,
     progress: Progress<'_>,
 ) -> Option<Hypothesis> {
-    let f0 = first.members[0];
-    let r_first = problem.train_residuals(&first.pred);
-    let counter = Counter::new("pairs: ranking", cands.len(), progress);
-    let second: Vec<Option<(f64, Vec<f64>)>> = (0..cands.len())
+    let n = current.members.len() + 1;
+    let with = |j: usize| -> Vec<usize> {
+        let mut m = current.members.clone();
+        m.push(j);
+        m
+    };
+    let r_current = problem.train_residuals(&current.pred);
+    let stage_rank: &'static str = if n == 2 {
+        "pairs: ranking"
+    } else {
+        "sets: ranking"
+    };
+    let counter = Counter::new(stage_rank, cands.len(), progress);
+    let next: Vec<Option<(f64, Vec<f64>)>> = (0..cands.len())
         .into_par_iter()
         .map(|j| {
             counter.tick();
-            if j == f0 || ranked[j].best.is_none() {
+            if current.members.contains(&j) || ranked[j].best.is_none() {
                 return None;
             }
-            let comp = Composite::new(model, &[&cands[f0], &cands[j]]).ok()?;
-            best_start(problem, &comp, &cands[j], &first.theta, &r_first).0
+            let refs: Vec<&Candidate> = with(j).iter().map(|&i| &cands[i]).collect();
+            let comp = Composite::new(model, &refs).ok()?;
+            best_start(problem, &comp, &cands[j], &current.theta, &r_current).0
         })
         .collect();
     let mut partners: Vec<usize> = (0..cands.len())
-        .filter(|&j| second[j].as_ref().is_some_and(|b| b.0 < first.train_chi2))
+        .filter(|&j| next[j].as_ref().is_some_and(|b| b.0 < current.train_chi2))
         .collect();
     partners.sort_by(|&a, &b| {
-        let (xa, xb) = (second[a].as_ref().unwrap().0, second[b].as_ref().unwrap().0);
+        let (xa, xb) = (next[a].as_ref().unwrap().0, next[b].as_ref().unwrap().0);
         xa.total_cmp(&xb).then(a.cmp(&b))
     });
     partners.truncate(opts.pair_partners);
-    let counter = Counter::new("pairs", partners.len(), progress);
-    let pairs: Vec<Result<Hypothesis, String>> = partners
+    let counter = Counter::new(
+        if n == 2 { "pairs" } else { "sets" },
+        partners.len(),
+        progress,
+    );
+    let fitted: Vec<Result<Hypothesis, String>> = partners
         .par_iter()
         .map(|&j| {
-            let mut start = first.theta.clone();
-            start.extend_from_slice(&second[j].as_ref().unwrap().1);
-            let r = fit(problem, model, cands, &[f0, j], &start);
+            let mut start = current.theta.clone();
+            start.extend_from_slice(&next[j].as_ref().unwrap().1);
+            let r = fit(problem, model, cands, &with(j), &start);
             counter.tick();
             r
         })
         .collect();
     let reference = Reference {
-        train_chi2: first.train_chi2,
-        holdout_chi2: first.holdout_chi2,
-        pred: &first.pred,
+        train_chi2: current.train_chi2,
+        holdout_chi2: current.holdout_chi2,
+        pred: &current.pred,
     };
     let mut best: Option<Hypothesis> = None;
-    for h in pairs.into_iter().flatten() {
-        let k_extra = cands[h.members[1]].params.len();
+    for h in fitted.into_iter().flatten() {
+        let k_extra = cands[*h.members.last().unwrap()].params.len();
         if problem.judge(&h, &reference, k_extra, opts).is_ok()
             && best.as_ref().is_none_or(|b| h.train_chi2 < b.train_chi2)
         {
