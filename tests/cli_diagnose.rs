@@ -285,6 +285,14 @@ fn cli_diagnose_refuses_outputs_that_are_inputs_and_bad_holdouts() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     common::assert_error("holdout", &out, &["--holdout-orbits 12", "12 whole orbits"]);
+    let out = common::bin()
+        .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+        .arg(&rec)
+        .args(["--max-effects", "9"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    common::assert_error("max-effects", &out, &["--max-effects", "1..=8"]);
 }
 
 /// An `orbitlash run` log is a recording too (its node temperatures and backlash as

@@ -442,7 +442,24 @@ fn val_generator_three_effects_heater_lag_and_offset() {
                 ("offset_k", 0.6, REL),
             ],
         }),
+    ); // The limit holds: at two effects the same recording keeps a structured residual,
+    // reported as a partial explanation of two findings.
+    let csv = cases::generate(&r);
+    let rec = Recording::from_csv(csv.as_bytes(), "three").unwrap();
+    let model = Model::new(parse_spec(REFERENCE_HINGE_TOML, "<reference>").unwrap()).unwrap();
+    let opts = Options {
+        max_effects: 2,
+        ..Options::default()
+    };
+    let d = diagnose(&model, &rec, &opts, &|_, _, _| {}).unwrap();
+    assert_eq!(
+        d.verdict.as_str(),
+        "unexplained",
+        "{}",
+        summary("three/2", &d)
     );
+    assert_eq!(d.findings.len(), 2, "{}", summary("three/2", &d));
+    assert!(d.notes.iter().any(|n| n.contains("limit of 2 effects")));
 }
 
 #[test]

@@ -34,6 +34,11 @@ pub struct DiagnoseArgs {
     /// third of them, at least one). They are never used for fitting or ranking.
     #[arg(long, value_name = "N")]
     holdout_orbits: Option<usize>,
+    /// Forward selection adds at most this many effects (1 … 8). Each step costs a
+    /// ranking of every candidate and 4 joint fits; see `docs/performance.md`.
+    #[arg(long, value_name = "N", default_value_t = Options::default().max_effects as u8,
+          value_parser = clap::value_parser!(u8).range(1..=8))]
+    max_effects: u8,
     /// Change a number of the scenario by its key path (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
@@ -95,6 +100,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     )?;
     let opts = Options {
         holdout_orbits: a.holdout_orbits,
+        max_effects: usize::from(a.max_effects),
         ..Options::default()
     };
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
