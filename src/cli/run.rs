@@ -236,7 +236,8 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(p) = &log_path {
         outln!(
             o,
-            "log: {}  (open in Foxglove, or `rerun {}`)",
+            "log: {}  (Foxglove: import viewer/foxglove-layout.json; Rerun with its plots: \
+             `python3 viewer/rerun_export.py {}` then `rerun` the .rrd)",
             p.display(),
             p.display()
         );
