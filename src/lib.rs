@@ -67,6 +67,7 @@ pub mod gear;
 pub mod io;
 pub mod margins;
 pub mod orbit;
+pub mod plot;
 pub mod recording;
 pub mod run;
 pub mod spec;

@@ -3,12 +3,11 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use clap::Args;
 
 use orbitlash::io::atomic::{AtomicFile, OutputPolicy};
-use orbitlash::io::csv_export::GEAR_COLUMNS;
-use orbitlash::io::mcap_read::read_log;
+use orbitlash::io::mcap_read::{read_log, run_table};
 
 use super::print_out;
 
@@ -24,15 +23,6 @@ pub struct ExportArgs {
     #[arg(long)]
     all: bool,
 }
-
-/// Log fields of `/gears/<pair>/mesh` in the order of the CSV's gear columns.
-const GEAR_FIELDS: [&str; 5] = [
-    "backlash_exact_um",
-    "backlash_closed_form_um",
-    "backlash_paper_um",
-    "pressure_angle_deg",
-    "center_distance_mm",
-];
 
 pub fn export(a: ExportArgs) -> Result<()> {
     // The output is checked and opened first: a bad path fails before the log is read.
@@ -51,82 +41,15 @@ pub fn export(a: ExportArgs) -> Result<()> {
             t.file_bytes
         );
     }
-    let temp_topic = "/thermal/temperature";
-    if table.column(&format!("{temp_topic}.time_s")).is_none() {
-        bail!(
-            "{} has no {temp_topic} channel: not an orbitlash run log",
-            a.log.display()
-        );
-    }
-    // (header, column index in the table)
-    let mut cols: Vec<(String, usize)> = Vec::new();
-    let meta = table
-        .channel_metadata
-        .get(temp_topic)
-        .cloned()
-        .unwrap_or_default();
-    let prefix = format!("{temp_topic}.");
-    for (i, c) in table.columns.iter().enumerate() {
-        if let Some(field) = c.strip_prefix(&prefix)
-            && field != "time_s"
-        {
-            let node = meta
-                .get(&format!("node:{field}"))
-                .cloned()
-                .unwrap_or_else(|| field.trim_end_matches("_k").to_string());
-            cols.push((format!("{node}_k"), i));
-        }
-    }
-    let mut pairs: Vec<(String, String)> = table
-        .channel_metadata
-        .iter()
-        .filter(|(t, _)| t.starts_with("/gears/"))
-        .map(|(t, m)| {
-            (
-                t.clone(),
-                m.get("pair").cloned().unwrap_or_else(|| t.clone()),
-            )
-        })
-        .collect();
-    pairs.sort();
-    let several = pairs.len() > 1;
-    for (topic, pair) in &pairs {
-        for (field, header) in GEAR_FIELDS.iter().zip(GEAR_COLUMNS) {
-            if let Some(i) = table.column(&format!("{topic}.{field}")) {
-                cols.push((
-                    if several {
-                        format!("{pair}.{header}")
-                    } else {
-                        header.to_string()
-                    },
-                    i,
-                ));
-            }
-        }
-    }
-    if a.all {
-        let used: Vec<usize> = cols.iter().map(|c| c.1).collect();
-        for (i, c) in table.columns.iter().enumerate() {
-            if !used.contains(&i) && !c.ends_with(".time_s") {
-                cols.push((c.clone(), i));
-            }
-        }
-    }
-    let mut text = String::from("time_s");
-    for (h, _) in &cols {
-        text.push(',');
-        text.push_str(h);
-    }
+    let (headers, rows) =
+        run_table(&table, a.all).map_err(|m| anyhow::anyhow!("{}: {m}", a.log.display()))?;
+    let mut text = headers.join(",");
     text.push('\n');
-    for (t_ns, row) in &table.rows {
+    for row in &rows {
         use std::fmt::Write as _;
-        let _ = write!(
-            text,
-            "{:.3}",
-            t_ns.saturating_sub(table.time_origin_ns) as f64 * 1e-9
-        );
-        for (_, i) in &cols {
-            let _ = write!(text, ",{:.6}", row[*i]);
+        let _ = write!(text, "{:.3}", row[0]);
+        for v in &row[1..] {
+            let _ = write!(text, ",{v:.6}");
         }
         text.push('\n');
     }

@@ -17,6 +17,7 @@ mod estimate;
 mod export;
 mod margins;
 mod params;
+mod plot;
 mod recover;
 mod run;
 mod table;
@@ -86,6 +87,10 @@ enum Command {
     /// Convert an MCAP log back to CSV (the layout of `run --csv`); a cut-off log is
     /// read up to its last whole message.
     ExportCsv(export::ExportArgs),
+    /// A run's temperatures and backlash against time (eclipses shaded, the smallest
+    /// backlash marked; a long run as per-orbit envelopes), from its log or CSV, as PNG
+    /// or SVG.
+    Plot(plot::PlotArgs),
     /// Make a killed run's log (`<name>.<pid>.partial`) or a truncated copy into a valid MCAP
     /// file holding everything up to its last whole message.
     Recover(recover::RecoverArgs),
@@ -119,6 +124,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
         Command::Diagnose(a) => diagnose::diagnose(a),
         Command::Environment(a) => done(environment::environment(a)),
         Command::ExportCsv(a) => done(export::export(a)),
+        Command::Plot(a) => done(plot::plot(a)),
         Command::Recover(a) => done(recover::recover(a)),
     }
 }

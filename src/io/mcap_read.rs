@@ -5,6 +5,8 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
+use super::csv_export::GEAR_COLUMNS;
+
 use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage, Value};
 
 #[derive(Debug, thiserror::Error)]
@@ -349,4 +351,91 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
         }
     }
     Ok(table)
+}
+
+/// Log fields of `/gears/<pair>` in the order of the CSV's gear columns.
+const GEAR_FIELDS: [&str; 5] = [
+    "backlash_exact_um",
+    "backlash_closed_form_um",
+    "backlash_paper_um",
+    "pressure_angle_deg",
+    "center_distance_mm",
+];
+
+/// A log as the table of `run --csv`: `time_s` (from the log's time origin), then
+/// `<node>_k` by node name and the gear columns (`<pair>.` before them when there are
+/// several pairs); with `all`, every other numeric series as `<topic>.<field>`.
+/// `export-csv` writes it; `plot` draws it.
+#[allow(clippy::type_complexity)]
+pub fn run_table(table: &LogTable, all: bool) -> Result<(Vec<String>, Vec<Vec<f64>>), String> {
+    let temp_topic = "/thermal/temperature";
+    if table.column(&format!("{temp_topic}.time_s")).is_none() {
+        return Err(format!("no {temp_topic} channel: not an orbitlash run log"));
+    }
+    // (header, column index in the table)
+    let mut cols: Vec<(String, usize)> = Vec::new();
+    let meta = table
+        .channel_metadata
+        .get(temp_topic)
+        .cloned()
+        .unwrap_or_default();
+    let prefix = format!("{temp_topic}.");
+    for (i, c) in table.columns.iter().enumerate() {
+        if let Some(field) = c.strip_prefix(&prefix)
+            && field != "time_s"
+        {
+            let node = meta
+                .get(&format!("node:{field}"))
+                .cloned()
+                .unwrap_or_else(|| field.trim_end_matches("_k").to_string());
+            cols.push((format!("{node}_k"), i));
+        }
+    }
+    let mut pairs: Vec<(String, String)> = table
+        .channel_metadata
+        .iter()
+        .filter(|(t, _)| t.starts_with("/gears/"))
+        .map(|(t, m)| {
+            (
+                t.clone(),
+                m.get("pair").cloned().unwrap_or_else(|| t.clone()),
+            )
+        })
+        .collect();
+    pairs.sort();
+    let several = pairs.len() > 1;
+    for (topic, pair) in &pairs {
+        for (field, header) in GEAR_FIELDS.iter().zip(GEAR_COLUMNS) {
+            if let Some(i) = table.column(&format!("{topic}.{field}")) {
+                cols.push((
+                    if several {
+                        format!("{pair}.{header}")
+                    } else {
+                        header.to_string()
+                    },
+                    i,
+                ));
+            }
+        }
+    }
+    if all {
+        let used: Vec<usize> = cols.iter().map(|c| c.1).collect();
+        for (i, c) in table.columns.iter().enumerate() {
+            if !used.contains(&i) && !c.ends_with(".time_s") {
+                cols.push((c.clone(), i));
+            }
+        }
+    }
+    let mut headers = vec!["time_s".to_string()];
+    headers.extend(cols.iter().map(|c| c.0.clone()));
+    let rows = table
+        .rows
+        .iter()
+        .map(|(t_ns, row)| {
+            let mut r = vec![t_ns.saturating_sub(table.time_origin_ns) as f64 * 1e-9];
+            r.extend(cols.iter().map(|(_, i)| row[*i]));
+            r
+        })
+        .collect();
+    Ok((headers, rows))
 }

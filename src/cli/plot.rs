@@ -1,0 +1,168 @@
+//! `orbitlash plot`: a run's temperatures and backlash against time, from its log or
+//! its CSV, as PNG or SVG (see `orbitlash::plot::run`).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use orbitlash::io::atomic::AtomicFile;
+use orbitlash::io::atomic::OutputPolicy;
+use orbitlash::io::mcap_read::{read_log, run_table};
+use orbitlash::io::output::Outputs;
+use orbitlash::plot::run::{RunSeries, figure};
+
+use super::print_out;
+
+#[derive(Args, Debug)]
+pub struct PlotArgs {
+    /// A run's MCAP log, or a CSV table of `run --csv` or `export-csv [--all]` (the
+    /// eclipse shading and the smallest allowed backlash need the log, or `--all`).
+    input: PathBuf,
+    /// The figure: `.png` or `.svg` (default: logs/<input's name>.png).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// The figure's title (default: the scenario's name, or the input's file name).
+    #[arg(long)]
+    title: Option<String>,
+}
+
+/// What `--out` asks for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Png,
+    Svg,
+}
+
+pub fn format_of(p: &Path) -> Result<Format> {
+    match p
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("png") => Ok(Format::Png),
+        Some("svg") => Ok(Format::Svg),
+        _ => bail!(
+            "--out {}: the figure's name must end in .png or .svg",
+            p.display()
+        ),
+    }
+}
+
+/// A figure written atomically to `out` (never over an input of the command).
+pub fn write_figure(fig: &orbitlash::plot::Figure, out: &Path, inputs: &[&Path]) -> Result<()> {
+    let bytes = match format_of(out)? {
+        Format::Png => fig.png(2.0)?,
+        Format::Svg => fig.svg.clone().into_bytes(),
+    };
+    let mut f = AtomicFile::create(out, &OutputPolicy::reading(inputs))?;
+    f.write_all(&bytes)
+        .map_err(|e| orbitlash::io::output::OutputError::io(out, e))?;
+    f.commit()?;
+    Ok(())
+}
+
+/// A CSV table with `time_s` first, every cell a number (a row's error names its line).
+fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
+    orbitlash::io::output::check_input(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let mut r = csv::ReaderBuilder::new()
+        .from_path(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let headers: Vec<String> = r
+        .headers()
+        .with_context(|| format!("{}: no header line", path.display()))?
+        .iter()
+        .map(|h| h.trim().to_string())
+        .collect();
+    let mut rows = Vec::new();
+    for (k, rec) in r.records().enumerate() {
+        let line = k + 2;
+        let rec = rec.with_context(|| format!("{}: line {line}", path.display()))?;
+        let mut row = Vec::with_capacity(headers.len());
+        for (c, cell) in rec.iter().enumerate() {
+            let v: f64 = cell
+                .trim()
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite())
+                .ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "{}: line {line}, column {} ({}): {:?} is not a finite number",
+                        path.display(),
+                        c + 1,
+                        headers.get(c).map_or("?", String::as_str),
+                        cell
+                    )
+                })?;
+            row.push(v);
+        }
+        if row.len() != headers.len() {
+            bail!(
+                "{}: line {line} has {} cells, the header {}",
+                path.display(),
+                row.len(),
+                headers.len()
+            );
+        }
+        if let Some(prev) = rows.last().map(|r: &Vec<f64>| r[0])
+            && row[0] < prev
+        {
+            bail!(
+                "{}: line {line}: time_s {} is not after {prev} (time must not go back)",
+                path.display(),
+                row[0]
+            );
+        }
+        rows.push(row);
+    }
+    Ok((headers, rows))
+}
+
+/// `logs/<stem>.png` for `<dir>/<stem>.<ext>`.
+fn default_out(input: &Path) -> PathBuf {
+    let stem = input
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    PathBuf::from("logs").join(format!("{stem}.png"))
+}
+
+pub fn plot(a: PlotArgs) -> Result<()> {
+    let out = a.out.clone().unwrap_or_else(|| default_out(&a.input));
+    format_of(&out)?;
+    // The output's place is checked before the input is read.
+    Outputs::new(OutputPolicy::reading(&[&a.input])).file("--out", &out)?;
+    let is_log = a
+        .input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+        || a.input.to_string_lossy().ends_with(".partial");
+    let (title, headers, rows) = if is_log {
+        let table = read_log(&a.input)?;
+        let name = table
+            .metadata
+            .get("orbitlash.provenance")
+            .and_then(|m| m.get("scenario_name"))
+            .cloned();
+        let (h, r) =
+            run_table(&table, true).map_err(|m| anyhow::anyhow!("{}: {m}", a.input.display()))?;
+        (name, h, r)
+    } else {
+        let (h, r) = read_csv(&a.input)?;
+        (None, h, r)
+    };
+    let title = a.title.clone().or(title).unwrap_or_else(|| {
+        a.input
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    });
+    let series = RunSeries::from_table(&title, &headers, &rows)
+        .with_context(|| format!("cannot plot {}", a.input.display()))?;
+    let fig = figure(&series)?;
+    write_figure(&fig, &out, &[&a.input])?;
+    print_out(&format!("figure: {}\n", out.display()))
+}

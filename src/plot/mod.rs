@@ -1,0 +1,164 @@
+//! Figures: the one plotting layer every figure of the tool goes through (`plot`,
+//! margins, diagnose). Charts are drawn with `plotters` into SVG; PNG is that SVG
+//! rendered by `resvg` with the embedded DejaVu Sans, so no system font, GUI or C
+//! library is needed and the SVG and the PNG show the same figure. Annotations (the
+//! legend, the smallest backlash, the verdict) are placed by [`labels::Placer`], which
+//! measures text with the same font and never puts two labels on top of each other;
+//! every [`Figure`] keeps the boxes it placed, so tests can check them.
+//!
+//! Pure: the figures are strings and bytes; the CLI writes them.
+
+pub mod labels;
+pub mod run;
+
+use std::sync::OnceLock;
+
+pub use labels::{Placer, Rect};
+
+/// DejaVu Sans (Bitstream Vera licence: `assets/fonts/LICENSE-DejaVu.txt`).
+pub const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+/// The family the SVG names (plotters writes `sans-serif`; the PNG maps it to DejaVu).
+pub const FAMILY: &str = "sans-serif";
+
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    #[error("drawing the figure: {0}")]
+    Draw(String),
+    #[error("rendering the figure as PNG: {0}")]
+    Png(String),
+    #[error("{0}")]
+    Data(String),
+}
+
+pub(crate) fn draw_err<E: std::fmt::Debug>(e: E) -> PlotError {
+    PlotError::Draw(format!("{e:?}"))
+}
+
+/// A text label as placed on a figure, in pixels (y down).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Label {
+    pub text: String,
+    pub rect: Rect,
+}
+
+/// A drawn figure: its SVG and the labels it placed.
+#[derive(Debug, Clone)]
+pub struct Figure {
+    pub svg: String,
+    pub width: u32,
+    pub height: u32,
+    pub labels: Vec<Label>,
+}
+
+impl Figure {
+    /// The figure as PNG at `scale` × its size (2 for a sharp figure on a screen).
+    pub fn png(&self, scale: f32) -> Result<Vec<u8>, PlotError> {
+        use resvg::{tiny_skia, usvg};
+        let mut opt = usvg::Options::default();
+        {
+            let db = opt.fontdb_mut();
+            db.load_font_data(FONT.to_vec());
+            db.set_sans_serif_family("DejaVu Sans");
+        }
+        let tree =
+            usvg::Tree::from_str(&self.svg, &opt).map_err(|e| PlotError::Png(e.to_string()))?;
+        let (w, h) = (
+            (self.width as f32 * scale).ceil() as u32,
+            (self.height as f32 * scale).ceil() as u32,
+        );
+        let mut pixmap =
+            tiny_skia::Pixmap::new(w, h).ok_or_else(|| PlotError::Png(format!("{w}×{h} px")))?;
+        pixmap.fill(tiny_skia::Color::WHITE);
+        resvg::render(
+            &tree,
+            tiny_skia::Transform::from_scale(scale, scale),
+            &mut pixmap.as_mut(),
+        );
+        pixmap
+            .encode_png()
+            .map_err(|e| PlotError::Png(e.to_string()))
+    }
+
+    /// Pairs of labels whose boxes overlap (none, on a figure drawn right).
+    pub fn overlapping_labels(&self) -> Vec<(String, String)> {
+        let mut out = Vec::new();
+        for (i, a) in self.labels.iter().enumerate() {
+            for b in &self.labels[i + 1..] {
+                if a.rect.intersects(&b.rect) {
+                    out.push((a.text.clone(), b.text.clone()));
+                }
+            }
+        }
+        out
+    }
+
+    /// Labels that leave the figure.
+    pub fn labels_outside(&self) -> Vec<String> {
+        let page = Rect::new(0.0, 0.0, self.width as f64, self.height as f64);
+        self.labels
+            .iter()
+            .filter(|l| !page.contains(&l.rect))
+            .map(|l| l.text.clone())
+            .collect()
+    }
+}
+
+fn face() -> &'static ttf_parser::Face<'static> {
+    static FACE: OnceLock<ttf_parser::Face<'static>> = OnceLock::new();
+    FACE.get_or_init(|| ttf_parser::Face::parse(FONT, 0).expect("the embedded font parses"))
+}
+
+/// The advance width of `text` at `size_px` in the embedded font, px.
+pub fn text_width(text: &str, size_px: f64) -> f64 {
+    let f = face();
+    let units = f.units_per_em() as f64;
+    let mut w = 0.0;
+    for c in text.chars() {
+        let adv = f
+            .glyph_index(c)
+            .and_then(|g| f.glyph_hor_advance(g))
+            .unwrap_or(f.units_per_em() / 2);
+        w += adv as f64;
+    }
+    w / units * size_px
+}
+
+/// Round tick step for a span: 1, 2 or 5 × 10ⁿ, about `n` ticks.
+pub fn nice_step(span: f64, n: f64) -> f64 {
+    if !(span.is_finite() && span > 0.0) {
+        return 1.0;
+    }
+    let raw = span / n;
+    let p = 10f64.powf(raw.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|s| *s >= raw * 0.999)
+        .unwrap_or(10.0 * p)
+}
+
+/// A range widened to whole tick steps, with a little room.
+pub fn nice_range(lo: f64, hi: f64) -> (f64, f64) {
+    let (lo, hi) = if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 1.0, hi + 1.0)
+    };
+    let s = nice_step(hi - lo, 6.0);
+    ((lo / s).floor() * s, (hi / s).ceil() * s)
+}
+
+/// Colours of series, distinguishable in print and for the common colour blindnesses
+/// (Okabe & Ito 2008), then darker variants.
+pub const PALETTE: [(u8, u8, u8); 10] = [
+    (0, 114, 178),
+    (213, 94, 0),
+    (0, 158, 115),
+    (204, 121, 167),
+    (230, 159, 0),
+    (86, 180, 233),
+    (120, 120, 120),
+    (0, 0, 0),
+    (150, 60, 0),
+    (0, 90, 60),
+];

@@ -1,0 +1,310 @@
+//! `orbitlash plot`: a run's figure from its log or CSV, PNG and SVG, with labels that
+//! never overlap, the verdict on the figure, eclipses shaded from the log, and a long
+//! run drawn as per-orbit envelopes whose edges are the true per-orbit extremes.
+
+mod common;
+
+use orbitlash::plot::run::{RunSeries, envelope, figure};
+
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
+    let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+fn run_log(dir: &std::path::Path, name: &str, sets: &[&str]) -> std::path::PathBuf {
+    let log = dir.join(format!("{name}.mcap"));
+    let mut cmd = common::bin();
+    cmd.args(["run", "--quiet", "--orbits", "3", "--out"])
+        .arg(&log);
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.code() == Some(0) || out.status.code() == Some(1),
+        "{out:?}"
+    );
+    log
+}
+
+#[test]
+fn cli_plot_a_log_as_png_and_svg_with_eclipses_verdict_and_smallest_backlash() {
+    let dir = common::tmpdir("plot-log");
+    let log = run_log(&dir, "ref", &[]);
+    let png = dir.join("ref.png");
+    let out = common::bin()
+        .arg("plot")
+        .arg(&log)
+        .arg("--out")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(png_size(&std::fs::read(&png).unwrap()), (2400, 1640));
+    let svg_path = dir.join("ref.svg");
+    let out = common::bin()
+        .arg("plot")
+        .arg(&log)
+        .arg("--out")
+        .arg(&svg_path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    for needle in [
+        "reference-hinge",
+        "PASS",
+        "temperature (°C)",
+        "backlash (µm)",
+        "simulated time (h)",
+        "eclipse",
+        "smallest allowed 5.000 µm",
+        "smallest 2",
+        "housing",
+        "gear1.r2",
+    ] {
+        assert!(svg.contains(needle), "the figure lacks {needle:?}");
+    }
+}
+
+#[test]
+fn cli_plot_a_csv_and_the_bad_inputs() {
+    let dir = common::tmpdir("plot-csv");
+    let csv = dir.join("run.csv");
+    let out = common::bin()
+        .args(["run", "--quiet", "--orbits", "2", "--no-log", "--csv"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let svg = dir.join("run.svg");
+    let out = common::bin()
+        .arg("plot")
+        .arg(&csv)
+        .arg("--out")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    // `run --csv` has no eclipse flag and no margin: no shading, no verdict claimed
+    assert!(text.contains("backlash (µm)") && !text.contains("PASS") && !text.contains("eclipse"));
+
+    // time going back names its line
+    let lines: Vec<String> = std::fs::read_to_string(&csv)
+        .unwrap()
+        .lines()
+        .map(String::from)
+        .collect();
+    let mut bad = lines.clone();
+    bad.swap(3, 4);
+    let back = dir.join("back.csv");
+    std::fs::write(&back, bad.join("\n")).unwrap();
+    let out = common::bin()
+        .arg("plot")
+        .arg(&back)
+        .arg("--out")
+        .arg(dir.join("b.png"))
+        .output()
+        .unwrap();
+    common::assert_error(
+        "back",
+        &out,
+        &["back.csv", "line 5", "time must not go back"],
+    );
+    assert!(!dir.join("b.png").exists(), "a figure of a refused input");
+    // NaN and text cells name line and column
+    let mut nan = lines.clone();
+    nan[2] = nan[2].replacen(',', ",x", 1);
+    let bad_cell = dir.join("cell.csv");
+    std::fs::write(&bad_cell, nan.join("\n")).unwrap();
+    let out = common::bin()
+        .arg("plot")
+        .arg(&bad_cell)
+        .arg("--out")
+        .arg(dir.join("c.png"))
+        .output()
+        .unwrap();
+    common::assert_error(
+        "cell",
+        &out,
+        &["cell.csv", "line 3", "column 2", "housing_k"],
+    );
+    let mut nan = lines.clone();
+    let cells: Vec<&str> = nan[4].split(',').collect();
+    nan[4] = format!("{},NaN,{}", cells[0], cells[2..].join(","));
+    let nan_path = dir.join("nan.csv");
+    std::fs::write(&nan_path, nan.join("\n")).unwrap();
+    let out = common::bin()
+        .arg("plot")
+        .arg(&nan_path)
+        .arg("--out")
+        .arg(dir.join("n.png"))
+        .output()
+        .unwrap();
+    common::assert_error(
+        "nan",
+        &out,
+        &["nan.csv", "line 5", "column 2", "not a finite number"],
+    );
+    // the figure's format from its name; never over the input
+    let out = common::bin()
+        .arg("plot")
+        .arg(&csv)
+        .arg("--out")
+        .arg(dir.join("fig.jpg"))
+        .output()
+        .unwrap();
+    common::assert_error("format", &out, &["fig.jpg", ".png or .svg"]);
+    let before = std::fs::read(&csv).unwrap();
+    let same = dir.join("same.svg");
+    std::fs::copy(&csv, &same).unwrap();
+    let out = common::bin()
+        .arg("plot")
+        .arg(&same)
+        .arg("--out")
+        .arg(&same)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(std::fs::read(&csv).unwrap(), before);
+    assert_eq!(
+        std::fs::read(&same).unwrap(),
+        before,
+        "the input was overwritten"
+    );
+}
+
+/// A failing run (the smallest allowed backlash set above what the run reaches): FAIL on
+/// the figure, the labels of the allowed line and of the smallest point placed apart.
+#[test]
+fn cli_plot_a_failing_run_says_so_and_no_labels_overlap() {
+    let dir = common::tmpdir("plot-fail");
+    let log = run_log(&dir, "fail", &["gear_pair.mesh.min_backlash_um=26"]);
+    let table = orbitlash::io::mcap_read::read_log(&log).unwrap();
+    let (h, r) = orbitlash::io::mcap_read::run_table(&table, true).unwrap();
+    let s = RunSeries::from_table("failing", &h, &r).unwrap();
+    assert_eq!(s.allowed_um.len(), 1);
+    assert!(
+        (s.allowed_um[0].1 - 26.0).abs() < 1e-6,
+        "{:?}",
+        s.allowed_um
+    );
+    let fig = figure(&s).unwrap();
+    assert!(
+        fig.svg.contains("FAIL"),
+        "no FAIL on a failing run's figure"
+    );
+    assert!(
+        fig.overlapping_labels().is_empty(),
+        "{:?}",
+        fig.overlapping_labels()
+    );
+    assert!(
+        fig.labels_outside().is_empty(),
+        "{:?}",
+        fig.labels_outside()
+    );
+    assert!(
+        fig.labels
+            .iter()
+            .any(|l| l.text.starts_with("smallest allowed 26.000"))
+    );
+    assert!(fig.labels.iter().any(|l| l.text.starts_with("smallest 2")));
+    // and the PNG renders with the embedded font
+    assert_eq!(png_size(&fig.png(1.0).unwrap()), (1200, 820));
+}
+
+/// A 40-day synthetic run, one orbit of 5400 s: the figure switches to per-orbit
+/// envelopes, in days, and keeps its labels apart; the per-orbit extremes are those of
+/// the closed form (a sine of amplitude 10 K about a drift).
+#[test]
+fn val_closed_form_long_run_is_drawn_as_per_orbit_envelopes() {
+    let period = 5400.0;
+    let n = 40 * 86_400 / 60;
+    let headers: Vec<String> = [
+        "time_s",
+        "housing_k",
+        "backlash_um",
+        "/orbit/state.sunlit",
+        "/orbit/state.orbit_number",
+        "/gears/mesh.margin_um",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let rows: Vec<Vec<f64>> = (0..n)
+        .map(|i| {
+            let t = i as f64 * 60.0;
+            let ph = (t / period).fract();
+            let temp = 280.0 + 1e-6 * t + 10.0 * (2.0 * std::f64::consts::PI * ph).sin();
+            let backlash = 30.0 - 0.2 * (temp - 280.0);
+            vec![
+                t,
+                temp,
+                backlash,
+                if ph < 0.65 { 1.0 } else { 0.0 },
+                (t / period).floor() + 1.0,
+                backlash - 5.0,
+            ]
+        })
+        .collect();
+    let s = RunSeries::from_table("synthetic 40 days", &headers, &rows).unwrap();
+    let fig = figure(&s).unwrap();
+    assert!(fig.svg.contains("simulated time (days)"));
+    assert!(fig.svg.contains("smallest and largest per orbit"));
+    assert!(
+        fig.overlapping_labels().is_empty(),
+        "{:?}",
+        fig.overlapping_labels()
+    );
+    // every whole orbit's edges are the closed form's extremes (sampled each 60 s:
+    // within 10 (1 − cos(π/90)) = 0.006 K)
+    let env = envelope(&s, &[&s.temps_k[0].1]);
+    assert_eq!(env.per, "orbit");
+    assert_eq!(env.t.len(), (40.0 * 86_400.0 / period).ceil() as usize);
+    for k in 0..env.t.len() - 1 {
+        let drift = 280.0 + 1e-6 * (k as f64 + 0.5) * period;
+        assert!(
+            (env.hi[0][k] - (drift + 10.0)).abs() < 0.01,
+            "orbit {k}: {}",
+            env.hi[0][k]
+        );
+        assert!(
+            (env.lo[0][k] - (drift - 10.0)).abs() < 0.01,
+            "orbit {k}: {}",
+            env.lo[0][k]
+        );
+    }
+    // the smallest backlash: at the largest temperature of the last orbits
+    let smallest = fig
+        .labels
+        .iter()
+        .find(|l| l.text.starts_with("smallest 2"))
+        .unwrap();
+    let t_end = 40.0 * 86_400.0;
+    let expect = 30.0 - 0.2 * (1e-6 * t_end + 10.0);
+    let shown: f64 = smallest
+        .text
+        .split_whitespace()
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (shown - expect).abs() < 0.01,
+        "{} vs {expect}",
+        smallest.text
+    );
+}
