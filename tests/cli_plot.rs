@@ -308,3 +308,27 @@ fn val_closed_form_long_run_is_drawn_as_per_orbit_envelopes() {
         smallest.text
     );
 }
+
+/// `run --plot` draws the run it made (from its log), and says when it cannot.
+#[test]
+fn cli_run_plot_draws_the_run() {
+    let dir = common::tmpdir("run-plot");
+    let fig = dir.join("run.svg");
+    let out = common::bin()
+        .args(["run", "--quiet", "--orbits", "2", "--out"])
+        .arg(dir.join("run.mcap"))
+        .arg("--plot")
+        .arg(&fig)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("plot: "));
+    let svg = std::fs::read_to_string(&fig).unwrap();
+    assert!(svg.contains("PASS") && svg.contains("eclipse"));
+    let out = common::bin()
+        .args(["run", "--quiet", "--orbits", "2", "--no-log", "--plot"])
+        .arg(dir.join("x.png"))
+        .output()
+        .unwrap();
+    common::assert_error("no log", &out, &["--plot", "--no-log"]);
+}

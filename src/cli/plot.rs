@@ -132,37 +132,41 @@ fn default_out(input: &Path) -> PathBuf {
 
 pub fn plot(a: PlotArgs) -> Result<()> {
     let out = a.out.clone().unwrap_or_else(|| default_out(&a.input));
-    format_of(&out)?;
+    draw(&a.input, &out, a.title.as_deref())?;
+    print_out(&format!("figure: {}\n", out.display()))
+}
+
+/// The figure of the run in `input` (a log or a CSV) written to `out`.
+pub fn draw(input: &Path, out: &Path, title: Option<&str>) -> Result<()> {
+    format_of(out)?;
     // The output's place is checked before the input is read.
-    Outputs::new(OutputPolicy::reading(&[&a.input])).file("--out", &out)?;
-    let is_log = a
-        .input
+    Outputs::new(OutputPolicy::reading(&[input])).file("--out", out)?;
+    let is_log = input
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-        || a.input.to_string_lossy().ends_with(".partial");
-    let (title, headers, rows) = if is_log {
-        let table = read_log(&a.input)?;
+        || input.to_string_lossy().ends_with(".partial");
+    let (name, headers, rows) = if is_log {
+        let table = read_log(input)?;
         let name = table
             .metadata
             .get("orbitlash.provenance")
             .and_then(|m| m.get("scenario_name"))
             .cloned();
         let (h, r) =
-            run_table(&table, true).map_err(|m| anyhow::anyhow!("{}: {m}", a.input.display()))?;
+            run_table(&table, true).map_err(|m| anyhow::anyhow!("{}: {m}", input.display()))?;
         (name, h, r)
     } else {
-        let (h, r) = read_csv(&a.input)?;
+        let (h, r) = read_csv(input)?;
         (None, h, r)
     };
-    let title = a.title.clone().or(title).unwrap_or_else(|| {
-        a.input
+    let title = title.map(str::to_string).or(name).unwrap_or_else(|| {
+        input
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     });
     let series = RunSeries::from_table(&title, &headers, &rows)
-        .with_context(|| format!("cannot plot {}", a.input.display()))?;
+        .with_context(|| format!("cannot plot {}", input.display()))?;
     let fig = figure(&series)?;
-    write_figure(&fig, &out, &[&a.input])?;
-    print_out(&format!("figure: {}\n", out.display()))
+    write_figure(&fig, out, &[input])
 }

@@ -56,6 +56,10 @@ pub struct RunArgs {
     /// Also write the run summary as JSON (stable keys, see the README).
     #[arg(long, value_name = "FILE.json")]
     json: Option<PathBuf>,
+    /// Also draw the run (as `orbitlash plot` draws its log): `.png` or `.svg`. Needs
+    /// the log (or `--csv` with `--no-log`: no eclipse shading then).
+    #[arg(long, value_name = "FILE.png|svg")]
+    plot: Option<PathBuf>,
     /// Find the orbit-periodic solution first (Newton shooting, marching as the
     /// fallback) and report one period of it; with --csv, exactly that period. Needs an
     /// environment that repeats every orbit (no tables or mode windows).
@@ -233,6 +237,18 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
+    if let Some(f) = &a.plot
+        && !stats.interrupted
+    {
+        // From the log (eclipses and margins in it), else the CSV.
+        let source = log_path
+            .as_ref()
+            .or(a.csv.as_ref())
+            .expect("checked in plan_outputs");
+        super::plot::draw(source, f, None)
+            .map_err(|e| anyhow!("--plot {}: {}", f.display(), error_chain(&e)))?;
+        outln!(o, "plot: {}", f.display());
+    }
     if let Some(p) = &log_path {
         outln!(
             o,
@@ -290,6 +306,16 @@ fn plan_outputs(
     // The JSON summary is written after the run, but its path is checked now.
     if let Some(j) = &a.json {
         outs.file("--json", j)?;
+    }
+    if let Some(f) = &a.plot {
+        super::plot::format_of(f)?;
+        if log_path.is_none() && a.csv.is_none() {
+            anyhow::bail!(
+                "--plot {} draws the run from its log or its CSV: drop --no-log or add --csv",
+                f.display()
+            );
+        }
+        outs.file("--plot", f)?;
     }
     Ok((outs, log_path, log_policy))
 }
