@@ -346,17 +346,22 @@ fn cli_margins_plots_are_svg_with_the_limit_and_the_bound() {
         serde_json::from_slice(&std::fs::read(dir.join("r.json")).unwrap()).unwrap();
     let hist = std::fs::read_to_string(dir.join("plots/mesh-min-backlash.svg")).unwrap();
     assert!(hist.starts_with("<svg ") && hist.ends_with("</svg>\n"));
-    // 30 bars holding the 60 samples; the limit and the 95/95 bound marked and labelled
-    assert_eq!(hist.matches("class=\"bar\"").count(), 30);
-    assert!(hist.contains("class=\"limit\"") && hist.contains("minimum 5 µm"));
+    // 30 bars (the bar colour, #96AFC8); the limit and the 95/95 bound labelled; the
+    // verdict and the counts on the figure; both axes named
+    assert_eq!(hist.matches("fill=\"#96AFC8\"").count(), 30);
+    assert!(hist.contains("minimum 5 µm"));
+    assert!(hist.contains("PASS: 60 samples, 0 below the minimum, 0 interfering"));
+    assert!(
+        hist.contains("samples per bin (bars)")
+            && hist.contains("cumulative fraction of samples (line)")
+    );
     let bound = r["pairs"][0]["tolerance_95_95_um"].as_f64().unwrap();
     assert!(
         hist.contains(&format!("95/95 bound {bound:.3} µm")),
         "{bound}"
     );
-    assert!(hist.contains("class=\"cdf\""));
     let tornado = std::fs::read_to_string(dir.join("plots/mesh-sensitivity.svg")).unwrap();
-    assert_eq!(tornado.matches("class=\"bar\"").count(), 2);
+    assert!(tornado.contains("whiskers: 95 % interval (60 samples)"));
     assert!(tornado.contains("gear_pair.mesh.pinion.tooth_thinning_um (+"));
     // a missing folder is an error, nothing written
     let out = bin()

@@ -321,7 +321,12 @@ fn cli_run_plot_draws_the_run() {
         .arg(&fig)
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("plot: "));
     let svg = std::fs::read_to_string(&fig).unwrap();
     assert!(svg.contains("PASS") && svg.contains("eclipse"));
@@ -331,4 +336,87 @@ fn cli_run_plot_draws_the_run() {
         .output()
         .unwrap();
     common::assert_error("no log", &out, &["--plot", "--no-log"]);
+}
+
+/// The margins figures on a failing run with long key paths (the case of issue 20):
+/// the minimum (20 µm) and the 95/95 bound (17.21 µm) close together, bars up to the
+/// top, a weak and a strong correlation, a constant input. No two labels overlap, none
+/// leaves the figure, the verdict and counts are on it, the weak bar is pale.
+#[test]
+fn cli_margins_figures_of_a_failing_run_with_long_key_paths_keep_labels_apart() {
+    use orbitlash::plot::margins::{DistributionInput, distribution, rho_interval, tornado};
+    let values: Vec<f64> = (0..400)
+        .map(|i| 15.0 + 10.0 * ((i as f64 * 0.618).fract()))
+        .collect();
+    let below = values.iter().filter(|v| **v < 20.0).count() as u64;
+    let fig = distribution(&DistributionInput {
+        title: "a-scenario-with-a-long-name / gear_pair_with_a_long_name: smallest backlash".into(),
+        values: &values,
+        limit_um: 20.0,
+        bound_um: Some(17.21),
+        bins: 30,
+        pass: false,
+        below,
+        interfering: 3,
+    })
+    .unwrap();
+    assert!(
+        fig.overlapping_labels().is_empty(),
+        "{:?}",
+        fig.overlapping_labels()
+    );
+    assert!(
+        fig.labels_outside().is_empty(),
+        "{:?}",
+        fig.labels_outside()
+    );
+    let texts: Vec<&str> = fig.labels.iter().map(|l| l.text.as_str()).collect();
+    assert!(
+        texts.contains(&"minimum 20 µm") && texts.contains(&"95/95 bound 17.210 µm"),
+        "{texts:?}"
+    );
+    assert!(texts.contains(
+        &format!("FAIL: 400 samples, {below} below the minimum, 3 interfering").as_str()
+    ));
+    fig.png(1.0).unwrap();
+
+    let long = "gear_pair.\"a-very-long-gear-pair-name-from-an-imported-network\".pinion.tooth_thinning_um";
+    let rows = vec![
+        (long.to_string(), 0.8),
+        (
+            "conductor.\"node-0001-with-a-long-name-node-0002\".conductance_w_per_k".to_string(),
+            -0.45,
+        ),
+        ("environment.beta_deg".to_string(), 0.01),
+        ("environment.albedo".to_string(), f64::NAN),
+    ];
+    let fig = tornado("sensitivity of the smallest backlash", &rows, 400).unwrap();
+    assert!(
+        fig.overlapping_labels().is_empty(),
+        "{:?}",
+        fig.overlapping_labels()
+    );
+    assert!(
+        fig.labels_outside().is_empty(),
+        "{:?}",
+        fig.labels_outside()
+    );
+    assert!(
+        fig.labels
+            .iter()
+            .any(|l| l.text == format!("{long} (+0.80)"))
+    );
+    assert!(
+        fig.labels
+            .iter()
+            .any(|l| l.text == "environment.albedo (no variation)")
+    );
+    assert!(!fig.svg.contains("(+0.00)"));
+    // ρ = 0.01 of 400 samples: its interval holds 0, so its bar is pale; 0.8's is not
+    let (a, b) = rho_interval(0.01, 400).unwrap();
+    assert!(a < 0.0 && b > 0.0);
+    let (a, _) = rho_interval(0.8, 400).unwrap();
+    assert!(a > 0.7);
+    assert!(fig.svg.contains("opacity=\"0.3\""), "no pale bar");
+    fig.png(1.0).unwrap();
 }

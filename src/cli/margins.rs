@@ -275,7 +275,7 @@ fn finish(
         files.push((p.to_path_buf(), samples_csv(id, outcomes).into_bytes()));
     }
     if let Some(dir) = plots {
-        files.extend(plots_of(dir, &rep, outcomes));
+        files.extend(plots_of(dir, &rep, outcomes)?);
     }
     let refs: Vec<(&Path, &[u8])> = files
         .iter()
@@ -339,7 +339,11 @@ fn run_with_progress(
 }
 
 /// The plots of `rep` for `dir`: (path, SVG text) per gear pair.
-fn plots_of(dir: &Path, rep: &Report, outcomes: &[SampleOutcome]) -> Vec<(PathBuf, Vec<u8>)> {
+fn plots_of(
+    dir: &Path,
+    rep: &Report,
+    outcomes: &[SampleOutcome],
+) -> Result<Vec<(PathBuf, Vec<u8>)>, orbitlash::plot::PlotError> {
     let mut files = Vec::new();
     for (k, p) in rep.pairs.iter().enumerate() {
         let values: Vec<f64> = outcomes
@@ -348,32 +352,37 @@ fn plots_of(dir: &Path, rep: &Report, outcomes: &[SampleOutcome]) -> Vec<(PathBu
             .map(|o| o.pairs[k].min_backlash_um)
             .collect();
         let [dist_name, tornado_name] = plot_names(&p.name);
-        let svg = orbitlash::io::svg::distribution(
-            &format!(
-                "{} / {}: smallest backlash of {} samples",
-                rep.scenario, p.name, rep.valid_samples
-            ),
-            &values,
-            p.min_backlash_allowed_um,
-            p.tolerance_95_95_um,
-            30,
-        );
-        files.push((dir.join(dist_name), svg.into_bytes()));
+        let fig =
+            orbitlash::plot::margins::distribution(&orbitlash::plot::margins::DistributionInput {
+                title: format!(
+                    "{} / {}: smallest backlash per sample",
+                    rep.scenario, p.name
+                ),
+                values: &values,
+                limit_um: p.min_backlash_allowed_um,
+                bound_um: p.tolerance_95_95_um,
+                bins: 30,
+                pass: p.verdict == orbitlash::run::summary::PassFail::Pass,
+                below: p.violations.count,
+                interfering: p.interference.count,
+            })?;
+        files.push((dir.join(dist_name), fig.svg.into_bytes()));
         let rows: Vec<(String, f64)> = p
             .sensitivities
             .iter()
             .map(|s| (s.path.clone(), s.spearman))
             .collect();
-        let svg = orbitlash::io::svg::tornado(
+        let fig = orbitlash::plot::margins::tornado(
             &format!(
                 "{} / {}: sensitivity of the smallest backlash",
                 rep.scenario, p.name
             ),
             &rows,
-        );
-        files.push((dir.join(tornado_name), svg.into_bytes()));
+            rep.valid_samples as usize,
+        )?;
+        files.push((dir.join(tornado_name), fig.svg.into_bytes()));
     }
-    files
+    Ok(files)
 }
 
 /// The human report of a margins run.

@@ -9,6 +9,7 @@
 //! Pure: the figures are strings and bytes; the CLI writes them.
 
 pub mod labels;
+pub mod margins;
 pub mod run;
 
 use std::sync::OnceLock;
