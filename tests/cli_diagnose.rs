@@ -170,17 +170,30 @@ fn cli_diagnose_heater_report_json_and_out_folder() {
     let rec = orbitlash::io::recording::Recording::read(&heater()).unwrap();
     let col = rec.channel("housing_c").unwrap();
     assert!(recorded.iter().zip(col).all(|(a, b)| Some(a.1) == *b));
-    // Plots: before and after, one mark per recorded sample.
+    // Plots: the recording and the residual before and after, one mark per recorded
+    // sample (and one in the legend) in each colour; eclipses and held-out orbits
+    // shaded and named in the legend, beside the plots.
     for ch in ["housing_c", "backlash_um"] {
         let svg = std::fs::read_to_string(out.join(format!("residuals-{ch}.svg"))).unwrap();
-        for class in ["before", "after"] {
-            let path = svg
+        for (what, colour) in [
+            ("recorded", "#3C3C3C"),
+            ("before", "#D55E00"),
+            ("after", "#0072B2"),
+        ] {
+            let marks = svg
                 .lines()
-                .find(|l| l.contains(&format!("class=\"{class}\"")))
-                .unwrap_or_else(|| panic!("{ch}: no {class} series"));
-            assert_eq!(path.matches('M').count(), 2271, "{ch} {class}");
+                .filter(|l| l.starts_with("<circle") && l.contains(&format!("fill=\"{colour}\"")))
+                .count();
+            assert_eq!(marks, 2271 + 1, "{ch} {what}");
         }
-        assert!(svg.contains("class=\"holdout\""));
+        for text in [
+            "held out (never fitted)",
+            "eclipse",
+            "baseline model",
+            "corrected model",
+        ] {
+            assert!(svg.contains(text), "{ch}: no {text:?}");
+        }
     }
 }
 

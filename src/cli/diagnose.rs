@@ -261,8 +261,9 @@ fn out_files(
         orbitlash::io::diagnose_out::series_csv(d).into_bytes(),
     ));
     for (c, name) in d.series.channels.iter().enumerate() {
-        let svg = orbitlash::io::svg::residuals(&d.series, c);
-        files.push((dir.join(residual_plot_name(name)), svg.into_bytes()));
+        let fig = orbitlash::plot::diagnose::channel(&d.series, c)
+            .map_err(|e| anyhow::anyhow!("cannot draw {}: {e}", residual_plot_name(name)))?;
+        files.push((dir.join(residual_plot_name(name)), fig.svg.into_bytes()));
     }
     Ok(files)
 }

@@ -123,6 +123,8 @@ pub struct Channel {
     pub sensor: usize,
     /// `K` for temperatures (residuals of °C and K columns are kelvin), `um` for backlash.
     pub unit: &'static str,
+    /// The unit of the channel's values as recorded: `°C`, `K` or `µm`.
+    pub value_unit: &'static str,
     pub is_temperature: bool,
 }
 
@@ -181,6 +183,11 @@ impl Observations {
                     name: name.clone(),
                     sensor: k,
                     unit: if temp { "K" } else { "um" },
+                    value_unit: match sc.sensors[k].unit() {
+                        crate::run::sensor::ColumnUnit::Celsius => "°C",
+                        crate::run::sensor::ColumnUnit::Kelvin => "K",
+                        crate::run::sensor::ColumnUnit::Micrometre => "µm",
+                    },
                     is_temperature: temp,
                 }
             })

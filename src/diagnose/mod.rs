@@ -403,6 +403,8 @@ pub struct Series {
     pub time_s: Vec<f64>,
     pub channels: Vec<String>,
     pub units: Vec<&'static str>,
+    /// The unit of each channel's values as recorded (`°C`, `K`, `µm`).
+    pub value_units: Vec<&'static str>,
     pub recorded: Vec<Vec<Option<f64>>>,
     pub baseline: Vec<Vec<f64>>,
     pub corrected: Vec<Vec<f64>>,
@@ -410,6 +412,8 @@ pub struct Series {
     pub holdout_end_s: f64,
     /// Each channel's estimated noise (K or µm).
     pub noise: Vec<f64>,
+    /// The model's eclipse windows (entry, exit), s, within the recording.
+    pub eclipses: Vec<(f64, f64)>,
 }
 
 /// Simulated sensor values at `times` (ascending, from ≥ 0), per sensor (the
@@ -594,12 +598,19 @@ fn baseline_report(
         time_s: obs.time_s.clone(),
         channels: names.clone(),
         units: obs.channels.iter().map(|c| c.unit).collect(),
+        value_units: obs.channels.iter().map(|c| c.value_unit).collect(),
         recorded: obs.values.clone(),
         baseline: per_channel(&base.pred),
         corrected: per_channel(&base.pred),
         train_end_s: obs.split.train_end_s.min(last_s),
         holdout_end_s: obs.split.holdout_end_s.min(last_s),
         noise: base.noise.clone(),
+        eclipses: obs
+            .eclipses
+            .iter()
+            .map(|&(a, b)| (a.max(0.0), b.min(last_s)))
+            .filter(|(a, b)| b > a)
+            .collect(),
     };
     let report = Diagnosis {
         verdict: if at_noise {

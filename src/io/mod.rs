@@ -12,4 +12,3 @@ pub mod protobuf;
 pub mod recording;
 pub mod scenario_toml;
 pub mod scene;
-pub mod svg;

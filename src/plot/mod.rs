@@ -8,6 +8,7 @@
 //!
 //! Pure: the figures are strings and bytes; the CLI writes them.
 
+pub mod diagnose;
 pub mod labels;
 pub mod margins;
 pub mod run;
