@@ -180,11 +180,12 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     // last orbit's window.
     let mut stats_run = WindowStats::last(t_end_s);
     let mut mesh = MeshStats::last(period_s.min(t_end_s));
+    let mut daily = orbitlash::run::summary::DailyStats::default();
     let interrupt = interrupt_flag();
     let wall = Instant::now();
     let result = {
         let mut observers = (
-            (&mut stats_obs, &mut stats_run, &mut mesh),
+            (&mut stats_obs, &mut stats_run, &mut mesh, &mut daily),
             csv,
             &mut log,
             progress,
@@ -225,6 +226,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     }
     o.push_str(&format_summary(&sc.thermal, &stats, window, period_s));
     o.push_str(&format_mesh(&sc, &mesh));
+    o.push_str(&format_days(&sc, &daily, &stats));
     if a.verbose {
         o.push_str(&format_solver(&stats, wall_s, t_end_s / period_s));
     }
@@ -509,11 +511,179 @@ fn orbit_phase(sc: &Scenario, t: f64) -> String {
     }
     let env = &sc.thermal.environment;
     format!(
-        "t = {t:.1} s, orbit {}, θ = {:.1}° from noon, {}",
+        "{}, orbit {}, θ = {:.1}° from noon, {}",
+        when(sc, t),
         env.orbit_number(t),
         env.orbit_phase_deg(t),
         if env.sunlit(t) { "sunlit" } else { "eclipse" }
     )
+}
+
+/// A time of the run for reports: seconds in a run of up to three days; past that,
+/// days (day 1 is t = 0 … 86 400 s) with the seconds after them; and the UTC date and
+/// time when the scenario is dated.
+fn when(sc: &Scenario, t: f64) -> String {
+    let env = &sc.thermal.environment;
+    let utc = env.start_utc().and_then(|u| {
+        let ms = (t * 1e3).round();
+        (ms.abs() < 1e15).then(|| u + chrono_ms(ms as i64))
+    });
+    let long = sc.run.duration_s > 3.0 * orbitlash::run::summary::DAY_S;
+    let base = if long {
+        format!(
+            "t = {:.3} d ({t:.1} s, day {})",
+            t / orbitlash::run::summary::DAY_S,
+            (t / orbitlash::run::summary::DAY_S).floor() as u64 + 1
+        )
+    } else {
+        format!("t = {t:.1} s")
+    };
+    match utc {
+        Some(u) => format!("{base}, {} UTC", u.format("%Y-%m-%d %H:%M:%S")),
+        None => base,
+    }
+}
+
+fn chrono_ms(ms: i64) -> sgp4::chrono::Duration {
+    sgp4::chrono::Duration::milliseconds(ms)
+}
+
+/// The per-day summary of a run longer than three days: per day (per week past 60
+/// days), each pair's smallest and largest backlash, the coldest and hottest node, and
+/// the heaters' duty cycle; then each heater's duty cycle and energy over the run.
+fn format_days(
+    sc: &Scenario,
+    daily: &orbitlash::run::summary::DailyStats,
+    stats: &RunStats,
+) -> String {
+    use orbitlash::run::summary::DAY_S;
+    let mut o = String::new();
+    let span = stats.t_end_s - stats.t_start_s;
+    if !daily.heaters.is_empty() {
+        outln!(
+            o,
+            "
+heaters over the run:"
+        );
+        let mut t = table::new(
+            &[
+                "heater",
+                "power W",
+                "on h",
+                "duty %",
+                "energy kJ",
+                "energy Wh",
+            ],
+            &[
+                Align::Left,
+                Align::Right,
+                Align::Right,
+                Align::Right,
+                Align::Right,
+                Align::Right,
+            ],
+        );
+        for (k, (name, p)) in daily.heaters.iter().enumerate() {
+            let on: f64 = daily.days.iter().map(|d| d.heater_on_s[k]).sum();
+            let j: f64 = daily.days.iter().map(|d| d.heater_j[k]).sum();
+            t.add_row(vec![
+                name.clone(),
+                format!("{p:.2}"),
+                format!("{:.2}", on / 3600.0),
+                format!("{:.1}", 100.0 * on / span.max(1e-9)),
+                format!("{:.1}", j / 1e3),
+                format!("{:.2}", j / 3600.0),
+            ]);
+        }
+        o += &table::render(&t, "  ");
+    }
+    if span <= 3.0 * DAY_S || daily.days.is_empty() {
+        return o;
+    }
+    let per = if daily.days.len() > 60 { 7 } else { 1 };
+    outln!(
+        o,
+        "
+per {} (day 1 starts at t = 0{}; each node's range per orbit: `orbitlash plot` on the log):",
+        if per == 7 { "week" } else { "day" },
+        sc.thermal
+            .environment
+            .start_utc()
+            .map_or(String::new(), |u| format!(
+                ", {} UTC",
+                u.format("%Y-%m-%d %H:%M")
+            ))
+    );
+    let mut head: Vec<String> = vec![if per == 7 {
+        "days".into()
+    } else {
+        "day".into()
+    }];
+    for g in &sc.gears {
+        head.push(format!("{} min µm", g.name));
+        head.push(format!("{} max µm", g.name));
+    }
+    head.extend(["coldest node °C".to_string(), "hottest node °C".to_string()]);
+    if !daily.heaters.is_empty() {
+        head.push("heaters on %".to_string());
+    }
+    let refs: Vec<&str> = head.iter().map(String::as_str).collect();
+    let mut aligns = vec![Align::Right; head.len()];
+    aligns[head.len() - 2 - usize::from(!daily.heaters.is_empty())] = Align::Left;
+    aligns[head.len() - 1 - usize::from(!daily.heaters.is_empty())] = Align::Left;
+    let mut t = table::new(&refs, &aligns);
+    for chunk in daily.days.chunks(per) {
+        let first = chunk[0].day + 1;
+        let last = chunk[chunk.len() - 1].day + 1;
+        let mut row = vec![if first == last {
+            first.to_string()
+        } else {
+            format!("{first}–{last}")
+        }];
+        for k in 0..sc.gears.len() {
+            let lo = chunk
+                .iter()
+                .map(|d| d.backlash_m[k].0)
+                .fold(f64::INFINITY, f64::min);
+            let hi = chunk
+                .iter()
+                .map(|d| d.backlash_m[k].1)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let um = |v: f64| {
+                if v.is_finite() {
+                    format!("{:.3}", v * 1e6)
+                } else {
+                    "–".into()
+                }
+            };
+            row.push(um(lo));
+            row.push(um(hi));
+        }
+        let (mut cold, mut hot) = ((f64::INFINITY, 0usize), (f64::NEG_INFINITY, 0usize));
+        for d in chunk {
+            for (i, &(a, b)) in d.node_k.iter().enumerate() {
+                if a < cold.0 {
+                    cold = (a, i);
+                }
+                if b > hot.0 {
+                    hot = (b, i);
+                }
+            }
+        }
+        row.push(format!("{:.2} {}", k_to_c(cold.0), daily.nodes[cold.1]));
+        row.push(format!("{:.2} {}", k_to_c(hot.0), daily.nodes[hot.1]));
+        if !daily.heaters.is_empty() {
+            let on: f64 = chunk.iter().flat_map(|d| d.heater_on_s.iter()).sum();
+            let cov: f64 = chunk.iter().map(|d| d.covered_s).sum();
+            row.push(format!(
+                "{:.1}",
+                100.0 * on / (cov * daily.heaters.len() as f64).max(1e-9)
+            ));
+        }
+        t.add_row(row);
+    }
+    o += &table::render(&t, "  ");
+    o
 }
 
 /// The first lines of the summary: one PASS/FAIL line per gear pair, then what ran.

@@ -691,3 +691,100 @@ impl RunSummary {
         }
     }
 }
+
+/// A run's days (of simulated time, from t = 0): per day, each gear pair's smallest
+/// and largest exact backlash, each node's range, and each heater's time on and
+/// energy. A step counts to the day it starts in (steps are minutes; a day is 86 400 s);
+/// extremes are those at step ends (`MeshStats` refines the run's within steps: they
+/// agree to a few nanometres).
+#[derive(Debug, Clone, Default)]
+pub struct DailyStats {
+    pub nodes: Vec<String>,
+    pub heaters: Vec<(String, f64)>,
+    pub days: Vec<Day>,
+}
+
+/// One day of [`DailyStats`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Day {
+    /// Day number from 0.
+    pub day: u64,
+    /// Per pair: (smallest, largest) exact backlash, m (NaN: no valid mesh that day).
+    pub backlash_m: Vec<(f64, f64)>,
+    /// Per node: (smallest, largest) temperature, K.
+    pub node_k: Vec<(f64, f64)>,
+    /// Per heater: seconds on, and energy, J.
+    pub heater_on_s: Vec<f64>,
+    pub heater_j: Vec<f64>,
+    /// Seconds of the day the run covered.
+    pub covered_s: f64,
+}
+
+pub const DAY_S: f64 = 86_400.0;
+
+impl DailyStats {
+    fn day(&mut self, t_s: f64, pairs: usize) -> &mut Day {
+        let d = (t_s / DAY_S).floor().max(0.0) as u64;
+        if self.days.last().is_none_or(|l| l.day != d) {
+            self.days.push(Day {
+                day: d,
+                backlash_m: vec![(f64::INFINITY, f64::NEG_INFINITY); pairs],
+                node_k: vec![(f64::INFINITY, f64::NEG_INFINITY); self.nodes.len()],
+                heater_on_s: vec![0.0; self.heaters.len()],
+                heater_j: vec![0.0; self.heaters.len()],
+                covered_s: 0.0,
+            });
+        }
+        self.days.last_mut().expect("pushed")
+    }
+}
+
+impl Observer for DailyStats {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        self.nodes = r
+            .model
+            .network
+            .nodes
+            .iter()
+            .map(|n| n.name.clone())
+            .collect();
+        self.heaters = r
+            .model
+            .network
+            .heaters
+            .iter()
+            .map(|h| (h.name.clone(), h.power_w))
+            .collect();
+        self.days.clear();
+        let pairs = r.gears.len();
+        let day = self.day(r.t_start_s, pairs);
+        for (i, &t) in r.temps_k.iter().enumerate() {
+            day.node_k[i] = (t, t);
+        }
+        Ok(())
+    }
+
+    fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
+        let heaters: Vec<f64> = self.heaters.iter().map(|h| h.1).collect();
+        let day = self.day(s.data.t0_s, s.mesh.len());
+        day.covered_s += s.data.h_s;
+        for (k, m) in s.mesh.iter().enumerate() {
+            let b = m.backlash_exact_m;
+            if b.is_finite() {
+                let e = &mut day.backlash_m[k];
+                *e = (e.0.min(b), e.1.max(b));
+            }
+        }
+        for (i, &t) in s.data.temps1_k.iter().enumerate() {
+            let e = &mut day.node_k[i];
+            *e = (e.0.min(t), e.1.max(t));
+        }
+        for (k, &on) in s.heaters_on.iter().enumerate() {
+            if on {
+                day.heater_on_s[k] += s.data.h_s;
+                day.heater_j[k] += heaters[k] * s.data.h_s;
+            }
+        }
+        Ok(())
+    }
+}
