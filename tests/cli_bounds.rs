@@ -112,19 +112,21 @@ fn cli_a_run_over_the_step_limit_needs_force() {
 
 #[test]
 fn cli_a_log_larger_than_the_free_space_is_refused_before_writing() {
-    // ten years logged every millisecond: 3e11 samples, hundreds of terabytes
+    // ten years as CSV every millisecond: 3e11 rows, tens of terabytes (a log is never
+    // bigger than one sample per solver step, whatever --log-every asks)
     refused(
         "disk",
         &[("orbits = 6", "duration_days = 3650")],
         &[
             "run",
             "--quiet",
-            "--log-every",
-            "0.001s",
-            "--out",
-            "big.mcap",
+            "--no-log",
+            "--csv",
+            "big.csv",
+            "--set",
+            "run.output_interval_s=0.001",
         ],
-        &["the outputs would take about", "free", "--log-every"],
+        &["the outputs would take about", "free", "output_interval_s"],
     );
 }
 

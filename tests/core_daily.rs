@@ -51,7 +51,7 @@ fn core_daily_stats_of_90_days_agree_with_the_run() {
         .map(|d| d.backlash_m[0].0)
         .fold(f64::INFINITY, f64::min);
     // The days see step ends; MeshStats refines the extremes within steps: the same to
-    // a nanometre, never below it.
+    // a few nanometres, never beyond it.
     let run_min = mesh.run_pairs[0].min_exact_m;
     assert!(
         smallest >= run_min && smallest - run_min < 5e-9,

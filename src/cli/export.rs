@@ -22,6 +22,61 @@ pub struct ExportArgs {
     /// `run --csv` columns.
     #[arg(long)]
     all: bool,
+    /// Resample onto a grid of this interval (e.g. 30s): t = 0, 30, 60 … s up to the
+    /// log's end, each column linear between the logged rows around it. Without it,
+    /// the rows are the log's own (every solver step, or `run --log-every`), unevenly
+    /// spaced. `run --csv` writes the same grid from the solver's own interpolant.
+    #[arg(long, value_name = "SECONDSs", value_parser = every_arg)]
+    every: Option<f64>,
+}
+
+fn every_arg(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .strip_suffix('s')
+        .unwrap_or(s)
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not an interval in seconds (e.g. 30s)"))?;
+    if v.is_finite() && v >= 1e-3 {
+        Ok(v)
+    } else {
+        Err(format!("`{s}`: the interval must be at least 0.001 s"))
+    }
+}
+
+/// `rows` (time first, ascending) at t = 0, dt, 2 dt … ≤ the last row's time, each
+/// column linear between the rows around it (a row at the time itself is taken as is).
+pub fn resample(rows: &[Vec<f64>], dt: f64) -> Vec<Vec<f64>> {
+    let Some(last) = rows.last() else {
+        return Vec::new();
+    };
+    let t_end = last[0];
+    let mut out = Vec::new();
+    let mut j = 0;
+    let mut k = 0u64;
+    loop {
+        let t = k as f64 * dt;
+        if t > t_end * (1.0 + 1e-12) {
+            break;
+        }
+        while j + 1 < rows.len() && rows[j + 1][0] < t {
+            j += 1;
+        }
+        let (a, b) = (&rows[j], &rows[(j + 1).min(rows.len() - 1)]);
+        let row = if (b[0] - t).abs() <= 1e-9 * t.abs().max(1.0) {
+            b.clone()
+        } else if b[0] > a[0] && t >= a[0] {
+            let w = (t - a[0]) / (b[0] - a[0]);
+            a.iter().zip(b).map(|(x, y)| x + w * (y - x)).collect()
+        } else {
+            a.clone()
+        };
+        let mut row = row;
+        row[0] = t;
+        out.push(row);
+        k += 1;
+    }
+    out
 }
 
 pub fn export(a: ExportArgs) -> Result<()> {
@@ -43,6 +98,10 @@ pub fn export(a: ExportArgs) -> Result<()> {
     }
     let (headers, rows) =
         run_table(&table, a.all).map_err(|m| anyhow::anyhow!("{}: {m}", a.log.display()))?;
+    let rows = match a.every {
+        Some(dt) => resample(&rows, dt),
+        None => rows,
+    };
     let mut text = headers.join(",");
     text.push('\n');
     for row in &rows {

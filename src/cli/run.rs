@@ -468,7 +468,8 @@ shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --forc
         {
             anyhow::bail!(
                 "the outputs would take about {} but the file system of {} has {} free; \
-log less often (--log-every 60s), skip the log (--no-log) or shorten the run",
+log less often (--log-every 600s), sample the CSV more coarsely (--set run.output_interval_s=…), \
+skip the log (--no-log) or shorten the run",
                 size(need),
                 path.display(),
                 size(free as f64)

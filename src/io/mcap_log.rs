@@ -46,7 +46,10 @@ use crate::thermal::ThermalModel;
 pub enum LogCadence {
     /// Every n-th accepted step (1 = every step).
     Steps(u64),
-    /// Every `dt` seconds of simulated time, from the solver's interpolant.
+    /// Every `dt` seconds of simulated time, from the solver's interpolant, at most
+    /// once per accepted step (the last multiple of `dt` the step reaches): where the
+    /// steps are longer than `dt` the log follows them, so it is never bigger than
+    /// logging every step.
     Interval(f64),
 }
 
@@ -83,7 +86,7 @@ impl LogCadence {
     pub fn cadence(&self) -> Cadence {
         match *self {
             LogCadence::Steps(n) => Cadence::Steps(n),
-            LogCadence::Interval(dt) => Cadence::Interval(dt),
+            LogCadence::Interval(dt) => Cadence::IntervalAtMostPerStep(dt),
         }
     }
 
@@ -91,7 +94,7 @@ impl LogCadence {
     pub fn samples(&self, steps: f64, t_end_s: f64) -> f64 {
         1.0 + match *self {
             LogCadence::Steps(n) => steps / n as f64,
-            LogCadence::Interval(dt) => t_end_s / dt,
+            LogCadence::Interval(dt) => (t_end_s / dt).min(steps),
         }
     }
 }

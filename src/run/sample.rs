@@ -260,6 +260,11 @@ pub enum Cadence {
     Steps(u64),
     /// The start, then every multiple of the interval, s (interpolated).
     Interval(f64),
+    /// As `Interval`, but at most one sample per accepted step: the last multiple of
+    /// the interval the step reaches (none if it reaches none). Where the solver's
+    /// steps are longer than the interval, the samples follow the steps, so there are
+    /// never more samples than steps (a log's `--log-every 60s`).
+    IntervalAtMostPerStep(f64),
     /// The given times, s, ascending (interpolated; a time equal to the run's start is
     /// the start state; times before the start are skipped).
     Times(std::sync::Arc<[f64]>),
@@ -286,7 +291,7 @@ pub struct Sampler {
 impl Sampler {
     pub fn new(cadence: Cadence, want: Want) -> Sampler {
         let grid = Grid::new(match &cadence {
-            Cadence::Interval(dt) => *dt,
+            Cadence::Interval(dt) | Cadence::IntervalAtMostPerStep(dt) => *dt,
             _ => 1.0,
         });
         Sampler {
@@ -319,7 +324,7 @@ impl Sampler {
         }
         self.steps = 0;
         match &self.cadence {
-            Cadence::Interval(_) => self.grid.start(t0),
+            Cadence::Interval(_) | Cadence::IntervalAtMostPerStep(_) => self.grid.start(t0),
             Cadence::Steps(_) => {}
             Cadence::Times(ts) => {
                 self.next_time = ts.partition_point(|&t| t < t0);
@@ -351,6 +356,16 @@ impl Sampler {
             }
             Cadence::Interval(_) => {
                 while let Some(t) = self.grid.next_due(t1) {
+                    step.sample_at(t, self.want, &mut self.sample);
+                    f(&self.sample)?;
+                }
+            }
+            Cadence::IntervalAtMostPerStep(_) => {
+                let mut last = None;
+                while let Some(t) = self.grid.next_due(t1) {
+                    last = Some(t);
+                }
+                if let Some(t) = last {
                     step.sample_at(t, self.want, &mut self.sample);
                     f(&self.sample)?;
                 }
