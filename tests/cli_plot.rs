@@ -420,3 +420,59 @@ fn cli_margins_figures_of_a_failing_run_with_long_key_paths_keep_labels_apart() 
     assert!(fig.svg.contains("opacity=\"0.3\""), "no pale bar");
     fig.png(1.0).unwrap();
 }
+
+/// `plot` on the 90-day scenario's log: days on the axis, per-orbit envelopes, the
+/// smallest backlash marked, labels apart (the figure in docs/img is this one).
+#[test]
+fn cli_plot_the_90_day_run() {
+    let dir = common::tmpdir("plot-90");
+    let log = dir.join("d90.mcap");
+    let scenario =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml");
+    let out = common::bin()
+        .arg("run")
+        .arg(&scenario)
+        .args(["--quiet", "--log-every", "600s", "--out"])
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = orbitlash::io::mcap_read::read_log(&log).unwrap();
+    let (h, r) = orbitlash::io::mcap_read::run_table(&table, true).unwrap();
+    let s = RunSeries::from_table("hinge-90-day-drift", &h, &r).unwrap();
+    let fig = figure(&s).unwrap();
+    assert!(
+        fig.svg.contains("simulated time (days)")
+            && fig.svg.contains("smallest and largest per orbit")
+    );
+    assert!(fig.svg.contains("PASS"));
+    assert!(
+        fig.labels
+            .iter()
+            .any(|l| l.text.starts_with("smallest 25.")),
+        "{:?}",
+        fig.labels
+    );
+    assert!(
+        fig.overlapping_labels().is_empty(),
+        "{:?}",
+        fig.overlapping_labels()
+    );
+    assert!(fig.labels_outside().is_empty());
+    let png = dir.join("d90.png");
+    let out = common::bin()
+        .arg("plot")
+        .arg(&log)
+        .arg("--out")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(png_size(&std::fs::read(&png).unwrap()), (2400, 1640));
+    let _ = std::fs::remove_dir_all(&dir);
+}
