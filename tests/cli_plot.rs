@@ -143,7 +143,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     );
     let mut nan = lines.clone();
     let cells: Vec<&str> = nan[4].split(',').collect();
-    nan[4] = format!("{},NaN,{}", cells[0], cells[2..].join(","));
+    nan[4] = format!("{},inf,{}", cells[0], cells[2..].join(","));
     let nan_path = dir.join("nan.csv");
     std::fs::write(&nan_path, nan.join("\n")).unwrap();
     let out = common::bin()
@@ -154,9 +154,57 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
         .output()
         .unwrap();
     common::assert_error(
-        "nan",
+        "inf",
         &out,
-        &["nan.csv", "line 5", "column 2", "not a finite number"],
+        &["nan.csv", "line 5", "column 2", "not a number"],
+    );
+    // NaN is the tool's own mark of no valid mesh: drawn as a gap, not refused; a NaN
+    // time is refused
+    let b = lines[0]
+        .split(',')
+        .position(|h| h == "backlash_um")
+        .unwrap();
+    let mut gap = lines.clone();
+    gap[6] = gap[6]
+        .split(',')
+        .enumerate()
+        .map(|(i, c)| if i == b { "NaN" } else { c })
+        .collect::<Vec<_>>()
+        .join(",");
+    let gap_path = dir.join("gap.csv");
+    std::fs::write(&gap_path, gap.join("\n")).unwrap();
+    let out = common::bin()
+        .arg("plot")
+        .arg(&gap_path)
+        .arg("--out")
+        .arg(dir.join("g.svg"))
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut nan_time = lines.clone();
+    nan_time[6] = nan_time[6].replacen(
+        &nan_time[6].split(',').next().unwrap().to_string(),
+        "NaN",
+        1,
+    );
+    let nt = dir.join("nantime.csv");
+    std::fs::write(&nt, nan_time.join("\n")).unwrap();
+    let out = common::bin()
+        .arg("plot")
+        .arg(&nt)
+        .arg("--out")
+        .arg(dir.join("t.svg"))
+        .output()
+        .unwrap();
+    common::assert_error(
+        "nan time",
+        &out,
+        &["nantime.csv", "line 7", "column 1", "time_s"],
     );
     // the figure's format from its name; never over the input
     let out = common::bin()
@@ -475,4 +523,39 @@ fn cli_plot_the_90_day_run() {
     assert_eq!(out.status.code(), Some(0));
     assert_eq!(png_size(&std::fs::read(&png).unwrap()), (2400, 1640));
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A pair with no valid mesh anywhere (all NaN) is drawn as an empty panel, promptly,
+/// with no smallest to mark; a pair named as the log cannot name a topic (`Stage-2`,
+/// topic `/gears/stage_2`) still gets its smallest allowed line and the verdict.
+#[test]
+fn cli_plot_no_valid_mesh_and_pair_names_that_are_not_identifiers() {
+    let headers: Vec<String> = [
+        "time_s",
+        "housing_k",
+        "Stage-2.backlash_um",
+        "/gears/stage_2.margin_um",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let nan_rows: Vec<Vec<f64>> = (0..50)
+        .map(|i| vec![i as f64 * 60.0, 290.0, f64::NAN, f64::NAN])
+        .collect();
+    let s = RunSeries::from_table("no mesh", &headers, &nan_rows).unwrap();
+    let t0 = std::time::Instant::now();
+    let fig = figure(&s).unwrap();
+    assert!(t0.elapsed().as_secs_f64() < 5.0);
+    assert!(!fig.labels.iter().any(|l| l.text.starts_with("smallest ")));
+    let rows: Vec<Vec<f64>> = (0..50)
+        .map(|i| {
+            let b = 10.0 + (i as f64 * 0.2).sin();
+            vec![i as f64 * 60.0, 290.0, b, b - 9.5]
+        })
+        .collect();
+    let s = RunSeries::from_table("stage 2", &headers, &rows).unwrap();
+    assert_eq!(s.allowed_um.len(), 1);
+    assert!((s.allowed_um[0].1 - 9.5).abs() < 1e-9);
+    let fig = figure(&s).unwrap();
+    assert!(fig.svg.contains("FAIL"), "9.5 allowed, 9.0 reached");
 }

@@ -342,6 +342,29 @@ fn cli_export_csv_every_resamples_onto_the_run_grid_and_logs_never_grow() {
             );
         }
     }
+    // whole-number columns (orbit number, the eclipse flag) are held, not blended
+    let all = run_ok(&[
+        "export-csv",
+        log.to_str().unwrap(),
+        "--all",
+        "--every",
+        "30s",
+    ]);
+    let head: Vec<&str> = all.lines().next().unwrap().split(',').collect();
+    for name in ["/orbit/state.orbit_number", "/orbit/state.sunlit"] {
+        let c = head.iter().position(|h| *h == name).unwrap();
+        for l in all.lines().skip(1) {
+            let v: f64 = l.split(',').nth(c).unwrap().parse().unwrap();
+            assert_eq!(v.fract(), 0.0, "{name} = {v}");
+        }
+    }
+    // a grid of more than 1e7 rows is refused, not built in memory
+    let out = bin()
+        .args(["export-csv", log.to_str().unwrap(), "--every", "0.001s"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("choose a longer interval"));
     let every_step = std::fs::metadata(&log).unwrap().len();
     for every in ["1s", "30s"] {
         let p = dir.join(format!("e{every}.mcap"));

@@ -96,7 +96,9 @@ def export(log, out):
     name = prov.get("scenario_name", os.path.basename(log))
     rec_id = f"{prov.get('scenario_sha256', 'unknown')[:16]}-seed{prov.get('seed', '0')}-{os.path.basename(log)}"
     rec = rr.RecordingStream(APP_ID, recording_id=rec_id)
-    rec.save(out)
+    # written beside, renamed when whole: a failed export leaves no half .rrd
+    partial = out + ".partial"
+    rec.save(partial)
 
     def times(t_ns):
         t = np.asarray(t_ns, dtype=np.int64)
@@ -134,7 +136,11 @@ def export(log, out):
                 allowed = [b - m for b, m in zip(bv, v)]
                 entity = f"backlash/{pair}/minimum_allowed"
                 send(entity, bt, allowed, f"{pair} smallest allowed (µm)")
-                i = min(range(len(bv)), key=lambda k: bv[k])
+                finite = [k for k in range(len(bv)) if math.isfinite(bv[k])]
+                if not finite:
+                    groups[f"backlash, gear pair {pair} (µm)"].append(entity)
+                    continue
+                i = min(finite, key=lambda k: bv[k])
                 low = f"backlash/{pair}/smallest"
                 rec.log(low, rr.SeriesPoints(names=f"{pair} smallest: {bv[i]:.3f} µm", marker_sizes=8.0), static=True)
                 rec.send_columns(low, indexes=times([bt[i]]), columns=rr.Scalars.columns(scalars=[bv[i]]))
@@ -223,6 +229,8 @@ def export(log, out):
     )
     rec.send_blueprint(blueprint)
     rec.flush()
+    rec.disconnect()
+    os.replace(partial, out)
     n = sum(len(x[0]) for x in series.values())
     print(f"{out}: {len(series)} series, {n} points, {len(texts)} events; app id {APP_ID!r}, "
           f"timeline sim_time{' and utc' if origin_ns else ''}")
@@ -242,8 +250,10 @@ def main():
         return 2
     try:
         export(a.log, out)
-    except (OSError, ValueError, RuntimeError) as e:
-        print(f"error: {e}", file=sys.stderr)
+    except Exception as e:  # a damaged or foreign file: the reader's own words, exit 2
+        print(f"error: {a.log}: {type(e).__name__}: {e}", file=sys.stderr)
+        if os.path.exists(out + ".partial"):
+            os.remove(out + ".partial")
         return 2
     return 0
 

@@ -44,12 +44,20 @@ fn every_arg(s: &str) -> Result<f64, String> {
     }
 }
 
+/// The most rows `--every` writes.
+const MAX_EVERY_ROWS: f64 = 1e7;
+
 /// `rows` (time first, ascending) at t = 0, dt, 2 dt … ≤ the last row's time, each
-/// column linear between the rows around it (a row at the time itself is taken as is).
+/// column linear between the rows around it (a row at the time itself is taken as
+/// is); a column whose every value is a whole number (an orbit number, the sunlit
+/// flag, a heater's state) keeps the value of the row before instead.
 pub fn resample(rows: &[Vec<f64>], dt: f64) -> Vec<Vec<f64>> {
     let Some(last) = rows.last() else {
         return Vec::new();
     };
+    let discrete: Vec<bool> = (0..last.len())
+        .map(|c| c > 0 && rows.iter().all(|r| r[c].is_nan() || r[c].fract() == 0.0))
+        .collect();
     let t_end = last[0];
     let mut out = Vec::new();
     let mut j = 0;
@@ -67,7 +75,11 @@ pub fn resample(rows: &[Vec<f64>], dt: f64) -> Vec<Vec<f64>> {
             b.clone()
         } else if b[0] > a[0] && t >= a[0] {
             let w = (t - a[0]) / (b[0] - a[0]);
-            a.iter().zip(b).map(|(x, y)| x + w * (y - x)).collect()
+            a.iter()
+                .zip(b)
+                .zip(&discrete)
+                .map(|((x, y), d)| if *d { *x } else { x + w * (y - x) })
+                .collect()
         } else {
             a.clone()
         };
@@ -99,7 +111,16 @@ pub fn export(a: ExportArgs) -> Result<()> {
     let (headers, rows) =
         run_table(&table, a.all).map_err(|m| anyhow::anyhow!("{}: {m}", a.log.display()))?;
     let rows = match a.every {
-        Some(dt) => resample(&rows, dt),
+        Some(dt) => {
+            let t_end = rows.last().map_or(0.0, |r| r[0]);
+            if t_end / dt > MAX_EVERY_ROWS {
+                anyhow::bail!(
+                    "--every {dt} s over {t_end:.0} s would write {:.1e} rows (at most {MAX_EVERY_ROWS:.0e}): choose a longer interval",
+                    t_end / dt
+                );
+            }
+            resample(&rows, dt)
+        }
         None => rows,
     };
     let mut text = headers.join(",");

@@ -87,10 +87,13 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
                 .trim()
                 .parse()
                 .ok()
-                .filter(|v: &f64| v.is_finite())
+                // NaN is the tool's own "no valid mesh here" (run --csv, export-csv),
+                // drawn as a gap; an infinity, text, or a time that is not finite is
+                // not a value.
+                .filter(|v: &f64| !v.is_infinite() && (c > 0 || v.is_finite()))
                 .ok_or_else(|| {
                     anyhow::anyhow!(
-                        "{}: line {line}, column {} ({}): {:?} is not a finite number",
+                        "{}: line {line}, column {} ({}): {:?} is not a number (NaN or finite; time finite)",
                         path.display(),
                         c + 1,
                         headers.get(c).map_or("?", String::as_str),
@@ -131,7 +134,19 @@ fn default_out(input: &Path) -> PathBuf {
 }
 
 pub fn plot(a: PlotArgs) -> Result<()> {
-    let out = a.out.clone().unwrap_or_else(|| default_out(&a.input));
+    let out = match &a.out {
+        Some(o) => o.clone(),
+        None => {
+            // the default, logs/<name>.png: logs/ is made if missing
+            let o = default_out(&a.input);
+            Outputs::new(OutputPolicy::default_in_logs(&[&a.input])).folder(
+                "the default figure folder",
+                o.parent().expect("logs/<name>"),
+                true,
+            )?;
+            o
+        }
+    };
     draw(&a.input, &out, a.title.as_deref())?;
     print_out(&format!("figure: {}\n", out.display()))
 }

@@ -239,6 +239,12 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
+    if a.plot.is_some() && stats.interrupted {
+        outln!(
+            o,
+            "plot: not drawn (the run was interrupted); `orbitlash plot` draws the log as far as it goes"
+        );
+    }
     if let Some(f) = &a.plot
         && !stats.interrupted
     {

@@ -1001,16 +1001,24 @@ pub fn diagnose(
         // residual (the baseline not at the noise); the verdict stays unexplained.
         let share = 1.0 - last.holdout_chi2 / reference.holdout_chi2;
         if !explained && (report.verdict == Verdict::Consistent || share < opts.min_partial_share) {
-            chain.clear();
-            report.notes.push(format!(
-                "the best candidate, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of the \
+            // What forward selection reached, and why it is not reported.
+            let names: Vec<String> = last.members.iter().map(|&m| cands[m].label()).collect();
+            let note = format!(
+                "the best {}, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of the \
                  baseline's held-out residual (a partial finding needs {:.0} %) and does not \
                  bring the held-out orbits to the noise",
-                cands[first.members[0]].label(),
-                problem.bic_gain(first, reference.train_chi2, first.theta.len()),
-                100.0 * (1.0 - first.holdout_chi2 / reference.holdout_chi2),
+                if names.len() == 1 {
+                    "candidate"
+                } else {
+                    "set of candidates"
+                },
+                names.join(" with "),
+                problem.bic_gain(last, reference.train_chi2, last.theta.len()),
+                100.0 * share,
                 100.0 * opts.min_partial_share
-            ));
+            );
+            report.notes.push(note);
+            chain.clear();
         }
     }
     let best = chain.last().cloned();

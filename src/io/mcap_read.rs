@@ -394,7 +394,8 @@ pub fn run_table(table: &LogTable, all: bool) -> Result<(Vec<String>, Vec<Vec<f6
     let mut pairs: Vec<(String, String)> = table
         .channel_metadata
         .iter()
-        .filter(|(t, _)| t.starts_with("/gears/"))
+        // the gear pairs (a `--scene` log also has `/gears/<pair>/scene`: not a pair)
+        .filter(|(t, _)| t.starts_with("/gears/") && !t.ends_with("/scene"))
         .map(|(t, m)| {
             (
                 t.clone(),

@@ -141,6 +141,11 @@ pub fn nice_step(span: f64, n: f64) -> f64 {
 
 /// A range widened to whole tick steps, with a little room.
 pub fn nice_range(lo: f64, hi: f64) -> (f64, f64) {
+    // No finite data (a pair with no valid mesh anywhere): an empty 0 … 1 axis; an
+    // infinite range would never finish its ticks.
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (0.0, 1.0);
+    }
     let (lo, hi) = if hi > lo {
         (lo, hi)
     } else {

@@ -96,7 +96,9 @@ impl RunSeries {
         for (pair, b) in &s.backlash_um {
             let m = margins
                 .iter()
-                .find(|(p, _)| p == pair)
+                // the log's topic is the pair's name made an identifier (`Stage-2` →
+                // `/gears/stage_2`)
+                .find(|(p, _)| p == pair || *p == crate::io::log_schema::identifier(pair))
                 .or_else(|| (s.backlash_um.len() == 1 && margins.len() == 1).then(|| &margins[0]));
             if let Some((_, m)) = m
                 && let Some(v) = b.iter().zip(m).map(|(b, m)| b - m).find(|v| v.is_finite())
@@ -164,7 +166,8 @@ pub fn envelope(s: &RunSeries, series: &[&Vec<f64>]) -> Envelope {
     } else {
         "bin"
     };
-    let n_bins = bins.iter().max().copied().unwrap_or(0) + 1;
+    // distinct bins (a CSV excerpt late in a long run starts at a high orbit number)
+    let n_bins = 1 + bins.windows(2).filter(|w| w[0] != w[1]).count();
     if n_bins > MAX_BINS {
         bins = s
             .time_s

@@ -243,6 +243,27 @@ impl Grid {
         self.next = (t_start_s / self.interval_s).floor() as i64 + 1;
     }
 
+    /// The last grid time at or before `t1_s` not given yet, if any; the ones before
+    /// it are skipped (in one jump: a step may pass millions of them).
+    pub fn last_due(&mut self, t1_s: f64) -> Option<f64> {
+        let first = self.next_due(t1_s)?;
+        let lim = t1_s * (1.0 + 1e-12);
+        let mut n = (lim / self.interval_s).floor() as i64;
+        // the same test as next_due's, whatever the division rounded to
+        while n as f64 * self.interval_s > lim {
+            n -= 1;
+        }
+        while (n + 1) as f64 * self.interval_s <= lim {
+            n += 1;
+        }
+        if n >= self.next {
+            self.next = n + 1;
+            Some(n as f64 * self.interval_s)
+        } else {
+            Some(first)
+        }
+    }
+
     /// The next grid time at or before `t1_s` (a step's end), if any; each once.
     pub fn next_due(&mut self, t1_s: f64) -> Option<f64> {
         let t = self.next as f64 * self.interval_s;
@@ -361,10 +382,7 @@ impl Sampler {
                 }
             }
             Cadence::IntervalAtMostPerStep(_) => {
-                let mut last = None;
-                while let Some(t) = self.grid.next_due(t1) {
-                    last = Some(t);
-                }
+                let last = self.grid.last_due(t1);
                 if let Some(t) = last {
                     step.sample_at(t, self.want, &mut self.sample);
                     f(&self.sample)?;

@@ -709,7 +709,8 @@ pub struct DailyStats {
 pub struct Day {
     /// Day number from 0.
     pub day: u64,
-    /// Per pair: (smallest, largest) exact backlash, m (NaN: no valid mesh that day).
+    /// Per pair: (smallest, largest) exact backlash, m ((∞, −∞): no valid mesh that
+    /// day).
     pub backlash_m: Vec<(f64, f64)>,
     /// Per node: (smallest, largest) temperature, K.
     pub node_k: Vec<(f64, f64)>,
@@ -722,21 +723,21 @@ pub struct Day {
 
 pub const DAY_S: f64 = 86_400.0;
 
-impl DailyStats {
-    fn day(&mut self, t_s: f64, pairs: usize) -> &mut Day {
-        let d = (t_s / DAY_S).floor().max(0.0) as u64;
-        if self.days.last().is_none_or(|l| l.day != d) {
-            self.days.push(Day {
-                day: d,
-                backlash_m: vec![(f64::INFINITY, f64::NEG_INFINITY); pairs],
-                node_k: vec![(f64::INFINITY, f64::NEG_INFINITY); self.nodes.len()],
-                heater_on_s: vec![0.0; self.heaters.len()],
-                heater_j: vec![0.0; self.heaters.len()],
-                covered_s: 0.0,
-            });
-        }
-        self.days.last_mut().expect("pushed")
+/// The day `t_s` falls in, started when it is a new one (a new day allocates; a step
+/// within a day does not).
+fn day_of(days: &mut Vec<Day>, t_s: f64, pairs: usize, nodes: usize, heaters: usize) -> &mut Day {
+    let d = (t_s / DAY_S).floor().max(0.0) as u64;
+    if days.last().is_none_or(|l| l.day != d) {
+        days.push(Day {
+            day: d,
+            backlash_m: vec![(f64::INFINITY, f64::NEG_INFINITY); pairs],
+            node_k: vec![(f64::INFINITY, f64::NEG_INFINITY); nodes],
+            heater_on_s: vec![0.0; heaters],
+            heater_j: vec![0.0; heaters],
+            covered_s: 0.0,
+        });
     }
+    days.last_mut().expect("pushed")
 }
 
 impl Observer for DailyStats {
@@ -756,17 +757,35 @@ impl Observer for DailyStats {
             .map(|h| (h.name.clone(), h.power_w))
             .collect();
         self.days.clear();
-        let pairs = r.gears.len();
-        let day = self.day(r.t_start_s, pairs);
+        let day = day_of(
+            &mut self.days,
+            r.t_start_s,
+            r.gears.len(),
+            self.nodes.len(),
+            self.heaters.len(),
+        );
         for (i, &t) in r.temps_k.iter().enumerate() {
             day.node_k[i] = (t, t);
+        }
+        // The start state counts, as it does for MeshStats (a cold start's backlash).
+        for (k, m) in r.mesh.iter().enumerate() {
+            let b = m.backlash_exact_m;
+            if b.is_finite() {
+                day.backlash_m[k] = (b, b);
+            }
         }
         Ok(())
     }
 
     fn on_step(&mut self, s: &StepView<'_>) -> ObserverResult {
-        let heaters: Vec<f64> = self.heaters.iter().map(|h| h.1).collect();
-        let day = self.day(s.data.t0_s, s.mesh.len());
+        let heaters = &self.heaters;
+        let day = day_of(
+            &mut self.days,
+            s.data.t0_s,
+            s.mesh.len(),
+            self.nodes.len(),
+            heaters.len(),
+        );
         day.covered_s += s.data.h_s;
         for (k, m) in s.mesh.iter().enumerate() {
             let b = m.backlash_exact_m;
@@ -782,7 +801,7 @@ impl Observer for DailyStats {
         for (k, &on) in s.heaters_on.iter().enumerate() {
             if on {
                 day.heater_on_s[k] += s.data.h_s;
-                day.heater_j[k] += heaters[k] * s.data.h_s;
+                day.heater_j[k] += heaters[k].1 * s.data.h_s;
             }
         }
         Ok(())

@@ -31,11 +31,16 @@ def main():
     p.add_argument("--cells", default="2x3")
     a = p.parse_args()
     cols, rows = (int(x) for x in a.cells.split("x"))
+    # ORBITLASH_REQUIRE_VIEWER=1 (CI): a viewer that cannot start is a failure, not a skip
+    strict = os.environ.get("ORBITLASH_REQUIRE_VIEWER") == "1"
+    if os.path.abspath(a.shot) == os.path.abspath(a.log):
+        print("FAIL: the screenshot would overwrite the log")
+        return 2
     rerun = shutil.which("rerun", path=os.path.dirname(sys.executable)) or shutil.which("rerun")
     xvfb = shutil.which("xvfb-run")
     if not rerun or not xvfb:
-        print(f"SKIP: the Rerun viewer cannot start here ({'no rerun' if not rerun else 'no xvfb-run'})")
-        return 0
+        print(f"{'FAIL' if strict else 'SKIP'}: the Rerun viewer cannot start here ({'no rerun' if not rerun else 'no xvfb-run'})")
+        return 1 if strict else 0
     rrd = os.path.splitext(a.shot)[0] + ".rrd"
     r = subprocess.run([sys.executable, EXPORT, a.log, "-o", rrd])
     if r.returncode != 0:
@@ -53,7 +58,7 @@ def main():
         return 1
     if v.returncode != 0 or not os.path.exists(a.shot):
         tail = "\n".join(v.stderr.strip().splitlines()[-5:])
-        if "adapter" in v.stderr.lower() or "vulkan" in v.stderr.lower() or "display" in v.stderr.lower():
+        if not strict and any(w in v.stderr.lower() for w in ("adapter", "vulkan", "display")):
             print(f"SKIP: the Rerun viewer could not start a renderer here:\n{tail}")
             return 0
         print(f"FAIL: the viewer exited {v.returncode} without a screenshot:\n{tail}")
