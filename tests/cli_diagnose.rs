@@ -195,6 +195,17 @@ fn cli_diagnose_heater_report_json_and_out_folder() {
             assert!(svg.contains(text), "{ch}: no {text:?}");
         }
     }
+    // The overview: every channel titled with its held-out RMSE before → after, the
+    // numbers of the report
+    let overview = std::fs::read_to_string(out.join("overview.svg")).unwrap();
+    for (ch, after) in r["heldout_rmse"].as_object().unwrap() {
+        let before = r["baseline"]["heldout_rmse"][ch].as_f64().unwrap();
+        let title = format!("held-out RMSE {before:.2} → {:.2}", after.as_f64().unwrap());
+        assert!(
+            overview.contains(&title),
+            "{ch}: no {title:?} in the overview"
+        );
+    }
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> PathBuf {

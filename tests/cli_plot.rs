@@ -559,3 +559,48 @@ fn cli_plot_no_valid_mesh_and_pair_names_that_are_not_identifiers() {
     let fig = figure(&s).unwrap();
     assert!(fig.svg.contains("FAIL"), "9.5 allowed, 9.0 reached");
 }
+
+/// `environment --plot`: each face's fluxes over an orbit, eclipses shaded; a scenario
+/// without faces is refused with the reason.
+#[test]
+fn cli_environment_plot_draws_the_face_fluxes() {
+    let dir = common::tmpdir("env-plot");
+    let fig = dir.join("faces.svg");
+    let cubesat =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml");
+    let out = common::bin()
+        .arg("environment")
+        .arg(&cubesat)
+        .arg("--plot")
+        .arg(&fig)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(&fig).unwrap();
+    for needle in [
+        "direct Sun (W/m²)",
+        "Earth albedo (W/m²)",
+        "Earth infrared (W/m²)",
+        "panel_pz.pz",
+        "eclipse",
+        "time (h)",
+    ] {
+        assert!(svg.contains(needle), "no {needle:?}");
+    }
+    let reference =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml");
+    let out = common::bin()
+        .arg("environment")
+        .arg(&reference)
+        .arg("--plot")
+        .arg(dir.join("r.svg"))
+        .output()
+        .unwrap();
+    common::assert_error("no faces", &out, &["--plot", "no [[face]]"]);
+    assert!(!dir.join("r.svg").exists());
+}

@@ -27,7 +27,9 @@ pub struct DiagnoseArgs {
     /// place that is not an input): `corrected.toml` (the scenario with the accepted
     /// effects, runnable as it is), `diagnose.mcap` (recording, baseline, corrected and
     /// residuals side by side), `series.csv` (the same series as CSV, for any plotting
-    /// tool) and `residuals-<channel>.svg` (before and after).
+    /// tool), `overview.svg` (every channel, recorded against the baseline and
+    /// corrected models) and `residuals-<channel>.svg` (one channel and its residual
+    /// before and after).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
     /// Whole orbits held out at the end of the recording for validation (default: a
@@ -63,7 +65,12 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     }
     if let Some(dir) = &a.out {
         outs.folder("--out", dir, true)?;
-        for name in ["corrected.toml", "diagnose.mcap", "series.csv"] {
+        for name in [
+            "corrected.toml",
+            "diagnose.mcap",
+            "series.csv",
+            "overview.svg",
+        ] {
             outs.file(&format!("--out ({name})"), &dir.join(name))?;
         }
     }
@@ -260,6 +267,16 @@ fn out_files(
         dir.join("series.csv"),
         orbitlash::io::diagnose_out::series_csv(d).into_bytes(),
     ));
+    let title = format!(
+        "{}: {} against the model, before and after",
+        loaded.scenario.name,
+        Path::new(recording)
+            .file_name()
+            .map_or(recording.to_string(), |n| n.to_string_lossy().into_owned())
+    );
+    let fig = orbitlash::plot::overview::overview(&d.series, &title)
+        .map_err(|e| anyhow::anyhow!("cannot draw overview.svg: {e}"))?;
+    files.push((dir.join("overview.svg"), fig.svg.into_bytes()));
     for (c, name) in d.series.channels.iter().enumerate() {
         let fig = orbitlash::plot::diagnose::channel(&d.series, c)
             .map_err(|e| anyhow::anyhow!("cannot draw {}: {e}", residual_plot_name(name)))?;

@@ -37,6 +37,10 @@ pub struct EnvironmentArgs {
     /// `.earth_ir_w_per_m2` (incident, before absorptivity).
     #[arg(long)]
     csv: Option<PathBuf>,
+    /// Draw each face's incident solar, albedo and Earth-infrared flux against time,
+    /// eclipses shaded: `.png` or `.svg` (the series of `--csv`).
+    #[arg(long, value_name = "FILE.png|svg")]
+    plot: Option<PathBuf>,
     /// Change a number of the scenario by its key path (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
@@ -53,6 +57,12 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         )?),
         None => None,
     };
+    let input_paths: Vec<PathBuf> = loaded.inputs().iter().map(|p| p.to_path_buf()).collect();
+    if let Some(p) = &a.plot {
+        super::plot::format_of(p)?;
+        orbitlash::io::output::Outputs::new(OutputPolicy::reading(&loaded.inputs()))
+            .file("--plot", p)?;
+    }
     let sc = loaded
         .scenario
         .with_orbits(a.orbits)
@@ -160,7 +170,67 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     if let Some(f) = csv {
         f.commit()?;
     }
+    if let Some(p) = &a.plot {
+        if faces.is_empty() {
+            bail!(
+                "--plot {}: the scenario has no [[face]] to draw",
+                p.display()
+            );
+        }
+        let text = series(env, &faces, horizon, step, &|_| None);
+        let fig = face_figure(&text, &format!("{}: incident flux per face", sc.name))?;
+        let inputs: Vec<&std::path::Path> = input_paths.iter().map(PathBuf::as_path).collect();
+        super::plot::write_figure(&fig, p, &inputs)?;
+        outln!(o, "plot: {}", p.display());
+    }
     print_out(&o)
+}
+
+/// The figure of the `--csv` series `text` (without its utc column).
+fn face_figure(text: &str, title: &str) -> Result<orbitlash::plot::Figure> {
+    use orbitlash::plot::faces::{FaceSeries, face_fluxes};
+    let mut lines = text.lines();
+    // (the series is made without its utc cells; the header still names the column)
+    let header: Vec<&str> = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .filter(|h| *h != "utc")
+        .collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    let col = |name: &str| header.iter().position(|h| *h == name);
+    let values = |i: usize| {
+        rows.iter()
+            .map(|r| r.get(i).copied().unwrap_or(f64::NAN))
+            .collect::<Vec<f64>>()
+    };
+    let (Some(t), Some(lit)) = (col("time_s"), col("sunlit")) else {
+        bail!("the environment series lacks time_s or sunlit");
+    };
+    let mut faces = Vec::new();
+    for (i, h) in header.iter().enumerate() {
+        if let Some(name) = h.strip_suffix(".solar_w_per_m2") {
+            let (Some(a), Some(e)) = (
+                col(&format!("{name}.albedo_w_per_m2")),
+                col(&format!("{name}.earth_ir_w_per_m2")),
+            ) else {
+                continue;
+            };
+            faces.push(FaceSeries {
+                name: name.to_string(),
+                solar: values(i),
+                albedo: values(a),
+                earth_ir: values(e),
+            });
+        }
+    }
+    Ok(face_fluxes(title, &values(t), &values(lit), &faces)?)
 }
 
 /// Every eclipse (umbra entry, exit) from 0 to `horizon_s`, as the run would land on

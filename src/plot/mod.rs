@@ -9,8 +9,10 @@
 //! Pure: the figures are strings and bytes; the CLI writes them.
 
 pub mod diagnose;
+pub mod faces;
 pub mod labels;
 pub mod margins;
+pub mod overview;
 pub mod run;
 
 use std::sync::OnceLock;

@@ -1,0 +1,249 @@
+//! The overview of a diagnosis: every channel in a grid, the recording against the
+//! baseline and corrected models, each panel titled with its held-out RMSE before and
+//! after; eclipses and the held-out orbits shaded; one legend on top (the figure of
+//! `docs/validation.md`, written by `diagnose --out` as `overview.svg`).
+
+use plotters::prelude::*;
+
+use super::labels::{Placer, Rect};
+use super::{FAMILY, Figure, Label, PlotError, draw_err, nice_range, nice_step, text_width};
+use crate::diagnose::Series;
+
+const BEFORE: RGBColor = RGBColor(213, 94, 0);
+const AFTER: RGBColor = RGBColor(0, 114, 178);
+const RECORDED: RGBColor = RGBColor(40, 40, 40);
+const ECLIPSE: RGBColor = RGBColor(222, 226, 236);
+const HELD_OUT: RGBColor = RGBColor(254, 243, 216);
+
+/// RMS of recorded − model over the held-out orbits (NaN: none there).
+fn heldout_rms(s: &Series, c: usize, model: &[f64]) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (j, &t) in s.time_s.iter().enumerate() {
+        if t > s.train_end_s
+            && t <= s.holdout_end_s
+            && let Some(v) = s.recorded[c][j]
+        {
+            sum += (v - model[j]).powi(2);
+            n += 1;
+        }
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        (sum / n as f64).sqrt()
+    }
+}
+
+/// The overview figure of `s`, titled `title`.
+pub fn overview(s: &Series, title: &str) -> Result<Figure, PlotError> {
+    let n = s.channels.len().max(1);
+    let cols = if n == 1 { 1 } else { 2 };
+    let rows = n.div_ceil(cols);
+    let (w, panel_h, top) = (1200u32, 230u32, 80u32);
+    let h = top + rows as u32 * panel_h + 40;
+    let span = s.time_s.last().copied().unwrap_or(1.0).max(1.0);
+    let (unit_s, tunit) = if span <= 3.0 * 86_400.0 {
+        (3600.0, "h")
+    } else {
+        (86_400.0, "days")
+    };
+    let tx = |t: f64| t / unit_s;
+    let (x0, x1) = (0.0, tx(span));
+    let mut svg = String::new();
+    let mut labels = Vec::new();
+    let mut placer = Placer::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        let page = Rect::new(0.0, 0.0, w as f64, h as f64);
+        root.draw(&Text::new(
+            title.to_string(),
+            (20, 10),
+            (FAMILY, 19).into_font().color(&BLACK),
+        ))
+        .map_err(draw_err)?;
+        let r = Placer::text_box(title, 19.0, 20.0, 10.0);
+        placer.avoid(r);
+        labels.push(Label {
+            text: title.to_string(),
+            rect: r,
+        });
+        // One legend row under the title.
+        let items: [(&str, RGBColor, u8); 5] = [
+            ("recorded", RECORDED, 0),
+            ("baseline model", BEFORE, 1),
+            ("corrected model", AFTER, 1),
+            ("eclipse", ECLIPSE, 2),
+            ("held out (never fitted)", HELD_OUT, 2),
+        ];
+        let mut x = 24.0;
+        for (text, color, kind) in items {
+            let ym = 50;
+            match kind {
+                0 => root
+                    .draw(&Circle::new((x as i32 + 12, ym), 3, color.filled()))
+                    .map_err(draw_err)?,
+                1 => root
+                    .draw(&PathElement::new(
+                        vec![(x as i32, ym), (x as i32 + 24, ym)],
+                        color.stroke_width(3),
+                    ))
+                    .map_err(draw_err)?,
+                _ => root
+                    .draw(&Rectangle::new(
+                        [(x as i32, ym - 6), (x as i32 + 24, ym + 6)],
+                        color.filled(),
+                    ))
+                    .map_err(draw_err)?,
+            }
+            let ((tx0, ty0), r) = placer.place(
+                text,
+                14.0,
+                (x + 26.0, ym as f64),
+                &[super::labels::Side::Right],
+                &page,
+            );
+            root.draw(&Text::new(
+                text.to_string(),
+                (tx0 as i32, ty0 as i32),
+                (FAMILY, 14).into_font().color(&BLACK),
+            ))
+            .map_err(draw_err)?;
+            labels.push(Label {
+                text: text.to_string(),
+                rect: r,
+            });
+            x = r.x1 + 24.0;
+        }
+        let area = root.clone().shrink((0, top), (w, rows as u32 * panel_h));
+        let panels = area.split_evenly((rows, cols));
+        for (c, panel) in panels.iter().enumerate().take(s.channels.len()) {
+            let unit = s.value_units.get(c).copied().unwrap_or("");
+            let rec: Vec<(f64, f64)> = s
+                .time_s
+                .iter()
+                .zip(&s.recorded[c])
+                .filter_map(|(t, v)| v.filter(|v| v.is_finite()).map(|v| (tx(*t), v)))
+                .collect();
+            let vals = rec
+                .iter()
+                .map(|p| p.1)
+                .chain(s.baseline[c].iter().copied())
+                .chain(s.corrected[c].iter().copied());
+            let (lo, hi) = vals
+                .filter(|v| v.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v), b.max(v))
+                });
+            if !lo.is_finite() {
+                continue;
+            }
+            let (ylo, yhi) = nice_range(lo, hi);
+            let head = format!(
+                "{} ({unit}): held-out RMSE {:.2} → {:.2}",
+                s.channels[c],
+                heldout_rms(s, c, &s.baseline[c]),
+                heldout_rms(s, c, &s.corrected[c])
+            );
+            let mut chart = ChartBuilder::on(panel)
+                .margin(8)
+                .margin_top(28)
+                .x_label_area_size(28)
+                .y_label_area_size(48)
+                .build_cartesian_2d(x0..x1, ylo..yhi)
+                .map_err(draw_err)?;
+            let ystep = nice_step(yhi - ylo, 4.0);
+            let ydec = if ystep >= 1.0 {
+                0
+            } else {
+                (-ystep.log10().floor()) as usize
+            };
+            let xstep = nice_step(x1 - x0, 8.0);
+            let xdec = if xstep >= 1.0 {
+                0
+            } else {
+                (-xstep.log10().floor()) as usize
+            };
+            chart
+                .configure_mesh()
+                .y_labels(((yhi - ylo) / ystep).round() as usize + 1)
+                .x_labels(((x1 - x0) / xstep).round() as usize + 1)
+                .y_label_formatter(&|v| format!("{v:.ydec$}"))
+                .x_label_formatter(&|v| format!("{v:.xdec$}"))
+                .light_line_style(TRANSPARENT)
+                .bold_line_style(RGBColor(230, 230, 230))
+                .label_style((FAMILY, 12))
+                .draw()
+                .map_err(draw_err)?;
+            let (ha, hb) = (tx(s.train_end_s), tx(s.holdout_end_s.max(s.train_end_s)));
+            if ha < x1 {
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(ha, ylo), (hb.min(x1), yhi)],
+                        HELD_OUT.filled(),
+                    )))
+                    .map_err(draw_err)?;
+            }
+            chart
+                .draw_series(s.eclipses.iter().map(|&(a, b)| {
+                    Rectangle::new([(tx(a), ylo), (tx(b), yhi)], ECLIPSE.mix(0.8).filled())
+                }))
+                .map_err(draw_err)?;
+            for (series, color) in [(&s.baseline[c], BEFORE), (&s.corrected[c], AFTER)] {
+                chart
+                    .draw_series(LineSeries::new(
+                        s.time_s
+                            .iter()
+                            .zip(series.iter())
+                            .filter(|(_, v)| v.is_finite())
+                            .map(|(t, v)| (tx(*t), *v)),
+                        color.stroke_width(2),
+                    ))
+                    .map_err(draw_err)?;
+            }
+            chart
+                .draw_series(
+                    rec.iter()
+                        .map(|p| Circle::new(*p, 1, RECORDED.mix(0.8).filled())),
+                )
+                .map_err(draw_err)?;
+            let (xr, yr) = chart.plotting_area().get_pixel_range();
+            let tw = text_width(&head, 13.0);
+            let pos = (
+                ((xr.start + xr.end) as f64 - tw) / 2.0,
+                yr.start as f64 - 22.0,
+            );
+            let r = Placer::text_box(&head, 13.0, pos.0, pos.1);
+            root.draw(&Text::new(
+                head.clone(),
+                (pos.0 as i32, pos.1 as i32),
+                (FAMILY, 13).into_font().color(&BLACK),
+            ))
+            .map_err(draw_err)?;
+            labels.push(Label {
+                text: head,
+                rect: r,
+            });
+        }
+        let foot = format!("time since the recording's start ({tunit})");
+        let fw = text_width(&foot, 14.0);
+        let pos = ((w as f64 - fw) / 2.0, h as f64 - 28.0);
+        root.draw(&Text::new(
+            foot.clone(),
+            (pos.0 as i32, pos.1 as i32),
+            (FAMILY, 14).into_font().color(&BLACK),
+        ))
+        .map_err(draw_err)?;
+        labels.push(Label {
+            text: foot.clone(),
+            rect: Placer::text_box(&foot, 14.0, pos.0, pos.1),
+        });
+        root.present().map_err(draw_err)?;
+    }
+    Ok(Figure {
+        svg,
+        width: w,
+        height: h,
+        labels,
+    })
+}
