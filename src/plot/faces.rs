@@ -16,6 +16,9 @@ pub struct FaceSeries {
     pub earth_ir: Vec<f64>,
 }
 
+/// Which of a face's fluxes a panel draws.
+type Flux = fn(&FaceSeries) -> &Vec<f64>;
+
 /// `time_s` ascending; `sunlit` 0 … 1 (penumbra between).
 pub fn face_fluxes(
     title: &str,
@@ -71,7 +74,7 @@ pub fn face_fluxes(
             text: title.to_string(),
             rect: r,
         });
-        let kinds: [(&str, fn(&FaceSeries) -> &Vec<f64>); 3] = [
+        let kinds: [(&str, Flux); 3] = [
             ("direct Sun (W/m²)", |f| &f.solar),
             ("Earth albedo (W/m²)", |f| &f.albedo),
             ("Earth infrared (W/m²)", |f| &f.earth_ir),
