@@ -71,7 +71,7 @@ pub fn resample(rows: &[Vec<f64>], dt: f64) -> Vec<Vec<f64>> {
             j += 1;
         }
         let (a, b) = (&rows[j], &rows[(j + 1).min(rows.len() - 1)]);
-        let row = if (b[0] - t).abs() <= 1e-9 * t.abs().max(1.0) {
+        let mut row = if (b[0] - t).abs() <= 1e-9 * t.abs().max(1.0) {
             b.clone()
         } else if b[0] > a[0] && t >= a[0] {
             let w = (t - a[0]) / (b[0] - a[0]);
@@ -83,7 +83,6 @@ pub fn resample(rows: &[Vec<f64>], dt: f64) -> Vec<Vec<f64>> {
         } else {
             a.clone()
         };
-        let mut row = row;
         row[0] = t;
         out.push(row);
         k += 1;

@@ -533,7 +533,7 @@ fn when(sc: &Scenario, t: f64) -> String {
     let env = &sc.thermal.environment;
     let utc = env.start_utc().and_then(|u| {
         let ms = (t * 1e3).round();
-        (ms.abs() < 1e15).then(|| u + chrono_ms(ms as i64))
+        (ms.abs() < 1e15).then(|| u + sgp4::chrono::Duration::milliseconds(ms as i64))
     });
     let long = sc.run.duration_s > 3.0 * orbitlash::run::summary::DAY_S;
     let base = if long {
@@ -549,10 +549,6 @@ fn when(sc: &Scenario, t: f64) -> String {
         Some(u) => format!("{base}, {} UTC", u.format("%Y-%m-%d %H:%M:%S")),
         None => base,
     }
-}
-
-fn chrono_ms(ms: i64) -> sgp4::chrono::Duration {
-    sgp4::chrono::Duration::milliseconds(ms)
 }
 
 /// The per-day summary of a run longer than three days: per day (per week past 60

@@ -7,17 +7,16 @@
 use plotters::prelude::*;
 
 use super::labels::Placer;
-use super::{FAMILY, Figure, Label, PlotError, draw_err, nice_range, nice_step};
+use super::{
+    AFTER, BEFORE, ECLIPSE, FAMILY, Figure, HELD_OUT, Label, PlotError, Swatch, decimals, draw_err,
+    nice_range, nice_step, time_unit,
+};
 use crate::diagnose::Series;
 
 const W: u32 = 1200;
 const H: u32 = 760;
 const LEGEND_X: i32 = 930;
-const BEFORE: RGBColor = RGBColor(213, 94, 0);
-const AFTER: RGBColor = RGBColor(0, 114, 178);
 const RECORDED: RGBColor = RGBColor(60, 60, 60);
-const ECLIPSE: RGBColor = RGBColor(222, 226, 236);
-const HELD_OUT: RGBColor = RGBColor(254, 243, 216);
 
 /// The figure of channel `c` of `s`.
 pub fn channel(s: &Series, c: usize) -> Result<Figure, PlotError> {
@@ -29,15 +28,10 @@ pub fn channel(s: &Series, c: usize) -> Result<Figure, PlotError> {
         .get(c)
         .copied()
         .unwrap_or(if is_temp { "K" } else { "µm" });
-    let offset = 0.0;
     let res_unit = if is_temp { "K" } else { "µm" };
     let sigma = s.noise.get(c).copied().unwrap_or(f64::NAN);
     let span = s.time_s.last().copied().unwrap_or(1.0).max(1.0);
-    let (unit_s, tunit) = if span <= 3.0 * 86_400.0 {
-        (3600.0, "h")
-    } else {
-        (86_400.0, "days")
-    };
+    let (unit_s, tunit) = time_unit(span);
     let tx = |t: f64| t / unit_s;
     let (x0, x1) = (0.0, tx(span));
     // (t, recorded, baseline, corrected) where there is a reading
@@ -46,14 +40,7 @@ pub fn channel(s: &Series, c: usize) -> Result<Figure, PlotError> {
         .iter()
         .enumerate()
         .filter_map(|(j, &t)| {
-            s.recorded[c][j].map(|v| {
-                (
-                    tx(t),
-                    v - offset,
-                    s.baseline[c][j] - offset,
-                    s.corrected[c][j] - offset,
-                )
-            })
+            s.recorded[c][j].map(|v| (tx(t), v, s.baseline[c][j], s.corrected[c][j]))
         })
         .filter(|p| p.1.is_finite() && p.2.is_finite() && p.3.is_finite())
         .collect();
@@ -119,17 +106,9 @@ pub fn channel(s: &Series, c: usize) -> Result<Figure, PlotError> {
                 .build_cartesian_2d(x0..x1, ylo..yhi)
                 .map_err(draw_err)?;
             let ystep = nice_step(yhi - ylo, 6.0);
-            let ydec = if ystep >= 1.0 {
-                0
-            } else {
-                (-ystep.log10().floor()) as usize
-            };
+            let ydec = decimals(ystep);
             let xstep = nice_step(x1 - x0, 10.0);
-            let xdec = if xstep >= 1.0 {
-                0
-            } else {
-                (-xstep.log10().floor()) as usize
-            };
+            let xdec = decimals(xstep);
             let yfmt = move |v: &f64| format!("{v:.ydec$}");
             let xfmt = move |v: &f64| format!("{v:.xdec$}");
             let ydesc = if values {
@@ -212,59 +191,34 @@ pub fn channel(s: &Series, c: usize) -> Result<Figure, PlotError> {
             }
             let (_, yr) = chart.plotting_area().get_pixel_range();
             // The legend beside the panel.
-            let lines: Vec<(String, RGBColor, bool)> = if values {
+            let mut entries: Vec<(String, Swatch)> = if values {
                 vec![
-                    ("recorded".into(), RECORDED, true),
-                    ("baseline model".into(), BEFORE, false),
-                    ("corrected model".into(), AFTER, false),
-                    ("eclipse".into(), ECLIPSE, false),
-                    ("held out (never fitted)".into(), HELD_OUT, false),
+                    ("recorded".into(), Swatch::Dot(RECORDED)),
+                    ("baseline model".into(), Swatch::Line(BEFORE, 3)),
+                    ("corrected model".into(), Swatch::Line(AFTER, 3)),
+                    ("eclipse".into(), Swatch::Patch(ECLIPSE)),
+                    ("held out (never fitted)".into(), Swatch::Patch(HELD_OUT)),
                 ]
             } else {
-                let mut l = vec![
-                    ("before (baseline)".to_string(), BEFORE, true),
-                    ("after (corrected)".to_string(), AFTER, true),
-                ];
-                if sigma.is_finite() {
-                    l.push((
-                        format!("noise ±1σ, ±3σ (σ = {sigma:.3} {res_unit})"),
-                        RGBColor(200, 200, 200),
-                        false,
-                    ));
-                }
-                l
+                vec![
+                    ("before (baseline)".into(), Swatch::Dot(BEFORE)),
+                    ("after (corrected)".into(), Swatch::Dot(AFTER)),
+                ]
             };
-            let texts: Vec<String> = lines.iter().map(|l| l.0.clone()).collect();
-            let placed = placer.column(&texts, 14.0, (LEGEND_X as f64 + 34.0, yr.start as f64));
-            for ((text, color, point), ((x, y), r)) in lines.iter().zip(&placed) {
-                let ym = ((r.y0 + r.y1) / 2.0) as i32;
-                if *point {
-                    root.draw(&Circle::new((LEGEND_X + 16, ym), 4, color.filled()))
-                        .map_err(draw_err)?;
-                } else if text == "baseline model" || text == "corrected model" {
-                    root.draw(&PathElement::new(
-                        vec![(LEGEND_X + 4, ym), (LEGEND_X + 28, ym)],
-                        color.stroke_width(3),
-                    ))
-                    .map_err(draw_err)?;
-                } else {
-                    root.draw(&Rectangle::new(
-                        [(LEGEND_X + 4, ym - 6), (LEGEND_X + 28, ym + 6)],
-                        color.filled(),
-                    ))
-                    .map_err(draw_err)?;
-                }
-                root.draw(&Text::new(
-                    text.clone(),
-                    (*x as i32, *y as i32),
-                    (FAMILY, 14).into_font().color(&BLACK),
-                ))
-                .map_err(draw_err)?;
-                labels.push(Label {
-                    text: text.clone(),
-                    rect: *r,
-                });
+            if !values && sigma.is_finite() {
+                entries.push((
+                    format!("noise ±1σ, ±3σ (σ = {sigma:.3} {res_unit})"),
+                    Swatch::Patch(RGBColor(200, 200, 200)),
+                ));
             }
+            super::legend(
+                &root,
+                &mut placer,
+                &mut labels,
+                LEGEND_X,
+                yr.start as f64,
+                &entries,
+            )?;
         }
         root.present().map_err(draw_err)?;
     }

@@ -5,7 +5,10 @@
 use plotters::prelude::*;
 
 use super::labels::Placer;
-use super::{FAMILY, Figure, Label, PALETTE, PlotError, draw_err, nice_range, nice_step};
+use super::{
+    ECLIPSE, FAMILY, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, nice_step,
+    palette, time_unit,
+};
 
 /// One face's fluxes, W/m² (incident, before absorptivity), at the figure's times.
 #[derive(Debug, Clone)]
@@ -33,11 +36,7 @@ pub fn face_fluxes(
         return Err(PlotError::Data("fewer than two times to plot".into()));
     }
     let span = (time_s[time_s.len() - 1] - time_s[0]).max(1.0);
-    let (unit_s, unit) = if span <= 3.0 * 86_400.0 {
-        (3600.0, "h")
-    } else {
-        (86_400.0, "days")
-    };
+    let (unit_s, unit) = time_unit(span);
     let tx = |t: f64| t / unit_s;
     let (x0, x1) = (tx(time_s[0]), tx(time_s[time_s.len() - 1]));
     // eclipse spans: sunlit below a half
@@ -103,11 +102,7 @@ pub fn face_fluxes(
                 .map_err(draw_err)?;
             let ystep = nice_step(yhi - ylo, 5.0);
             let xstep = nice_step(x1 - x0, 10.0);
-            let xdec = if xstep >= 1.0 {
-                0
-            } else {
-                (-xstep.log10().floor()) as usize
-            };
+            let xdec = decimals(xstep);
             let yfmt = |v: &f64| format!("{v:.0}");
             let xfmt = move |v: &f64| format!("{v:.xdec$}");
             let mut mesh = chart.configure_mesh();
@@ -125,15 +120,13 @@ pub fn face_fluxes(
             }
             mesh.draw().map_err(draw_err)?;
             chart
-                .draw_series(eclipses.iter().map(|&(a, b)| {
-                    Rectangle::new(
-                        [(tx(a), ylo), (tx(b), yhi)],
-                        RGBColor(222, 226, 236).filled(),
-                    )
-                }))
+                .draw_series(
+                    eclipses.iter().map(|&(a, b)| {
+                        Rectangle::new([(tx(a), ylo), (tx(b), yhi)], ECLIPSE.filled())
+                    }),
+                )
                 .map_err(draw_err)?;
             for (i, f) in faces.iter().enumerate() {
-                let (r, g, b) = PALETTE[i % PALETTE.len()];
                 chart
                     .draw_series(LineSeries::new(
                         time_s
@@ -141,44 +134,28 @@ pub fn face_fluxes(
                             .zip(get(f).iter())
                             .filter(|(_, v)| v.is_finite())
                             .map(|(t, v)| (tx(*t), *v)),
-                        RGBColor(r, g, b).stroke_width(2),
+                        palette(i).stroke_width(2),
                     ))
                     .map_err(draw_err)?;
             }
             if k == 0 {
                 let (_, yr) = chart.plotting_area().get_pixel_range();
-                let mut lines: Vec<String> = faces.iter().map(|f| f.name.clone()).collect();
+                let mut entries: Vec<(String, Swatch)> = faces
+                    .iter()
+                    .enumerate()
+                    .map(|(i, f)| (f.name.clone(), Swatch::Line(palette(i), 3)))
+                    .collect();
                 if !eclipses.is_empty() {
-                    lines.push("eclipse".into());
+                    entries.push(("eclipse".into(), Swatch::Patch(ECLIPSE)));
                 }
-                let placed = placer.column(&lines, 14.0, (LEGEND_X as f64 + 34.0, yr.start as f64));
-                for (i, ((x, y), r)) in placed.iter().enumerate() {
-                    let ym = ((r.y0 + r.y1) / 2.0) as i32;
-                    if i < faces.len() {
-                        let (cr, cg, cb) = PALETTE[i % PALETTE.len()];
-                        root.draw(&PathElement::new(
-                            vec![(LEGEND_X + 4, ym), (LEGEND_X + 28, ym)],
-                            RGBColor(cr, cg, cb).stroke_width(3),
-                        ))
-                        .map_err(draw_err)?;
-                    } else {
-                        root.draw(&Rectangle::new(
-                            [(LEGEND_X + 4, ym - 6), (LEGEND_X + 28, ym + 6)],
-                            RGBColor(222, 226, 236).filled(),
-                        ))
-                        .map_err(draw_err)?;
-                    }
-                    root.draw(&Text::new(
-                        lines[i].clone(),
-                        (*x as i32, *y as i32),
-                        (FAMILY, 14).into_font().color(&BLACK),
-                    ))
-                    .map_err(draw_err)?;
-                    labels.push(Label {
-                        text: lines[i].clone(),
-                        rect: *r,
-                    });
-                }
+                super::legend(
+                    &root,
+                    &mut placer,
+                    &mut labels,
+                    LEGEND_X,
+                    yr.start as f64,
+                    &entries,
+                )?;
             }
         }
         root.present().map_err(draw_err)?;

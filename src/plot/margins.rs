@@ -7,7 +7,7 @@
 use plotters::prelude::*;
 
 use super::labels::{Placer, Rect, Side};
-use super::{FAMILY, Figure, Label, PlotError, draw_err, nice_step, text_width};
+use super::{FAMILY, Figure, Label, PlotError, decimals, draw_err, nice_step, text_width};
 
 /// What the distribution figure shows.
 #[derive(Debug, Clone)]
@@ -133,11 +133,7 @@ pub fn distribution(d: &DistributionInput<'_>) -> Result<Figure, PlotError> {
             .map_err(draw_err)?
             .set_secondary_coord(lo..hi, 0.0..1.0);
         let xstep = nice_step(hi - lo, 8.0);
-        let xdec = if xstep >= 1.0 {
-            0
-        } else {
-            (-xstep.log10().floor()) as usize
-        };
+        let xdec = decimals(xstep);
         chart
             .configure_mesh()
             .x_desc("smallest backlash of a sample (µm)")

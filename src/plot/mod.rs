@@ -157,6 +157,12 @@ pub fn nice_range(lo: f64, hi: f64) -> (f64, f64) {
     ((lo / s).floor() * s, (hi / s).ceil() * s)
 }
 
+/// The `i`-th colour of [`PALETTE`], cycling.
+pub(crate) fn palette(i: usize) -> plotters::style::RGBColor {
+    let (r, g, b) = PALETTE[i % PALETTE.len()];
+    plotters::style::RGBColor(r, g, b)
+}
+
 /// Colours of series, distinguishable in print and for the common colour blindnesses
 /// (Okabe & Ito 2008), then darker variants.
 pub const PALETTE: [(u8, u8, u8); 10] = [
@@ -171,3 +177,93 @@ pub const PALETTE: [(u8, u8, u8); 10] = [
     (150, 60, 0),
     (0, 90, 60),
 ];
+
+/// Decimals a tick label needs at tick spacing `step` (0 from 1 up).
+pub(crate) fn decimals(step: f64) -> usize {
+    if step >= 1.0 {
+        0
+    } else {
+        (-step.log10().floor()) as usize
+    }
+}
+
+/// The unit of a time axis ending at `t_end_s`: hours up to three days, then days
+/// (seconds per unit, name). One rule for every figure.
+pub fn time_unit(t_end_s: f64) -> (f64, &'static str) {
+    if t_end_s <= 3.0 * 86_400.0 {
+        (3600.0, "h")
+    } else {
+        (86_400.0, "days")
+    }
+}
+
+/// Shading of eclipses, and of a diagnosis's held-out orbits.
+pub(crate) const ECLIPSE: plotters::style::RGBColor = plotters::style::RGBColor(222, 226, 236);
+pub(crate) const HELD_OUT: plotters::style::RGBColor = plotters::style::RGBColor(254, 243, 216);
+/// The model before a diagnosis (orange) and after it (blue).
+pub(crate) const BEFORE: plotters::style::RGBColor = plotters::style::RGBColor(213, 94, 0);
+pub(crate) const AFTER: plotters::style::RGBColor = plotters::style::RGBColor(0, 114, 178);
+
+/// What stands left of a legend line.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Swatch {
+    /// A line of this colour and width.
+    Line(plotters::style::RGBColor, u32),
+    /// A point (a recording's samples).
+    Dot(plotters::style::RGBColor),
+    /// A shaded area.
+    Patch(plotters::style::RGBColor),
+    /// Nothing (a note under the entries).
+    None,
+}
+
+/// A legend drawn as a column with its swatches at `x` (24 px wide) and the texts
+/// after them from `top` down, the boxes placed by `placer` and kept in `labels`;
+/// returns the boxes.
+pub(crate) fn legend(
+    root: &plotters::drawing::DrawingArea<
+        plotters::prelude::SVGBackend<'_>,
+        plotters::coord::Shift,
+    >,
+    placer: &mut Placer,
+    labels: &mut Vec<Label>,
+    x: i32,
+    top: f64,
+    entries: &[(String, Swatch)],
+) -> Result<Vec<Rect>, PlotError> {
+    use plotters::prelude::*;
+    let texts: Vec<String> = entries.iter().map(|e| e.0.clone()).collect();
+    let placed = placer.column(&texts, 14.0, (x as f64 + 34.0, top));
+    for ((text, swatch), ((tx, ty), r)) in entries.iter().zip(&placed) {
+        let ym = ((r.y0 + r.y1) / 2.0) as i32;
+        match *swatch {
+            Swatch::Line(c, w) => root
+                .draw(&PathElement::new(
+                    vec![(x + 4, ym), (x + 28, ym)],
+                    c.stroke_width(w),
+                ))
+                .map_err(draw_err)?,
+            Swatch::Dot(c) => root
+                .draw(&Circle::new((x + 16, ym), 4, c.filled()))
+                .map_err(draw_err)?,
+            Swatch::Patch(c) => root
+                .draw(&Rectangle::new(
+                    [(x + 4, ym - 6), (x + 28, ym + 6)],
+                    c.filled(),
+                ))
+                .map_err(draw_err)?,
+            Swatch::None => {}
+        }
+        root.draw(&Text::new(
+            text.clone(),
+            (*tx as i32, *ty as i32),
+            (FAMILY, 14).into_font().color(&BLACK),
+        ))
+        .map_err(draw_err)?;
+        labels.push(Label {
+            text: text.clone(),
+            rect: *r,
+        });
+    }
+    Ok(placed.into_iter().map(|p| p.1).collect())
+}

@@ -6,14 +6,13 @@
 use plotters::prelude::*;
 
 use super::labels::{Placer, Rect};
-use super::{FAMILY, Figure, Label, PlotError, draw_err, nice_range, nice_step, text_width};
+use super::{
+    AFTER, BEFORE, ECLIPSE, FAMILY, Figure, HELD_OUT, Label, PlotError, decimals, draw_err,
+    nice_range, nice_step, text_width, time_unit,
+};
 use crate::diagnose::Series;
 
-const BEFORE: RGBColor = RGBColor(213, 94, 0);
-const AFTER: RGBColor = RGBColor(0, 114, 178);
 const RECORDED: RGBColor = RGBColor(40, 40, 40);
-const ECLIPSE: RGBColor = RGBColor(222, 226, 236);
-const HELD_OUT: RGBColor = RGBColor(254, 243, 216);
 
 /// RMS of recorded − model over the held-out orbits (NaN: none there).
 fn heldout_rms(s: &Series, c: usize, model: &[f64]) -> f64 {
@@ -42,11 +41,7 @@ pub fn overview(s: &Series, title: &str) -> Result<Figure, PlotError> {
     let (w, panel_h, top) = (1200u32, 230u32, 80u32);
     let h = top + rows as u32 * panel_h + 40;
     let span = s.time_s.last().copied().unwrap_or(1.0).max(1.0);
-    let (unit_s, tunit) = if span <= 3.0 * 86_400.0 {
-        (3600.0, "h")
-    } else {
-        (86_400.0, "days")
-    };
+    let (unit_s, tunit) = time_unit(span);
     let tx = |t: f64| t / unit_s;
     let (x0, x1) = (0.0, tx(span));
     let mut svg = String::new();
@@ -153,17 +148,9 @@ pub fn overview(s: &Series, title: &str) -> Result<Figure, PlotError> {
                 .build_cartesian_2d(x0..x1, ylo..yhi)
                 .map_err(draw_err)?;
             let ystep = nice_step(yhi - ylo, 4.0);
-            let ydec = if ystep >= 1.0 {
-                0
-            } else {
-                (-ystep.log10().floor()) as usize
-            };
+            let ydec = decimals(ystep);
             let xstep = nice_step(x1 - x0, 8.0);
-            let xdec = if xstep >= 1.0 {
-                0
-            } else {
-                (-xstep.log10().floor()) as usize
-            };
+            let xdec = decimals(xstep);
             chart
                 .configure_mesh()
                 .y_labels(((yhi - ylo) / ystep).round() as usize + 1)

@@ -12,7 +12,10 @@
 use plotters::prelude::*;
 
 use super::labels::{Placer, Rect, Side};
-use super::{Figure, Label, PALETTE, PlotError, draw_err, nice_range, text_width};
+use super::{
+    ECLIPSE, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, palette, text_width,
+    time_unit,
+};
 
 /// A run longer than this many days is drawn as per-orbit envelopes.
 pub const ENVELOPE_DAYS: f64 = 5.0;
@@ -112,15 +115,6 @@ impl RunSeries {
             ));
         }
         Ok(s)
-    }
-}
-
-/// The unit of the time axis: hours up to three days, then days.
-fn time_unit(span_s: f64) -> (f64, &'static str) {
-    if span_s <= 3.0 * 86_400.0 {
-        (3600.0, "h")
-    } else {
-        (86_400.0, "days")
     }
 }
 
@@ -224,11 +218,6 @@ fn eclipses(s: &RunSeries) -> Vec<(f64, f64)> {
         out.push((t0, *s.time_s.last().unwrap()));
     }
     out
-}
-
-fn color(i: usize) -> RGBColor {
-    let (r, g, b) = PALETTE[i % PALETTE.len()];
-    RGBColor(r, g, b)
 }
 
 fn range_of<'a>(v: impl Iterator<Item = &'a f64>) -> (f64, f64) {
@@ -349,17 +338,9 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
                 .map_err(draw_err)?;
             let mut mesh = chart.configure_mesh();
             let ystep = super::nice_step(yhi - ylo, 6.0);
-            let ydec = if ystep >= 1.0 {
-                0
-            } else {
-                (-ystep.log10().floor()) as usize
-            };
+            let ydec = decimals(ystep);
             let xstep = super::nice_step(x1 - x0, 10.0);
-            let xdec = if xstep >= 1.0 {
-                0
-            } else {
-                (-xstep.log10().floor()) as usize
-            };
+            let xdec = decimals(xstep);
             let yfmt = move |v: &f64| format!("{v:.ydec$}");
             let xfmt = move |v: &f64| format!("{v:.xdec$}");
             mesh.y_desc(y_desc)
@@ -377,12 +358,11 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
             mesh.draw().map_err(draw_err)?;
             // Eclipses, under the lines.
             chart
-                .draw_series(ecl.iter().map(|&(a, b)| {
-                    Rectangle::new(
-                        [(tx(a), ylo), (tx(b), yhi)],
-                        RGBColor(222, 226, 236).filled(),
-                    )
-                }))
+                .draw_series(
+                    ecl.iter().map(|&(a, b)| {
+                        Rectangle::new([(tx(a), ylo), (tx(b), yhi)], ECLIPSE.filled())
+                    }),
+                )
                 .map_err(draw_err)?;
             let plot_px = {
                 let (xr, yr) = chart.plotting_area().get_pixel_range();
@@ -415,7 +395,7 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
                 let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
                 let env = envelope(s, &refs);
                 for (k, (name, _)) in series.iter().enumerate() {
-                    let c = color(k);
+                    let c = palette(k);
                     let band: Vec<(f64, f64)> = env
                         .t
                         .iter()
@@ -448,7 +428,7 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
                 }
             } else {
                 for (k, (name, v)) in series.iter().enumerate() {
-                    let c = color(k);
+                    let c = palette(k);
                     chart
                         .draw_series(LineSeries::new(
                             s.time_s
@@ -551,37 +531,31 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
                 lines.push("eclipse".to_string());
             }
             legend_top = legend_top.max(plot_px.y0);
-            let placed = placer.column(&lines, 14.0, (LEGEND_X as f64 + 34.0, legend_top));
-            for (k, ((x, y), r)) in placed.iter().enumerate() {
-                let text = &lines[k];
-                let ym = (r.y0 + r.y1) as i32 / 2;
-                if k < legend.len() {
-                    root.draw(&PathElement::new(
-                        vec![(LEGEND_X + 4, ym), (LEGEND_X + 28, ym)],
-                        color(k).stroke_width(if long { 8 } else { 3 }),
-                    ))
-                    .map_err(draw_err)?;
-                } else if text == "eclipse" {
-                    root.draw(&Rectangle::new(
-                        [(LEGEND_X + 4, ym - 6), (LEGEND_X + 28, ym + 6)],
-                        RGBColor(222, 226, 236).filled(),
-                    ))
-                    .map_err(draw_err)?;
-                }
-                root.draw(&Text::new(
-                    text.clone(),
-                    (*x as i32, *y as i32),
-                    (super::FAMILY, 14).into_font().color(&BLACK),
-                ))
-                .map_err(draw_err)?;
-                labels.push(Label {
-                    text: text.clone(),
-                    rect: *r,
-                });
-            }
+            let entries: Vec<(String, Swatch)> = lines
+                .iter()
+                .enumerate()
+                .map(|(k, t)| {
+                    let swatch = if k < legend.len() {
+                        Swatch::Line(palette(k), if long { 8 } else { 3 })
+                    } else if t == "eclipse" {
+                        Swatch::Patch(ECLIPSE)
+                    } else {
+                        Swatch::None
+                    };
+                    (t.clone(), swatch)
+                })
+                .collect();
+            let placed = super::legend(
+                &root,
+                &mut placer,
+                &mut labels,
+                LEGEND_X,
+                legend_top,
+                &entries,
+            )?;
             legend_top = placed
                 .last()
-                .map_or(legend_top, |p| p.1.y1 + 24.0)
+                .map_or(legend_top, |r| r.y1 + 24.0)
                 .max(panels.get(pi + 1).map_or(0.0, |p| p.0 as f64 + 10.0));
         }
         root.present().map_err(draw_err)?;
