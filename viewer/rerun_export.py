@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """An orbitlash MCAP log as a Rerun recording that opens with its plots.
 
-    python3 viewer/rerun_export.py LOG.mcap [-o LOG.rrd]
+    python3 viewer/rerun_export.py LOG.mcap [-o LOG.rrd] [--force]
     rerun LOG.rrd
 
 Rerun's own MCAP importer leaves each protobuf message one opaque struct (no plot until
@@ -15,7 +15,10 @@ views grouped as an engineer reads them:
 - temperatures, °C: housing, motor, shafts (every node that is not a gear's) and each
   gear's radial nodes r0 (bore) … rN (rim);
 - backlash, µm: exact, closed form and the paper's, the smallest allowed (a line) and
-  the run's smallest backlash (a point);
+  the run's smallest backlash (a point, labelled with the pair's verdict). Both come
+  from the run itself (`pairs_json` of the log's `orbitlash.run_end` record), not from
+  the logged samples, which can miss the minimum between them; a log written before
+  that record had them gets both from its samples;
 - heat flows, W; the orbit (sunlit, β, solar flux); face fluxes of a dated scenario;
 - events (eclipse entries and exits, heater switches) as a text log.
 
@@ -24,15 +27,25 @@ recorded, baseline and corrected series side by side per channel). The applicati
 is "orbitlash"; the recording id is the log's scenario hash and seed, so re-exporting
 the same log gives the same recording.
 
-Needs the pinned clients of tests/viewer/requirements.txt (rerun-sdk, mcap,
-mcap-protobuf-support). Exit 0 on success, 2 when the log cannot be read or written.
+Every chunk's CRC is checked: a log changed after it was written is refused (exit 2).
+The .rrd is written as `<out>.partial` and renamed into place when whole; a failure
+removes the .partial and leaves a previous .rrd as it was. `-o` never writes over the
+log itself (also through a symbolic or hard link), a symbolic link, a directory or a
+device, nor over an existing file that is not an .rrd unless `--force` is given.
+
+Needs the pinned clients of viewer/requirements.txt (mcap, mcap-protobuf-support,
+protobuf, rerun-sdk). Exit 0 on success, 2 when the log cannot be read or the .rrd
+cannot be written.
 """
 import argparse
+import importlib
+import json
 import math
 import os
 import re
+import stat
 import sys
-from collections import defaultdict
+from collections import defaultdict, namedtuple
 
 APP_ID = "orbitlash"
 # diagnose.mcap: the recording pale, the model before orange, after blue
@@ -44,18 +57,53 @@ DIAGNOSE_COLORS = {
     "residual_after": [60, 140, 230],
 }
 GEAR_NODE = re.compile(r"^(gear\w*?)_r(\d+)_k$")
+BACKLASH_FIELDS = ("backlash_exact_um", "backlash_closed_form_um", "backlash_paper_um")
+LEVELS = {1: "DEBUG", 2: "INFO", 3: "WARN", 4: "ERROR", 5: "CRITICAL"}
+# The modules this script imports and the Python packages (pip names) that provide
+# them, dependencies first, so that a missing one is named rather than its dependent.
+PACKAGES = [
+    ("mcap", "mcap"),
+    ("google.protobuf", "protobuf"),
+    ("mcap_protobuf", "mcap-protobuf-support"),
+    ("numpy", "numpy"),
+    ("pyarrow", "pyarrow"),
+    ("rerun", "rerun-sdk"),
+]
+# An .rrd starts with Rerun's FourCC: RRF2 (rerun-sdk 0.41), RRF0 and RRF1 before.
+RRD_MAGICS = (b"RRF2", b"RRF1", b"RRF0")
+# A gear pair's verdict in run_end's pairs_json, as the smallest point's label says it.
+VERDICTS = {
+    "pass": "PASS",
+    "margin_violated": "FAIL: margin violated",
+    "interference": "FAIL: teeth interfere",
+    "no_valid_mesh": "no valid mesh",
+}
+# The run's smallest backlash on a gear topic: log time (None when no value is finite),
+# µm, the smallest allowed (None: from the samples), verdict and pair name (None: the
+# log predates pairs_json).
+Smallest = namedtuple("Smallest", "t_ns value_um allowed_um verdict name")
+
+
+def missing_package():
+    """(pip name, error) of the first package that does not import, or None."""
+    for module, package in PACKAGES:
+        try:
+            importlib.import_module(module)
+        except ImportError as e:
+            return package, e
+    return None
 
 
 def read_log(path):
     """Every numeric field of every protobuf channel as series over log time, the
-    text logs, the channel metadata and the provenance."""
+    text logs, the channel metadata and the provenance. Checks every chunk's CRC."""
     from mcap.reader import make_reader
     from mcap_protobuf.decoder import DecoderFactory
 
     series = defaultdict(lambda: ([], []))  # (topic, field) -> (t_ns, values)
     texts = []  # (t_ns, level, message)
     with open(path, "rb") as f:
-        r = make_reader(f, decoder_factories=[DecoderFactory()])
+        r = make_reader(f, validate_crcs=True, decoder_factories=[DecoderFactory()])
         s = r.get_summary()
         if s is None:
             raise ValueError(f"{path}: no summary section (run `orbitlash recover` on it first)")
@@ -81,41 +129,137 @@ def read_log(path):
     return series, texts, channels, meta
 
 
-def c_of(field):
-    return field[:-2] + "_c" if field.endswith("_k") else field
+def finite(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
 
 
-def export(log, out):
-    import numpy as np
-    import rerun as rr
-    import rerun.blueprint as rrb
+def run_pairs(meta, channels=None):
+    """The run's own smallest backlash per gear topic: run_end's pairs_json entries by
+    topic (an entry without "topic" goes to the channel whose `pair` metadata is its
+    name, else to /gears/<name>); None for a log written before pairs_json."""
+    raw = meta.get("orbitlash.run_end", {}).get("pairs_json")
+    if raw is None:
+        return None
+    try:
+        entries = json.loads(raw)
+    except ValueError as e:
+        raise ValueError(f"run_end's pairs_json is not JSON ({e})") from None
+    by_name = {md.get("pair"): topic for topic, (_, md) in (channels or {}).items() if md.get("pair")}
+    pairs = {}
+    for entry in entries:
+        name = entry.get("name")
+        pairs[entry.get("topic") or by_name.get(name) or f"/gears/{name}"] = entry
+    return pairs
 
-    series, texts, channels, meta = read_log(log)
-    prov = meta.get("orbitlash.provenance", {})
-    origin_ns = int(prov.get("time_origin_unix_ns", "0") or 0)
-    name = prov.get("scenario_name", os.path.basename(log))
-    rec_id = f"{prov.get('scenario_sha256', 'unknown')[:16]}-seed{prov.get('seed', '0')}-{os.path.basename(log)}"
-    rec = rr.RecordingStream(APP_ID, recording_id=rec_id)
-    # written beside, renamed when whole: a failed export leaves no half .rrd
-    partial = out + ".partial"
-    rec.save(partial)
 
-    def times(t_ns):
+def smallest_point(topic, series, pairs, origin_ns):
+    """The run's smallest backlash on a gear topic (a Smallest): from the run itself
+    (run_pairs) when the log has it, else the smallest logged sample."""
+    entry = (pairs or {}).get(topic)
+    if entry is not None:
+        value, t_s, allowed = entry.get("min_backlash_um"), entry.get("t_min_s"), entry.get("min_allowed_um")
+        known = finite(value) and finite(t_s)
+        return Smallest(
+            origin_ns + round(t_s * 1e9) if known else None,
+            value if known else None,
+            allowed if finite(allowed) else None,
+            entry.get("verdict"),
+            entry.get("name"),
+        )
+    bt, bv = series[(topic, "backlash_exact_um")]
+    kept = [k for k in range(len(bv)) if math.isfinite(bv[k])]
+    if not kept:
+        return Smallest(None, None, None, None, None)
+    i = min(kept, key=lambda k: bv[k])
+    return Smallest(bt[i], bv[i], None, None, None)
+
+
+def smallest_label(pair, low):
+    """E.g. "stage1 smallest: 24.398 µm (FAIL: margin violated)"."""
+    text = f"{low.name or pair} smallest: {low.value_um:.3f} µm"
+    verdict = VERDICTS.get(low.verdict, str(low.verdict).upper()) if low.verdict else None
+    return f"{text} ({verdict})" if verdict else text
+
+
+class Recording:
+    """The .rrd being written: series on the log's timelines (sim_time since t = 0, and
+    utc when the log is dated, i.e. its time origin is not 0)."""
+
+    def __init__(self, rec, origin_ns):
+        self.rec = rec
+        self.origin_ns = origin_ns
+        self.t_end_ns = None  # the latest time sent
+
+    def times(self, t_ns):
+        import numpy as np
+        import rerun as rr
+
         t = np.asarray(t_ns, dtype=np.int64)
-        cols = [rr.TimeColumn("sim_time", duration=(t - origin_ns) * 1e-9)]
-        if origin_ns:
+        self.t_end_ns = max(int(t.max()), self.t_end_ns or int(t.max()))
+        cols = [rr.TimeColumn("sim_time", duration=(t - self.origin_ns) * 1e-9)]
+        if self.origin_ns:
             cols.append(rr.TimeColumn("utc", timestamp=t * 1e-9))
         return cols
 
-    def send(entity, t_ns, values, label, color=None, points=False, width=None):
+    def series(self, entity, t_ns, values, label, color=None, points=False, width=None):
+        import numpy as np
+        import rerun as rr
+
         style = (
             rr.SeriesPoints(names=label, colors=color, marker_sizes=1.5)
             if points
             else rr.SeriesLines(names=label, colors=color, widths=width)
         )
-        rec.log(entity, style, static=True)
-        rec.send_columns(entity, indexes=times(t_ns), columns=rr.Scalars.columns(scalars=np.asarray(values)))
+        self.rec.log(entity, style, static=True)
+        self.rec.send_columns(entity, indexes=self.times(t_ns), columns=rr.Scalars.columns(scalars=np.asarray(values)))
 
+    def point(self, entity, t_ns, value, label):
+        import rerun as rr
+
+        self.rec.log(entity, rr.SeriesPoints(names=label, marker_sizes=8.0), static=True)
+        self.rec.send_columns(entity, indexes=self.times([t_ns]), columns=rr.Scalars.columns(scalars=[value]))
+
+    def events(self, texts):
+        import rerun as rr
+
+        for t, level, text in texts:
+            self.rec.set_time("sim_time", duration=(t - self.origin_ns) * 1e-9)
+            if self.origin_ns:
+                self.rec.set_time("utc", timestamp=t * 1e-9)
+            self.rec.log("events", rr.TextLog(text, level=LEVELS.get(level, "INFO")))
+
+
+def send_gear(out, topic, field, t, v, series, pairs, groups):
+    """One field of a /gears/<pair> topic: the backlash series; with margin_um, the
+    smallest allowed line and the run's smallest point; the mesh geometry."""
+    pair = topic[len("/gears/"):].replace("/", "_")
+    backlash = f"backlash, gear pair {pair} (µm)"
+    if field in BACKLASH_FIELDS:
+        entity = f"backlash/{pair}/{field[:-3]}"
+        out.series(entity, t, v, f"{pair} {field[:-3].replace('_', ' ')} (µm)")
+        groups[backlash].append(entity)
+    elif field == "margin_um" and (topic, "backlash_exact_um") in series:
+        bt, bv = series[(topic, "backlash_exact_um")]
+        low = smallest_point(topic, series, pairs, out.origin_ns)
+        if low.allowed_um is not None:  # the run's own minimum
+            allowed = [low.allowed_um] * len(bt)
+        else:  # a log before pairs_json: backlash less margin
+            allowed = [b - m for b, m in zip(bv, v)]
+        entity = f"backlash/{pair}/minimum_allowed"
+        out.series(entity, bt, allowed, f"{pair} smallest allowed (µm)")
+        groups[backlash].append(entity)
+        if low.t_ns is not None:
+            out.point(f"backlash/{pair}/smallest", low.t_ns, low.value_um, smallest_label(pair, low))
+            groups[backlash].append(f"backlash/{pair}/smallest")
+    else:
+        entity = f"gears/{pair}/{field}"
+        out.series(entity, t, v, field)
+        groups[f"mesh geometry, gear pair {pair}"].append(entity)
+
+
+def send_series(out, series, channels, pairs):
+    """Every series of the log, as entities; returns the views' groups (title ->
+    entities), the body temperatures and each gear's radial nodes."""
     groups = defaultdict(list)  # view title -> entity origins
     body, gears = [], defaultdict(list)
     for (topic, field), (t, v) in sorted(series.items()):
@@ -123,35 +267,13 @@ def export(log, out):
             node = channels[topic][1].get(f"node:{field}", field[:-2] if field.endswith("_k") else field)
             m = GEAR_NODE.match(field)
             entity = f"temperature/{m.group(1)}/r{m.group(2)}" if m else f"temperature/body/{node}"
-            send(entity, t, [x - 273.15 for x in v], f"{node} (°C)")
+            out.series(entity, t, [x - 273.15 for x in v], f"{node} (°C)")
             (gears[m.group(1)] if m else body).append(entity)
         elif topic.startswith("/gears/"):
-            pair = topic[len("/gears/"):].replace("/", "_")
-            if field in ("backlash_exact_um", "backlash_closed_form_um", "backlash_paper_um"):
-                entity = f"backlash/{pair}/{field[:-3]}"
-                send(entity, t, v, f"{pair} {field[:-3].replace('_', ' ')} (µm)")
-                groups[f"backlash, gear pair {pair} (µm)"].append(entity)
-            elif field == "margin_um" and (topic, "backlash_exact_um") in series:
-                bt, bv = series[(topic, "backlash_exact_um")]
-                allowed = [b - m for b, m in zip(bv, v)]
-                entity = f"backlash/{pair}/minimum_allowed"
-                send(entity, bt, allowed, f"{pair} smallest allowed (µm)")
-                finite = [k for k in range(len(bv)) if math.isfinite(bv[k])]
-                if not finite:
-                    groups[f"backlash, gear pair {pair} (µm)"].append(entity)
-                    continue
-                i = min(finite, key=lambda k: bv[k])
-                low = f"backlash/{pair}/smallest"
-                rec.log(low, rr.SeriesPoints(names=f"{pair} smallest: {bv[i]:.3f} µm", marker_sizes=8.0), static=True)
-                rec.send_columns(low, indexes=times([bt[i]]), columns=rr.Scalars.columns(scalars=[bv[i]]))
-                groups[f"backlash, gear pair {pair} (µm)"] += [entity, low]
-            else:
-                entity = f"gears/{pair}/{field}"
-                send(entity, t, v, field)
-                groups[f"mesh geometry, gear pair {pair}"].append(entity)
+            send_gear(out, topic, field, t, v, series, pairs, groups)
         elif topic == "/thermal/heat":
             entity = f"heat/{field}"
-            send(entity, t, v, f"{field[:-2] if field.endswith('_w') else field} (W)")
+            out.series(entity, t, v, f"{field[:-2] if field.endswith('_w') else field} (W)")
             groups["heat flows (W)"].append(entity)
         elif topic.startswith("/diagnose/"):
             # diagnose.mcap: one topic per channel, fields recorded/baseline/corrected/residuals
@@ -160,28 +282,28 @@ def export(log, out):
                 continue  # the fitted/held-out flag, not a series
             entity = f"diagnose/{ch}/{field}"
             # the recording as points, the corrected model as the boldest line
-            send(entity, t, v, f"{ch} {field.replace('_', ' ')}", DIAGNOSE_COLORS.get(field),
-                 points=field == "recorded", width=2.5 if field.endswith(("corrected", "after")) else None)
+            out.series(entity, t, v, f"{ch} {field.replace('_', ' ')}", DIAGNOSE_COLORS.get(field),
+                       points=field == "recorded", width=2.5 if field.endswith(("corrected", "after")) else None)
             key = "residuals" if field.startswith("residual") else "series"
             groups[f"{ch}: {key}"].append(entity)
         else:
             entity = f"{topic.strip('/')}/{field}"
-            send(entity, t, v, field)
+            out.series(entity, t, v, field)
             groups[topic.strip("/")].append(entity)
-    if texts:
-        levels = {1: "DEBUG", 2: "INFO", 3: "WARN", 4: "ERROR", 5: "CRITICAL"}
-        for t, level, text in texts:
-            rec.set_time("sim_time", duration=(t - origin_ns) * 1e-9)
-            if origin_ns:
-                rec.set_time("utc", timestamp=t * 1e-9)
-            rec.log("events", rr.TextLog(text, level=levels.get(level, "INFO")))
+    return groups, body, gears
 
-    # Every plot shows the whole run (not a window around the time cursor).
-    t_all = [x for xs, _ in series.values() for x in (xs[0], xs[-1])]
-    span = (0.0, (max(t_all) - origin_ns) * 1e-9) if t_all else (0.0, 1.0)
+
+def make_blueprint(name, groups, body, gears, has_events, span_s):
+    """The views: temperatures beside backlash, heat flows and the eclipse flag on the
+    first tab; diagnose.mcap's fits; everything else (mesh geometry, orbit, faces,
+    events) on the last. Every plot shows the whole run (0 … span_s), not a window
+    around the time cursor."""
+    import rerun as rr
+    import rerun.blueprint as rrb
+
     whole = rr.TimeRange(
-        start=rr.TimeRangeBoundary.absolute(seconds=span[0]),
-        end=rr.TimeRangeBoundary.absolute(seconds=span[1]),
+        start=rr.TimeRangeBoundary.absolute(seconds=0.0),
+        end=rr.TimeRangeBoundary.absolute(seconds=span_s),
     )
 
     def view(title, entities):
@@ -197,8 +319,6 @@ def export(log, out):
         temps.append(view("nodes other than gears (°C)" if gears else "node temperatures (°C)", body))
     for g, ents in sorted(gears.items()):
         temps.append(view(f"{g}: radial nodes, bore r0 … rim (°C)", ents))
-    # The first tab: temperatures beside backlash, heat flows and the eclipse flag;
-    # everything else (mesh geometry, orbit, faces, events) on the second.
     diag = (": series", ": residuals")
     main = [view(k, v) for k, v in groups.items() if k.startswith(("backlash", "heat")) and not k.endswith(diag)]
     sunlit = [e for e in groups.get("orbit/state", []) if e.endswith("/sunlit")]
@@ -206,12 +326,8 @@ def export(log, out):
         main.append(view("sunlit (1) or eclipse (0)", sunlit))
     fitted = [view(k, v) for k, v in groups.items() if k.endswith(": series")]
     residuals = [view(k, v) for k, v in groups.items() if k.endswith(": residuals")]
-    rest = [
-        view(k, v)
-        for k, v in groups.items()
-        if not k.startswith(("backlash", "heat")) and not k.endswith(diag)
-    ]
-    if texts:
+    rest = [view(k, v) for k, v in groups.items() if not k.startswith(("backlash", "heat")) and not k.endswith(diag)]
+    if has_events:
         rest.append(rrb.TextLogView(name="events", origin="/events"))
     panes = [rrb.Vertical(*x) for x in (temps, main) if x]
     tabs = [rrb.Horizontal(*panes, name=name)] if panes else []
@@ -222,39 +338,115 @@ def export(log, out):
         tabs.append(rrb.Grid(*residuals, name="residuals before and after"))
     if rest:
         tabs.append(rrb.Grid(*rest, name="mesh, orbit, events" if body else "more"))
-    blueprint = rrb.Blueprint(
+    return rrb.Blueprint(
         rrb.Tabs(*tabs),
         rrb.TimePanel(timeline="sim_time", state="collapsed"),
         collapse_panels=True,
     )
-    rec.send_blueprint(blueprint)
-    rec.flush()
-    rec.disconnect()
+
+
+def export(log, out, partial):
+    """Writes the log as an .rrd to `partial`, then renames it to `out`."""
+    import rerun as rr
+
+    series, texts, channels, meta = read_log(log)
+    prov = meta.get("orbitlash.provenance", {})
+    origin_ns = int(prov.get("time_origin_unix_ns", "0") or 0)
+    pairs = run_pairs(meta, channels)
+    name = prov.get("scenario_name", os.path.basename(log))
+    rec_id = f"{prov.get('scenario_sha256', 'unknown')[:16]}-seed{prov.get('seed', '0')}-{os.path.basename(log)}"
+    rec = rr.RecordingStream(APP_ID, recording_id=rec_id)
+    rec.save(partial)
+    try:
+        recording = Recording(rec, origin_ns)
+        groups, body, gears = send_series(recording, series, channels, pairs)
+        recording.events(texts)
+        end_ns = recording.t_end_ns
+        span_s = (end_ns - origin_ns) * 1e-9 if end_ns is not None else 1.0
+        rec.send_blueprint(make_blueprint(name, groups, body, gears, bool(texts), span_s))
+        rec.flush()
+    finally:
+        rec.disconnect()
     os.replace(partial, out)
     n = sum(len(x[0]) for x in series.values())
     print(f"{out}: {len(series)} series, {n} points, {len(texts)} events; app id {APP_ID!r}, "
           f"timeline sim_time{' and utc' if origin_ns else ''}")
 
 
-def main():
+def same_file(a, b):
+    """Whether two paths are one file: the same resolved path, or the same inode (a
+    hard link)."""
+    if os.path.realpath(a) == os.path.realpath(b):
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist
+        return False
+
+
+def refusal(path, log, force):
+    """Why the export must not write `path` (a phrase), or None when it may."""
+    if same_file(path, log):
+        return "it is the log itself" + (" (through a link)" if os.path.realpath(path) != os.path.abspath(log) or os.path.islink(path) else "")
+    if os.path.islink(path):
+        return "it is a symbolic link (give the file itself, or another name)"
+    if not os.path.lexists(path):
+        return None
+    mode = os.lstat(path).st_mode
+    if stat.S_ISDIR(mode):
+        return "it is a directory"
+    if not stat.S_ISREG(mode):
+        return "it is not a regular file (a device, FIFO or socket)"
+    if force:
+        return None
+    with open(path, "rb") as f:
+        head = f.read(4)
+    if head not in RRD_MAGICS:
+        return f"it exists and is not an .rrd (it does not start with {RRD_MAGICS[0].decode()}); --force writes over it"
+    return None
+
+
+def unreadable(e):
+    """The one-line reason an export failed."""
+    from mcap.stream_reader import CRCValidationError
+
+    if isinstance(e, CRCValidationError):
+        return ("a chunk's CRC does not match its bytes: the file is damaged (it changed after it was "
+                "written); `orbitlash recover` writes a copy without the damaged chunks")
+    return f"{type(e).__name__}: {' '.join(str(e).split())}"
+
+
+def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("log", help="an orbitlash MCAP log")
     p.add_argument("-o", "--out", help="the .rrd to write (default: beside the log, .rrd)")
-    a = p.parse_args()
-    out = a.out or os.path.splitext(a.log)[0] + ".rrd"
-    if os.path.abspath(out) == os.path.abspath(a.log):
-        print(f"error: --out {out} is the log itself", file=sys.stderr)
+    p.add_argument("--force", action="store_true",
+                   help="write over an existing file that is not an .rrd (never over the log, a link, a directory or a device)")
+    a = p.parse_args(argv)
+    missing = missing_package()
+    if missing:
+        package, e = missing
+        print(f"rerun_export.py needs the Python package `{package}`: pip install -r viewer/requirements.txt ({e})",
+              file=sys.stderr)
         return 2
+    out = a.out or os.path.splitext(a.log)[0] + ".rrd"
+    partial = out + ".partial"
+    for path in (out, partial):
+        why = refusal(path, a.log, a.force)
+        if why:
+            print(f"error: will not write {path}: {why}", file=sys.stderr)
+            return 2
     if not os.path.isdir(os.path.dirname(os.path.abspath(out))):
         print(f"error: --out {out}: its folder does not exist", file=sys.stderr)
         return 2
     try:
-        export(a.log, out)
+        export(a.log, out, partial)
     except Exception as e:  # a damaged or foreign file: the reader's own words, exit 2
-        print(f"error: {a.log}: {type(e).__name__}: {e}", file=sys.stderr)
-        if os.path.exists(out + ".partial"):
-            os.remove(out + ".partial")
+        print(f"error: {a.log}: {unreadable(e)}", file=sys.stderr)
         return 2
+    finally:  # after a failure (or Ctrl-C): no half .rrd
+        if os.path.lexists(partial):
+            os.remove(partial)
     return 0
 
 

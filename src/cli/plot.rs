@@ -11,7 +11,7 @@ use orbitlash::io::atomic::AtomicFile;
 use orbitlash::io::atomic::OutputPolicy;
 use orbitlash::io::mcap_read::{read_log, run_table};
 use orbitlash::io::output::Outputs;
-use orbitlash::plot::run::{RunSeries, figure};
+use orbitlash::plot::run::{RunEnd, RunSeries, figure};
 
 use super::print_out;
 
@@ -147,12 +147,14 @@ pub fn plot(a: PlotArgs) -> Result<()> {
             o
         }
     };
-    draw(&a.input, &out, a.title.as_deref())?;
+    draw(&a.input, &out, a.title.as_deref(), None)?;
     print_out(&format!("figure: {}\n", out.display()))
 }
 
-/// The figure of the run in `input` (a log or a CSV) written to `out`.
-pub fn draw(input: &Path, out: &Path, title: Option<&str>) -> Result<()> {
+/// The figure of the run in `input` (a log or a CSV) written to `out`. The verdict,
+/// smallest backlash and eclipses come from the log's end record, else from `end` (the
+/// run drawing its own figure), else from the rows.
+pub fn draw(input: &Path, out: &Path, title: Option<&str>, end: Option<&RunEnd>) -> Result<()> {
     format_of(out)?;
     // The output's place is checked before the input is read.
     Outputs::new(OutputPolicy::reading(&[input])).file("--out", out)?;
@@ -160,8 +162,16 @@ pub fn draw(input: &Path, out: &Path, title: Option<&str>) -> Result<()> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
         || input.to_string_lossy().ends_with(".partial");
+    let mut end = end.cloned();
     let (name, headers, rows) = if is_log {
         let table = read_log(input)?;
+        if let Some(e) = table
+            .metadata
+            .get("orbitlash.run_end")
+            .and_then(RunEnd::from_metadata)
+        {
+            end = Some(e);
+        }
         let name = table
             .metadata
             .get("orbitlash.provenance")
@@ -180,8 +190,9 @@ pub fn draw(input: &Path, out: &Path, title: Option<&str>) -> Result<()> {
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     });
-    let series = RunSeries::from_table(&title, &headers, &rows)
+    let mut series = RunSeries::from_table(&title, &headers, &rows)
         .with_context(|| format!("cannot plot {}", input.display()))?;
+    series.end = end;
     let fig = figure(&series)?;
     write_figure(&fig, out, &[input])
 }

@@ -151,11 +151,17 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         None
     };
 
-    let log = open_log(&a, &loaded, &sc, log_path.as_deref(), &log_policy)?;
+    // The log keeps the pair statistics (its end record carries the verdict and each
+    // pair's smallest backlash); without a log they are kept here.
+    let mesh_window_s = period_s.min(t_end_s);
+    let log = open_log(&a, &loaded, &sc, log_path.as_deref(), &log_policy)?
+        .map(|l| l.with_mesh_stats(MeshStats::last(mesh_window_s)));
     let mut log = match log {
         Some(l) if a.scene => Some(l.with_scene(300.0)),
         other => other,
     };
+    let mut mesh_alone = log.is_none().then(|| MeshStats::last(mesh_window_s));
+    let mut eclipses = orbitlash::run::summary::EclipseWindows::default();
     let csv = match &a.csv {
         Some(p) => Some(CsvExport::create(
             p,
@@ -179,13 +185,18 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     // Over the whole run: reported instead when an interrupted run ends before the
     // last orbit's window.
     let mut stats_run = WindowStats::last(t_end_s);
-    let mut mesh = MeshStats::last(period_s.min(t_end_s));
     let mut daily = orbitlash::run::summary::DailyStats::default();
     let interrupt = interrupt_flag();
     let wall = Instant::now();
     let result = {
         let mut observers = (
-            (&mut stats_obs, &mut stats_run, &mut mesh, &mut daily),
+            (
+                &mut stats_obs,
+                &mut stats_run,
+                &mut mesh_alone,
+                &mut daily,
+                &mut eclipses,
+            ),
             csv,
             &mut log,
             progress,
@@ -210,6 +221,19 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         Err(e) => return Err(run_failed(e, log.as_mut(), &loaded.file, a.csv.is_some())),
     };
     let wall_s = wall.elapsed().as_secs_f64();
+    let mesh = match (&log, &mesh_alone) {
+        (Some(l), _) => l.mesh_stats(),
+        (None, Some(m)) => m,
+        (None, None) => unreachable!("the statistics are kept by the log or here"),
+    };
+    let run_end = orbitlash::run::summary::RunEnd::new(
+        &mesh.run_pairs,
+        &sc.gears
+            .iter()
+            .map(|g| g.min_backlash_m)
+            .collect::<Vec<_>>(),
+        eclipses.closed_at(stats.t_end_s),
+    );
 
     let window = if stats.t_end_s > stats_obs.window_start_s() {
         &stats_obs
@@ -217,7 +241,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         &stats_run
     };
     let verdicts: Vec<PairVerdict> = mesh.run_pairs.iter().map(PairStats::verdict).collect();
-    let mut o = format_verdict(&sc, &stats, &mesh);
+    let mut o = format_verdict(&sc, &stats, mesh);
     if let Some(line) = &replay {
         outln!(o, "{line}");
     }
@@ -225,13 +249,13 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         outln!(o, "{line}");
     }
     o.push_str(&format_summary(&sc.thermal, &stats, window, period_s));
-    o.push_str(&format_mesh(&sc, &mesh));
+    o.push_str(&format_mesh(&sc, mesh));
     o.push_str(&format_days(&sc, &daily, &stats));
     if a.verbose {
         o.push_str(&format_solver(&stats, wall_s, t_end_s / period_s));
     }
     if let Some(p) = &json_out {
-        let summary = RunSummary::new(&sc, &stats, window, &mesh, wall_s);
+        let summary = RunSummary::new(&sc, &stats, window, mesh, wall_s);
         let text = serde_json::to_string_pretty(&summary)? + "\n";
         outs.write_all(&[(p.as_path(), text.as_bytes())])?;
         outln!(o, "json: {}", p.display());
@@ -253,7 +277,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             .as_ref()
             .or(a.csv.as_ref())
             .expect("checked in plan_outputs");
-        super::plot::draw(source, f, None)
+        super::plot::draw(source, f, None, Some(&run_end))
             .map_err(|e| anyhow!("--plot {}: {}", f.display(), error_chain(&e)))?;
         outln!(o, "plot: {}", f.display());
     }

@@ -41,22 +41,16 @@ impl AtomicFile {
         self.writer.as_mut().expect("file not yet committed")
     }
 
-    /// Flushes and renames the file into place. The rename is atomic, so a crash of
-    /// the program never leaves a partial file under the final name. There is no
-    /// fsync: it would double the cost of a logged run, and outputs are reproducible.
+    /// Flushes and renames the file into place, over any older file of that name. The
+    /// rename is atomic: until it happens the older file stays whole under the final
+    /// name (a run killed, out of disk or failed loses nothing that was there), and a
+    /// crash never leaves a partial file under it. There is no fsync: it would double
+    /// the cost of a logged run, and outputs are reproducible.
     pub fn commit(mut self) -> Result<PathBuf, OutputError> {
         let err = |source| OutputError::io(&self.final_path, source);
         let w = self.writer.take().expect("committed twice");
         let file = w.into_inner().map_err(|e| err(e.into_error()))?;
         drop(file);
-        // Removing an old file first keeps ext4 from forcing the new file to disk, as it
-        // does on a rename over an existing file (auto_da_alloc); it costs more than the
-        // whole logging of a short run. A crash in between leaves no file, never a
-        // partial one.
-        match std::fs::remove_file(&self.final_path) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(err(e)),
-            _ => {}
-        }
         std::fs::rename(&self.tmp_path, &self.final_path).map_err(err)?;
         Ok(self.final_path.clone())
     }

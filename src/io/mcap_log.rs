@@ -39,6 +39,7 @@ use super::scene;
 use crate::gear::{GearPair, MeshState};
 use crate::run::sample::{Cadence, Sample, Sampler, Want};
 use crate::run::sim::{Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView};
+use crate::run::summary::{EclipseWindows, MeshStats, RunEnd};
 use crate::thermal::ThermalModel;
 
 /// How often the log records the state.
@@ -260,6 +261,9 @@ struct WriterThread {
 
 /// Samples handed to the writer thread at a time.
 const BATCH_SAMPLES: usize = 32;
+/// A batch waits for a held sample (a smallest backlash still falling) up to this many
+/// items; past it the held sample goes out as it is.
+const MAX_HELD_BATCH: usize = 4096;
 
 enum State {
     /// Created, before the run starts.
@@ -281,6 +285,22 @@ pub struct McapLog {
     scene_interval_s: Option<f64>,
     /// End of the last step the log saw: a failure with no time of its own is dated here.
     last_t_s: f64,
+    /// The run's own statistics of each pair (every step probed inside, not only at
+    /// samples): the end record's verdict and smallest backlash come from them.
+    mesh: MeshStats,
+    eclipses: EclipseWindows,
+    /// Each pair's smallest allowed backlash, m.
+    min_allowed_m: Vec<f64>,
+    /// The run's planned end, s: its last step is always logged.
+    t_end_s: f64,
+    /// Time of the last sample pushed, s.
+    last_logged_s: f64,
+    /// Per pair, the sample at a new smallest backlash found since it was last logged,
+    /// held until a step no longer lowers it (then it goes into the log, in time order):
+    /// one extra sample per descent, not per step.
+    held: Vec<Option<Sample>>,
+    /// Each pair's `t_min_s` before the step (scratch).
+    t_min_before: Vec<f64>,
 }
 
 /// Seconds to MCAP nanoseconds (never negative).
@@ -465,6 +485,13 @@ impl McapLog {
             names: Names::default(),
             scene_interval_s: None,
             last_t_s: 0.0,
+            mesh: MeshStats::last(f64::INFINITY),
+            eclipses: EclipseWindows::default(),
+            min_allowed_m: Vec::new(),
+            t_end_s: f64::INFINITY,
+            last_logged_s: f64::NEG_INFINITY,
+            held: Vec::new(),
+            t_min_before: Vec::new(),
         })
     }
 
@@ -475,8 +502,38 @@ impl McapLog {
         self
     }
 
+    /// The pair statistics the log keeps (`mesh`: the window its `last` orbit covers,
+    /// and the whole run); `run` reports from these instead of keeping a second copy.
+    pub fn with_mesh_stats(mut self, mesh: MeshStats) -> McapLog {
+        self.mesh = mesh;
+        self
+    }
+
+    /// The run's pair statistics, as the log saw them.
+    pub fn mesh_stats(&self) -> &MeshStats {
+        &self.mesh
+    }
+
+    /// The end of the run as the `run_end` record says it (so far, before the end).
+    pub fn run_end(&self, t_end_s: f64) -> RunEnd {
+        RunEnd::new(
+            &self.mesh.run_pairs,
+            &self.min_allowed_m,
+            self.eclipses.closed_at(t_end_s),
+        )
+    }
+
     fn send_batch(&mut self) -> ObserverResult {
         send_batch(&mut self.state, &mut self.batch, &self.path)
+    }
+
+    /// Puts the held samples into the batch at their times.
+    fn release_held(&mut self) {
+        for k in 0..self.held.len() {
+            if let Some(s) = self.held[k].take() {
+                insert_sample(&mut self.batch, &s);
+            }
+        }
     }
 
     /// Closes the log after a failed run: the data so far, an error event and a
@@ -486,6 +543,7 @@ impl McapLog {
     /// not finite); the error event and `run_end.t_end_s` carry it.
     pub fn close_failed(&mut self, t_s: f64, reason: &str) -> Result<PathBuf, OutputError> {
         let t_s = if t_s.is_finite() { t_s } else { self.last_t_s };
+        self.release_held();
         self.batch.items.push(Item::Event {
             t_s,
             level: 4,
@@ -496,7 +554,7 @@ impl McapLog {
 
     fn finish(&mut self, status: &str, t_s: f64, detail: &str) -> Result<PathBuf, OutputError> {
         let path = self.path.clone();
-        let end: BTreeMap<String, String> = [
+        let mut end: BTreeMap<String, String> = [
             ("status", status.to_string()),
             ("t_end_s", format!("{t_s}")),
             ("detail", detail.to_string()),
@@ -504,6 +562,7 @@ impl McapLog {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
+        end.extend(self.run_end(t_s).to_metadata());
         if let Err(e) = self.send_batch()
             && matches!(self.state, State::Closed(false))
         {
@@ -599,6 +658,33 @@ fn push_sample(batch: &mut Batch, s: &Sample) {
     batch.items.push(Item::Sample(at, mesh));
 }
 
+/// The time of a batch item, s.
+fn item_time(batch: &Batch, item: &Item) -> f64 {
+    match item {
+        Item::Sample(at, _) => batch.values[*at],
+        Item::Event { t_s, .. } => *t_s,
+    }
+}
+
+/// Adds a sample to a batch at its time among the items there (after events of the same
+/// time); none if a sample of that time is there already.
+fn insert_sample(batch: &mut Batch, s: &Sample) {
+    let mut at = batch.items.len();
+    while at > 0 && item_time(batch, &batch.items[at - 1]) > s.t_s {
+        at -= 1;
+    }
+    let taken = batch.items[..at].iter().rev().any(|i| match i {
+        Item::Sample(v, _) => batch.values[*v] == s.t_s,
+        Item::Event { .. } => false,
+    });
+    if taken {
+        return;
+    }
+    push_sample(batch, s);
+    let item = batch.items.pop().expect("just pushed");
+    batch.items.insert(at, item);
+}
+
 /// Runs `w` on a thread fed by batches until `Finish`.
 fn spawn_writer(
     setup: impl FnOnce() -> Result<LogWriter, OutputError> + Send + 'static,
@@ -619,15 +705,9 @@ fn spawn_writer(
                     return Err(e);
                 }
             };
-            // An older log under the same name goes now, in parallel with the run.
-            // (`AtomicFile::commit` explains why it is removed before the rename.)
-            let mut error: Option<OutputError> = match std::fs::remove_file(&w.path) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                    flag.store(true, std::sync::atomic::Ordering::Relaxed);
-                    Some(OutputError::io(&w.path, e))
-                }
-                _ => None,
-            };
+            // An older log under the same name stays until this one is committed
+            // (`AtomicFile::commit` renames over it).
+            let mut error: Option<OutputError> = None;
             for msg in rx {
                 match msg {
                     ToWriter::Batch(b) => {
@@ -1017,9 +1097,15 @@ impl Observer for McapLog {
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.
         self.last_t_s = r.t_start_s;
+        self.t_end_s = r.t_end_s;
+        self.mesh.on_start(r)?;
+        self.eclipses.on_start(r)?;
+        self.min_allowed_m = r.gears.iter().map(|g| g.min_backlash_m).collect();
+        self.held = vec![None; r.gears.len()];
         self.sampler = Sampler::new(self.cadence.cadence(), Want::ALL);
         if let Some(s) = self.sampler.start(r) {
             push_sample(&mut self.batch, s);
+            self.last_logged_s = s.t_s;
         }
         let setup = move || {
             open_log_writer(
@@ -1036,19 +1122,56 @@ impl Observer for McapLog {
         Ok(())
     }
 
+    /// Besides the samples at the log's cadence, the log always holds each pair's
+    /// sample at the run's smallest backlash (held while steps keep lowering it) and
+    /// the last step's end, so a figure or viewer of the log shows the run's own
+    /// minimum and end whatever the cadence.
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        self.last_t_s = step.t1_s();
-        let (batch, state, path) = (&mut self.batch, &mut self.state, &self.path);
-        self.sampler.each(step, |s| {
-            push_sample(batch, s);
-            if batch.items.len() >= BATCH_SAMPLES {
-                send_batch(state, batch, path)?;
+        let t1 = step.t1_s();
+        self.last_t_s = t1;
+        self.t_min_before.clear();
+        self.t_min_before
+            .extend(self.mesh.run_pairs.iter().map(|p| p.t_min_s));
+        self.mesh.on_step(step)?;
+        for k in 0..self.held.len() {
+            let t_min = self.mesh.run_pairs[k].t_min_s;
+            if t_min.to_bits() != self.t_min_before[k].to_bits() {
+                // a new smallest within this step: its sample replaces the held one
+                let s = self.held[k].get_or_insert_with(Sample::default);
+                if t_min == t1 {
+                    step.sample_end(Want::ALL, s);
+                } else {
+                    step.sample_at(t_min, Want::ALL, s);
+                }
+            } else if let Some(s) = self.held[k].take() {
+                insert_sample(&mut self.batch, &s);
             }
+        }
+        let (batch, last) = (&mut self.batch, &mut self.last_logged_s);
+        self.sampler.each(step, |s| -> ObserverResult {
+            push_sample(batch, s);
+            *last = s.t_s;
             Ok(())
-        })
+        })?;
+        if t1 >= self.t_end_s {
+            self.release_held();
+            if self.last_logged_s != t1 {
+                let mut s = Sample::default();
+                step.sample_end(Want::ALL, &mut s);
+                push_sample(&mut self.batch, &s);
+                self.last_logged_s = t1;
+            }
+        }
+        let n = self.batch.items.len();
+        if n >= BATCH_SAMPLES && (self.held.iter().all(Option::is_none) || n >= MAX_HELD_BATCH) {
+            self.release_held();
+            self.send_batch()?;
+        }
+        Ok(())
     }
 
     fn on_event(&mut self, event: &Event) -> ObserverResult {
+        self.eclipses.on_event(event)?;
         let (level, text) = event_text(event.kind, &self.names);
         self.batch.items.push(Item::Event {
             t_s: event.t_s,
@@ -1059,6 +1182,8 @@ impl Observer for McapLog {
     }
 
     fn on_finish(&mut self, stats: &RunStats) -> ObserverResult {
+        self.mesh.on_finish(stats)?;
+        self.release_held();
         let (status, detail) = if stats.interrupted {
             self.batch.items.push(Item::Event {
                 t_s: stats.t_end_s,

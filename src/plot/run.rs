@@ -16,6 +16,7 @@ use super::{
     ECLIPSE, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, palette, text_width,
     time_unit,
 };
+pub use crate::run::summary::RunEnd;
 
 /// A run longer than this many days is drawn as per-orbit envelopes.
 pub const ENVELOPE_DAYS: f64 = 5.0;
@@ -45,6 +46,11 @@ pub struct RunSeries {
     /// 1 sunlit, 0 eclipse.
     pub sunlit: Option<Vec<f64>>,
     pub orbit: Option<Vec<f64>>,
+    /// How the run ended, from the run itself (its log's end record, or the run that
+    /// draws its own figure): the verdict, each pair's smallest backlash and its time,
+    /// and the eclipse windows. Without it they are taken from the rows, which may
+    /// have missed the run's smallest value.
+    pub end: Option<RunEnd>,
 }
 
 impl RunSeries {
@@ -71,6 +77,7 @@ impl RunSeries {
             allowed_um: Vec::new(),
             sunlit: None,
             orbit: None,
+            end: None,
         };
         let mut margins: Vec<(String, Vec<f64>)> = Vec::new();
         for (i, h) in headers.iter().enumerate().skip(1) {
@@ -191,8 +198,56 @@ pub fn envelope(s: &RunSeries, series: &[&Vec<f64>]) -> Envelope {
     env
 }
 
-/// Eclipse spans (t0, t1), s.
+/// Each pair's smallest backlash: (pair, time s, value µm), from the run's end when
+/// known, else from the rows.
+fn smallest_points(s: &RunSeries) -> Vec<(String, f64, f64)> {
+    s.backlash_um
+        .iter()
+        .map(|(p, v)| {
+            let from_end = s.end.as_ref().and_then(|e| {
+                let pe = e.pairs.iter().find(|q| {
+                    q.name == *p
+                        || crate::io::log_schema::identifier(&q.name) == *p
+                        || (p.is_empty() && e.pairs.len() == 1)
+                })?;
+                Some((pe.t_min_s?, pe.min_backlash_um?))
+            });
+            let (t, m) = from_end.unwrap_or_else(|| {
+                let (i, m) = v.iter().enumerate().filter(|(_, x)| x.is_finite()).fold(
+                    (0, f64::INFINITY),
+                    |b, (i, x)| if *x < b.1 { (i, *x) } else { b },
+                );
+                (s.time_s[i], m)
+            });
+            (p.clone(), t, m)
+        })
+        .collect()
+}
+
+/// The title's verdict: the run's own when known, else judged from the rows.
+fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
+    let fails = match s.end.as_ref().map(|e| e.verdict.as_str()) {
+        Some("pass") => false,
+        Some("fail") => true,
+        Some(_) => return String::new(),
+        None if s.allowed_um.is_empty() => return String::new(),
+        None => smallest
+            .iter()
+            .any(|(p, _, m)| s.allowed_um.iter().any(|(q, a)| q == p && m < a)),
+    };
+    if fails {
+        "  —  FAIL: backlash below the smallest allowed".to_string()
+    } else {
+        "  —  PASS".to_string()
+    }
+}
+
+/// Eclipse spans (t0, t1), s: the run's own windows when known, else from the rows'
+/// sunlit flag.
 fn eclipses(s: &RunSeries) -> Vec<(f64, f64)> {
+    if let Some(e) = &s.end {
+        return e.eclipses_s.iter().map(|w| (w[0], w[1])).collect();
+    }
     let Some(sl) = &s.sunlit else {
         return Vec::new();
     };
@@ -261,28 +316,9 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
         root.fill(&WHITE).map_err(draw_err)?;
         let title_style = TextStyle::from((super::FAMILY, 20).into_font()).color(&BLACK);
 
-        // The verdict, when the log knows the smallest allowed backlash.
-        let smallest: Vec<(String, usize, f64)> = s
-            .backlash_um
-            .iter()
-            .map(|(p, v)| {
-                let (i, m) = v.iter().enumerate().filter(|(_, x)| x.is_finite()).fold(
-                    (0, f64::INFINITY),
-                    |b, (i, x)| if *x < b.1 { (i, *x) } else { b },
-                );
-                (p.clone(), i, m)
-            })
-            .collect();
-        let fails = smallest
-            .iter()
-            .any(|(p, _, m)| s.allowed_um.iter().any(|(q, a)| q == p && m < a));
-        let verdict = if s.allowed_um.is_empty() {
-            String::new()
-        } else if fails {
-            "  —  FAIL: backlash below the smallest allowed".to_string()
-        } else {
-            "  —  PASS".to_string()
-        };
+        // The verdict, when the run's end or the log's margins give it.
+        let smallest = smallest_points(s);
+        let verdict = verdict_suffix(s, &smallest);
         let title = format!("{}{}", s.title, verdict);
         root.draw(&Text::new(title.clone(), (20, 12), title_style.clone()))
             .map_err(draw_err)?;
@@ -477,11 +513,11 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
                     .map_err(draw_err)?;
                     labels.push(Label { text, rect: r });
                 }
-                for (pair, i, m) in &smallest {
+                for (pair, t, m) in &smallest {
                     if !m.is_finite() {
                         continue;
                     }
-                    let t = s.time_s[*i];
+                    let t = *t;
                     let (px, py) = chart.backend_coord(&(tx(t), *m));
                     root.draw(&Circle::new((px, py), 6, BLACK.stroke_width(2)))
                         .map_err(draw_err)?;

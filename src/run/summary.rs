@@ -807,3 +807,123 @@ impl Observer for DailyStats {
         Ok(())
     }
 }
+
+/// How a run ended, as its log's `orbitlash.run_end` record carries it (keys
+/// `verdict`, `pairs_json`, `eclipses_json`) and as its figures take it: the verdict,
+/// each pair's smallest backlash and its time from the run itself (the mesh statistics,
+/// which see inside every step), not from whichever samples a log or CSV kept.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RunEnd {
+    /// "pass", "fail", or "none" (no gear pair).
+    pub verdict: String,
+    pub pairs: Vec<PairEnd>,
+    /// Eclipse windows (entry, exit), s since t = 0; one still open at the end closes
+    /// at the run's end.
+    pub eclipses_s: Vec<[f64; 2]>,
+}
+
+/// One gear pair's part of [`RunEnd`]; a value that is not finite is `None` (JSON null).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PairEnd {
+    pub name: String,
+    pub min_backlash_um: Option<f64>,
+    pub t_min_s: Option<f64>,
+    pub min_allowed_um: Option<f64>,
+    /// As [`PairVerdict`] serialises.
+    pub verdict: String,
+}
+
+impl RunEnd {
+    /// From the run-wide pair statistics, each pair's smallest allowed backlash (m, in
+    /// the same order) and the eclipse windows.
+    pub fn new(pairs: &[PairStats], min_allowed_m: &[f64], eclipses_s: Vec<[f64; 2]>) -> RunEnd {
+        let finite = |v: f64| v.is_finite().then_some(v);
+        let verdict = if pairs.is_empty() {
+            "none"
+        } else {
+            PassFail::all(pairs.iter().map(|p| p.verdict().passes())).as_str()
+        };
+        RunEnd {
+            verdict: verdict.to_string(),
+            pairs: pairs
+                .iter()
+                .zip(min_allowed_m)
+                .map(|(p, a)| PairEnd {
+                    name: p.name.clone(),
+                    min_backlash_um: finite(p.min_exact_m * 1e6),
+                    t_min_s: finite(p.t_min_s),
+                    min_allowed_um: finite(a * 1e6),
+                    verdict: serde_json::to_value(p.verdict())
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_string))
+                        .unwrap_or_default(),
+                })
+                .collect(),
+            eclipses_s,
+        }
+    }
+
+    /// The record's keys and values (`pairs_json` and `eclipses_json` as JSON).
+    pub fn to_metadata(&self) -> Vec<(String, String)> {
+        vec![
+            ("verdict".into(), self.verdict.clone()),
+            (
+                "pairs_json".into(),
+                serde_json::to_string(&self.pairs).expect("plain data"),
+            ),
+            (
+                "eclipses_json".into(),
+                serde_json::to_string(&self.eclipses_s).expect("plain data"),
+            ),
+        ]
+    }
+
+    /// Back from a `run_end` record; `None` for a log written before these keys (or
+    /// by a run that failed before its first step).
+    pub fn from_metadata(m: &std::collections::BTreeMap<String, String>) -> Option<RunEnd> {
+        Some(RunEnd {
+            verdict: m.get("verdict")?.clone(),
+            pairs: serde_json::from_str(m.get("pairs_json")?).ok()?,
+            eclipses_s: serde_json::from_str(m.get("eclipses_json")?).ok()?,
+        })
+    }
+}
+
+/// Eclipse windows from a run's events (an observer): entry to exit, one open at the
+/// start (the run starts in shadow) from the start, one open at the end to the end.
+#[derive(Debug, Clone, Default)]
+pub struct EclipseWindows {
+    pub windows_s: Vec<[f64; 2]>,
+    open_s: Option<f64>,
+}
+
+impl EclipseWindows {
+    /// The windows, with one still open closed at `t_end_s`.
+    pub fn closed_at(&self, t_end_s: f64) -> Vec<[f64; 2]> {
+        let mut w = self.windows_s.clone();
+        if let Some(t0) = self.open_s {
+            w.push([t0, t_end_s]);
+        }
+        w
+    }
+}
+
+impl Observer for EclipseWindows {
+    fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        if !r.sunlit {
+            self.open_s = Some(r.t_start_s);
+        }
+        Ok(())
+    }
+    fn on_event(&mut self, e: &Event) -> ObserverResult {
+        match e.kind {
+            EventKind::EclipseEntry => self.open_s = Some(e.t_s),
+            EventKind::EclipseExit => {
+                let t0 = self.open_s.take().unwrap_or(e.t_s);
+                self.windows_s.push([t0, e.t_s]);
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}

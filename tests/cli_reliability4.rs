@@ -1,0 +1,147 @@
+//! Reliability, round 4 (issue 27): each defect an outside adversarial trial reproduced,
+//! as a case that failed before its fix. Items are numbered as in the issue.
+
+use std::path::Path;
+use std::process::Output;
+
+mod common;
+use common::{assert_check_refuses, assert_error, bin, reference_text, reference_with, tmpdir};
+
+fn run_in(dir: &Path, args: &[&str]) -> Output {
+    bin().args(args).current_dir(dir).output().unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The path of the built binary (for runs killed from outside).
+fn bin_path() -> std::path::PathBuf {
+    std::path::PathBuf::from(env!("CARGO_BIN_EXE_orbitlash"))
+}
+
+// 1. A killed run keeps the previous log under its name: the new one replaces it only
+// when committed.
+#[test]
+fn cli_a_killed_run_keeps_the_previous_log() {
+    let dir = tmpdir("r4-killed");
+    let first = run_in(&dir, &["run", "--quiet", "--out", "d.mcap"]);
+    assert_eq!(first.status.code(), Some(0), "{}", stderr(&first));
+    let before = std::fs::read(dir.join("d.mcap")).unwrap();
+    let mut child = std::process::Command::new(bin_path())
+        .args([
+            "run",
+            "--quiet",
+            "--orbits",
+            "20000",
+            "--log-every",
+            "60s",
+            "--force",
+            "--out",
+            "d.mcap",
+        ])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    // the run is still going (a log of 20000 orbits takes far longer)
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the long run ended early"
+    );
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let after = std::fs::read(dir.join("d.mcap")).expect("the previous log is gone");
+    assert!(before == after, "the previous log changed");
+    // and a run that completes replaces it
+    let again = run_in(
+        &dir,
+        &["run", "--quiet", "--orbits", "1", "--out", "d.mcap"],
+    );
+    assert_eq!(again.status.code(), Some(0), "{}", stderr(&again));
+    assert!(std::fs::read(dir.join("d.mcap")).unwrap() != before);
+}
+
+// 3. A FAIL run is drawn as FAIL with the run's own smallest backlash and time, from
+// any log cadence: the log's end record carries the verdict, each pair's smallest and
+// the eclipses, and the log always holds the samples at the smallest and at the end.
+#[test]
+fn cli_a_failing_run_is_drawn_failing_whatever_the_log_keeps() {
+    let dir = tmpdir("r4-fail-drawn");
+    for every in ["3600s", "1e30s"] {
+        let out = run_in(
+            &dir,
+            &[
+                "run",
+                "--quiet",
+                "--out",
+                "le.mcap",
+                "--log-every",
+                every,
+                "--plot",
+                "le.svg",
+                "--set",
+                "gear_pair.mesh.min_backlash_um=24.5",
+            ],
+        );
+        assert_eq!(out.status.code(), Some(1), "{every}: {}", stderr(&out));
+        assert!(stdout(&out).starts_with("FAIL"), "{every}");
+        let svg = std::fs::read_to_string(dir.join("le.svg")).unwrap();
+        assert!(svg.contains("FAIL"), "{every}: the figure says PASS");
+        assert!(!svg.contains("PASS"), "{every}");
+        assert!(
+            svg.contains("smallest 24.398 µm at 8.39 h"),
+            "{every}: the smallest is not the run's"
+        );
+        // the log's end record and its samples
+        let t = orbitlash::io::mcap_read::read_log(&dir.join("le.mcap")).unwrap();
+        let end = orbitlash::run::summary::RunEnd::from_metadata(&t.metadata["orbitlash.run_end"])
+            .expect("the end record's verdict");
+        assert_eq!(end.verdict, "fail");
+        assert_eq!(end.pairs[0].verdict, "margin_violated");
+        assert!((end.pairs[0].min_backlash_um.unwrap() - 24.3978).abs() < 1e-3);
+        assert!((end.pairs[0].t_min_s.unwrap() - 30186.9).abs() < 0.1);
+        assert_eq!(end.eclipses_s.len(), 6, "the six eclipses");
+        let times: Vec<f64> = t.rows.iter().map(|(ns, _)| *ns as f64 * 1e-9).collect();
+        assert!(
+            times.iter().any(|x| (x - 30186.87).abs() < 0.01),
+            "{every}: no sample at the smallest"
+        );
+        assert!(
+            (times.last().unwrap() - 6.0 * 5676.978).abs() < 0.01,
+            "{every}: the log ends at {}",
+            times.last().unwrap()
+        );
+        // `plot` of the log says the same
+        let p = run_in(&dir, &["plot", "le.mcap", "--out", "again.svg"]);
+        assert_eq!(p.status.code(), Some(0), "{}", stderr(&p));
+        let again = std::fs::read_to_string(dir.join("again.svg")).unwrap();
+        assert!(again.contains("FAIL") && again.contains("smallest 24.398 µm at 8.39 h"));
+    }
+    // a figure from the CSV alone (no log) takes the run's end too
+    let out = run_in(
+        &dir,
+        &[
+            "run",
+            "--quiet",
+            "--no-log",
+            "--csv",
+            "le.csv",
+            "--set",
+            "run.output_interval_s=3600",
+            "--plot",
+            "csv.svg",
+            "--set",
+            "gear_pair.mesh.min_backlash_um=24.5",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let svg = std::fs::read_to_string(dir.join("csv.svg")).unwrap();
+    assert!(svg.contains("FAIL") && svg.contains("smallest 24.398 µm at 8.39 h"));
+}
