@@ -145,3 +145,38 @@ fn cli_a_failing_run_is_drawn_failing_whatever_the_log_keeps() {
     let svg = std::fs::read_to_string(dir.join("csv.svg")).unwrap();
     assert!(svg.contains("FAIL") && svg.contains("smallest 24.398 µm at 8.39 h"));
 }
+
+// 12. A damaged length field is "damaged file", exit 2, from every reader, under an
+// address-space limit (before, each allocated 4 GB and aborted with exit 134).
+#[test]
+fn cli_a_damaged_length_is_named_by_every_reader() {
+    let dir = tmpdir("r4-length");
+    let out = run_in(
+        &dir,
+        &["run", "--quiet", "--orbits", "0.5", "--out", "d.mcap"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let mut bytes = std::fs::read(dir.join("d.mcap")).unwrap();
+    bytes[18..22].copy_from_slice(&[0xff, 0xff, 0xff, 0x7f]);
+    std::fs::write(dir.join("d.mcap"), &bytes).unwrap();
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml");
+    let scenario = scenario.to_str().unwrap();
+    for cmd in [
+        "export-csv d.mcap --out d.csv",
+        "recover d.mcap --out r.mcap",
+        "plot d.mcap --out d.svg",
+        &format!("diagnose {scenario} --recording d.mcap"),
+        "bench --diagnose d.mcap",
+    ] {
+        let out = std::process::Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v 3000000; exec {} {cmd}",
+                bin_path().display()
+            ))
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert_error(cmd, &out, &["d.mcap", "damaged", "byte 8"]);
+    }
+}

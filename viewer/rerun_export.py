@@ -195,7 +195,8 @@ class Recording:
         import rerun as rr
 
         t = np.asarray(t_ns, dtype=np.int64)
-        self.t_end_ns = max(int(t.max()), self.t_end_ns or int(t.max()))
+        last = int(t.max())
+        self.t_end_ns = last if self.t_end_ns is None else max(self.t_end_ns, last)
         cols = [rr.TimeColumn("sim_time", duration=(t - self.origin_ns) * 1e-9)]
         if self.origin_ns:
             cols.append(rr.TimeColumn("utc", timestamp=t * 1e-9))
@@ -245,8 +246,11 @@ def send_gear(out, topic, field, t, v, series, pairs, groups):
             allowed = [low.allowed_um] * len(bt)
         else:  # a log before pairs_json: backlash less margin
             allowed = [b - m for b, m in zip(bv, v)]
+        label = f"{pair} smallest allowed (µm)"
+        if low.t_ns is None and low.verdict:  # no point to carry the verdict
+            label += f" ({VERDICTS.get(low.verdict, str(low.verdict).upper())})"
         entity = f"backlash/{pair}/minimum_allowed"
-        out.series(entity, bt, allowed, f"{pair} smallest allowed (µm)")
+        out.series(entity, bt, allowed, label)
         groups[backlash].append(entity)
         if low.t_ns is not None:
             out.point(f"backlash/{pair}/smallest", low.t_ns, low.value_um, smallest_label(pair, low))
@@ -387,7 +391,7 @@ def same_file(a, b):
 def refusal(path, log, force):
     """Why the export must not write `path` (a phrase), or None when it may."""
     if same_file(path, log):
-        return "it is the log itself" + (" (through a link)" if os.path.realpath(path) != os.path.abspath(log) or os.path.islink(path) else "")
+        return "it is the log itself"
     if os.path.islink(path):
         return "it is a symbolic link (give the file itself, or another name)"
     if not os.path.lexists(path):

@@ -103,7 +103,7 @@ pub enum ScanError {
     NotMcap,
     #[error("the file ends within its first 8 bytes (the MCAP magic): nothing was written to it")]
     Empty,
-    #[error("record at byte {offset} is malformed: {message}")]
+    #[error("the file is damaged: the record at byte {offset} is malformed: {message}")]
     Malformed { offset: usize, message: String },
 }
 
@@ -151,6 +151,10 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
             break;
         };
         let body = &bytes[body_start..end];
+        super::mcap_lengths::check_record(op, body).map_err(|message| ScanError::Malformed {
+            offset: at,
+            message,
+        })?;
         let record = mcap::parse_record(op, body).map_err(|e| ScanError::Malformed {
             offset: at,
             message: e.to_string(),
@@ -243,14 +247,17 @@ fn inner_records<'a>(
         else {
             break;
         };
-        let record = match mcap::parse_record(op, &bytes[body_start..end]) {
+        let body = &bytes[body_start..end];
+        let record = match super::mcap_lengths::check_record(op, body)
+            .and_then(|()| mcap::parse_record(op, body).map_err(|e| e.to_string()))
+        {
             Ok(r) => r,
             // in a chunk cut off, a record that does not parse is where the data ends
             Err(_) if !verified => break,
-            Err(e) => {
+            Err(message) => {
                 return Err(ScanError::Malformed {
                     offset: at,
-                    message: e.to_string(),
+                    message,
                 });
             }
         };

@@ -4,6 +4,7 @@ pub mod atomic;
 pub mod csv_export;
 pub mod diagnose_out;
 pub mod log_schema;
+pub mod mcap_lengths;
 pub mod mcap_log;
 pub mod mcap_read;
 pub mod mcap_scan;

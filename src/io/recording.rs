@@ -385,6 +385,14 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
         file: file.to_string(),
         message,
     };
+    // Every length checked first (the crate's parser allocates what a length says).
+    if bytes.starts_with(b"\x89MCAP0\r\n") {
+        super::mcap_lengths::check_file(bytes, 8).map_err(|(offset, m)| {
+            fail(format!(
+                "is not a readable MCAP file (damaged or cut off): the record at byte {offset} is malformed: {m} (a file cut off by a killed run is recovered by `orbitlash recover`)"
+            ))
+        })?;
+    }
     // The mcap crate's reader: any chunk compression, a whole file.
     let mut messages = Vec::new();
     for m in mcap::MessageStream::new(bytes)

@@ -5,6 +5,7 @@
 
 Reads the file with the MCAP reader Foxglove publishes (protobuf decoded through the
 schemas stored in the file) and imports it with Rerun's own MCAP importer, then checks:
+- every chunk matches its CRC (a file changed after it was written fails);
 - every channel has a schema and is protobuf (Rerun decodes protobuf by reflection;
   JSON would reach it as raw bytes);
 - every message decodes, the message count matches the summary, log time never goes
@@ -17,10 +18,16 @@ schemas stored in the file) and imports it with Rerun's own MCAP importer, then 
 - provenance: the metadata record and the attached scenario file are present, and the
   run_end record says the run completed (or was interrupted, with --allow-interrupted,
   or was recovered from a cut-off log by `orbitlash recover`, with --allow-recovered).
-Exit 0 = OK, 1 = a viewer would not get the data, 2 = the check could not run.
+Exit 0 = OK, 1 = a viewer would not get the data, 2 = the check could not run (one line
+naming a missing Python package: pip install -r tests/viewer/requirements.txt).
 """
-import argparse, math, sys
+import argparse, importlib, math, sys
 from collections import defaultdict
+
+# The modules imported here and the Python packages (pip names) that provide them,
+# dependencies first, so that a missing one is named rather than its dependent.
+PACKAGES = [("mcap", "mcap"), ("google.protobuf", "protobuf"), ("mcap_protobuf", "mcap-protobuf-support"),
+            ("pyarrow", "pyarrow"), ("rerun", "rerun-sdk")]
 
 GEAR_FIELDS = ["backlash_exact_um", "backlash_closed_form_um", "backlash_paper_um", "margin_um",
                "pressure_angle_deg", "center_distance_mm"]
@@ -31,6 +38,15 @@ def fail(msg):
     problems.append(msg)
     print("FAIL:", msg)
 
+def missing_package():
+    """(pip name, error) of the first package that does not import, or None."""
+    for module, package in PACKAGES:
+        try:
+            importlib.import_module(module)
+        except ImportError as e:
+            return package, e
+    return None
+
 def foxglove_side(path, allowed_ends):
     from mcap.reader import make_reader
     from mcap_protobuf.decoder import DecoderFactory
@@ -39,7 +55,8 @@ def foxglove_side(path, allowed_ends):
     logs = set()
     scenes = set()
     with open(path, "rb") as f:
-        r = make_reader(f, decoder_factories=[DecoderFactory()])
+        # every chunk read is checked against its CRC (CRCValidationError)
+        r = make_reader(f, validate_crcs=True, decoder_factories=[DecoderFactory()])
         s = r.get_summary()
         if s is None or s.statistics is None:
             fail("no summary section: the file was not closed")
@@ -103,7 +120,7 @@ def has_gear_pairs(path):
     """Whether the scenario attached to the log has gear pairs (then it must log them)."""
     from mcap.reader import make_reader
     with open(path, "rb") as f:
-        for a in make_reader(f).iter_attachments():
+        for a in make_reader(f, validate_crcs=True).iter_attachments():
             if a.media_type == "application/toml":
                 return any(line.strip().startswith("[[gear_pair]]")
                            for line in a.data.decode("utf-8", "replace").splitlines())
@@ -166,11 +183,13 @@ def main():
     a = ap.parse_args()
     allowed_ends = {e for e, ok in [("interrupted", a.allow_interrupted),
                                     ("recovered", a.allow_recovered)] if ok}
-    try:
-        import mcap, mcap_protobuf, rerun  # noqa: F401
-    except ImportError as e:
-        print("cannot run the check:", e)
+    missing = missing_package()
+    if missing:
+        package, e = missing
+        print(f"check_log.py needs the Python package `{package}`: "
+              f"pip install -r tests/viewer/requirements.txt ({e})")
         return 2
+    from mcap.stream_reader import CRCValidationError
     try:
         expected, counts, logs = foxglove_side(a.log, allowed_ends)
         if "/thermal/temperature" not in expected:
@@ -179,6 +198,9 @@ def main():
             fail("no /gears/<pair> channel")
         if counts:
             rerun_side(a.log, expected, counts, logs)
+    except CRCValidationError:
+        fail(f"{a.log}: a chunk's CRC does not match its bytes: the file is damaged (it changed after "
+             "it was written; `orbitlash recover` writes a copy without the damaged chunks)")
     except Exception as e:  # unreadable, truncated, undecodable
         fail(f"{type(e).__name__}: {e}")
     print("RESULT:", "OK" if not problems else f"{len(problems)} problem(s)")

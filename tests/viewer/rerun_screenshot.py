@@ -24,6 +24,20 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 EXPORT = os.path.join(HERE, "..", "..", "viewer", "rerun_export.py")
 
 
+def refusal(shot, log):
+    """Why the screenshot must not be written at `shot` (a phrase), or None."""
+    same = os.path.realpath(shot) == os.path.realpath(log)
+    if not same and os.path.exists(shot) and os.path.exists(log):
+        same = os.path.samefile(shot, log)  # a hard link
+    if same:
+        return "it is the log itself"
+    if os.path.islink(shot):
+        return "it is a symbolic link (give the file itself, or another name)"
+    if os.path.lexists(shot) and not os.path.isfile(shot):
+        return "it is not a regular file"
+    return None
+
+
 def main():
     p = argparse.ArgumentParser()
     p.add_argument("log")
@@ -33,8 +47,9 @@ def main():
     cols, rows = (int(x) for x in a.cells.split("x"))
     # ORBITLASH_REQUIRE_VIEWER=1 (CI): a viewer that cannot start is a failure, not a skip
     strict = os.environ.get("ORBITLASH_REQUIRE_VIEWER") == "1"
-    if os.path.abspath(a.shot) == os.path.abspath(a.log):
-        print("FAIL: the screenshot would overwrite the log")
+    why = refusal(a.shot, a.log)
+    if why:
+        print(f"FAIL: will not write the screenshot {a.shot}: {why}")
         return 2
     rerun = shutil.which("rerun", path=os.path.dirname(sys.executable)) or shutil.which("rerun")
     xvfb = shutil.which("xvfb-run")

@@ -25,7 +25,9 @@ What they check:
   logs written here in Python (the binary's log, with a smallest below every sample),
   and on the binary's own log when it writes pairs_json (a SKIP line when not).
 """
+import contextlib
 import importlib.util
+import io
 import json
 import os
 import shutil
@@ -251,6 +253,7 @@ def rrd_entity(rrd, entity):
 
 
 def load_export_module():
+    sys.dont_write_bytecode = True  # no viewer/__pycache__ in the tree
     spec = importlib.util.spec_from_file_location("rerun_export", EXPORT)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -388,8 +391,10 @@ def test_failure_keeps_previous(tmp, log):
         raise RuntimeError("failure injected by test_helpers.py")
 
     module.make_blueprint = broken
-    code = module.main([victim, "-o", out])
-    expect(code == 2, f"main returned {code} after a failure")
+    said = io.StringIO()
+    with contextlib.redirect_stderr(said):
+        code = module.main([victim, "-o", out])
+    expect(code == 2 and "failure injected" in said.getvalue(), f"main returned {code}: {said.getvalue()!r}")
     expect(not os.path.lexists(out + ".partial"), f"{out}.partial was left")
     expect(read(out) == before, "the previous .rrd changed")
 
