@@ -180,3 +180,82 @@ fn cli_a_damaged_length_is_named_by_every_reader() {
         assert_error(cmd, &out, &["d.mcap", "damaged", "byte 8"]);
     }
 }
+
+// 11. Two faces of one name are refused, naming both lines (before, the second was
+// silently renamed `px-2`).
+#[test]
+fn cli_duplicate_face_names_are_refused_naming_both_lines() {
+    let dir = tmpdir("r4-faces");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
+    )
+    .unwrap()
+    .replacen("name = \"mx\"", "name = \"px\"", 1);
+    assert_check_refuses(
+        &dir,
+        "dup-face",
+        &text,
+        &[":94:", "face[1].name", "`px` is defined twice", "line 86"],
+    );
+}
+
+// 5. Huge and tiny vectors keep their direction (scaled before squaring): a face normal
+// [1e200, 0, 0] sees the Sun as [1, 0, 0] does, a quaternion [1e200, 1e200, 0, 0] is a
+// turn of 90°, not the identity, and [1e-170, 1e-170, 0] is a direction.
+#[test]
+fn cli_huge_and_tiny_vectors_keep_their_direction() {
+    let dir = tmpdir("r4-vectors");
+    let cubesat = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
+    )
+    .unwrap();
+    let fluxes = |name: &str, text: &str| {
+        std::fs::write(dir.join(name), text).unwrap();
+        let out = run_in(
+            &dir,
+            &["environment", name, "--csv", &format!("{name}.csv")],
+        );
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        std::fs::read_to_string(dir.join(format!("{name}.csv"))).unwrap()
+    };
+    let unit = fluxes("unit.toml", &cubesat);
+    assert!(cubesat.contains("normal = [1.0, 0.0, 0.0]"));
+    for (v, also) in [
+        ("[1e200, 0.0, 0.0]", "[0.0, 1e300, 0.0]"),
+        ("[1e-170, 0.0, 0.0]", "[0.0, 1e-300, 0.0]"),
+    ] {
+        let text = cubesat
+            .replacen("normal = [1.0, 0.0, 0.0]", &format!("normal = {v}"), 1)
+            .replacen("normal = [0.0, 1.0, 0.0]", &format!("normal = {also}"), 1);
+        assert_eq!(fluxes("scaled.toml", &text), unit, "{v}");
+    }
+    // a diagonal tiny vector is a direction, not "the zero vector"
+    let text = cubesat.replacen(
+        "normal = [1.0, 0.0, 0.0]",
+        "normal = [1e-170, 1e-170, 0.0]",
+        1,
+    );
+    std::fs::write(dir.join("diag.toml"), &text).unwrap();
+    let out = run_in(&dir, &["check", "diag.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // only the zero vector has none
+    let text = cubesat.replacen("normal = [1.0, 0.0, 0.0]", "normal = [0.0, 0.0, 0.0]", 1);
+    assert_check_refuses(&dir, "zero", &text, &["face.px.normal", "zero vector"]);
+    // a quaternion of huge components turns the body as its unit form does
+    let inertial = |q: &str| {
+        cubesat.replacen(
+            "[attitude]\nmode = \"nadir\"\nyaw_deg = 0.0\n",
+            &format!("[attitude]\nmode = \"inertial\"\nquaternion = {q}\n"),
+            1,
+        )
+    };
+    assert!(cubesat.contains("[attitude]\nmode = \"nadir\"\nyaw_deg = 0.0\n"));
+    let a = fluxes(
+        "qa.toml",
+        &inertial("[0.7071067811865476, 0.7071067811865476, 0.0, 0.0]"),
+    );
+    let b = fluxes("qb.toml", &inertial("[1e200, 1e200, 0.0, 0.0]"));
+    let identity = fluxes("qi.toml", &inertial("[1.0, 0.0, 0.0, 0.0]"));
+    assert_eq!(a, b);
+    assert_ne!(a, identity);
+}

@@ -151,3 +151,22 @@ fn core_telemetry_columns_get_channel_names() {
         orbitlash::spec::scenario::check_name(&sensor_name_of(column)).unwrap();
     }
 }
+
+/// Issue 27 item 7: an empty cell is no reading, so it does not count in a mean of
+/// rows sharing a stamp (10, empty, 20 → 15, not 13.333), in any position.
+#[test]
+fn core_mean_of_a_shared_stamp_counts_readings_not_rows() {
+    let mean = RecordingFormat {
+        duplicate_times: DuplicateTimes::Mean,
+        ..utc_format()
+    };
+    let text = "UTC,a,b,Battery mV\n\
+                2016-02-04 00:00:00,10,,1\n\
+                2016-02-04 00:00:00,,4,2\n\
+                2016-02-04 00:00:00,20,8,3\n\
+                2016-02-04 00:01:00,,,4\n\
+                2016-02-04 00:01:00,7,,5\n";
+    let r = read(text, &mean).unwrap();
+    assert_eq!(r.values[0], vec![Some(15.0), Some(7.0)]);
+    assert_eq!(r.values[1], vec![Some(6.0), None]);
+}

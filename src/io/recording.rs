@@ -254,9 +254,10 @@ impl Recording {
             merged_rows: Vec::new(),
         };
         let mut row = csv::StringRecord::new();
-        // the previous row's cells (time excluded), and how many rows its values average
+        // the previous row's cells (time excluded), and per channel how many readings its
+        // value averages (an empty cell is no reading)
         let mut previous: Vec<String> = Vec::new();
-        let mut averaged = 1.0;
+        let mut averaged: Vec<f64> = vec![0.0; rec.columns.len()];
         let mut values: Vec<Option<f64>> = Vec::new();
         loop {
             match reader.read_record(&mut row) {
@@ -329,20 +330,21 @@ impl Recording {
                     }
                     if !same_cells {
                         // the mean of the rows sharing the stamp, cell by cell
-                        for (ch, v) in rec.values.iter_mut().zip(&values) {
+                        for ((ch, v), n) in rec.values.iter_mut().zip(&values).zip(&mut averaged) {
                             let old = ch.last_mut().expect("a row before");
-                            *old = match (*old, v) {
-                                (Some(a), Some(b)) => Some((a * averaged + b) / (averaged + 1.0)),
-                                (a, b) => a.or(*b),
-                            };
+                            if let Some(b) = v {
+                                *old = Some(old.map_or(*b, |a| (a * *n + b) / (*n + 1.0)));
+                                *n += 1.0;
+                            }
                         }
-                        averaged += 1.0;
                     }
                     rec.merged_rows.push(line);
                     continue;
                 }
             }
-            averaged = 1.0;
+            for (n, v) in averaged.iter_mut().zip(&values) {
+                *n = if v.is_some() { 1.0 } else { 0.0 };
+            }
             let fill = fmt.repeated_rows_are_fill && !rec.time_s.is_empty() && same_cells;
             if fill {
                 rec.fill_rows.push(line);

@@ -60,14 +60,19 @@ pub fn parse(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
 /// The error of `e` at its key's place in `text`: the deepest part of the key path
 /// present in the file.
 pub fn located(text: &str, file: &str, e: SpecError) -> ScenarioError {
+    let line_of = |offset: usize| text[..offset.min(text.len())].matches('\n').count() + 1;
     let offset = locate(text, &e.key).unwrap_or(0);
     let before = &text[..offset.min(text.len())];
+    let message = match e.also.as_ref().and_then(|k| Some((k, locate(text, k)?))) {
+        Some((k, at)) => format!("{} (also `{k}` at line {})", e.message, line_of(at)),
+        None => e.message,
+    };
     ScenarioError::Invalid {
         file: file.to_string(),
-        line: before.matches('\n').count() + 1,
+        line: line_of(offset),
         column: before.len() - before.rfind('\n').map_or(0, |p| p + 1) + 1,
         key: e.key.to_string(),
-        message: e.message,
+        message,
     }
 }
 

@@ -269,6 +269,7 @@ fn err(key: KeyPath, message: impl Into<String>) -> SpecError {
     SpecError {
         key,
         message: message.into(),
+        also: None,
     }
 }
 

@@ -34,6 +34,9 @@ use crate::units::{SECONDS_PER_DAY, num};
 pub struct SpecError {
     pub key: KeyPath,
     pub message: String,
+    /// Another key the error concerns (the first of two that clash): its line is named
+    /// too where the error is placed in the file.
+    pub also: Option<KeyPath>,
 }
 
 /// The checks, each naming the key path it checks.
@@ -45,6 +48,16 @@ impl Cx {
         SpecError {
             key: path.clone(),
             message: message.into(),
+            also: None,
+        }
+    }
+
+    /// An error at `path` that clashes with `other` (two of one name).
+    fn clash(&self, path: &KeyPath, other: &KeyPath, message: impl Into<String>) -> SpecError {
+        SpecError {
+            key: path.clone(),
+            message: message.into(),
+            also: Some(other.clone()),
         }
     }
 
@@ -913,11 +926,20 @@ fn unit_vector<const N: usize>(
     for (k, x) in arr.iter().enumerate() {
         cx.finite(&path.at(k), *x)?;
     }
-    let n = arr.iter().map(|x| x * x).sum::<f64>().sqrt();
-    if n <= 1e-9 {
-        return Err(cx.err(path, "is the zero vector; it needs a direction"));
+    Ok(direction(arr).ok_or_else(|| cx.err(path, "is the zero vector; it needs a direction"))?)
+}
+
+/// `v` scaled to unit length, `None` for the zero vector. Scaled by its largest
+/// component first, so that no square overflows or underflows: `[1e200, 0, 0]` and
+/// `[1e-170, 1e-170, 0]` have directions like any other vector.
+pub fn direction<const N: usize>(v: [f64; N]) -> Option<[f64; N]> {
+    let m = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if m == 0.0 || !m.is_finite() {
+        return None;
     }
-    Ok(arr.map(|x| x / n))
+    let scaled = v.map(|x| x / m);
+    let n = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
+    Some(scaled.map(|x| x / n))
 }
 
 /// `[attitude]` and `[[face]]`: each face a load on its node (direct Sun, albedo,
@@ -1024,6 +1046,22 @@ fn faces(
         }
     };
     let space = table.lookup(cx, &KeyPath::new("boundary"), SPACE)?;
+    // Two faces of one name would share one key path (`face.<name>.…`): refused, not
+    // renamed.
+    for (i, f) in specs.iter().enumerate() {
+        let name = |f: &FaceSpec, i| {
+            f.name
+                .clone()
+                .unwrap_or_else(|| crate::spec::keys::face_name(&f.node, i))
+        };
+        if let Some(j) = (0..i).find(|&j| name(&specs[j], j) == name(f, i)) {
+            return Err(cx.clash(
+                &KeyPath::new("face").at(i).key("name"),
+                &KeyPath::new("face").at(j).key("name"),
+                format!("face `{}` is defined twice", name(f, i)),
+            ));
+        }
+    }
     for (i, f) in specs.into_iter().enumerate() {
         let p = KeyPath::new("face").elem(i, &keys.face[i]);
         let node = table.diffusion(cx, &p.key("node"), &f.node)?;

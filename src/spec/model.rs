@@ -76,6 +76,7 @@ impl Model {
                 return Err(SpecError {
                     key: at.key("column"),
                     message: "must not be empty".into(),
+                    also: None,
                 });
             }
             if inp.drives == "sunlit" {
@@ -84,18 +85,21 @@ impl Model {
                         key: at.key("drives"),
                         message: "\"sunlit\" needs a dated scenario ([orbit] tle and start_utc)"
                             .into(),
+                        also: None,
                     });
                 }
                 if !inp.below.is_some_and(f64::is_finite) {
                     return Err(SpecError {
                         key: at.key("below"),
                         message: "\"sunlit\" needs `below`: the reading under which the spacecraft is in eclipse".into(),
+                        also: None,
                     });
                 }
             } else if inp.below.is_some() {
                 return Err(SpecError {
                     key: at.key("below"),
                     message: "applies to drives = \"sunlit\" only".into(),
+                    also: None,
                 });
             } else if input_target(&self.spec, &inp.drives).is_none() {
                 return Err(SpecError {
@@ -104,6 +108,7 @@ impl Model {
                         "`{}` is not a boundary's temperature or a dissipation's power of this scenario (`boundary.<name>.temperature_k`, `dissipation.<name>.power_w`)",
                         inp.drives
                     ),
+                    also: None,
                 });
             }
             for (key, v) in [("scale", inp.scale), ("offset", inp.offset)] {
@@ -111,6 +116,7 @@ impl Model {
                     return Err(SpecError {
                         key: at.key(key),
                         message: "must be a finite number".into(),
+                        also: None,
                     });
                 }
             }
@@ -165,6 +171,7 @@ impl Model {
         for (i, u) in self.spec.uncertain.iter().enumerate() {
             let at = KeyPath::new("uncertain").at(i);
             let err = |key: &'static str, message: String| SpecError {
+                also: None,
                 key: at.key(key),
                 message,
             };
