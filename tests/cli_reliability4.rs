@@ -259,3 +259,66 @@ fn cli_huge_and_tiny_vectors_keep_their_direction() {
     assert_eq!(a, b);
     assert_ne!(a, identity);
 }
+
+/// A TLE line with columns `from` … `to` (1-based) replaced by `text` (same width) and
+/// its checksum made right again.
+fn tle_edit(line: &str, from: usize, text: &str) -> String {
+    let mut l = line.to_string();
+    l.replace_range(from - 1..from - 1 + text.len(), text);
+    let sum: u32 = l[..68]
+        .bytes()
+        .map(|b| match b {
+            b'0'..=b'9' => (b - b'0') as u32,
+            b'-' => 1,
+            _ => 0,
+        })
+        .sum();
+    l.replace_range(68..69, &(sum % 10).to_string());
+    l
+}
+
+// 9. TLE fields out of range are refused naming the field and its columns; a start
+// outside the years the Sun's formulas are stated for is warned about.
+#[test]
+fn cli_tle_fields_are_checked_and_the_sun_formula_range_is_said() {
+    let dir = tmpdir("r4-tle");
+    let funcube = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml"),
+    )
+    .unwrap();
+    let l1 = "1 39444U 13066AE  16035.38257241  .00000865  00000-0  11531-3 0  9990";
+    let l2 = "2 39444  97.7004  94.3150 0060634  98.1157 262.6940 14.80829622117779";
+    assert!(funcube.contains(l1) && funcube.contains(l2));
+    let cases: [(&str, &str, usize, &str, &[&str]); 6] = [
+        ("inclination", l2, 9, "200.0000", &["inclination", "columns 9 … 16", "200"]),
+        ("raan", l2, 18, "400.0000", &["ascending node", "columns 18 … 25", "400"]),
+        ("anomaly", l2, 44, "-10.0000", &["mean anomaly", "columns 44 … 51", "-10"]),
+        ("day-0", l1, 21, "000.00000000", &["epoch day", "columns 21 … 32", "2016 has days 1 … 366"]),
+        ("day-367", l1, 21, "367.00000000", &["epoch day", "2016 has days 1 … 366"]),
+        ("day-366-2015", l1, 19, "15366.50000000", &["epoch day", "2015 has days 1 … 365"]),
+    ];
+    for (case, line, col, text, needles) in cases {
+        let edited = funcube.replace(line, &tle_edit(line, col, text));
+        let mut all = needles.to_vec();
+        all.push(if line == l1 { "orbit.tle[0]" } else { "orbit.tle[1]" });
+        assert_check_refuses(&dir, case, &edited, &all);
+    }
+    // a leap year's day 366 is a day
+    let leap = funcube.replace(l1, &tle_edit(l1, 19, "16366.50000000"));
+    let out = {
+        std::fs::write(dir.join("leap.toml"), &leap).unwrap();
+        run_in(&dir, &["check", "leap.toml"])
+    };
+    assert!(!stderr(&out).contains("epoch day"), "{}", stderr(&out));
+    // a start in 2055 (with its TLE; two-digit TLE years end in 2056) is warned about, naming the stated years
+    let late = funcube
+        .replace(l1, &tle_edit(l1, 19, "55035.38257241"))
+        .replace("2016-02-04T00:00:00Z", "2055-02-04T00:00:00Z");
+    std::fs::write(dir.join("late.toml"), &late).unwrap();
+    let out = run_in(&dir, &["check", "late.toml"]);
+    assert!(
+        stdout(&out).contains("is in 2055") && stdout(&out).contains("1950 … 2050"),
+        "{}",
+        stdout(&out)
+    );
+}

@@ -22,6 +22,10 @@ pub const AU_M: f64 = 149_597_870_700.0;
 /// stated for 1950–2050 and degrade slowly beyond.
 pub const EPHEMERIS_YEARS: (i32, i32) = (1900, 2100);
 
+/// The years for which the almanac states its accuracy: a start outside them is
+/// accepted (within [`EPHEMERIS_YEARS`]) with a warning.
+pub const STATED_YEARS: (i32, i32) = (1950, 2050);
+
 /// Where the Sun is, seen from the Earth's centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SunPosition {

@@ -388,6 +388,63 @@ fn check_line(n: usize, line: &str) -> Result<(), TleError> {
             sum % 10
         )));
     }
+    fields(n, l).map_err(err)
+}
+
+/// A field of a TLE line, columns `from` … `to` (1-based, inclusive), as a number.
+fn field(l: &str, from: usize, to: usize, what: &str) -> Result<f64, String> {
+    let text = l[from - 1..to].trim();
+    text.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| format!("{what}, columns {from} … {to}, `{text}` is not a number"))
+}
+
+/// The epoch (line 1) and the angles and mean motion (line 2) within their ranges,
+/// each error naming the field and its columns.
+fn fields(n: usize, l: &str) -> Result<(), String> {
+    let within = |v: f64, lo: f64, hi: f64, hi_open: bool, what: &str, cols: (usize, usize)| {
+        let ok = v >= lo && if hi_open { v < hi } else { v <= hi };
+        if ok {
+            Ok(())
+        } else {
+            Err(format!(
+                "{what}, columns {} … {}, is {v}; it must be within {lo} … {hi}{}",
+                cols.0,
+                cols.1,
+                if hi_open { " (excluded)" } else { "" }
+            ))
+        }
+    };
+    if n == 1 {
+        let yy = field(l, 19, 20, "the epoch year")?;
+        let year = if yy < 57.0 { 2000 + yy as i32 } else { 1900 + yy as i32 };
+        let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+        let day = field(l, 21, 32, "the epoch day of the year")?;
+        let last = if leap { 367.0 } else { 366.0 };
+        if !(1.0..last).contains(&day) {
+            return Err(format!(
+                "the epoch day of the year, columns 21 … 32, is {day}; {year} has days 1 … {} \
+                 (day 1.0 is 1 January 0 h)",
+                last - 1.0
+            ));
+        }
+        return Ok(());
+    }
+    for (what, from, to, hi, open) in [
+        ("the inclination in degrees", 9, 16, 180.0, false),
+        ("the right ascension of the ascending node in degrees", 18, 25, 360.0, true),
+        ("the argument of perigee in degrees", 35, 42, 360.0, true),
+        ("the mean anomaly in degrees", 44, 51, 360.0, true),
+    ] {
+        within(field(l, from, to, what)?, 0.0, hi, open, what, (from, to))?;
+    }
+    let n_rev = field(l, 53, 63, "the mean motion")?;
+    if n_rev <= 0.0 {
+        return Err(format!(
+            "the mean motion (columns 53 … 63) is {n_rev} revolutions per day; it must be > 0"
+        ));
+    }
     Ok(())
 }
 

@@ -270,6 +270,16 @@ impl Scenario {
             });
         }
         if let crate::orbit::Environment::Dated(d) = &self.thermal.environment {
+            let year = sgp4::chrono::Datelike::year(&d.orbit.start_utc);
+            let (lo, hi) = crate::orbit::sun::STATED_YEARS;
+            if !(lo..=hi).contains(&year) {
+                w.push(Warning {
+                    key: "orbit.start_utc".into(),
+                    message: format!(
+                        "is in {year}: the Sun's position (the Astronomical Almanac's low-precision formulas) is stated to 0.01° for {lo} … {hi} only; beyond, its error grows slowly"
+                    ),
+                });
+            }
             let days = d.orbit.epoch_age_days();
             if days.abs() > crate::orbit::tle::EPOCH_WARN_DAYS {
                 w.push(Warning {
