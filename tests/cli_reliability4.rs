@@ -290,17 +290,57 @@ fn cli_tle_fields_are_checked_and_the_sun_formula_range_is_said() {
     let l2 = "2 39444  97.7004  94.3150 0060634  98.1157 262.6940 14.80829622117779";
     assert!(funcube.contains(l1) && funcube.contains(l2));
     let cases: [(&str, &str, usize, &str, &[&str]); 6] = [
-        ("inclination", l2, 9, "200.0000", &["inclination", "columns 9 … 16", "200"]),
-        ("raan", l2, 18, "400.0000", &["ascending node", "columns 18 … 25", "400"]),
-        ("anomaly", l2, 44, "-10.0000", &["mean anomaly", "columns 44 … 51", "-10"]),
-        ("day-0", l1, 21, "000.00000000", &["epoch day", "columns 21 … 32", "2016 has days 1 … 366"]),
-        ("day-367", l1, 21, "367.00000000", &["epoch day", "2016 has days 1 … 366"]),
-        ("day-366-2015", l1, 19, "15366.50000000", &["epoch day", "2015 has days 1 … 365"]),
+        (
+            "inclination",
+            l2,
+            9,
+            "200.0000",
+            &["inclination", "columns 9 … 16", "200"],
+        ),
+        (
+            "raan",
+            l2,
+            18,
+            "400.0000",
+            &["ascending node", "columns 18 … 25", "400"],
+        ),
+        (
+            "anomaly",
+            l2,
+            44,
+            "-10.0000",
+            &["mean anomaly", "columns 44 … 51", "-10"],
+        ),
+        (
+            "day-0",
+            l1,
+            21,
+            "000.00000000",
+            &["epoch day", "columns 21 … 32", "2016 has days 1 … 366"],
+        ),
+        (
+            "day-367",
+            l1,
+            21,
+            "367.00000000",
+            &["epoch day", "2016 has days 1 … 366"],
+        ),
+        (
+            "day-366-2015",
+            l1,
+            19,
+            "15366.50000000",
+            &["epoch day", "2015 has days 1 … 365"],
+        ),
     ];
     for (case, line, col, text, needles) in cases {
         let edited = funcube.replace(line, &tle_edit(line, col, text));
         let mut all = needles.to_vec();
-        all.push(if line == l1 { "orbit.tle[0]" } else { "orbit.tle[1]" });
+        all.push(if line == l1 {
+            "orbit.tle[0]"
+        } else {
+            "orbit.tle[1]"
+        });
         assert_check_refuses(&dir, case, &edited, &all);
     }
     // a leap year's day 366 is a day
@@ -321,4 +361,54 @@ fn cli_tle_fields_are_checked_and_the_sun_formula_range_is_said() {
         "{}",
         stdout(&out)
     );
+}
+
+// 8. [[input]] misconfigurations are refused by `check`, naming line and key: two
+// inputs driving one target (the last silently won), an input reading the time column
+// or an ignored column (`diagnose` then said "no column" though the file has it).
+#[test]
+fn cli_input_misconfigurations_are_refused_by_check() {
+    let dir = tmpdir("r4-inputs");
+    let funcube = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml"),
+    )
+    .unwrap();
+    let input = |column: &str| {
+        format!(
+            "\n[[input]]\ncolumn = \"{column}\"\ndrives = \"dissipation.electronics.power_w\"\nscale = 0.001\n"
+        )
+    };
+    let lines = funcube.lines().count();
+    let twice = funcube.clone() + &input("Total System Current mA") + &input("Battery Current mA");
+    assert_check_refuses(
+        &dir,
+        "twice",
+        &twice,
+        &[
+            &format!(":{}:", lines + 9),
+            "input[1].drives",
+            "driven by two inputs",
+            &format!("also `input[0].drives` at line {}", lines + 4),
+        ],
+    );
+    assert_check_refuses(
+        &dir,
+        "time",
+        &(funcube.clone() + &input("Satellite Date/Time UTC")),
+        &["input[0].column", "time column"],
+    );
+    assert_check_refuses(
+        &dir,
+        "ignored",
+        &(funcube.clone() + &input("Solar Panel X mV")),
+        &["input[0].column", "ignored column"],
+    );
+    // one input on a column of readings is fine
+    std::fs::write(
+        dir.join("one.toml"),
+        funcube + &input("Total System Current mA"),
+    )
+    .unwrap();
+    let out = run_in(&dir, &["check", "one.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }

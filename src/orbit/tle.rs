@@ -418,7 +418,11 @@ fn fields(n: usize, l: &str) -> Result<(), String> {
     };
     if n == 1 {
         let yy = field(l, 19, 20, "the epoch year")?;
-        let year = if yy < 57.0 { 2000 + yy as i32 } else { 1900 + yy as i32 };
+        let year = if yy < 57.0 {
+            2000 + yy as i32
+        } else {
+            1900 + yy as i32
+        };
         let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
         let day = field(l, 21, 32, "the epoch day of the year")?;
         let last = if leap { 367.0 } else { 366.0 };
@@ -433,7 +437,13 @@ fn fields(n: usize, l: &str) -> Result<(), String> {
     }
     for (what, from, to, hi, open) in [
         ("the inclination in degrees", 9, 16, 180.0, false),
-        ("the right ascension of the ascending node in degrees", 18, 25, 360.0, true),
+        (
+            "the right ascension of the ascending node in degrees",
+            18,
+            25,
+            360.0,
+            true,
+        ),
         ("the argument of perigee in degrees", 35, 42, 360.0, true),
         ("the mean anomaly in degrees", 44, 51, 360.0, true),
     ] {

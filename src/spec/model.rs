@@ -111,6 +111,33 @@ impl Model {
                     also: None,
                 });
             }
+            // A column is one thing: the time, an ignored column or one input's.
+            let fmt = &self.scenario.recording;
+            if inp.column == fmt.time_column || fmt.ignore_columns.contains(&inp.column) {
+                return Err(SpecError {
+                    key: at.key("column"),
+                    message: format!(
+                        "`{}` is the recording's {}; an input reads a column of readings",
+                        inp.column,
+                        if inp.column == fmt.time_column {
+                            "time column"
+                        } else {
+                            "ignored column ([recording] ignore_columns)"
+                        }
+                    ),
+                    also: None,
+                });
+            }
+            if let Some(j) = (0..i).find(|&j| self.spec.input[j].drives == inp.drives) {
+                return Err(SpecError {
+                    key: at.key("drives"),
+                    message: format!(
+                        "`{}` is driven by two inputs; one input drives a target",
+                        inp.drives
+                    ),
+                    also: Some(KeyPath::new("input").at(j).key("drives")),
+                });
+            }
             for (key, v) in [("scale", inp.scale), ("offset", inp.offset)] {
                 if v.is_some_and(|v| !v.is_finite()) {
                     return Err(SpecError {
