@@ -412,3 +412,59 @@ fn cli_input_misconfigurations_are_refused_by_check() {
     let out = run_in(&dir, &["check", "one.toml"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }
+
+// 13. The worker pool is built by the tool: RAYON_NUM_THREADS=3000 under a 4 GB
+// address-space limit is capped (said on stderr) instead of rayon's panic "The global
+// thread pool has not been initialized"; threads that cannot start are an error.
+#[test]
+fn cli_the_worker_pool_is_capped_and_its_failure_reported() {
+    let dir = tmpdir("r4-pool");
+    let root = env!("CARGO_MANIFEST_DIR");
+    let margins = format!(
+        "margins {root}/scenarios/reference-hinge-margins.toml --samples 8 --seed 1 --orbits 0.5 --quiet --json m.json"
+    );
+    let diagnose = format!(
+        "diagnose {root}/scenarios/reference-hinge.toml --recording {root}/examples/recordings/heater-housing.csv --quiet --max-effects 1"
+    );
+    for cmd in [&margins, &diagnose] {
+        let out = std::process::Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v 4000000; RAYON_NUM_THREADS=3000 exec {} {cmd}",
+                bin_path().display()
+            ))
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let err = stderr(&out);
+        assert!(
+            matches!(out.status.code(), Some(0 | 1)),
+            "{cmd}: {:?}\n{err}",
+            out.status
+        );
+        assert!(
+            err.contains("RAYON_NUM_THREADS=3000: using"),
+            "{cmd}: {err}"
+        );
+        // threads that cannot start (a stack no system gives)
+        let out = std::process::Command::new(bin_path())
+            .args(cmd.split(' '))
+            .env("RUST_MIN_STACK", "100000000000000")
+            .env("RAYON_NUM_THREADS", "4")
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert_error(cmd, &out, &["cannot start 4 worker threads"]);
+    }
+    let out = std::process::Command::new(bin_path())
+        .args(margins.split(' '))
+        .env("RAYON_NUM_THREADS", "many")
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_error(
+        "many",
+        &out,
+        &["RAYON_NUM_THREADS=many", "not a thread count"],
+    );
+}

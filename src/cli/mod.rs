@@ -113,6 +113,12 @@ impl Outcome {
 
 pub fn dispatch(cli: Cli) -> Result<Outcome> {
     let done = |r: Result<()>| r.map(|()| Outcome::Pass);
+    if matches!(
+        cli.command,
+        Command::Margins(_) | Command::Bench(_) | Command::Diagnose(_)
+    ) {
+        start_thread_pool()?;
+    }
     match cli.command {
         Command::Run(a) => run::run(a),
         Command::Check(a) => done(check::check(a)),
@@ -127,6 +133,40 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
         Command::Plot(a) => done(plot::plot(a)),
         Command::Recover(a) => done(recover::recover(a)),
     }
+}
+
+/// Worker threads at most per core: past this, more threads only cost memory (each
+/// has its stack) and start-up.
+pub const MAX_THREADS_PER_CORE: usize = 8;
+
+/// Builds the worker pool of the commands that run in parallel (margins, diagnose,
+/// bench): `RAYON_NUM_THREADS` threads when set (0: one per core), at most
+/// [`MAX_THREADS_PER_CORE`] per core (said on standard error when capped). Threads
+/// that cannot be started (a memory or process limit) are an error, not rayon's panic
+/// at the first parallel loop. Results do not depend on the count.
+fn start_thread_pool() -> Result<()> {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let requested = match std::env::var("RAYON_NUM_THREADS") {
+        Ok(v) => v.trim().parse::<usize>().map_err(|_| {
+            anyhow::anyhow!("RAYON_NUM_THREADS={v}: not a thread count (a whole number ≥ 0)")
+        })?,
+        Err(_) => 0,
+    };
+    let cap = MAX_THREADS_PER_CORE * cores;
+    let threads = match requested {
+        0 => cores,
+        n if n > cap => {
+            eprintln!(
+                "warning: RAYON_NUM_THREADS={n}: using {cap} threads ({MAX_THREADS_PER_CORE} per core on {cores} cores)"
+            );
+            cap
+        }
+        n => n,
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global()
+        .map_err(|e| anyhow::anyhow!("cannot start {threads} worker threads: {e}"))
 }
 
 /// An error and its causes on one line, outermost first, each cause once (a cause
