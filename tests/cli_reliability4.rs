@@ -468,3 +468,57 @@ fn cli_the_worker_pool_is_capped_and_its_failure_reported() {
         &["RAYON_NUM_THREADS=many", "not a thread count"],
     );
 }
+
+// 10. One definition of the orbit state in the log: `solar_flux_w_per_m2` is the flux
+// reaching the spacecraft (0 in the umbra, dimmed in the penumbra) and `sunlit` is 1
+// exactly when it is > 0 (before: the full S(d) in the umbra, and an edge record with
+// flux 0 and sunlit 1).
+#[test]
+fn cli_the_logged_flux_and_sunlit_flag_agree() {
+    let dir = tmpdir("r4-flux");
+    for (name, file) in [
+        ("conical", "cubesat-1u.toml"),
+        ("circular", "reference-hinge.toml"),
+    ] {
+        let scenario = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenarios")
+            .join(file);
+        let scenario = scenario.to_str().unwrap();
+        let out = run_in(
+            &dir,
+            &[
+                "run",
+                "--quiet",
+                "--orbits",
+                "1",
+                "--log-every",
+                "1",
+                scenario,
+                "--out",
+                "f.mcap",
+            ],
+        );
+        assert!(matches!(out.status.code(), Some(0 | 1)), "{}", stderr(&out));
+        let t = orbitlash::io::mcap_read::read_log(&dir.join("f.mcap")).unwrap();
+        let flux = t.column("/orbit/state.solar_flux_w_per_m2").unwrap();
+        let sunlit = t.column("/orbit/state.sunlit").unwrap();
+        let (mut dark, mut dimmed) = (0, 0);
+        let full = t.rows.iter().map(|r| r.1[flux]).fold(0.0, f64::max);
+        for (ns, r) in &t.rows {
+            assert_eq!(
+                r[sunlit] == 1.0,
+                r[flux] > 0.0,
+                "{name} at {} s: sunlit {} with flux {}",
+                *ns as f64 * 1e-9,
+                r[sunlit],
+                r[flux]
+            );
+            dark += (r[flux] == 0.0) as usize;
+            dimmed += (r[flux] > 0.0 && r[flux] < 0.99 * full) as usize;
+        }
+        assert!(dark > 5, "{name}: no umbra rows");
+        if name == "conical" {
+            assert!(dimmed > 0, "no penumbra rows");
+        }
+    }
+}

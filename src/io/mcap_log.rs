@@ -9,7 +9,10 @@
 //! - `/thermal/heat`: `absorbed_w`, `dissipated_w`, `to_<boundary>_w`, then
 //!   `<load>_w` for every load and `<heater>_w` for every heater;
 //! - `/orbit/state`: `orbit_angle_deg` (from orbit noon), `beta_deg`,
-//!   `solar_flux_w_per_m2`, `sunlit` (1/0), `orbit_number`;
+//!   `solar_flux_w_per_m2` (the flux that reaches the spacecraft: S at its distance
+//!   from the Sun in sunlight, dimmed in a conical shadow's penumbra, 0 in the umbra),
+//!   `sunlit` (1 when some of the Sun reaches it, that is the flux > 0; else 0),
+//!   `orbit_number`;
 //! - `/orbit/faces` (scenarios with `[[face]]`s): per face the incident flux before
 //!   absorptivity, `<node>_<face>_solar_w_per_m2`, `…_albedo_w_per_m2`,
 //!   `…_earth_ir_w_per_m2` (as `orbitlash environment --csv` writes them; the channel
@@ -632,10 +635,18 @@ fn send_batch(state: &mut State, batch: &mut Batch, path: &Path) -> ObserverResu
 /// Appends a sample to a batch, laid out as [`Layout`] says.
 fn push_sample(batch: &mut Batch, s: &Sample) {
     let b = |on: &bool| if *on { 1.0 } else { 0.0 };
+    let env = s.env.expect("the log samples the environment");
+    // One definition for both fields (see the module doc): the flux that reaches the
+    // spacecraft, and sunlit when any does.
+    let flux = if s.sunlit {
+        env.solar_flux_w_per_m2
+    } else {
+        0.0
+    };
     let v = &mut batch.values;
     let at = v.len();
     v.push(s.t_s);
-    v.push(b(&s.sunlit));
+    v.push(b(&(flux > 0.0)));
     v.extend_from_slice(&s.temperatures_k);
     v.extend(s.heaters_on.iter().map(b));
     v.extend(s.modes_active.iter().map(b));
@@ -645,10 +656,9 @@ fn push_sample(batch: &mut Batch, s: &Sample) {
     v.extend_from_slice(&f.to_boundary_w);
     v.extend_from_slice(&f.load_w);
     v.extend_from_slice(&f.heater_w);
-    let env = s.env.expect("the log samples the environment");
     v.push(s.orbit_phase_deg);
     v.push(env.beta_rad.to_degrees());
-    v.push(env.solar_flux_w_per_m2);
+    v.push(flux);
     v.push(s.orbit_number as f64);
     for i in &s.faces {
         v.extend([i.solar_w_per_m2, i.albedo_w_per_m2, i.earth_ir_w_per_m2]);
