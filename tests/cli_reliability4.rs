@@ -522,3 +522,115 @@ fn cli_the_logged_flux_and_sunlit_flag_agree() {
         }
     }
 }
+
+/// The example recording's lines, with `edit` applied to each data row's cells.
+fn edited_example(edit: impl Fn(usize, &mut Vec<String>)) -> String {
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/recordings/heater-housing.csv"),
+    )
+    .unwrap();
+    let mut out = String::new();
+    for (i, l) in text.lines().enumerate() {
+        let mut c: Vec<String> = l.split(',').map(String::from).collect();
+        if i > 0 {
+            edit(i, &mut c);
+        }
+        out += &(c.join(",") + "\n");
+    }
+    out
+}
+
+// 6. Impossible recordings: a backlash of 1e300 µm is refused like a temperature below
+// absolute zero (it gave inf, "NaN %" and nulls with exit 0); kelvin values in a °C
+// column warn (they were "explained" as a 177.6 W dissipation); a 2 ms recording or
+// one shorter than two orbits is refused (no held-out orbit: "NaN K").
+#[test]
+fn cli_impossible_recordings_are_refused_or_warned() {
+    let dir = tmpdir("r4-impossible");
+    std::fs::write(dir.join("s.toml"), reference_text()).unwrap();
+    let diagnose = |csv: &str| {
+        run_in(
+            &dir,
+            &[
+                "diagnose",
+                "s.toml",
+                "--recording",
+                csv,
+                "--quiet",
+                "--max-effects",
+                "1",
+            ],
+        )
+    };
+    std::fs::write(
+        dir.join("huge.csv"),
+        edited_example(|i, c| {
+            if i == 40 {
+                c[6] = "1e300".into();
+            }
+        }),
+    )
+    .unwrap();
+    assert_error(
+        "1e300 µm",
+        &diagnose("huge.csv"),
+        &["huge.csv:41", "`backlash_um` = 1e300 µm", "beyond ±1 cm"],
+    );
+    // 2000 rows 1 µs apart, and 1.5 orbits
+    let mut fast = String::from("time_s,housing_c\n");
+    for i in 0..2000 {
+        fast += &format!("{},{}\n", i as f64 * 1e-6, 20.0 + (i % 7) as f64 * 0.01);
+    }
+    std::fs::write(dir.join("fast.csv"), fast).unwrap();
+    assert_error(
+        "2 ms",
+        &diagnose("fast.csv"),
+        &["fast.csv", "0 whole orbit(s)", "at least two"],
+    );
+    let short: String = edited_example(|_, _| {})
+        .lines()
+        .take_while(|l| {
+            l.split(',')
+                .next()
+                .unwrap()
+                .parse::<f64>()
+                .map_or(true, |t| t < 1.5 * 5676.978)
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(dir.join("short.csv"), short).unwrap();
+    assert_error(
+        "1.5 orbits",
+        &diagnose("short.csv"),
+        &["short.csv", "1 whole orbit(s)", "at least two"],
+    );
+    // kelvin in a °C column: diagnosed, with a warning naming the channel and unit
+    std::fs::write(
+        dir.join("kelvin.csv"),
+        edited_example(|_, c| {
+            let v: f64 = c[1].parse().unwrap();
+            c[1] = format!("{:.2}", v + 273.15);
+        }),
+    )
+    .unwrap();
+    let out = diagnose("kelvin.csv");
+    assert!(matches!(out.status.code(), Some(0 | 1)), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("warning: channel `housing_c`: every reading")
+            && stderr(&out).contains("unit = \"K\""),
+        "{}",
+        stderr(&out)
+    );
+    // the untouched recording has no such warning
+    let plain = diagnose(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("examples/recordings/heater-housing.csv")
+            .to_str()
+            .unwrap(),
+    );
+    assert!(
+        !stderr(&plain).contains("every reading"),
+        "{}",
+        stderr(&plain)
+    );
+}

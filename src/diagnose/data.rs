@@ -222,6 +222,17 @@ impl Observations {
             1.5 * median(&mut gaps)
         };
         let split = Split::new(period, t_last, slack, holdout).map_err(DiagnoseError::Options)?;
+        if !split.can_validate() {
+            return Err(DiagnoseError::Recording(format!(
+                "{}: the recording ends at t = {} s, {} whole orbit(s) of {:.1} s: diagnose fits \
+whole orbits and checks the fit on later ones held out, so it needs at least two (is the time \
+column in seconds from the scenario's t = 0?)",
+                rec.file,
+                crate::units::num(t_last),
+                split.orbits,
+                period
+            )));
+        }
         check_split_holds_data(rec, &channels, &split)?;
         let env = &sc.thermal.environment;
         let mut eclipses = Vec::new();
@@ -298,9 +309,14 @@ impl Observations {
     }
 }
 
+/// The largest backlash reading taken as one, µm (either sign): a centimetre, far
+/// beyond any gear mesh's play.
+pub const MAX_BACKLASH_UM: f64 = 1e4;
+
 /// Temperatures a thermometer cannot read: below absolute zero, or above the
-/// 10 000 K every model output stays within (a wrong unit or a corrupt cell). Refused
-/// with the row's line (CSV) or message number (MCAP) and the column.
+/// 10 000 K every model output stays within, and backlash beyond ±[`MAX_BACKLASH_UM`]
+/// (a wrong unit or a corrupt cell). Refused with the row's line (CSV) or message
+/// number (MCAP) and the column.
 fn check_temperatures(
     rec: &Recording,
     sc: &Scenario,
@@ -311,12 +327,18 @@ fn check_temperatures(
         let (offset, unit) = match sc.sensors[k].unit() {
             ColumnUnit::Celsius => (crate::constants::ZERO_CELSIUS_K, "°C"),
             ColumnUnit::Kelvin => (0.0, "K"),
-            _ => continue,
+            ColumnUnit::Micrometre => (0.0, "µm"),
         };
+        let backlash = unit == "µm";
         for (j, v) in rec.values[c].iter().enumerate() {
             let Some(v) = *v else { continue };
             let t_k = v + offset;
-            let why = if t_k < 0.0 {
+            let why = if backlash {
+                if v.abs() <= MAX_BACKLASH_UM {
+                    continue;
+                }
+                "beyond ±1 cm"
+            } else if t_k < 0.0 {
                 "below absolute zero"
             } else if t_k > crate::run::sim::MAX_TEMPERATURE_K {
                 "above 10 000 K"
@@ -324,11 +346,12 @@ fn check_temperatures(
                 continue;
             };
             return Err(DiagnoseError::Recording(format!(
-                "{}:{}: `{}` = {} {unit} is {why}: not a temperature a sensor can read (a wrong unit, a scale factor or a corrupt cell?)",
+                "{}:{}: `{}` = {} {unit} is {why}: not a {} a sensor can read (a wrong unit, a scale factor or a corrupt cell?)",
                 rec.file,
                 rec.rows_at.get(j).copied().unwrap_or(j as u64 + 1),
                 crate::units::shown(&rec.columns[c]),
-                crate::units::num(v)
+                crate::units::num(v),
+                if backlash { "backlash" } else { "temperature" }
             )));
         }
     }

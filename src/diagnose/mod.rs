@@ -536,6 +536,36 @@ fn baseline(
     })
 }
 
+/// Temperature channels whose every reading is implausible in their stated unit but
+/// plausible in the other (kelvin in a °C column: every value above 200; °C in a
+/// kelvin column: every value below 100): the fit would explain a unit as heat.
+fn unit_warnings(obs: &Observations) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for (c, ch) in obs.channels.iter().enumerate() {
+        let (lo, hi) = obs.values[c]
+            .iter()
+            .flatten()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(*v), b.max(*v))
+            });
+        let other = match ch.value_unit {
+            "°C" if lo > 200.0 => "K",
+            "K" if hi < 100.0 => "C",
+            _ => continue,
+        };
+        warnings.push(format!(
+            "channel `{}`: every reading ({} … {} {}) is implausible in {} and plausible in {other}: \
+is the sensor's unit right (its `unit = \"{other}\"`)?",
+            ch.name,
+            crate::units::num(lo),
+            crate::units::num(hi),
+            ch.value_unit,
+            ch.value_unit
+        ));
+    }
+    warnings
+}
+
 /// Channels whose noise is far larger than their signal: the verdict would rest on
 /// noise.
 fn noise_warnings(obs: &Observations, base: &BaselineRun, validate: bool) -> Vec<String> {
@@ -902,7 +932,8 @@ pub fn diagnose(
     // 2. The baseline.
     progress("baseline", 0, 1);
     let base = baseline(model, &obs, validate, &mut notes)?;
-    let warnings = noise_warnings(&obs, &base, validate);
+    let mut warnings = unit_warnings(&obs);
+    warnings.extend(noise_warnings(&obs, &base, validate));
     let problem = Problem::new(&obs, base.noise.clone(), base.steps);
     let (mut report, mut series) = baseline_report(&obs, &base, &problem, opts, notes, warnings);
     report.recording = RecordingRows {
