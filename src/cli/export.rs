@@ -9,8 +9,6 @@ use clap::Args;
 use orbitlash::io::atomic::{AtomicFile, OutputPolicy};
 use orbitlash::io::mcap_read::{read_log, run_table};
 
-use super::print_out;
-
 #[derive(Args, Debug)]
 pub struct ExportArgs {
     /// An MCAP log written by `orbitlash run`.
@@ -47,47 +45,108 @@ fn every_arg(s: &str) -> Result<f64, String> {
 /// The most rows `--every` writes.
 const MAX_EVERY_ROWS: f64 = 1e7;
 
-/// `rows` (time first, ascending) at t = 0, dt, 2 dt … ≤ the last row's time, each
-/// column linear between the rows around it (a row at the time itself is taken as
-/// is); a column whose every value is a whole number (an orbit number, the sunlit
-/// flag, a heater's state) keeps the value of the row before instead.
-pub fn resample(rows: &[Vec<f64>], dt: f64) -> Vec<Vec<f64>> {
-    let Some(last) = rows.last() else {
-        return Vec::new();
-    };
-    let discrete: Vec<bool> = (0..last.len())
-        .map(|c| c > 0 && rows.iter().all(|r| r[c].is_nan() || r[c].fract() == 0.0))
-        .collect();
-    let t_end = last[0];
-    let mut out = Vec::new();
-    let mut j = 0;
-    let mut k = 0u64;
-    loop {
-        let t = k as f64 * dt;
-        if t > t_end * (1.0 + 1e-12) {
-            break;
+/// `rows` (time first, ascending) at t = 0, dt, 2 dt … ≤ the last row's time, one row
+/// at a time (nothing is built in memory), each column linear between the rows around
+/// it (a row at the time itself is taken as is); a column whose every value is a whole
+/// number (an orbit number, the sunlit flag, a heater's state) keeps the value of the
+/// row before instead.
+pub struct Resampled<'a> {
+    rows: &'a [Vec<f64>],
+    dt: f64,
+    discrete: Vec<bool>,
+    t_end: f64,
+    j: usize,
+    k: u64,
+}
+
+impl<'a> Resampled<'a> {
+    pub fn new(rows: &'a [Vec<f64>], dt: f64) -> Resampled<'a> {
+        let width = rows.first().map_or(0, Vec::len);
+        let discrete = (0..width)
+            .map(|c| c > 0 && rows.iter().all(|r| r[c].is_nan() || r[c].fract() == 0.0))
+            .collect();
+        Resampled {
+            rows,
+            dt,
+            discrete,
+            t_end: rows.last().map_or(f64::NEG_INFINITY, |r| r[0]),
+            j: 0,
+            k: 0,
         }
-        while j + 1 < rows.len() && rows[j + 1][0] < t {
-            j += 1;
+    }
+
+    /// The rows it gives.
+    pub fn count(&self) -> u64 {
+        if self.rows.is_empty() {
+            0
+        } else {
+            (self.t_end * (1.0 + 1e-12) / self.dt).floor() as u64 + 1
         }
-        let (a, b) = (&rows[j], &rows[(j + 1).min(rows.len() - 1)]);
-        let mut row = if (b[0] - t).abs() <= 1e-9 * t.abs().max(1.0) {
-            b.clone()
+    }
+
+    /// The next row into `row`; false past the end.
+    pub fn next_into(&mut self, row: &mut Vec<f64>) -> bool {
+        let rows = self.rows;
+        let t = self.k as f64 * self.dt;
+        if rows.is_empty() || t > self.t_end * (1.0 + 1e-12) {
+            return false;
+        }
+        while self.j + 1 < rows.len() && rows[self.j + 1][0] < t {
+            self.j += 1;
+        }
+        let (a, b) = (&rows[self.j], &rows[(self.j + 1).min(rows.len() - 1)]);
+        row.clear();
+        if (b[0] - t).abs() <= 1e-9 * t.abs().max(1.0) {
+            row.extend_from_slice(b);
         } else if b[0] > a[0] && t >= a[0] {
             let w = (t - a[0]) / (b[0] - a[0]);
-            a.iter()
-                .zip(b)
-                .zip(&discrete)
-                .map(|((x, y), d)| if *d { *x } else { x + w * (y - x) })
-                .collect()
+            row.extend(
+                a.iter()
+                    .zip(b)
+                    .zip(&self.discrete)
+                    .map(|((x, y), d)| if *d { *x } else { x + w * (y - x) }),
+            );
         } else {
-            a.clone()
-        };
+            row.extend_from_slice(a);
+        }
         row[0] = t;
-        out.push(row);
-        k += 1;
+        self.k += 1;
+        true
     }
-    out
+}
+
+/// One CSV row as `export-csv` writes it.
+fn write_row(w: &mut impl Write, row: &[f64]) -> std::io::Result<()> {
+    write!(w, "{:.3}", row[0])?;
+    for v in &row[1..] {
+        write!(w, ",{v:.6}")?;
+    }
+    w.write_all(b"\n")
+}
+
+/// Writes the header and every row, streamed.
+fn write_table(
+    w: &mut impl Write,
+    headers: &[String],
+    rows: &[Vec<f64>],
+    every: Option<f64>,
+) -> std::io::Result<()> {
+    writeln!(w, "{}", headers.join(","))?;
+    match every {
+        Some(dt) => {
+            let mut grid = Resampled::new(rows, dt);
+            let mut row = Vec::new();
+            while grid.next_into(&mut row) {
+                write_row(w, &row)?;
+            }
+        }
+        None => {
+            for row in rows {
+                write_row(w, row)?;
+            }
+        }
+    }
+    Ok(())
 }
 
 pub fn export(a: ExportArgs) -> Result<()> {
@@ -109,34 +168,47 @@ pub fn export(a: ExportArgs) -> Result<()> {
     }
     let (headers, rows) =
         run_table(&table, a.all).map_err(|m| anyhow::anyhow!("{}: {m}", a.log.display()))?;
-    let rows = match a.every {
-        Some(dt) => {
-            let t_end = rows.last().map_or(0.0, |r| r[0]);
-            if t_end / dt > MAX_EVERY_ROWS {
-                anyhow::bail!(
-                    "--every {dt} s over {t_end:.0} s would write {:.1e} rows (at most {MAX_EVERY_ROWS:.0e}): choose a longer interval",
-                    t_end / dt
-                );
-            }
-            resample(&rows, dt)
+    if let Some(dt) = a.every {
+        let t_end = rows.last().map_or(0.0, |r| r[0]);
+        if t_end / dt > MAX_EVERY_ROWS {
+            anyhow::bail!(
+                "--every {dt} s over {t_end:.0} s would write {:.1e} rows (at most {MAX_EVERY_ROWS:.0e}): choose a longer interval",
+                t_end / dt
+            );
         }
-        None => rows,
-    };
-    let mut text = headers.join(",");
-    text.push('\n');
-    for row in &rows {
-        use std::fmt::Write as _;
-        let _ = write!(text, "{:.3}", row[0]);
-        for v in &row[1..] {
-            let _ = write!(text, ",{v:.6}");
+    }
+    // The size, from the first row's width: refused when the file system has less.
+    if let (Some(f), Some(first)) = (&out, rows.first()) {
+        let mut probe = Vec::new();
+        write_row(&mut probe, first)?;
+        let count = match a.every {
+            Some(dt) => Resampled::new(&rows, dt).count() as f64,
+            None => rows.len() as f64,
+        };
+        let need = 1.1 * count * probe.len() as f64;
+        if let Some(free) = orbitlash::io::output::available_bytes(f.path())
+            && need > free as f64
+        {
+            anyhow::bail!(
+                "the CSV would take about {:.1} MB but the file system of {} has {:.1} MB free; \
+choose a longer --every or export fewer columns (without --all)",
+                need / 1e6,
+                f.path().display(),
+                free as f64 / 1e6
+            );
         }
-        text.push('\n');
     }
     match out.take() {
-        None => print_out(&text),
+        None => {
+            let mut w = std::io::BufWriter::new(std::io::stdout().lock());
+            match write_table(&mut w, &headers, &rows, a.every).and_then(|()| w.flush()) {
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+                r => Ok(r?),
+            }
+        }
         Some(mut f) => {
             let p = f.path().to_path_buf();
-            f.write_all(text.as_bytes())
+            write_table(&mut f, &headers, &rows, a.every)
                 .map_err(|e| orbitlash::io::output::OutputError::io(&p, e))?;
             f.commit()?;
             Ok(())
