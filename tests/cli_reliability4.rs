@@ -665,3 +665,41 @@ fn cli_export_csv_streams_its_rows() {
     assert_eq!(counts[0], rows, "{}", stderr(&out));
     assert!(counts[1] > 100_000_000, "{} bytes", counts[1]);
 }
+
+// 14. A dated scenario of 1e9 s propagates only what each command needs: params, check,
+// environment --orbits 1 and run --dry-run within 300 MB (before, each propagated the
+// whole run first: 6-27 s and 1.4 GB per command).
+#[test]
+fn cli_a_long_dated_scenario_propagates_only_what_is_needed() {
+    let dir = tmpdir("r4-lazy");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
+    )
+    .unwrap();
+    let start = text.find("\n[run]\n").expect("a [run] table") + "\n[run]\n".len();
+    let end = start + text[start..].find('\n').unwrap();
+    assert!(
+        text[start..end].starts_with("orbits ="),
+        "{}",
+        &text[start..end]
+    );
+    let long = format!("{}duration_s = 1e9{}", &text[..start], &text[end..]);
+    std::fs::write(dir.join("long.toml"), long).unwrap();
+    for cmd in [
+        "params long.toml",
+        "check long.toml",
+        "environment long.toml --orbits 1",
+        "run long.toml --dry-run",
+    ] {
+        let out = std::process::Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v 300000; exec {} {cmd}",
+                bin_path().display()
+            ))
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{cmd}: {}", stderr(&out));
+    }
+}

@@ -262,10 +262,11 @@ impl DatedEnvironment {
         (self.earth_radius_m / a).powi(2)
     }
 
-    /// Sets the run's length, propagating the orbit over it first: the propagation's
-    /// failure (a decayed or diverging orbit) with its date.
+    /// Sets the run's length. Nothing is propagated here: each command propagates
+    /// what it uses, lazily (`check` the start, `environment` its orbits), and a run
+    /// all of its length before its first step (`Setup::run`), where a decayed or
+    /// diverging orbit fails with its date.
     pub fn set_horizon_s(&mut self, horizon_s: f64) -> Result<(), String> {
-        self.orbit.check_until(horizon_s)?;
         self.horizon_s = horizon_s;
         Ok(())
     }

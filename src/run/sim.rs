@@ -301,6 +301,8 @@ pub enum SimError {
     },
     #[error("invalid run length {0} s")]
     BadDuration(f64),
+    #[error("the orbit cannot be propagated over the run: {0}")]
+    Orbit(String),
     #[error(
         "node {node} reached {temperature_k:.4e} K at t = {t_s:.3} s: temperatures must stay within 0 … {MAX_TEMPERATURE_K} K; {cause}"
     )]
@@ -697,6 +699,11 @@ impl<'a> Setup<'a> {
     ) -> Result<RunStats, SimError> {
         if !(t_end_s.is_finite() && t_end_s > state.t_s) {
             return Err(SimError::BadDuration(t_end_s - state.t_s));
+        }
+        // A real orbit is propagated as far as this run goes (and no further): a decayed
+        // or diverging orbit fails here, with its date, before any step.
+        if let crate::orbit::Environment::Dated(d) = &self.model.environment {
+            d.orbit.check_until(t_end_s).map_err(SimError::Orbit)?;
         }
         let model = self.model;
         let gears = self.gears;

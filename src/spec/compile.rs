@@ -314,7 +314,6 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
     };
     let run = run_control(cx, &raw.run, period_s)?;
     if let Environment::Dated(d) = &mut environment {
-        // A decayed orbit or a diverging propagation fails now, not in the run.
         d.set_horizon_s(run.duration_s)
             .map_err(|m| cx.err(&KeyPath::new("orbit").key("tle"), m))?;
     }
