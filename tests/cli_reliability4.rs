@@ -703,3 +703,88 @@ fn cli_a_long_dated_scenario_propagates_only_what_is_needed() {
         assert_eq!(out.status.code(), Some(0), "{cmd}: {}", stderr(&out));
     }
 }
+
+// 17 (shards). A shard names the build that wrote it and the bounds of its numbers:
+// merge refuses shards of another build, a smallest backlash's time before 0 or past
+// the horizon, an orbit number past the run, and a dispersed value its distribution
+// cannot draw.
+#[test]
+fn cli_merge_refuses_other_builds_and_numbers_past_their_bounds() {
+    let dir = tmpdir("r4-merge");
+    let text = reference_text()
+        + "\n[[dispersion]]\npath = \"gear_pair.mesh.pinion.tooth_thinning_um\"\ndistribution = \"uniform\"\nmin = 16.0\nmax = 23.0\n";
+    std::fs::write(dir.join("m.toml"), text).unwrap();
+    for i in 0..2 {
+        let out = run_in(
+            &dir,
+            &[
+                "margins",
+                "m.toml",
+                "--samples",
+                "20",
+                "--seed",
+                "4",
+                "--orbits",
+                "2",
+                "--quiet",
+                "--shard",
+                &format!("{i}/2"),
+                "--json",
+                &format!("s{i}.json"),
+            ],
+        );
+        assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    }
+    let ok = run_in(&dir, &["merge", "s0.json", "s1.json"]);
+    assert!(matches!(ok.status.code(), Some(0 | 1)), "{}", stderr(&ok));
+    let s0: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s0.json")).unwrap()).unwrap();
+    assert!(s0["tool"].as_str().unwrap().starts_with("orbitlash "));
+    let edit = |name: &str, f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = s0.clone();
+        f(&mut v);
+        std::fs::write(dir.join(name), v.to_string()).unwrap();
+    };
+    edit("tool.json", &|v| {
+        v["tool"] = "orbitlash 0.1.0 0123456789abcdef".into()
+    });
+    edit("t.json", &|v| {
+        v["outcomes"][2]["pairs"][0]["t_min_s"] = (-5.0).into()
+    });
+    edit("late.json", &|v| {
+        v["outcomes"][2]["pairs"][0]["t_min_s"] = 1e6.into()
+    });
+    edit("orbit.json", &|v| {
+        v["outcomes"][2]["pairs"][0]["orbit_number"] = 1_000_000.into()
+    });
+    edit("value.json", &|v| {
+        v["outcomes"][2]["values"][0] = (-1e6).into()
+    });
+    for (file, needles) in [
+        (
+            "tool.json",
+            &["s1.json", "another run", "the tool build"][..],
+        ),
+        ("t.json", &["t.json", "sample 2", "t_min_s -5"][..]),
+        (
+            "late.json",
+            &["late.json", "sample 2", "t_min_s 1e6 in a horizon"][..],
+        ),
+        (
+            "orbit.json",
+            &["orbit.json", "sample 2", "orbit_number 1000000"][..],
+        ),
+        (
+            "value.json",
+            &[
+                "value.json",
+                "sample 2",
+                "tooth_thinning_um = -1e6",
+                "16 … 23",
+            ][..],
+        ),
+    ] {
+        let out = run_in(&dir, &["merge", file, "s1.json"]);
+        assert_error(file, &out, needles);
+    }
+}

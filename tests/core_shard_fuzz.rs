@@ -9,7 +9,8 @@ use std::sync::atomic::AtomicU64;
 use orbitlash::io::scenario_toml::{REFERENCE_HINGE_TOML, parse_spec};
 use orbitlash::margins::dispersion::{Plan, Sampling};
 use orbitlash::margins::{
-    Horizon, RunIdentity, SHARD_FORMAT, Shard, merge, read_shard, report, run_samples, shard_range,
+    Horizon, RunIdentity, SHARD_FORMAT, Shard, ShardLimits, merge, read_shard, report, run_samples,
+    shard_range,
 };
 use orbitlash::spec::model::Model;
 use rand_chacha::ChaCha8Rng;
@@ -39,6 +40,8 @@ fn shard_texts() -> [String; 2] {
             run: id.clone(),
             shard: (i as u64, 2),
             range: (range.start, range.end),
+            tool: "orbitlash test".into(),
+            limits: ShardLimits::new(model.scenario(), &plan, horizon),
             outcomes,
         })
         .unwrap()

@@ -180,6 +180,8 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
             run: id,
             shard: (i, n),
             range: (range.start, range.end),
+            tool: orbitlash::margins::build_identity(),
+            limits: orbitlash::margins::ShardLimits::new(sc, &plan, horizon),
             outcomes,
         };
         let p = a.json.as_deref().expect("--shard requires --json");

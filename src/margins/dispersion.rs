@@ -102,6 +102,24 @@ impl Distribution {
         }
     }
 
+    /// The values a draw can take: a bounded distribution's bounds, an unbounded one's
+    /// quantiles at 1e-12 and 1 − 1e-12 (no sampling plan draws further out).
+    pub fn support(&self) -> (f64, f64) {
+        match self {
+            Distribution::Normal { .. } | Distribution::LogNormal { .. } => {
+                (self.quantile(1e-12), self.quantile(1.0 - 1e-12))
+            }
+            Distribution::TruncatedNormal { min, max, .. }
+            | Distribution::Uniform { min, max }
+            | Distribution::Triangular { min, max, .. } => (*min, *max),
+            Distribution::Cases(v) => v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                    (a.min(*x), b.max(*x))
+                }),
+        }
+    }
+
     /// The values that must lie within the parameter's range.
     fn extremes(&self) -> Vec<f64> {
         match self {

@@ -505,7 +505,62 @@ pub struct Shard {
     /// Shard i of n (0-based).
     pub shard: (u64, u64),
     pub range: (u64, u64),
+    /// The build that wrote it ([`build_identity`]): shards of different builds are
+    /// not merged (their numbers may differ).
+    pub tool: String,
+    /// What bounds its numbers: each sample's horizon and the orbit's period (a
+    /// smallest backlash's time and orbit number), and each dispersion's support.
+    pub limits: ShardLimits,
     pub outcomes: Vec<SampleOutcome>,
+}
+
+/// The bounds a shard's numbers must keep (see [`Shard::limits`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ShardLimits {
+    pub horizon_s: f64,
+    pub period_s: f64,
+    /// Per dispersion, the values its distribution can draw.
+    pub supports: Vec<(f64, f64)>,
+}
+
+impl ShardLimits {
+    pub fn new(sc: &crate::spec::scenario::Scenario, plan: &Plan, horizon: Horizon) -> ShardLimits {
+        let period_s = sc.period_s();
+        ShardLimits {
+            horizon_s: match horizon {
+                Horizon::Orbits(o) => o * period_s,
+                Horizon::Mission => sc.run.duration_s,
+                Horizon::SteadyState => period_s,
+            },
+            period_s,
+            supports: plan
+                .dispersions
+                .iter()
+                .map(|d| d.distribution.support())
+                .collect(),
+        }
+    }
+}
+
+/// The build of this program: its version and the first 16 hex digits of the SHA-256
+/// of its executable (two builds of one version differ), computed once.
+pub fn build_identity() -> String {
+    static ID: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ID.get_or_init(|| {
+        use sha2::Digest;
+        let hash = std::env::current_exe()
+            .and_then(std::fs::read)
+            .map(|b| {
+                let h = sha2::Sha256::digest(&b);
+                h.iter()
+                    .take(8)
+                    .map(|x| format!("{x:02x}"))
+                    .collect::<String>()
+            })
+            .unwrap_or_else(|_| "unknown".into());
+        format!("orbitlash {} {hash}", env!("CARGO_PKG_VERSION"))
+    })
+    .clone()
 }
 
 pub const SHARD_FORMAT: &str = "orbitlash margins shard";
@@ -606,6 +661,21 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
             s.range.0, s.range.1, r.samples, range.start, range.end
         )));
     }
+    let l = &s.limits;
+    if !(l.horizon_s > 0.0
+        && l.horizon_s <= crate::spec::scenario::MAX_DURATION_S
+        && l.period_s > 0.0
+        && l.period_s.is_finite()
+        && l.supports.len() == r.dispersed.len()
+        && l.supports.iter().all(|(lo, hi)| lo <= hi))
+    {
+        return Err(bad(
+            "its limits (horizon, period, one support per dispersion) are not a run's".into(),
+        ));
+    }
+    if s.tool.is_empty() || s.tool.chars().any(char::is_control) {
+        return Err(bad("it names no tool build".into()));
+    }
     if s.outcomes.len() as u64 != range.end - range.start {
         return Err(bad(format!(
             "{} outcomes for the {} samples of its range",
@@ -641,6 +711,16 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
         if o.values.iter().any(|v| !v.is_finite()) {
             return Err(sample("a dispersed value is not a finite number".into()));
         }
+        for ((v, (lo, hi)), path) in o.values.iter().zip(&l.supports).zip(&r.dispersed) {
+            if v < lo || v > hi {
+                return Err(sample(format!(
+                    "{path} = {} lies outside what its distribution draws ({} … {})",
+                    crate::units::num(*v),
+                    crate::units::num(*lo),
+                    crate::units::num(*hi)
+                )));
+            }
+        }
         let expected_pairs = if o.invalid.is_some() {
             0
         } else {
@@ -655,16 +735,25 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
         for (p, (name, allowed)) in o.pairs.iter().zip(&r.pairs) {
             // the sizes a run can give (a 1 m backlash, a run of 1e9 s); NaN: a lost mesh
             let plausible = |v: f64, max: f64| v.is_nan() || v.abs() <= max;
+            // the time within the sample's horizon, its orbit the one that time falls in
+            let t_ok =
+                p.t_min_s.is_nan() || (0.0..=l.horizon_s * (1.0 + 1e-9)).contains(&p.t_min_s);
+            let last_orbit = (p.t_min_s.max(0.0) / l.period_s).floor() + 2.0;
+            let orbit_ok =
+                p.t_min_s.is_nan() || (p.orbit_number >= 1 && p.orbit_number as f64 <= last_orbit);
             if !(plausible(p.min_backlash_um, MAX_BACKLASH_UM)
                 && plausible(p.min_margin_um, 2.0 * MAX_BACKLASH_UM)
-                && p.t_min_s.abs() <= 2.0 * crate::spec::scenario::MAX_DURATION_S
+                && t_ok
+                && orbit_ok
                 && (0.0..=360.0).contains(&p.orbit_phase_deg))
             {
                 return Err(sample(format!(
-                    "{name}: a value no run can give (min_backlash_um {}, min_margin_um {}, t_min_s {}, orbit_phase_deg {})",
+                    "{name}: a value no run can give (min_backlash_um {}, min_margin_um {}, t_min_s {} in a horizon of {} s, orbit_number {}, orbit_phase_deg {})",
                     crate::units::num(p.min_backlash_um),
                     crate::units::num(p.min_margin_um),
                     crate::units::num(p.t_min_s),
+                    crate::units::num(l.horizon_s),
+                    p.orbit_number,
                     crate::units::num(p.orbit_phase_deg)
                 )));
             }
@@ -730,6 +819,8 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
             ("the dispersions", r.dispersed != id.dispersed),
             ("the scenario's name", r.scenario != id.scenario),
             ("the gear pairs", r.pairs != id.pairs),
+            ("the tool build", s.tool != first.tool),
+            ("the limits", s.limits != first.limits),
         ]
         .into_iter()
         .find(|(_, d)| *d);
