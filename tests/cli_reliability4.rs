@@ -788,3 +788,35 @@ fn cli_merge_refuses_other_builds_and_numbers_past_their_bounds() {
         assert_error(file, &out, needles);
     }
 }
+
+// 16. Estimates ask for --force past one set of thresholds everywhere: a periodic search
+// of a 20 000-node network estimated at hours was a dry run that exited 0.
+#[test]
+fn cli_a_long_steady_state_asks_for_force() {
+    let dir = tmpdir("r4-steady");
+    let net = bin()
+        .args(["bench", "--emit-network", "lattice:20000"])
+        .output()
+        .unwrap();
+    assert!(net.status.success());
+    std::fs::write(dir.join("l.toml"), &net.stdout).unwrap();
+    let args = [
+        "run",
+        "l.toml",
+        "--steady-state",
+        "--dry-run",
+        "--set",
+        "solver.tolerance_k=1e-5",
+    ];
+    let out = run_in(&dir, &args);
+    assert_error(
+        "steady",
+        &out,
+        &["the periodic search", "of computing, more than 1.0 h", "--force"],
+    );
+    let mut forced = args.to_vec();
+    forced.push("--force");
+    let out = run_in(&dir, &forced);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stderr(&out).contains("estimate: the periodic search"));
+}

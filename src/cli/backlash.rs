@@ -40,9 +40,9 @@ pub struct BacklashArgs {
 
 fn finite(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > -273.15 && v < 9726.85 => Ok(v),
+        Ok(v) if v.is_finite() && v > -273.15 && v <= 9726.85 => Ok(v),
         _ => Err(format!(
-            "`{s}` is not a temperature in °C within −273.15 … 9726.85 (0 … 10 000 K)"
+            "`{s}` is not a temperature in °C above −273.15 and at most 9726.85 (0 … 10 000 K)"
         )),
     }
 }

@@ -64,22 +64,70 @@ fn steady_cost(sc: &Scenario) -> RunEstimate {
     orbit
 }
 
-/// Refuses `steps` over `limit` unless `force`; says what a long job will take.
-fn judge(what: &str, steps: f64, wall_s: f64, limit: f64, force: bool, hint: &str) -> Result<()> {
+/// The longest computation a command starts without `--force`, s of wall time on
+/// this machine's cores (the step limits are about the same for the reference).
+pub const MAX_WALL_S: f64 = 3600.0;
+
+/// The most memory a command takes without `--force`, bytes: half the machine's
+/// (8 GiB when it cannot be read).
+pub fn max_memory_bytes() -> f64 {
+    let total_kib = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        t.lines()
+            .find_map(|l| l.strip_prefix("MemTotal:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+    });
+    total_kib.map_or(8.0 * (1u64 << 30) as f64, |k| 0.5 * k * 1024.0)
+}
+
+/// Refuses a job past any of the limits (`limit` solver steps, [`MAX_WALL_S`],
+/// [`max_memory_bytes`]) unless `force`; says what a long or large job will take.
+pub fn judge_cost(
+    what: &str,
+    steps: f64,
+    wall_s: f64,
+    memory_bytes: f64,
+    limit: f64,
+    force: bool,
+    hint: &str,
+) -> Result<()> {
     let time = if wall_s.is_finite() {
         format!(", about {} of computing", duration(wall_s))
     } else {
         String::new()
     };
-    if steps > limit && !force {
+    let memory = if memory_bytes > 100e6 {
+        format!(" and {:.1} GB of memory", memory_bytes / 1e9)
+    } else {
+        String::new()
+    };
+    let over = if steps > limit {
+        Some(format!("more than the limit of {limit:.0e} steps"))
+    } else if wall_s > MAX_WALL_S {
+        Some(format!("more than {} of computing", duration(MAX_WALL_S)))
+    } else if memory_bytes > max_memory_bytes() {
+        Some(format!(
+            "more than the {:.1} GB of memory allowed (half the machine's)",
+            max_memory_bytes() / 1e9
+        ))
+    } else {
+        None
+    };
+    if let Some(over) = over
+        && !force
+    {
         anyhow::bail!(
-            "{what} would take about {steps:.2e} solver steps{time}, more than the limit of {limit:.0e}: {hint}, or pass --force"
+            "{what} would take about {steps:.2e} solver steps{time}{memory}, {over}: {hint}, or pass --force"
         );
     }
-    if wall_s > 5.0 {
-        eprintln!("estimate: {what}: about {steps:.3e} solver steps{time}");
+    if wall_s > 5.0 || memory_bytes > 1e9 {
+        eprintln!("estimate: {what}: about {steps:.3e} solver steps{time}{memory}");
     }
     Ok(())
+}
+
+/// [`judge_cost`] without a memory estimate.
+fn judge(what: &str, steps: f64, wall_s: f64, limit: f64, force: bool, hint: &str) -> Result<()> {
+    judge_cost(what, steps, wall_s, 0.0, limit, force, hint)
 }
 
 /// `run --steady-state`: the periodic search and the reported period.
@@ -129,8 +177,19 @@ pub fn margins(sc: &Scenario, horizon: Horizon, samples: u64, force: bool) -> Re
     })
 }
 
-/// `diagnose`: about `runs` runs of the scenario over `span_s` of recording.
-pub fn diagnose(sc: &Scenario, span_s: f64, runs: f64, force: bool) -> Result<()> {
+/// Each model run of a diagnosis, per recorded value (row × channel): sampling the
+/// run there, the residual and its statistics, s. Measured on the reference with the
+/// heater recording resampled from 2 271 to 227 000 rows (docs/performance.md: the
+/// CPU time grows by 0.40 ms per row over its ~820 runs of 6 channels).
+pub const DIAGNOSE_S_PER_VALUE_RUN: f64 = 81e-9;
+/// Memory per recorded value (row × channel), bytes, and the base (same measurements:
+/// 18 MB at 2 271 rows, 280 MB at 68 000, 830 MB at 227 000).
+pub const DIAGNOSE_BYTES_PER_VALUE: f64 = 620.0;
+pub const DIAGNOSE_BASE_BYTES: f64 = 15e6;
+
+/// `diagnose`: about `runs` runs of the scenario over `span_s` of a recording of
+/// `values` readings (rows × channels).
+pub fn diagnose(sc: &Scenario, span_s: f64, values: f64, runs: f64, force: bool) -> Result<()> {
     let per = run_cost(sc, span_s);
     judge(
         "the model over the recording",
@@ -140,13 +199,15 @@ pub fn diagnose(sc: &Scenario, span_s: f64, runs: f64, force: bool) -> Result<()
         force,
         "check the recording's time column (seconds from the start), or cut the recording",
     )?;
-    judge(
-        &format!("diagnose (about {runs:.0} runs of the model)"),
+    let per_run_s = per.wall_s + values * DIAGNOSE_S_PER_VALUE_RUN;
+    judge_cost(
+        &format!("diagnose (about {runs:.0} runs of the model, {values:.0} recorded values)"),
         per.steps * runs,
-        per.wall_s * runs / rayon::current_num_threads().max(1) as f64,
+        per_run_s * runs / rayon::current_num_threads().max(1) as f64,
+        DIAGNOSE_BASE_BYTES + values * DIAGNOSE_BYTES_PER_VALUE,
         MAX_TOTAL_STEPS,
         force,
-        "cut the recording into shorter stretches",
+        "cut the recording into shorter stretches or thin its rows",
     )
 }
 

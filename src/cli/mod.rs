@@ -135,6 +135,18 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
     }
 }
 
+/// Set when the process is asked to stop (SIGINT, SIGTERM, SIGHUP), once a command
+/// installs the handler by calling this: it then stops at a safe point and says so.
+pub fn interrupt_flag() -> &'static std::sync::atomic::AtomicBool {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static FLAG: AtomicBool = AtomicBool::new(false);
+    static HANDLER: std::sync::Once = std::sync::Once::new();
+    HANDLER.call_once(|| {
+        let _ = ctrlc::set_handler(|| FLAG.store(true, Ordering::Relaxed));
+    });
+    &FLAG
+}
+
 /// Worker threads at most per core: past this, more threads only cost memory (each
 /// has its stack) and start-up.
 pub const MAX_THREADS_PER_CORE: usize = 8;

@@ -35,7 +35,7 @@ pub enum Format {
     Svg,
 }
 
-pub fn format_of(p: &Path) -> Result<Format> {
+pub fn format_of(p: &Path, option: &str) -> Result<Format> {
     match p
         .extension()
         .and_then(|e| e.to_str())
@@ -45,7 +45,7 @@ pub fn format_of(p: &Path) -> Result<Format> {
         Some("png") => Ok(Format::Png),
         Some("svg") => Ok(Format::Svg),
         _ => bail!(
-            "--out {}: the figure's name must end in .png or .svg",
+            "{option} {}: the figure's name must end in .png or .svg",
             p.display()
         ),
     }
@@ -53,7 +53,7 @@ pub fn format_of(p: &Path) -> Result<Format> {
 
 /// A figure written atomically to `out` (never over an input of the command).
 pub fn write_figure(fig: &orbitlash::plot::Figure, out: &Path, inputs: &[&Path]) -> Result<()> {
-    let bytes = match format_of(out)? {
+    let bytes = match format_of(out, "--out")? {
         Format::Png => fig.png(2.0)?,
         Format::Svg => fig.svg.clone().into_bytes(),
     };
@@ -155,7 +155,7 @@ pub fn plot(a: PlotArgs) -> Result<()> {
 /// smallest backlash and eclipses come from the log's end record, else from `end` (the
 /// run drawing its own figure), else from the rows.
 pub fn draw(input: &Path, out: &Path, title: Option<&str>, end: Option<&RunEnd>) -> Result<()> {
-    format_of(out)?;
+    format_of(out, "--out")?;
     // The output's place is checked before the input is read.
     Outputs::new(OutputPolicy::reading(&[input])).file("--out", out)?;
     let is_log = input

@@ -2,7 +2,7 @@
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use anyhow::{Result, anyhow};
@@ -340,7 +340,7 @@ fn plan_outputs(
         outs.file("--json", j)?;
     }
     if let Some(f) = &a.plot {
-        super::plot::format_of(f)?;
+        super::plot::format_of(f, "--plot")?;
         if log_path.is_none() && a.csv.is_none() {
             anyhow::bail!(
                 "--plot {} draws the run from its log or its CSV: drop --no-log or add --csv",
@@ -438,9 +438,9 @@ fn bounded(
     if log.is_some() {
         est.wall_s *= 1.35;
     }
-    if est.steps > MAX_STEPS && !a.force {
+    if (est.steps > MAX_STEPS || est.wall_s > super::estimate::MAX_WALL_S) && !a.force {
         anyhow::bail!(
-            "the run would take about {:.2e} steps ({:.3e} s simulated{}), more than the limit of {MAX_STEPS:.0e}: \
+            "the run would take about {:.2e} steps ({:.3e} s simulated{}), more than {}: \
 shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --force",
             est.steps,
             t_end_s,
@@ -451,6 +451,14 @@ shorten it, loosen solver.tolerance_k or raise solver.max_step_s, or pass --forc
                 )
             } else {
                 String::new()
+            },
+            if est.steps > MAX_STEPS {
+                format!("the limit of {MAX_STEPS:.0e} steps")
+            } else {
+                format!(
+                    "{} of computing",
+                    super::estimate::duration(super::estimate::MAX_WALL_S)
+                )
             }
         );
     }
@@ -794,12 +802,7 @@ fn format_solver(stats: &RunStats, wall_s: f64, orbits: f64) -> String {
 /// A flag set by Ctrl-C (SIGINT/SIGTERM): the run stops after the current step and
 /// closes its outputs properly.
 fn interrupt_flag() -> &'static AtomicBool {
-    static FLAG: AtomicBool = AtomicBool::new(false);
-    static HANDLER: std::sync::Once = std::sync::Once::new();
-    HANDLER.call_once(|| {
-        let _ = ctrlc::set_handler(|| FLAG.store(true, Ordering::Relaxed));
-    });
-    &FLAG
+    super::interrupt_flag()
 }
 
 fn format_summary(

@@ -327,6 +327,8 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     let t = meta.file_type();
     if t.is_dir() {
         "a directory"
+    } else if t.is_file() {
+        "a regular file"
     } else if t.is_symlink() {
         "a symbolic link"
     } else if t.is_fifo() {
@@ -336,7 +338,7 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     } else if t.is_char_device() || t.is_block_device() {
         "a device"
     } else {
-        "not a regular file"
+        "a file of an unknown kind"
     }
 }
 

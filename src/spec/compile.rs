@@ -26,7 +26,7 @@ use crate::thermal::{
     BoundaryNode, Conductor, DiffusionNode, Heater, Load, LoadKind, Mode, Network, NodeRef,
     Radiator, ThermalModel, When,
 };
-use crate::units::{SECONDS_PER_DAY, num};
+use crate::units::{SECONDS_PER_DAY, exact, num};
 
 /// A spec that does not make a valid model: the key path and what is wrong.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -65,7 +65,7 @@ impl Cx {
         if v.is_finite() {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be a finite number (got {})", num(v))))
+            Err(self.err(path, format!("must be a finite number (got {})", exact(v))))
         }
     }
 
@@ -74,7 +74,7 @@ impl Cx {
         if v > 0.0 {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be > 0 (got {})", num(v))))
+            Err(self.err(path, format!("must be > 0 (got {})", exact(v))))
         }
     }
 
@@ -92,7 +92,7 @@ impl Cx {
         } else {
             Err(self.err(
                 path,
-                format!("must be at most {} {unit} (got {})", num(hi), num(v)),
+                format!("must be at most {} {unit} (got {})", num(hi), exact(v)),
             ))
         }
     }
@@ -105,7 +105,7 @@ impl Cx {
         } else {
             Err(self.err(
                 path,
-                format!("must be at least {} {unit} (got {})", num(lo), num(v)),
+                format!("must be at least {} {unit} (got {})", num(lo), exact(v)),
             ))
         }
     }
@@ -115,7 +115,7 @@ impl Cx {
         if v >= 0.0 {
             Ok(v)
         } else {
-            Err(self.err(path, format!("must be ≥ 0 (got {})", num(v))))
+            Err(self.err(path, format!("must be ≥ 0 (got {})", exact(v))))
         }
     }
 
@@ -185,7 +185,7 @@ impl Cx {
                     "{what} must be within {} … {} (got {})",
                     num(lo),
                     num(hi),
-                    num(v)
+                    exact(v)
                 ),
             ))
         }
@@ -193,12 +193,12 @@ impl Cx {
 
     fn temperature(&self, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
         self.finite(path, v)?;
-        if v > 0.0 && v < 5000.0 {
+        if v > 0.0 && v <= 5000.0 {
             Ok(v)
         } else {
             Err(self.err(
                 path,
-                format!("is a temperature in kelvin and must be within 0 … 5000 K (got {v}; °C values need + 273.15)"),
+                format!("is a temperature in kelvin and must be above 0 and at most 5000 K (got {v}; °C values need + 273.15)"),
             ))
         }
     }
