@@ -60,6 +60,17 @@ pub fn count(v: f64, unit: &str) -> String {
     }
 }
 
+/// A number of orbits as a person writes it: "1 orbit", "6 orbits" when whole (to a
+/// billionth), else with `decimals` digits ("0.50 orbits").
+pub fn orbits(v: f64, decimals: usize) -> String {
+    let r = v.round();
+    if v.is_finite() && (v - r).abs() <= 1e-9 * v.abs().max(1.0) {
+        count(r, "orbit")
+    } else {
+        format!("{v:.decimals$} orbits")
+    }
+}
+
 /// Text from a file or the user as it may be shown on a terminal: control characters
 /// (escape sequences, bells, carriage returns) written as `\u{1b}`, never sent raw.
 pub fn shown(text: &str) -> std::borrow::Cow<'_, str> {

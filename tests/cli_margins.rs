@@ -310,7 +310,7 @@ fn cli_shards_merge_to_the_unsharded_report_bit_for_bit() {
     ]);
     refused(
         &["merge", "s0.json", "t1.json", "s2.json", "s3.json"],
-        "the seed differs",
+        "they differ in the seed",
     );
     std::fs::write(dir.join("junk.json"), "{}").unwrap();
     refused(&["merge", "junk.json"], "not a margins shard");

@@ -1101,7 +1101,7 @@ fn cli_merge_outputs_and_sets_review_cases() {
             &dir,
             "pairs differ",
             &["merge", order[0], order[1], "--plots", "plots"],
-            &["from another run", "the gear pairs differs"],
+            &["from another run", "they differ in the gear pairs"],
         );
     }
     // --csv with --shard is refused; merge writes the CSV the unsharded run writes

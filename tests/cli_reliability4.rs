@@ -812,11 +812,205 @@ fn cli_a_long_steady_state_asks_for_force() {
     assert_error(
         "steady",
         &out,
-        &["the periodic search", "of computing, more than 1.0 h", "--force"],
+        &[
+            "the periodic search",
+            "of computing, more than 1.0 h",
+            "--force",
+        ],
     );
     let mut forced = args.to_vec();
     forced.push("--force");
     let out = run_in(&dir, &forced);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(stderr(&out).contains("estimate: the periodic search"));
+}
+
+// 17 (plot) and 18: messages that say what is wrong, and refusals where a figure or a
+// number would mislead.
+#[test]
+fn cli_messages_name_the_right_thing() {
+    let dir = tmpdir("r4-messages");
+    let root = env!("CARGO_MANIFEST_DIR");
+    let reference = format!("{root}/scenarios/reference-hinge.toml");
+    // run --plot with a bad extension names --plot, not --out
+    assert_error(
+        "plot ext",
+        &run_in(&dir, &["run", "--quiet", "--plot", "a.csv"]),
+        &["--plot a.csv", ".png or .svg"],
+    );
+    // environment --step-s 0 is about the step
+    assert_error(
+        "step",
+        &run_in(&dir, &["environment", &reference, "--step-s", "0"]),
+        &["--step-s", "the step must be > 0 s"],
+    );
+    // a file where a folder is asked for
+    std::fs::write(dir.join("afile"), "x").unwrap();
+    assert_error(
+        "plots file",
+        &run_in(
+            &dir,
+            &[
+                "margins",
+                &format!("{root}/scenarios/reference-hinge-margins.toml"),
+                "--samples",
+                "4",
+                "--seed",
+                "1",
+                "--orbits",
+                "0.2",
+                "--plots",
+                "afile",
+            ],
+        ),
+        &["afile", "a regular file, not a directory"],
+    );
+    // no CSV asked: no refusal over CSV rows
+    let out = run_in(&dir, &["environment", &reference, "--orbits", "176000"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // the bounds the messages give are accepted
+    let out = run_in(&dir, &["backlash", "--uniform-c", "9726.85"]);
+    assert!(matches!(out.status.code(), Some(0 | 1)), "{}", stderr(&out));
+    let text = reference_text();
+    let at = text.find("reference_temperature_k = ").unwrap();
+    let end = at + text[at..].find('\n').unwrap();
+    let hot = format!(
+        "{}reference_temperature_k = 5000{}",
+        &text[..at],
+        &text[end..]
+    );
+    std::fs::write(dir.join("hot.toml"), hot).unwrap();
+    let out = run_in(&dir, &["check", "hot.toml"]);
+    assert!(
+        !stderr(&out).contains("reference_temperature_k"),
+        "{}",
+        stderr(&out)
+    );
+    // a value just past a bound is shown as given
+    assert_check_refuses(
+        &dir,
+        "conductance",
+        &reference_with(&[(
+            "conductance_w_per_k = 0.03",
+            "conductance_w_per_k = 1000000000.001",
+        )]),
+        &["at most 1e9 W/K", "got 1.000000000001e9"],
+    );
+    // --steady-state on a real orbit, whose environment does not repeat
+    assert_error(
+        "steady tle",
+        &run_in(
+            &dir,
+            &[
+                "run",
+                &format!("{root}/scenarios/cubesat-1u.toml"),
+                "--steady-state",
+                "--dry-run",
+            ],
+        ),
+        &["--steady-state", "a real orbit's does not"],
+    );
+    // a whole number of orbits is written as one
+    let out = run_in(&dir, &["run", "--orbits", "1", "--no-log"]);
+    assert!(
+        stdout(&out).contains("reference-hinge: 1 orbit, "),
+        "{}",
+        stdout(&out)
+    );
+    // plot: a control character in the title, values no run gives, times that do not
+    // advance, a table that is not a run's
+    let out = run_in(
+        &dir,
+        &[
+            "run", "--quiet", "--orbits", "0.2", "--no-log", "--csv", "r.csv",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_error(
+        "title",
+        &run_in(
+            &dir,
+            &["plot", "r.csv", "--title", "a\u{1b}[31mb", "--out", "t.svg"],
+        ),
+        &["--title", "control character"],
+    );
+    let csv = std::fs::read_to_string(dir.join("r.csv")).unwrap();
+    let mut lines: Vec<String> = csv.lines().map(String::from).collect();
+    let mut cells: Vec<String> = lines[3].split(',').map(String::from).collect();
+    cells[1] = "1e300".into();
+    lines[3] = cells.join(",");
+    std::fs::write(dir.join("hot.csv"), lines.join("\n") + "\n").unwrap();
+    assert_error(
+        "1e300 K",
+        &run_in(&dir, &["plot", "hot.csv", "--out", "h.svg"]),
+        &[
+            "hot.csv: line 4, column 2 (housing_k)",
+            "1e300 is not a temperature",
+        ],
+    );
+    let header = csv.lines().next().unwrap();
+    let row = csv.lines().nth(1).unwrap();
+    std::fs::write(dir.join("flat.csv"), format!("{header}\n{row}\n{row}\n")).unwrap();
+    assert_error(
+        "flat",
+        &run_in(&dir, &["plot", "flat.csv", "--out", "f.svg"]),
+        &["flat.csv", "time_s does not advance"],
+    );
+    std::fs::write(dir.join("margins.csv"), "index,min_backlash_um\n0,\n").unwrap();
+    assert_error(
+        "margins csv",
+        &run_in(&dir, &["plot", "margins.csv", "--out", "m.svg"]),
+        &["margins.csv", "not a run table", "`index`"],
+    );
+    // a file name with a control character becomes an escaped title: valid XML
+    std::fs::copy(dir.join("r.csv"), dir.join("bell\u{7}.csv")).unwrap();
+    let out = run_in(&dir, &["plot", "bell\u{7}.csv", "--out", "b.svg"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let svg = std::fs::read_to_string(dir.join("b.svg")).unwrap();
+    assert!(!svg.contains('\u{7}') && svg.contains("bell\\u{7}.csv"));
+}
+
+// 18. margins stopped by SIGINT or SIGTERM says so and exits 2 (it died with 130/143
+// and no word), writing nothing.
+#[test]
+fn cli_an_interrupted_margins_run_says_so() {
+    let dir = tmpdir("r4-margins-signal");
+    let root = env!("CARGO_MANIFEST_DIR");
+    for signal in [libc::SIGINT, libc::SIGTERM] {
+        let child = std::process::Command::new(bin_path())
+            .args([
+                "margins",
+                &format!("{root}/scenarios/reference-hinge-margins.toml"),
+                "--samples",
+                "5000",
+                "--seed",
+                "1",
+                "--orbits",
+                "20",
+                "--quiet",
+                "--force",
+                "--json",
+                "m.json",
+            ])
+            .current_dir(&dir)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        unsafe { libc::kill(child.id() as i32, signal) };
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "signal {signal}: {}",
+            stderr(&out)
+        );
+        assert!(
+            stderr(&out).contains("interrupted after"),
+            "{}",
+            stderr(&out)
+        );
+        assert!(!dir.join("m.json").exists());
+    }
 }

@@ -347,3 +347,27 @@ fn core_recording_refuses_a_cut_off_mcap() {
         "{msg}"
     );
 }
+
+/// Issue 27 item 18: a JSON message with a key given twice is refused, as a CSV header
+/// given twice is (the last value was silently kept).
+#[test]
+fn core_json_mcap_with_a_key_twice_is_refused() {
+    let dir = std::env::temp_dir().join(format!("orbitlash-json-dup-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("dup.mcap");
+    let msgs: Vec<(u64, Vec<u8>)> = (0..5u64)
+        .map(|k| {
+            (
+                k * 30_000_000_000,
+                format!("{{\"time_s\": {}, \"a\": 1.0, \"a\": {k}}}", k * 30).into_bytes(),
+            )
+        })
+        .collect();
+    mcap_file(&path, "/recording", "json", None, &msgs, false);
+    let msg = Recording::read(&path).unwrap_err().to_string();
+    assert!(
+        msg.contains("dup.mcap") && msg.contains("field `a` is given twice"),
+        "{msg}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

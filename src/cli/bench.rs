@@ -375,8 +375,9 @@ fn solver_cost(sc: &Scenario, repeat: usize, o: &mut String) -> Result<u64> {
 
     outln!(
         *o,
-        "{}: {orbits:.2} orbits, {} nodes",
+        "{}: {}, {} nodes",
         sc.name,
+        orbitlash::units::orbits(orbits, 2),
         sc.thermal.network.nodes.len()
     );
     outln!(

@@ -230,9 +230,9 @@ fn run_section(o: &mut String, sc: &Scenario, period: f64) {
     outln!(o, "\nrun");
     outln!(
         o,
-        "  duration {:.1} s ({:.3} orbits), CSV every {} s",
+        "  duration {:.1} s ({}), CSV every {} s",
         sc.run.duration_s,
-        sc.run.duration_s / period,
+        orbitlash::units::orbits(sc.run.duration_s / period, 3),
         sc.run.output_interval_s
     );
     outln!(

@@ -99,7 +99,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         }
     }
     let span_s = rec.time_s.last().copied().unwrap_or(0.0);
-    let values = rec.values.iter().map(|c| c.iter().flatten().count()).sum::<usize>() as f64;
+    let values = rec
+        .values
+        .iter()
+        .map(|c| c.iter().flatten().count())
+        .sum::<usize>() as f64;
     super::estimate::diagnose(
         &loaded.scenario,
         span_s,

@@ -106,10 +106,10 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     let mut o = String::new();
     outln!(
         o,
-        "{}: {} ({:.3} orbits, {horizon:.1} s)",
+        "{}: {} ({}, {horizon:.1} s)",
         loaded.file,
         sc.name,
-        a.orbits
+        orbitlash::units::orbits(a.orbits, 3)
     );
     for line in env.report() {
         outln!(o, "{line}");

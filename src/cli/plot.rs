@@ -77,6 +77,13 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
         .iter()
         .map(|h| h.trim().to_string())
         .collect();
+    if headers.first().map(String::as_str) != Some("time_s") {
+        bail!(
+            "{}: not a run table: its first column is `{}`, not time_s (plot draws a run's log, a `run --csv` or an `export-csv` table)",
+            path.display(),
+            orbitlash::units::shown(headers.first().map_or("", String::as_str))
+        );
+    }
     let mut rows = Vec::new();
     for (k, rec) in r.records().enumerate() {
         let line = k + 2;
@@ -119,9 +126,48 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
                 row[0]
             );
         }
+        check_values(path, line, &headers, &row)?;
         rows.push(row);
     }
+    if rows.len() < 2 || rows[0][0] == rows[rows.len() - 1][0] {
+        bail!(
+            "{}: time_s does not advance ({} row(s), all at t = {} s): nothing to draw against time",
+            path.display(),
+            rows.len(),
+            rows.first().map_or(0.0, |r| r[0])
+        );
+    }
     Ok((headers, rows))
+}
+
+/// A temperature (`<node>_k`) a thermometer can read (0 … 10 000 K) and a backlash
+/// (`…backlash_um`) a gear can have (within ±1 cm), else an error naming line and column.
+fn check_values(path: &Path, line: usize, headers: &[String], row: &[f64]) -> Result<()> {
+    for (c, (h, v)) in headers.iter().zip(row).enumerate().skip(1) {
+        let ok = if h.starts_with('/') || v.is_nan() {
+            true
+        } else if h.ends_with("_k") {
+            (0.0..=orbitlash::run::sim::MAX_TEMPERATURE_K).contains(v)
+        } else if h.ends_with("backlash_um") {
+            v.abs() <= orbitlash::diagnose::data::MAX_BACKLASH_UM
+        } else {
+            true
+        };
+        if !ok {
+            bail!(
+                "{}: line {line}, column {} ({h}): {} is not a {} a run gives",
+                path.display(),
+                c + 1,
+                orbitlash::units::num(*v),
+                if h.ends_with("_k") {
+                    "temperature (0 … 10 000 K)"
+                } else {
+                    "backlash (within ±1 cm)"
+                }
+            );
+        }
+    }
+    Ok(())
 }
 
 /// `logs/<stem>.png` for `<dir>/<stem>.<ext>`.
@@ -134,6 +180,14 @@ fn default_out(input: &Path) -> PathBuf {
 }
 
 pub fn plot(a: PlotArgs) -> Result<()> {
+    if let Some(t) = &a.title
+        && t.chars().any(char::is_control)
+    {
+        bail!(
+            "--title {}: holds a control character; a title is one line of plain text",
+            orbitlash::units::shown(t)
+        );
+    }
     let out = match &a.out {
         Some(o) => o.clone(),
         None => {
@@ -190,6 +244,8 @@ pub fn draw(input: &Path, out: &Path, title: Option<&str>, end: Option<&RunEnd>)
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default()
     });
+    // a file's name may hold control characters, which XML cannot: shown escaped
+    let title = orbitlash::units::shown(&title).into_owned();
     let mut series = RunSeries::from_table(&title, &headers, &rows)
         .with_context(|| format!("cannot plot {}", input.display()))?;
     series.end = end;

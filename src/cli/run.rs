@@ -763,9 +763,9 @@ fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
     }
     outln!(
         o,
-        "{}: {:.2} orbits, {:.1} s simulated{}",
+        "{}: {}, {:.1} s simulated{}",
         sc.name,
-        stats.t_end_s / sc.period_s(),
+        orbitlash::units::orbits(stats.t_end_s / sc.period_s(), 2),
         stats.t_end_s,
         if stats.interrupted {
             " (interrupted)"

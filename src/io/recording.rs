@@ -372,6 +372,39 @@ impl Recording {
     }
 }
 
+/// A JSON object read with each key once: a key given twice is an error (as a CSV
+/// header given twice is), not the last value silently kept.
+struct UniqueObject(Vec<(String, serde_json::Value)>);
+
+impl<'de> serde::Deserialize<'de> for UniqueObject {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = UniqueObject;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<UniqueObject, A::Error> {
+                let mut fields: Vec<(String, serde_json::Value)> = Vec::new();
+                while let Some((k, v)) = map.next_entry::<String, serde_json::Value>()? {
+                    if fields.iter().any(|(f, _)| *f == k) {
+                        return Err(serde::de::Error::custom(format!(
+                            "field `{}` is given twice",
+                            crate::units::shown(&k)
+                        )));
+                    }
+                    fields.push((k, v));
+                }
+                Ok(UniqueObject(fields))
+            }
+        }
+        d.deserialize_map(Visit)
+    }
+}
+
 /// The topic a recording is read from when an MCAP file has several.
 pub const RECORDING_TOPIC: &str = "/recording";
 
@@ -477,11 +510,13 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
                     .map(|(k, v)| (k.trim_start_matches('.').to_string(), Some(v))),
             );
         } else {
-            let v: serde_json::Value =
-                serde_json::from_slice(&m.data).map_err(|e| where_(format!("is not JSON: {e}")))?;
-            let serde_json::Value::Object(fields) = v else {
-                return Err(where_("is not a JSON object".into()));
-            };
+            let UniqueObject(fields) = serde_json::from_slice(&m.data).map_err(|e| {
+                where_(if e.is_data() {
+                    e.to_string()
+                } else {
+                    format!("is not JSON: {e}")
+                })
+            })?;
             for (k, v) in fields {
                 match v {
                     serde_json::Value::Number(_) if text_fields.contains(&k) => {

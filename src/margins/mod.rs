@@ -576,7 +576,7 @@ pub fn shard_range(samples: u64, i: u64, n: u64) -> Range<u64> {
 pub enum MergeError {
     #[error("{file}: not a margins shard ({why})")]
     NotAShard { file: String, why: String },
-    #[error("{file} is from another run than {first}: {what} differs")]
+    #[error("{file} is from another run than {first}: they differ in {what}")]
     OtherRun {
         file: String,
         first: String,

@@ -99,6 +99,10 @@ pub enum SteadyError {
     )]
     NotPeriodic(f64),
     #[error(
+        "a periodic orbit needs an environment that repeats every orbit, and a real orbit's does not: β, the Sun's distance and the shadow move from orbit to orbit (run the mission, or a circular orbit with constant β)"
+    )]
+    RealOrbit,
+    #[error(
         "no periodic orbit within {orbits} orbits: the last orbit still moved a node by {error_k:.3e} K (tolerance {tolerance_k} K)"
     )]
     NotConverged {
@@ -111,6 +115,9 @@ pub enum SteadyError {
 /// Whether `model`'s environment and loads repeat every orbit (no table knots or mode
 /// edges), as a periodic orbit needs.
 pub fn check_repeats(model: &crate::thermal::ThermalModel) -> Result<(), SteadyError> {
+    if matches!(model.environment, crate::orbit::Environment::Dated(_)) {
+        return Err(SteadyError::RealOrbit);
+    }
     match model.breakpoints_s().first() {
         Some(&t) => Err(SteadyError::NotPeriodic(t)),
         None => Ok(()),
