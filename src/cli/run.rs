@@ -170,16 +170,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         )?),
         None => None,
     };
-    let progress = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
-        let pb = ProgressBar::new(1000);
-        pb.set_style(
-            ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {percent}% ({eta})")
-                .expect("template")
-                .progress_chars("=> "),
-        );
-        pb.set_message(sc.name.clone());
-        Progress(pb, t_end_s)
-    });
+    let progress = progress_bar(&a, &sc.name, t_end_s);
 
     let mut stats_obs = WindowStats::last(period_s.min(t_end_s));
     // Over the whole run: reported instead when an interrupted run ends before the
@@ -263,33 +254,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
-    if a.plot.is_some() && stats.interrupted {
-        outln!(
-            o,
-            "plot: not drawn (the run was interrupted); `orbitlash plot` draws the log as far as it goes"
-        );
-    }
-    if let Some(f) = &a.plot
-        && !stats.interrupted
-    {
-        // From the log (eclipses and margins in it), else the CSV.
-        let source = log_path
-            .as_ref()
-            .or(a.csv.as_ref())
-            .expect("checked in plan_outputs");
-        super::plot::draw(source, f, None, Some(&run_end))
-            .map_err(|e| anyhow!("--plot {}: {}", f.display(), error_chain(&e)))?;
-        outln!(o, "plot: {}", f.display());
-    }
-    if let Some(p) = &log_path {
-        outln!(
-            o,
-            "log: {}  (Foxglove: import viewer/foxglove-layout.json; Rerun with its plots: \
-             `python3 viewer/rerun_export.py {}` then `rerun` the .rrd)",
-            p.display(),
-            p.display()
-        );
-    }
+    o.push_str(&figure_and_log(&a, log_path.as_deref(), &stats, &run_end)?);
     print_out(&o)?;
     let pass = verdicts.iter().all(|v| v.passes());
     if stats.interrupted {
@@ -301,6 +266,57 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         );
     }
     Ok(Outcome::from_pass(pass))
+}
+
+/// The figure of `run --plot` (from the log, else the CSV, with the run's own end) and
+/// the lines that name it and the log.
+fn figure_and_log(
+    a: &RunArgs,
+    log_path: Option<&std::path::Path>,
+    stats: &RunStats,
+    run_end: &orbitlash::run::summary::RunEnd,
+) -> Result<String> {
+    let mut o = String::new();
+    if a.plot.is_some() && stats.interrupted {
+        outln!(
+            o,
+            "plot: not drawn (the run was interrupted); `orbitlash plot` draws the log as far as it goes"
+        );
+    }
+    if let Some(f) = &a.plot
+        && !stats.interrupted
+    {
+        let source = log_path
+            .or(a.csv.as_deref())
+            .expect("checked in plan_outputs");
+        super::plot::draw(source, f, None, Some(run_end))
+            .map_err(|e| anyhow!("--plot {}: {}", f.display(), error_chain(&e)))?;
+        outln!(o, "plot: {}", f.display());
+    }
+    if let Some(p) = log_path {
+        outln!(
+            o,
+            "log: {}  (Foxglove: import viewer/foxglove-layout.json; Rerun with its plots: \
+             `python3 viewer/rerun_export.py {}` then `rerun` the .rrd)",
+            p.display(),
+            p.display()
+        );
+    }
+    Ok(o)
+}
+
+/// A progress bar on a terminal (none with --quiet or when stderr is not one).
+fn progress_bar(a: &RunArgs, name: &str, t_end_s: f64) -> Option<Progress> {
+    (!a.quiet && std::io::stderr().is_terminal()).then(|| {
+        let pb = ProgressBar::new(1000);
+        pb.set_style(
+            ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {percent}% ({eta})")
+                .expect("template")
+                .progress_chars("=> "),
+        );
+        pb.set_message(name.to_string());
+        Progress(pb, t_end_s)
+    })
 }
 
 /// Every output of a run, checked before it starts so that a bad path fails now: none

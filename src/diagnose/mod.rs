@@ -567,10 +567,10 @@ is the sensor's unit right (its `unit = \"{other}\"`)?",
 }
 
 /// Channels whose noise is far larger than their signal: the verdict would rest on
-/// noise.
+/// noise (after the channels whose unit looks wrong, [`unit_warnings`]).
 fn noise_warnings(obs: &Observations, base: &BaselineRun, validate: bool) -> Vec<String> {
     let fit_part = |j: usize| !validate || obs.part[j] == Part::Train;
-    let mut warnings = Vec::new();
+    let mut warnings = unit_warnings(obs);
     for (c, ch) in obs.channels.iter().enumerate() {
         let noise = base.noise[c];
         let signal = signal_rms(obs, c, &base.pred[ch.sensor], noise, fit_part);
@@ -932,8 +932,7 @@ pub fn diagnose(
     // 2. The baseline.
     progress("baseline", 0, 1);
     let base = baseline(model, &obs, validate, &mut notes)?;
-    let mut warnings = unit_warnings(&obs);
-    warnings.extend(noise_warnings(&obs, &base, validate));
+    let warnings = noise_warnings(&obs, &base, validate);
     let problem = Problem::new(&obs, base.noise.clone(), base.steps);
     let (mut report, mut series) = baseline_report(&obs, &base, &problem, opts, notes, warnings);
     report.recording = RecordingRows {

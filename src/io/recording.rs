@@ -329,14 +329,7 @@ impl Recording {
                         ));
                     }
                     if !same_cells {
-                        // the mean of the rows sharing the stamp, cell by cell
-                        for ((ch, v), n) in rec.values.iter_mut().zip(&values).zip(&mut averaged) {
-                            let old = ch.last_mut().expect("a row before");
-                            if let Some(b) = v {
-                                *old = Some(old.map_or(*b, |a| (a * *n + b) / (*n + 1.0)));
-                                *n += 1.0;
-                            }
-                        }
+                        mean_into(&mut rec.values, &values, &mut averaged);
                     }
                     rec.merged_rows.push(line);
                     continue;
@@ -372,6 +365,17 @@ impl Recording {
     }
 }
 
+/// A message's JSON object (each key once), or why it is not one.
+fn json_object(data: &[u8]) -> Result<UniqueObject, String> {
+    serde_json::from_slice(data).map_err(|e| {
+        if e.is_data() {
+            e.to_string()
+        } else {
+            format!("is not JSON: {e}")
+        }
+    })
+}
+
 /// A JSON object read with each key once: a key given twice is an error (as a CSV
 /// header given twice is), not the last value silently kept.
 struct UniqueObject(Vec<(String, serde_json::Value)>);
@@ -405,6 +409,33 @@ impl<'de> serde::Deserialize<'de> for UniqueObject {
     }
 }
 
+/// Every length of an MCAP file checked before the mcap crate's parser allocates what
+/// a length says (`io::mcap_lengths`).
+fn check_lengths(bytes: &[u8], file: &str) -> Result<(), RecordingError> {
+    if !bytes.starts_with(b"\x89MCAP0\r\n") {
+        return Ok(());
+    }
+    super::mcap_lengths::check_file(bytes, 8).map_err(|(offset, m)| RecordingError::File {
+        file: file.to_string(),
+        message: format!(
+            "is not a readable MCAP file (damaged or cut off): the record at byte {offset} is malformed: {m} (a file cut off by a killed run is recovered by `orbitlash recover`)"
+        ),
+    })
+}
+
+/// The readings `values` of a row sharing the last row's time stamp, averaged into that
+/// row cell by cell; `averaged` counts each channel's readings so far (an empty cell is
+/// no reading).
+fn mean_into(rows: &mut [Vec<Option<f64>>], values: &[Option<f64>], averaged: &mut [f64]) {
+    for ((ch, v), n) in rows.iter_mut().zip(values).zip(averaged) {
+        let old = ch.last_mut().expect("a row before");
+        if let Some(b) = v {
+            *old = Some(old.map_or(*b, |a| (a * *n + b) / (*n + 1.0)));
+            *n += 1.0;
+        }
+    }
+}
+
 /// The topic a recording is read from when an MCAP file has several.
 pub const RECORDING_TOPIC: &str = "/recording";
 
@@ -420,14 +451,7 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
         file: file.to_string(),
         message,
     };
-    // Every length checked first (the crate's parser allocates what a length says).
-    if bytes.starts_with(b"\x89MCAP0\r\n") {
-        super::mcap_lengths::check_file(bytes, 8).map_err(|(offset, m)| {
-            fail(format!(
-                "is not a readable MCAP file (damaged or cut off): the record at byte {offset} is malformed: {m} (a file cut off by a killed run is recovered by `orbitlash recover`)"
-            ))
-        })?;
-    }
+    check_lengths(bytes, file)?;
     // The mcap crate's reader: any chunk compression, a whole file.
     let mut messages = Vec::new();
     for m in mcap::MessageStream::new(bytes)
@@ -510,13 +534,7 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
                     .map(|(k, v)| (k.trim_start_matches('.').to_string(), Some(v))),
             );
         } else {
-            let UniqueObject(fields) = serde_json::from_slice(&m.data).map_err(|e| {
-                where_(if e.is_data() {
-                    e.to_string()
-                } else {
-                    format!("is not JSON: {e}")
-                })
-            })?;
+            let UniqueObject(fields) = json_object(&m.data).map_err(where_)?;
             for (k, v) in fields {
                 match v {
                     serde_json::Value::Number(_) if text_fields.contains(&k) => {

@@ -733,56 +733,61 @@ pub fn check_shard(s: &Shard, file: &str) -> Result<(), MergeError> {
             )));
         }
         for (p, (name, allowed)) in o.pairs.iter().zip(&r.pairs) {
-            // the sizes a run can give (a 1 m backlash, a run of 1e9 s); NaN: a lost mesh
-            let plausible = |v: f64, max: f64| v.is_nan() || v.abs() <= max;
-            // the time within the sample's horizon, its orbit the one that time falls in
-            let t_ok =
-                p.t_min_s.is_nan() || (0.0..=l.horizon_s * (1.0 + 1e-9)).contains(&p.t_min_s);
-            let last_orbit = (p.t_min_s.max(0.0) / l.period_s).floor() + 2.0;
-            let orbit_ok =
-                p.t_min_s.is_nan() || (p.orbit_number >= 1 && p.orbit_number as f64 <= last_orbit);
-            if !(plausible(p.min_backlash_um, MAX_BACKLASH_UM)
-                && plausible(p.min_margin_um, 2.0 * MAX_BACKLASH_UM)
-                && t_ok
-                && orbit_ok
-                && (0.0..=360.0).contains(&p.orbit_phase_deg))
-            {
-                return Err(sample(format!(
-                    "{name}: a value no run can give (min_backlash_um {}, min_margin_um {}, t_min_s {} in a horizon of {} s, orbit_number {}, orbit_phase_deg {})",
-                    crate::units::num(p.min_backlash_um),
-                    crate::units::num(p.min_margin_um),
-                    crate::units::num(p.t_min_s),
-                    crate::units::num(l.horizon_s),
-                    p.orbit_number,
-                    crate::units::num(p.orbit_phase_deg)
-                )));
-            }
-            let (violated, interference) =
-                PairOutcome::flags_from_values(p.min_backlash_um, *allowed);
-            if p.violated != violated || p.interference != interference {
-                return Err(sample(format!(
-                    "{name}: min_backlash_um = {} with a minimum of {} µm means violated = {violated}, interference = {interference}, but the shard says {} and {}",
-                    crate::units::num(p.min_backlash_um),
-                    crate::units::num(*allowed),
-                    p.violated,
-                    p.interference
-                )));
-            }
-            let margin = p.min_backlash_um - allowed;
-            let agrees = if p.min_backlash_um.is_nan() {
-                p.min_margin_um.is_nan()
-            } else {
-                (p.min_margin_um - margin).abs() <= 1e-6 * margin.abs().max(1.0)
-            };
-            if !agrees || p.min_backlash_um.is_infinite() {
-                return Err(sample(format!(
-                    "{name}: min_margin_um = {} does not follow from min_backlash_um = {} and the minimum {} µm",
-                    crate::units::num(p.min_margin_um),
-                    crate::units::num(p.min_backlash_um),
-                    crate::units::num(*allowed)
-                )));
-            }
+            check_pair(p, name, *allowed, l).map_err(sample)?;
         }
+    }
+    Ok(())
+}
+
+/// One pair's result in a shard: values a run can give within the shard's limits, and
+/// flags and margin that follow from them.
+fn check_pair(p: &PairOutcome, name: &str, allowed: f64, l: &ShardLimits) -> Result<(), String> {
+    // the sizes a run can give (a 1 m backlash, a run of 1e9 s); NaN: a lost mesh
+    let plausible = |v: f64, max: f64| v.is_nan() || v.abs() <= max;
+    // the time within the sample's horizon, its orbit the one that time falls in
+    let t_ok = p.t_min_s.is_nan() || (0.0..=l.horizon_s * (1.0 + 1e-9)).contains(&p.t_min_s);
+    let last_orbit = (p.t_min_s.max(0.0) / l.period_s).floor() + 2.0;
+    let orbit_ok =
+        p.t_min_s.is_nan() || (p.orbit_number >= 1 && p.orbit_number as f64 <= last_orbit);
+    if !(plausible(p.min_backlash_um, MAX_BACKLASH_UM)
+        && plausible(p.min_margin_um, 2.0 * MAX_BACKLASH_UM)
+        && t_ok
+        && orbit_ok
+        && (0.0..=360.0).contains(&p.orbit_phase_deg))
+    {
+        return Err(format!(
+            "{name}: a value no run can give (min_backlash_um {}, min_margin_um {}, t_min_s {} in a horizon of {} s, orbit_number {}, orbit_phase_deg {})",
+            crate::units::num(p.min_backlash_um),
+            crate::units::num(p.min_margin_um),
+            crate::units::num(p.t_min_s),
+            crate::units::num(l.horizon_s),
+            p.orbit_number,
+            crate::units::num(p.orbit_phase_deg)
+        ));
+    }
+    let (violated, interference) = PairOutcome::flags_from_values(p.min_backlash_um, allowed);
+    if p.violated != violated || p.interference != interference {
+        return Err(format!(
+            "{name}: min_backlash_um = {} with a minimum of {} µm means violated = {violated}, interference = {interference}, but the shard says {} and {}",
+            crate::units::num(p.min_backlash_um),
+            crate::units::num(allowed),
+            p.violated,
+            p.interference
+        ));
+    }
+    let margin = p.min_backlash_um - allowed;
+    let agrees = if p.min_backlash_um.is_nan() {
+        p.min_margin_um.is_nan()
+    } else {
+        (p.min_margin_um - margin).abs() <= 1e-6 * margin.abs().max(1.0)
+    };
+    if !agrees || p.min_backlash_um.is_infinite() {
+        return Err(format!(
+            "{name}: min_margin_um = {} does not follow from min_backlash_um = {} and the minimum {} µm",
+            crate::units::num(p.min_margin_um),
+            crate::units::num(p.min_backlash_um),
+            crate::units::num(allowed)
+        ));
     }
     Ok(())
 }

@@ -75,6 +75,21 @@ pub struct RunStart<'a> {
     pub probe: Probe<'a>,
 }
 
+/// A run from `t_s` to `t_end_s` must go forward; a real orbit is propagated as far as
+/// it goes (and no further): a decayed or diverging orbit fails before the run's first
+/// step, with its date.
+fn check_span(env: &crate::orbit::Environment, t_s: f64, t_end_s: f64) -> Result<(), SimError> {
+    if !(t_end_s.is_finite() && t_end_s > t_s) {
+        return Err(SimError::BadDuration(t_end_s - t_s));
+    }
+    match env {
+        crate::orbit::Environment::Dated(d) => {
+            d.orbit.check_until(t_end_s).map_err(SimError::Orbit)
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The pair's state, or a state with NaN backlash when there is no valid mesh.
 pub fn mesh_or_nan(pair: &GearPair, temps_k: &[f64]) -> MeshState {
     pair.evaluate(temps_k).unwrap_or(MeshState {
@@ -697,14 +712,7 @@ impl<'a> Setup<'a> {
         observer: &mut O,
         stop: Stop<'_>,
     ) -> Result<RunStats, SimError> {
-        if !(t_end_s.is_finite() && t_end_s > state.t_s) {
-            return Err(SimError::BadDuration(t_end_s - state.t_s));
-        }
-        // A real orbit is propagated as far as this run goes (and no further): a decayed
-        // or diverging orbit fails here, with its date, before any step.
-        if let crate::orbit::Environment::Dated(d) = &self.model.environment {
-            d.orbit.check_until(t_end_s).map_err(SimError::Orbit)?;
-        }
+        check_span(&self.model.environment, state.t_s, t_end_s)?;
         let model = self.model;
         let gears = self.gears;
         let settings = self.settings.clone();

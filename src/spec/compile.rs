@@ -925,7 +925,7 @@ fn unit_vector<const N: usize>(
     for (k, x) in arr.iter().enumerate() {
         cx.finite(&path.at(k), *x)?;
     }
-    Ok(direction(arr).ok_or_else(|| cx.err(path, "is the zero vector; it needs a direction"))?)
+    direction(arr).ok_or_else(|| cx.err(path, "is the zero vector; it needs a direction"))
 }
 
 /// `v` scaled to unit length, `None` for the zero vector. Scaled by its largest
@@ -939,6 +939,26 @@ pub fn direction<const N: usize>(v: [f64; N]) -> Option<[f64; N]> {
     let scaled = v.map(|x| x / m);
     let n = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
     Some(scaled.map(|x| x / n))
+}
+
+/// Two faces of one name would share one key path (`face.<name>.…`): refused, naming
+/// both, not renamed.
+fn unique_face_names(cx: &Cx, specs: &[FaceSpec]) -> Result<(), SpecError> {
+    let name = |f: &FaceSpec, i| {
+        f.name
+            .clone()
+            .unwrap_or_else(|| crate::spec::keys::face_name(&f.node, i))
+    };
+    for (i, f) in specs.iter().enumerate() {
+        if let Some(j) = (0..i).find(|&j| name(&specs[j], j) == name(f, i)) {
+            return Err(cx.clash(
+                &KeyPath::new("face").at(i).key("name"),
+                &KeyPath::new("face").at(j).key("name"),
+                format!("face `{}` is defined twice", name(f, i)),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `[attitude]` and `[[face]]`: each face a load on its node (direct Sun, albedo,
@@ -1045,22 +1065,7 @@ fn faces(
         }
     };
     let space = table.lookup(cx, &KeyPath::new("boundary"), SPACE)?;
-    // Two faces of one name would share one key path (`face.<name>.…`): refused, not
-    // renamed.
-    for (i, f) in specs.iter().enumerate() {
-        let name = |f: &FaceSpec, i| {
-            f.name
-                .clone()
-                .unwrap_or_else(|| crate::spec::keys::face_name(&f.node, i))
-        };
-        if let Some(j) = (0..i).find(|&j| name(&specs[j], j) == name(f, i)) {
-            return Err(cx.clash(
-                &KeyPath::new("face").at(i).key("name"),
-                &KeyPath::new("face").at(j).key("name"),
-                format!("face `{}` is defined twice", name(f, i)),
-            ));
-        }
-    }
+    unique_face_names(cx, &specs)?;
     for (i, f) in specs.into_iter().enumerate() {
         let p = KeyPath::new("face").elem(i, &keys.face[i]);
         let node = table.diffusion(cx, &p.key("node"), &f.node)?;
