@@ -712,7 +712,9 @@ fn cli_a_long_dated_scenario_propagates_only_what_is_needed() {
 fn cli_merge_refuses_other_builds_and_numbers_past_their_bounds() {
     let dir = tmpdir("r4-merge");
     let text = reference_text()
-        + "\n[[dispersion]]\npath = \"gear_pair.mesh.pinion.tooth_thinning_um\"\ndistribution = \"uniform\"\nmin = 16.0\nmax = 23.0\n";
+        + "\n[[dispersion]]\npath = \"gear_pair.mesh.pinion.tooth_thinning_um\"\ndistribution = \"uniform\"\nmin = 16.0\nmax = 23.0\n"
+        // a dispersed altitude: each sample's period and horizon differ from the nominal
+        + "\n[[dispersion]]\npath = \"orbit.altitude_m\"\ndistribution = \"uniform\"\nmin = 300e3\nmax = 1500e3\n";
     std::fs::write(dir.join("m.toml"), text).unwrap();
     for i in 0..2 {
         let out = run_in(
@@ -735,8 +737,21 @@ fn cli_merge_refuses_other_builds_and_numbers_past_their_bounds() {
         );
         assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     }
+    // the shards of this build merge (with the altitude dispersed, the nominal period
+    // and horizon refused valid samples)
     let ok = run_in(&dir, &["merge", "s0.json", "s1.json"]);
     assert!(matches!(ok.status.code(), Some(0 | 1)), "{}", stderr(&ok));
+    // a shard of the build before (no tool, no limits) is named as such
+    let mut old: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s0.json")).unwrap()).unwrap();
+    old.as_object_mut().unwrap().remove("tool");
+    old.as_object_mut().unwrap().remove("limits");
+    std::fs::write(dir.join("old.json"), old.to_string()).unwrap();
+    assert_error(
+        "old",
+        &run_in(&dir, &["merge", "old.json", "s1.json"]),
+        &["old.json", "written by an older orbitlash"],
+    );
     let s0: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("s0.json")).unwrap()).unwrap();
     assert!(s0["tool"].as_str().unwrap().starts_with("orbitlash "));
@@ -874,13 +889,23 @@ fn cli_messages_name_the_right_thing() {
     let text = reference_text();
     let at = text.find("reference_temperature_k = ").unwrap();
     let end = at + text[at..].find('\n').unwrap();
-    let hot = format!(
-        "{}reference_temperature_k = 5000{}",
-        &text[..at],
-        &text[end..]
+    // 5000 K is outside the temperatures a scenario may give, and the message says so
+    // (it said "within 0 … 5000 K")
+    let with_t = |t: &str| {
+        format!(
+            "{}reference_temperature_k = {t}{}",
+            &text[..at],
+            &text[end..]
+        )
+    };
+    assert_check_refuses(
+        &dir,
+        "hot",
+        &with_t("5000"),
+        &["reference_temperature_k", "above 0 and below 5000 K"],
     );
-    std::fs::write(dir.join("hot.toml"), hot).unwrap();
-    let out = run_in(&dir, &["check", "hot.toml"]);
+    std::fs::write(dir.join("warm.toml"), with_t("4999.9")).unwrap();
+    let out = run_in(&dir, &["check", "warm.toml"]);
     assert!(
         !stderr(&out).contains("reference_temperature_k"),
         "{}",
@@ -1013,4 +1038,126 @@ fn cli_an_interrupted_margins_run_says_so() {
         );
         assert!(!dir.join("m.json").exists());
     }
+}
+
+/// Per topic of the log at `path`, its messages' log times (the file as written, not
+/// joined into rows).
+fn raw_times(path: &Path) -> std::collections::BTreeMap<String, Vec<u64>> {
+    let bytes = std::fs::read(path).unwrap();
+    let scan = orbitlash::io::mcap_scan::scan(&bytes).unwrap();
+    let mut out: std::collections::BTreeMap<String, Vec<u64>> = Default::default();
+    for m in &scan.messages {
+        let topic = scan.channels[&m.header.channel_id].topic.clone();
+        out.entry(topic).or_default().push(m.header.log_time);
+    }
+    out
+}
+
+// 3, continued: the log's messages stay in time order with the samples added, none
+// twice (also when the smallest falls on the last step, with two gear pairs); an
+// interrupted run's log reaches its last step and its end record says "incomplete",
+// not "pass".
+#[test]
+fn cli_logs_stay_in_order_and_interrupted_runs_are_incomplete() {
+    let dir = tmpdir("r4-order");
+    let two_pairs = {
+        let text = reference_text();
+        let at = text.find("[[gear_pair]]").expect("a gear pair");
+        let pair = &text[at..];
+        let end = pair[1..].find("\n[[").map_or(pair.len(), |e| e + 1);
+        let second = pair[..end].replacen("name = \"mesh\"", "name = \"stage2\"", 1);
+        assert!(
+            second.contains("stage2"),
+            "the pair has a name = \"mesh\" line"
+        );
+        format!("{text}\n{second}")
+    };
+    std::fs::write(dir.join("two.toml"), two_pairs).unwrap();
+    for (scenario, orbits, every) in [
+        (None, "0.2", "600s"),
+        (None, "6", "3600s"),
+        (Some("two.toml"), "3", "1000s"),
+        (None, "2", "1"),
+    ] {
+        let mut args = vec![
+            "run",
+            "--quiet",
+            "--orbits",
+            orbits,
+            "--log-every",
+            every,
+            "--out",
+            "o.mcap",
+        ];
+        args.extend(scenario);
+        let out = run_in(&dir, &args);
+        assert!(matches!(out.status.code(), Some(0 | 1)), "{}", stderr(&out));
+        let times = raw_times(&dir.join("o.mcap"));
+        assert!(times.contains_key("/thermal/temperature"));
+        for (topic, t) in times {
+            // samples: one message per time; events: several may share a time
+            let ok = if topic == "/events" {
+                t.windows(2).all(|w| w[0] <= w[1])
+            } else {
+                t.windows(2).all(|w| w[0] < w[1])
+            };
+            assert!(
+                ok,
+                "{scenario:?} {orbits} {every}: {topic} out of order or twice"
+            );
+        }
+    }
+    // interrupted
+    let mut child = std::process::Command::new(bin_path())
+        .args([
+            "run",
+            "--quiet",
+            "--orbits",
+            "20000",
+            "--log-every",
+            "3600s",
+            "--force",
+            "--out",
+            "i.mcap",
+        ])
+        .current_dir(&dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
+    assert_eq!(child.wait().unwrap().code(), Some(2));
+    let t = orbitlash::io::mcap_read::read_log(&dir.join("i.mcap")).unwrap();
+    let end = &t.metadata["orbitlash.run_end"];
+    assert_eq!(end["status"], "interrupted");
+    assert_eq!(end["verdict"], "incomplete");
+    let t_end: f64 = end["t_end_s"].parse().unwrap();
+    let last = t.rows.last().unwrap().0 as f64 * 1e-9;
+    assert!(
+        (last - t_end).abs() < 1e-6,
+        "the log ends at {last}, the run at {t_end}"
+    );
+    let p = run_in(&dir, &["plot", "i.mcap", "--out", "i.svg"]);
+    assert_eq!(p.status.code(), Some(0), "{}", stderr(&p));
+    let svg = std::fs::read_to_string(dir.join("i.svg")).unwrap();
+    assert!(svg.contains("INCOMPLETE") && !svg.contains("PASS"));
+    // a run whose CSV has one row still draws its figure
+    let out = run_in(
+        &dir,
+        &[
+            "run",
+            "--quiet",
+            "--orbits",
+            "0.5",
+            "--no-log",
+            "--csv",
+            "one.csv",
+            "--set",
+            "run.output_interval_s=1e6",
+            "--plot",
+            "one.svg",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }

@@ -41,7 +41,7 @@ fn shard_texts() -> [String; 2] {
             shard: (i as u64, 2),
             range: (range.start, range.end),
             tool: "orbitlash test".into(),
-            limits: ShardLimits::new(model.scenario(), &plan, horizon),
+            limits: ShardLimits::new(&model, &plan, horizon, range.clone()),
             outcomes,
         })
         .unwrap()

@@ -169,4 +169,29 @@ fn core_mean_of_a_shared_stamp_counts_readings_not_rows() {
     let r = read(text, &mean).unwrap();
     assert_eq!(r.values[0], vec![Some(15.0), Some(7.0)]);
     assert_eq!(r.values[1], vec![Some(6.0), None]);
+    // each row of a stamp is compared with the one before it: 10, 20, 10 is a mean of
+    // three readings (the third equals the first, not the second)
+    let text = "UTC,a,Battery mV\n\
+                2016-02-04 00:00:00,10,1\n\
+                2016-02-04 00:00:00,20,1\n\
+                2016-02-04 00:00:00,10,1\n\
+                2016-02-04 00:01:00,5,2\n\
+                2016-02-04 00:01:00,5,2\n";
+    let r = read(text, &mean).unwrap();
+    assert!(
+        (r.values[0][0].unwrap() - 40.0 / 3.0).abs() < 1e-12,
+        "{:?}",
+        r.values[0]
+    );
+    // an equal repeat of a stamp is one reading
+    assert_eq!(r.values[0][1], Some(5.0));
+    // a fill row (the row before repeated) holds no reading: readings merged into its
+    // stamp average among themselves
+    let text = "UTC,a,Battery mV\n\
+                2016-02-04 00:00:00,1,7\n\
+                2016-02-04 00:01:00,1,7\n\
+                2016-02-04 00:01:00,4,8\n\
+                2016-02-04 00:01:00,6,9\n";
+    let r = read(text, &mean).unwrap();
+    assert_eq!(r.values[0], vec![Some(1.0), Some(5.0)]);
 }

@@ -181,7 +181,12 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
             shard: (i, n),
             range: (range.start, range.end),
             tool: orbitlash::margins::build_identity(),
-            limits: orbitlash::margins::ShardLimits::new(sc, &plan, horizon),
+            limits: orbitlash::margins::ShardLimits::new(
+                &loaded.model,
+                &plan,
+                horizon,
+                range.clone(),
+            ),
             outcomes,
         };
         let p = a.json.as_deref().expect("--shard requires --json");

@@ -129,7 +129,7 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
         check_values(path, line, &headers, &row)?;
         rows.push(row);
     }
-    if rows.len() < 2 || rows[0][0] == rows[rows.len() - 1][0] {
+    if rows.len() >= 2 && rows[0][0] == rows[rows.len() - 1][0] {
         bail!(
             "{}: time_s does not advance ({} row(s), all at t = {} s): nothing to draw against time",
             path.display(),

@@ -224,6 +224,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             .map(|g| g.min_backlash_m)
             .collect::<Vec<_>>(),
         eclipses.closed_at(stats.t_end_s),
+        !stats.interrupted,
     );
 
     let window = if stats.t_end_s > stats_obs.window_start_s() {
@@ -453,6 +454,21 @@ fn bounded(
     );
     if log.is_some() {
         est.wall_s *= 1.35;
+    }
+    // A real orbit's table is kept for the whole run.
+    let table_bytes = match &sc.thermal.environment {
+        orbitlash::orbit::Environment::Dated(_) => {
+            t_end_s / 86_400.0 * orbitlash::orbit::tle::TABLE_BYTES_PER_DAY
+        }
+        _ => 0.0,
+    };
+    if table_bytes > super::estimate::max_memory_bytes() && !a.force {
+        anyhow::bail!(
+            "the run's orbit table would take about {:.1} GB of memory ({:.0} days of propagation), more than the {:.1} GB allowed: shorten it, or pass --force",
+            table_bytes / 1e9,
+            t_end_s / 86_400.0,
+            super::estimate::max_memory_bytes() / 1e9
+        );
     }
     if (est.steps > MAX_STEPS || est.wall_s > super::estimate::MAX_WALL_S) && !a.force {
         anyhow::bail!(

@@ -294,8 +294,6 @@ pub struct McapLog {
     eclipses: EclipseWindows,
     /// Each pair's smallest allowed backlash, m.
     min_allowed_m: Vec<f64>,
-    /// The run's planned end, s: its last step is always logged.
-    t_end_s: f64,
     /// Time of the last sample pushed, s.
     last_logged_s: f64,
     /// Per pair, the sample at a new smallest backlash found since it was last logged,
@@ -304,6 +302,11 @@ pub struct McapLog {
     held: Vec<Option<Sample>>,
     /// Each pair's `t_min_s` before the step (scratch).
     t_min_before: Vec<f64>,
+    /// The last step's end values, and the model and gears they are completed with
+    /// when the run ends (completed, interrupted or failed) and the log has no sample
+    /// there yet.
+    last_end: Sample,
+    end_model: Option<Box<(ThermalModel, Vec<GearPair>)>>,
 }
 
 /// Seconds to MCAP nanoseconds (never negative).
@@ -491,10 +494,11 @@ impl McapLog {
             mesh: MeshStats::last(f64::INFINITY),
             eclipses: EclipseWindows::default(),
             min_allowed_m: Vec::new(),
-            t_end_s: f64::INFINITY,
             last_logged_s: f64::NEG_INFINITY,
             held: Vec::new(),
             t_min_before: Vec::new(),
+            last_end: Sample::default(),
+            end_model: None,
         })
     }
 
@@ -518,12 +522,34 @@ impl McapLog {
     }
 
     /// The end of the run as the `run_end` record says it (so far, before the end).
-    pub fn run_end(&self, t_end_s: f64) -> RunEnd {
+    pub fn run_end(&self, t_end_s: f64, complete: bool) -> RunEnd {
         RunEnd::new(
             &self.mesh.run_pairs,
             &self.min_allowed_m,
             self.eclipses.closed_at(t_end_s),
+            complete,
         )
+    }
+
+    /// The held samples, then the last step's end (completed now) unless a sample is
+    /// there: whatever ends the run, the log reaches its last step.
+    fn release_end(&mut self) {
+        self.release_held();
+        let end = &mut self.last_end;
+        if end.t_s > self.last_logged_s
+            && let Some(m) = &self.end_model
+        {
+            let work = std::cell::RefCell::new(crate::run::sim::ProbeWork::default());
+            let probe = crate::run::sim::Probe {
+                model: &m.0,
+                gears: &m.1,
+                work: &work,
+            };
+            let mesh = std::mem::take(&mut end.mesh);
+            probe.complete(Want::ALL, Some(&mesh), end);
+            insert_sample(&mut self.batch, end);
+            self.last_logged_s = end.t_s;
+        }
     }
 
     fn send_batch(&mut self) -> ObserverResult {
@@ -534,6 +560,7 @@ impl McapLog {
     fn release_held(&mut self) {
         for k in 0..self.held.len() {
             if let Some(s) = self.held[k].take() {
+                self.last_logged_s = self.last_logged_s.max(s.t_s);
                 insert_sample(&mut self.batch, &s);
             }
         }
@@ -546,7 +573,7 @@ impl McapLog {
     /// not finite); the error event and `run_end.t_end_s` carry it.
     pub fn close_failed(&mut self, t_s: f64, reason: &str) -> Result<PathBuf, OutputError> {
         let t_s = if t_s.is_finite() { t_s } else { self.last_t_s };
-        self.release_held();
+        self.release_end();
         self.batch.items.push(Item::Event {
             t_s,
             level: 4,
@@ -565,7 +592,7 @@ impl McapLog {
         .into_iter()
         .map(|(k, v)| (k.to_string(), v))
         .collect();
-        end.extend(self.run_end(t_s).to_metadata());
+        end.extend(self.run_end(t_s, status == "complete").to_metadata());
         if let Err(e) = self.send_batch()
             && matches!(self.state, State::Closed(false))
         {
@@ -1107,10 +1134,11 @@ impl Observer for McapLog {
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.
         self.last_t_s = r.t_start_s;
-        self.t_end_s = r.t_end_s;
         self.mesh.on_start(r)?;
         self.eclipses.on_start(r)?;
         self.min_allowed_m = r.gears.iter().map(|g| g.min_backlash_m).collect();
+        self.end_model = Some(Box::new((r.model.clone(), r.gears.to_vec())));
+        self.last_end = Sample::default();
         self.held = vec![None; r.gears.len()];
         self.sampler = Sampler::new(self.cadence.cadence(), Want::ALL);
         if let Some(s) = self.sampler.start(r) {
@@ -1163,15 +1191,7 @@ impl Observer for McapLog {
             *last = s.t_s;
             Ok(())
         })?;
-        if t1 >= self.t_end_s {
-            self.release_held();
-            if self.last_logged_s != t1 {
-                let mut s = Sample::default();
-                step.sample_end(Want::ALL, &mut s);
-                push_sample(&mut self.batch, &s);
-                self.last_logged_s = t1;
-            }
-        }
+        step.end_state_into(&mut self.last_end);
         let n = self.batch.items.len();
         if n >= BATCH_SAMPLES && (self.held.iter().all(Option::is_none) || n >= MAX_HELD_BATCH) {
             self.release_held();
@@ -1193,7 +1213,7 @@ impl Observer for McapLog {
 
     fn on_finish(&mut self, stats: &RunStats) -> ObserverResult {
         self.mesh.on_finish(stats)?;
-        self.release_held();
+        self.release_end();
         let (status, detail) = if stats.interrupted {
             self.batch.items.push(Item::Event {
                 t_s: stats.t_end_s,

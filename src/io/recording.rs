@@ -330,15 +330,17 @@ impl Recording {
                     }
                     if !same_cells {
                         mean_into(&mut rec.values, &values, &mut averaged);
+                        // the next row of the stamp is compared with this one
+                        remember(&mut previous, &row, time_col);
                     }
                     rec.merged_rows.push(line);
                     continue;
                 }
             }
-            for (n, v) in averaged.iter_mut().zip(&values) {
-                *n = if v.is_some() { 1.0 } else { 0.0 };
-            }
             let fill = fmt.repeated_rows_are_fill && !rec.time_s.is_empty() && same_cells;
+            for (n, v) in averaged.iter_mut().zip(&values) {
+                *n = if v.is_some() && !fill { 1.0 } else { 0.0 };
+            }
             if fill {
                 rec.fill_rows.push(line);
             }
@@ -347,13 +349,7 @@ impl Recording {
             }
             rec.time_s.push(t);
             rec.rows_at.push(line);
-            previous.clear();
-            previous.extend(
-                row.iter()
-                    .enumerate()
-                    .filter(|&(k, _)| k != time_col)
-                    .map(|(_, c)| c.to_string()),
-            );
+            remember(&mut previous, &row, time_col);
         }
         if rec.time_s.is_empty() {
             return Err(RecordingError::File {
@@ -392,17 +388,18 @@ impl<'de> serde::Deserialize<'de> for UniqueObject {
                 self,
                 mut map: A,
             ) -> Result<UniqueObject, A::Error> {
-                let mut fields: Vec<(String, serde_json::Value)> = Vec::new();
+                // keys in sorted order, as serde_json's own map gives them
+                let mut fields = std::collections::BTreeMap::new();
                 while let Some((k, v)) = map.next_entry::<String, serde_json::Value>()? {
-                    if fields.iter().any(|(f, _)| *f == k) {
+                    if fields.contains_key(&k) {
                         return Err(serde::de::Error::custom(format!(
                             "field `{}` is given twice",
                             crate::units::shown(&k)
                         )));
                     }
-                    fields.push((k, v));
+                    fields.insert(k, v);
                 }
-                Ok(UniqueObject(fields))
+                Ok(UniqueObject(fields.into_iter().collect()))
             }
         }
         d.deserialize_map(Visit)
@@ -421,6 +418,17 @@ fn check_lengths(bytes: &[u8], file: &str) -> Result<(), RecordingError> {
             "is not a readable MCAP file (damaged or cut off): the record at byte {offset} is malformed: {m} (a file cut off by a killed run is recovered by `orbitlash recover`)"
         ),
     })
+}
+
+/// Keeps a row's cells (the time's excepted) for comparing the next row with it.
+fn remember(previous: &mut Vec<String>, row: &csv::StringRecord, time_col: usize) {
+    previous.clear();
+    previous.extend(
+        row.iter()
+            .enumerate()
+            .filter(|&(k, _)| k != time_col)
+            .map(|(_, c)| c.to_string()),
+    );
 }
 
 /// The readings `values` of a row sharing the last row's time stamp, averaged into that

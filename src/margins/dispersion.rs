@@ -105,9 +105,12 @@ impl Distribution {
     /// The values a draw can take: a bounded distribution's bounds, an unbounded one's
     /// quantiles at 1e-12 and 1 − 1e-12 (no sampling plan draws further out).
     pub fn support(&self) -> (f64, f64) {
+        // the farthest any draw reaches: u = 2^-54 (half an ulp of 1) and its mirror
+        let z = -std_normal().inverse_cdf(f64::EPSILON / 4.0);
         match self {
-            Distribution::Normal { .. } | Distribution::LogNormal { .. } => {
-                (self.quantile(1e-12), self.quantile(1.0 - 1e-12))
+            Distribution::Normal { mean, sd } => (mean - z * sd, mean + z * sd),
+            Distribution::LogNormal { median, sigma } => {
+                (median * (-z * sigma).exp(), median * (z * sigma).exp())
             }
             Distribution::TruncatedNormal { min, max, .. }
             | Distribution::Uniform { min, max }

@@ -524,14 +524,30 @@ pub struct ShardLimits {
 }
 
 impl ShardLimits {
-    pub fn new(sc: &crate::spec::scenario::Scenario, plan: &Plan, horizon: Horizon) -> ShardLimits {
-        let period_s = sc.period_s();
-        ShardLimits {
-            horizon_s: match horizon {
+    /// Over the samples `range` of `plan` on `nominal`: the longest horizon and the
+    /// shortest period any of them has (a dispersed altitude changes both), each
+    /// sample's model made as `run_sample` makes it (a few µs each).
+    pub fn new(nominal: &Model, plan: &Plan, horizon: Horizon, range: Range<u64>) -> ShardLimits {
+        let of = |sc: &crate::spec::scenario::Scenario| {
+            let period_s = sc.period_s();
+            let horizon_s = match horizon {
                 Horizon::Orbits(o) => o * period_s,
                 Horizon::Mission => sc.run.duration_s,
                 Horizon::SteadyState => period_s,
-            },
+            };
+            (horizon_s, period_s)
+        };
+        let (mut horizon_s, mut period_s) = of(nominal.scenario());
+        let mut model = nominal.clone();
+        for k in range.filter(|_| !plan.dispersions.is_empty()) {
+            if plan.apply(&mut model, k).is_ok() {
+                let (h, p) = of(model.scenario());
+                horizon_s = horizon_s.max(h);
+                period_s = period_s.min(p);
+            }
+        }
+        ShardLimits {
+            horizon_s,
             period_s,
             supports: plan
                 .dispersions
@@ -603,7 +619,14 @@ pub fn read_shard(text: &str, file: &str) -> Result<Shard, MergeError> {
         file: file.to_string(),
         why,
     };
-    let s: Shard = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+    let s: Shard = serde_json::from_str(text).map_err(|e| {
+        let m = e.to_string();
+        bad(if m.contains("missing field `tool`") || m.contains("missing field `limits`") {
+            format!("{m}: written by an older orbitlash, which named no build; run the shard again with this one")
+        } else {
+            m
+        })
+    })?;
     check_shard(&s, file)?;
     Ok(s)
 }
@@ -825,7 +848,10 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
             ("the scenario's name", r.scenario != id.scenario),
             ("the gear pairs", r.pairs != id.pairs),
             ("the tool build", s.tool != first.tool),
-            ("the limits", s.limits != first.limits),
+            (
+                "the dispersions' supports",
+                s.limits.supports != first.limits.supports,
+            ),
         ]
         .into_iter()
         .find(|(_, d)| *d);

@@ -262,11 +262,13 @@ impl DatedEnvironment {
         (self.earth_radius_m / a).powi(2)
     }
 
-    /// Sets the run's length. Nothing is propagated here: each command propagates
-    /// what it uses, lazily (`check` the start, `environment` its orbits), and a run
-    /// all of its length before its first step (`Setup::run`), where a decayed or
-    /// diverging orbit fails with its date.
+    /// Sets the run's length, checking one SGP4 point a day over it (a decayed or
+    /// diverging orbit fails now, with its date). Nothing is tabulated here: each
+    /// command tabulates what it uses, lazily (`check` the start, `environment` its
+    /// orbits), and a run all of its length before its first step (`Setup::run`).
     pub fn set_horizon_s(&mut self, horizon_s: f64) -> Result<(), String> {
+        // a decayed orbit is still found now, from one SGP4 point a day
+        self.orbit.check_daily(horizon_s)?;
         self.horizon_s = horizon_s;
         Ok(())
     }

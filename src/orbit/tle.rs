@@ -29,6 +29,9 @@ pub const NODE_SPACING_S: f64 = 60.0;
 /// Samples per cached chunk (one day).
 const CHUNK_NODES: usize = 1440;
 const CHUNK_S: f64 = NODE_SPACING_S * CHUNK_NODES as f64;
+/// Memory the propagation's table takes per simulated day, bytes (a run keeps every
+/// day it has propagated).
+pub const TABLE_BYTES_PER_DAY: f64 = ((CHUNK_NODES + 1) * 10 * 8) as f64;
 
 /// Days between a TLE's epoch and the start of a run beyond which `check` warns: a
 /// LEO TLE's along-track error grows to tens of km within a few days.
@@ -303,6 +306,17 @@ impl TleOrbit {
             *x /= n;
         }
         out
+    }
+
+    /// One SGP4 point a day from the start to `t_end_s` (and at it): a decayed or
+    /// diverging orbit found cheaply (a few ms for a 30-year run), before anything is
+    /// tabulated; the first failure with its time.
+    pub fn check_daily(&self, t_end_s: f64) -> Result<(), String> {
+        let days = (t_end_s.max(0.0) / 86_400.0).ceil() as u64;
+        for d in 0..=days {
+            self.propagate((d as f64 * 86_400.0).min(t_end_s.max(0.0)))?;
+        }
+        Ok(())
     }
 
     /// Propagates every cached day up to `t_end_s`: the first failure (a decayed or

@@ -229,6 +229,10 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
     let fails = match s.end.as_ref().map(|e| e.verdict.as_str()) {
         Some("pass") => false,
         Some("fail") => true,
+        Some("incomplete") => {
+            return "  —  INCOMPLETE: the run stopped before its end (no pair below its minimum so far)"
+                .to_string();
+        }
         Some(_) => return String::new(),
         None if s.allowed_um.is_empty() => return String::new(),
         None => smallest

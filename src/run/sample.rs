@@ -89,7 +89,7 @@ impl<'a> Probe<'a> {
     }
 
     /// Fills everything but the temperatures (already in `out`) at `out.t_s`.
-    fn complete(&self, want: Want, mesh: Option<&[MeshState]>, out: &mut Sample) {
+    pub(crate) fn complete(&self, want: Want, mesh: Option<&[MeshState]>, out: &mut Sample) {
         let env_model = &self.model.environment;
         let env = env_model.state_with(out.t_s, out.sunlit);
         out.env = Some(env);
@@ -189,6 +189,18 @@ impl RunStart<'_> {
 }
 
 impl StepView<'_> {
+    /// The step's end values a sample is completed from later ([`Probe::complete`]
+    /// with the same model): time, temperatures, switch states, sunlit and mesh
+    /// states, copied (no evaluation).
+    pub fn end_state_into(&self, out: &mut Sample) {
+        out.t_s = self.t1_s();
+        out.temperatures_k.clear();
+        out.temperatures_k.extend_from_slice(self.temps1_k());
+        self.switches_into(out);
+        out.mesh.clear();
+        out.mesh.extend_from_slice(self.mesh);
+    }
+
     /// The step's end as a sample (the step's own end values, not interpolated).
     pub fn sample_end(&self, want: Want, out: &mut Sample) {
         out.t_s = self.t1_s();

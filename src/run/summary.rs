@@ -814,7 +814,8 @@ impl Observer for DailyStats {
 /// which see inside every step), not from whichever samples a log or CSV kept.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunEnd {
-    /// "pass", "fail", or "none" (no gear pair).
+    /// "pass", "fail", "none" (no gear pair), or "incomplete" (the run stopped before
+    /// its end with no pair failing so far).
     pub verdict: String,
     pub pairs: Vec<PairEnd>,
     /// Eclipse windows (entry, exit), s since t = 0; one still open at the end closes
@@ -835,13 +836,18 @@ pub struct PairEnd {
 
 impl RunEnd {
     /// From the run-wide pair statistics, each pair's smallest allowed backlash (m, in
-    /// the same order) and the eclipse windows.
-    pub fn new(pairs: &[PairStats], min_allowed_m: &[f64], eclipses_s: Vec<[f64; 2]>) -> RunEnd {
+    /// the same order), the eclipse windows and whether the run reached its end.
+    pub fn new(
+        pairs: &[PairStats],
+        min_allowed_m: &[f64],
+        eclipses_s: Vec<[f64; 2]>,
+        complete: bool,
+    ) -> RunEnd {
         let finite = |v: f64| v.is_finite().then_some(v);
-        let verdict = if pairs.is_empty() {
-            "none"
-        } else {
-            PassFail::all(pairs.iter().map(|p| p.verdict().passes())).as_str()
+        let verdict = match PassFail::all(pairs.iter().map(|p| p.verdict().passes())) {
+            _ if pairs.is_empty() => "none",
+            PassFail::Pass if !complete => "incomplete",
+            v => v.as_str(),
         };
         RunEnd {
             verdict: verdict.to_string(),

@@ -193,12 +193,12 @@ impl Cx {
 
     fn temperature(&self, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
         self.finite(path, v)?;
-        if v > 0.0 && v <= 5000.0 {
+        if v > 0.0 && v < 5000.0 {
             Ok(v)
         } else {
             Err(self.err(
                 path,
-                format!("is a temperature in kelvin and must be above 0 and at most 5000 K (got {v}; °C values need + 273.15)"),
+                format!("is a temperature in kelvin and must be above 0 and below 5000 K (got {v}; °C values need + 273.15)"),
             ))
         }
     }
