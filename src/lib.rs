@@ -40,9 +40,12 @@
 //! setup.run(&mut state, 3.0 * sc.period_s(), &mut (), Stop::default()).unwrap();
 //! ```
 //!
-//! Physics (`orbit`, `thermal`, `gear`, `sim`, `sample`, `sensor`, `summary`, `spec`,
-//! `model`, `validate`) knows nothing of files or the CLI; `io` holds everything that
-//! reads or writes files; `cli` maps commands to the pipeline. See
+//! The physics (`orbit`, `thermal`, `gear`), the runs over it (`run`: `sim`, `sample`,
+//! `sensor`, `summary`, `steady`), the scenario and its checks (`spec`: `compile`,
+//! `model`, `validate`), the analyses (`margins`, `diagnose`) and the figures (`plot`)
+//! know nothing of files or the CLI; `io` holds everything that reads or writes files;
+//! the binary's `cli` maps commands to the pipeline; `constants`, `units` and `numeric`
+//! are the leaves. See
 //! `docs/ARCHITECTURE.md` for the module map and invariants.
 
 /// An error and its causes on one line, each once (a cause its message already quotes
@@ -66,6 +69,7 @@ pub mod diagnose;
 pub mod gear;
 pub mod io;
 pub mod margins;
+pub mod numeric;
 pub mod orbit;
 pub mod plot;
 pub mod recording;

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use clap::Args;
+use orbitlash::constants::ZERO_CELSIUS_K;
 
 use orbitlash::gear::{CenterDistance, DeformedGear, GearPair, MeshState};
 use orbitlash::run::summary::PassFail;
@@ -40,7 +41,13 @@ pub struct BacklashArgs {
 
 fn finite(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > -273.15 && v <= 9726.85 => Ok(v),
+        Ok(v)
+            if v.is_finite()
+                && v > -ZERO_CELSIUS_K
+                && v <= orbitlash::run::sim::MAX_TEMPERATURE_K - ZERO_CELSIUS_K =>
+        {
+            Ok(v)
+        }
         _ => Err(format!(
             "`{s}` is not a temperature in °C above −273.15 and at most 9726.85 (0 … 10 000 K)"
         )),

@@ -152,7 +152,7 @@ fn gear_section(o: &mut String, sc: &Scenario) -> Result<()> {
             o,
             "\ngear pair {} at assembly ({:.2} °C)",
             pair.name,
-            pair.reference_temperature_k - 273.15
+            pair.reference_temperature_k - orbitlash::constants::ZERO_CELSIUS_K
         );
         outln!(
             o,

@@ -374,8 +374,6 @@ pub struct Hints {
     pub heater_on_k: Vec<Option<f64>>,
 }
 
-const C_TO_K: f64 = 273.15;
-
 /// A thermostat is fitted from its best ranked points, this many: one long on-period
 /// and several short cycles are separate basins of its cost (measured in
 /// `docs/performance.md`).
@@ -552,7 +550,7 @@ impl<'a> Generator<'a> {
         let pp = path_of(&base, "heater", &hn, "power_w")?;
         let pon = path_of(&base, "heater", &hn, "on_k")?;
         let poff = path_of(&base, "heater", &hn, "off_k")?;
-        let on_c = on_k - C_TO_K;
+        let on_c = on_k - crate::constants::ZERO_CELSIUS_K;
         let mut starts = Vec::new();
         for p in [1.0, 3.0, 8.0] {
             for h in [2.0, 5.0] {
@@ -571,12 +569,12 @@ impl<'a> Generator<'a> {
                 Setter::scaled(pp, 0, 1.0),
                 Setter {
                     path: pon,
-                    constant: C_TO_K,
+                    constant: crate::constants::ZERO_CELSIUS_K,
                     terms: vec![(1, 1.0)],
                 },
                 Setter {
                     path: poff,
-                    constant: C_TO_K,
+                    constant: crate::constants::ZERO_CELSIUS_K,
                     terms: vec![(1, 1.0), (2, 1.0)],
                 },
             ],

@@ -130,7 +130,7 @@ pub struct Options {
     pub holdout_orbits: Option<usize>,
     /// An effect must lower BIC (χ² + k ln n with the estimated noise) by more than
     /// this on the training orbits. Calibrated on null recordings
-    /// (`tests/val_diagnose_null.rs`).
+    /// (`tests/val_own_cases_diagnose.rs`, `val_generator_null_recordings_no_false_discoveries`).
     pub bic_margin: f64,
     /// … and lower the held-out χ² by more than this.
     pub holdout_margin: f64,

@@ -1,7 +1,7 @@
 //! Thermal strain laws ε(T) = ΔL/L relative to the assembly (zero-strain) temperature.
 //! Non-linear laws are integrated as strains, never as α × ΔT with a mean α.
 
-use crate::orbit::table::interpolate;
+use crate::numeric::interpolate;
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum StrainLaw {

@@ -9,8 +9,8 @@
 use crate::diagnose::Diagnosis;
 use std::collections::BTreeMap;
 
+use super::log_schema::ns;
 use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
-use super::mcap_log::ns;
 use super::protobuf::Encoder;
 
 /// The side-by-side file's bytes (the caller writes them with the command's other

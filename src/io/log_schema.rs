@@ -53,23 +53,12 @@ impl MessageType {
 
 pub const PACKAGE: &str = "orbitlash";
 
-/// A field name made of ASCII letters, digits and `_`, not starting with a digit.
-pub fn identifier(name: &str) -> String {
-    let mut s: String = name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() {
-                c.to_ascii_lowercase()
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if s.chars().next().is_none_or(|c| c.is_ascii_digit()) {
-        s.insert(0, '_');
-    }
-    s
+/// Seconds to MCAP nanoseconds (never negative).
+pub(crate) fn ns(t_s: f64) -> u64 {
+    (t_s * 1e9).round().max(0.0) as u64
 }
+
+pub use crate::units::identifier;
 
 fn field(f: &Field) -> FieldDescriptorProto {
     let (ty, label, type_name) = match &f.kind {

@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 use sha2::{Digest, Sha256};
 
 use super::atomic::{AtomicFile, OutputError, OutputPolicy};
-use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
+use super::log_schema::{Kind, MessageType, descriptor_set, identifier, ns};
 use super::protobuf::Encoder;
 use super::scene;
 use crate::gear::{GearPair, MeshState};
@@ -309,14 +309,9 @@ pub struct McapLog {
     end_model: Option<Box<(ThermalModel, Vec<GearPair>)>>,
 }
 
-/// Seconds to MCAP nanoseconds (never negative).
 /// Key of the provenance record holding the log time of t = 0 (ns since the Unix
 /// epoch) in a dated scenario's log; absent, log times count from t = 0.
 pub const TIME_ORIGIN_KEY: &str = "time_origin_unix_ns";
-
-pub(crate) fn ns(t_s: f64) -> u64 {
-    (t_s * 1e9).round().max(0.0) as u64
-}
 
 fn out_err(path: &Path, e: mcap::McapError) -> OutputError {
     OutputError::mcap(path, e)

@@ -131,7 +131,7 @@ pub fn timestamp_at(origin_ns: u64, t_s: f64) -> Timestamp {
     if origin_ns == 0 {
         return timestamp(t_s);
     }
-    let total = origin_ns + super::mcap_log::ns(t_s);
+    let total = origin_ns + super::log_schema::ns(t_s);
     Timestamp::new(
         (total / 1_000_000_000).min(u64::from(u32::MAX)) as u32,
         (total % 1_000_000_000) as u32,

@@ -1,5 +1,7 @@
 //! Piecewise-linear tables of a quantity over mission time.
 
+use crate::numeric::interpolate;
+
 /// A quantity that is either constant or piecewise linear in time (held constant
 /// outside the table). Knots are strictly increasing; the solver lands steps on them.
 #[derive(Debug, Clone, PartialEq)]
@@ -47,24 +49,6 @@ impl Profile {
             },
         }
     }
-}
-
-/// Linear interpolation in a strictly increasing abscissa, clamped at both ends.
-pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
-    debug_assert_eq!(xs.len(), ys.len());
-    let n = xs.len();
-    if x.is_nan() {
-        return f64::NAN;
-    }
-    if n == 1 || x <= xs[0] {
-        return ys[0];
-    }
-    if x >= xs[n - 1] {
-        return ys[n - 1];
-    }
-    let i = xs.partition_point(|&k| k <= x); // xs[i-1] <= x < xs[i]
-    let (x0, x1, y0, y1) = (xs[i - 1], xs[i], ys[i - 1], ys[i]);
-    y0 + (y1 - y0) * (x - x0) / (x1 - x0)
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@ use super::{
     ECLIPSE, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, palette, text_width,
     time_unit,
 };
+use crate::constants::ZERO_CELSIUS_K;
 pub use crate::run::summary::RunEnd;
 
 /// A run longer than this many days is drawn as per-orbit envelopes.
@@ -108,7 +109,7 @@ impl RunSeries {
                 .iter()
                 // the log's topic is the pair's name made an identifier (`Stage-2` →
                 // `/gears/stage_2`)
-                .find(|(p, _)| p == pair || *p == crate::io::log_schema::identifier(pair))
+                .find(|(p, _)| p == pair || *p == crate::units::identifier(pair))
                 .or_else(|| (s.backlash_um.len() == 1 && margins.len() == 1).then(|| &margins[0]));
             if let Some((_, m)) = m
                 && let Some(v) = b.iter().zip(m).map(|(b, m)| b - m).find(|v| v.is_finite())
@@ -207,7 +208,7 @@ fn smallest_points(s: &RunSeries) -> Vec<(String, f64, f64)> {
             let from_end = s.end.as_ref().and_then(|e| {
                 let pe = e.pairs.iter().find(|q| {
                     q.name == *p
-                        || crate::io::log_schema::identifier(&q.name) == *p
+                        || crate::units::identifier(&q.name) == *p
                         || (p.is_empty() && e.pairs.len() == 1)
                 })?;
                 Some((pe.t_min_s?, pe.min_backlash_um?))
@@ -299,7 +300,7 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
     let mut temps: Vec<(String, Vec<f64>)> = s
         .temps_k
         .iter()
-        .map(|(n, v)| (n.clone(), v.iter().map(|k| k - 273.15).collect()))
+        .map(|(n, v)| (n.clone(), v.iter().map(|k| k - ZERO_CELSIUS_K).collect()))
         .collect();
     let n_nodes = temps.len();
     let max_temps = if long { MAX_ENVELOPE_TEMPS } else { MAX_TEMPS };

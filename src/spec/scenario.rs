@@ -340,8 +340,8 @@ impl Scenario {
                     key,
                     message: format!(
                         "{v} K ({:.2} °C) looks like a Celsius value typed as kelvin; {v} °C is {:.2} K",
-                        v - 273.15,
-                        v + 273.15
+                        v - crate::constants::ZERO_CELSIUS_K,
+                        v + crate::constants::ZERO_CELSIUS_K
                     ),
                 });
             }
@@ -360,8 +360,8 @@ impl Scenario {
                     key: format!("boundary.{}.temperature_k", key_segment(&b.name)),
                     message: format!(
                         "{lo} K ({:.2} °C) looks like a Celsius value typed as kelvin (cryogenic shrouds aside); {lo} °C is {:.2} K",
-                        lo - 273.15,
-                        lo + 273.15
+                        lo - crate::constants::ZERO_CELSIUS_K,
+                        lo + crate::constants::ZERO_CELSIUS_K
                     ),
                 });
             }
