@@ -107,7 +107,13 @@ impl Effect {
             | Effect::CapacitanceScale
             | Effect::EmissivityScale
             | Effect::UncertainParameter => EffectKind::Calibration,
-            _ => EffectKind::Physics,
+            // every variant named: a new effect must say what it is
+            Effect::EarthAlbedoIr
+            | Effect::HeaterThermostat
+            | Effect::InternalDissipation
+            | Effect::HousingExpansion
+            | Effect::CteTemperature
+            | Effect::BoreFit => EffectKind::Physics,
         }
     }
 
@@ -989,5 +995,72 @@ fn element_of(path: &str) -> String {
             _ => path.to_string(),
         },
         Err(_) => path.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod vocabulary_doc {
+    use super::{Effect, EffectKind};
+
+    /// Every effect is in `Effect::ALL` (the match fails to compile for a new variant
+    /// until it is listed here, and the test until it is in `ALL`).
+    fn listed(e: Effect) -> bool {
+        match e {
+            Effect::EarthAlbedoIr
+            | Effect::HeaterThermostat
+            | Effect::InternalDissipation
+            | Effect::HousingExpansion
+            | Effect::CteTemperature
+            | Effect::BoreFit
+            | Effect::SensorLag
+            | Effect::SensorOffset
+            | Effect::AbsorptivityScale
+            | Effect::ConductanceScale
+            | Effect::CteScale
+            | Effect::CapacitanceScale
+            | Effect::EmissivityScale
+            | Effect::UncertainParameter => Effect::ALL.contains(&e),
+        }
+    }
+
+    /// `docs/vocabulary.md` has a row for every effect, with its id and kind, and no
+    /// row for an effect that does not exist.
+    #[test]
+    fn core_every_effect_has_its_row_in_the_vocabulary() {
+        let doc = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/vocabulary.md"),
+        )
+        .unwrap();
+        let rows: Vec<(String, String)> = doc
+            .lines()
+            .filter(|l| l.starts_with("| `") || l.starts_with("| **`"))
+            .filter_map(|l| {
+                let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+                let id = cells
+                    .get(1)?
+                    .trim_matches('*')
+                    .trim_matches('`')
+                    .to_string();
+                Some((id, cells.get(2)?.to_string()))
+            })
+            .collect();
+        for e in Effect::ALL {
+            assert!(listed(e));
+            let kind: EffectKind = e.kind();
+            assert!(
+                rows.iter()
+                    .any(|(id, k)| id == e.id() && k == kind.as_str()),
+                "docs/vocabulary.md has no row `{}` | {}",
+                e.id(),
+                kind
+            );
+        }
+        for (id, _) in &rows {
+            assert!(
+                Effect::from_id(id).is_some(),
+                "docs/vocabulary.md documents `{id}`, no effect"
+            );
+        }
+        assert_eq!(rows.len(), Effect::ALL.len());
     }
 }
