@@ -318,11 +318,6 @@ fn unit_of(name: &str) -> &'static str {
     if name.ends_with("_um") { "µm" } else { "K" }
 }
 
-/// The human report.
-///
-/// Long by choice (about 170 lines): the report's sections printed in order
-/// (verdict, noise, baseline, mismatches, findings, candidates, notes), no logic
-/// beyond formatting; read top to bottom it is the report.
 /// ` (lines 3, 7, 9, …)`: the first few of `lines`, or nothing.
 fn lines_shown(lines: &[u64]) -> String {
     if lines.is_empty() {
@@ -341,8 +336,22 @@ fn lines_shown(lines: &[u64]) -> String {
     )
 }
 
+/// The human report: its sections in order (verdict and split, the channel table,
+/// where the baseline residual sits, the findings, the residual that remains, the
+/// candidates), each formatted by its own function.
 pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
     let mut o = String::new();
+    report_head(&mut o, d, scenario, recording);
+    report_channels(&mut o, d);
+    report_where(&mut o, d);
+    report_findings(&mut o, d);
+    report_remaining(&mut o, d);
+    report_candidates(&mut o, d);
+    o
+}
+
+/// The verdict, the files, the held-out split, the recording's rows and the notes.
+fn report_head(o: &mut String, d: &Diagnosis, scenario: &str, recording: &str) {
     let verdict = match d.verdict {
         Verdict::Consistent => {
             "CONSISTENT: the model fits the recording to its noise; nothing to add"
@@ -385,6 +394,10 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
     for n in &d.notes {
         outln!(o, "note: {n}");
     }
+}
+
+/// Each channel's noise and its baseline and corrected residuals.
+fn report_channels(o: &mut String, d: &Diagnosis) {
     outln!(o, "");
     outln!(
         o,
@@ -402,6 +415,10 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
         );
     }
     outln!(o, "");
+}
+
+/// Where the baseline residual sits, largest first.
+fn report_where(o: &mut String, d: &Diagnosis) {
     if d.mismatches.is_empty() {
         outln!(o, "where: no channel's baseline residual exceeds its noise");
     } else {
@@ -427,6 +444,10 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
         }
     }
     outln!(o, "");
+}
+
+/// What the model left out: each finding's parameters, correlations and evidence.
+fn report_findings(o: &mut String, d: &Diagnosis) {
     if !d.findings.is_empty() {
         outln!(o, "what the model left out:");
         for f in &d.findings {
@@ -462,6 +483,10 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
         }
         outln!(o, "");
     }
+}
+
+/// Where the residual that no finding explains sits (an unexplained verdict).
+fn report_remaining(o: &mut String, d: &Diagnosis) {
     if d.verdict != Verdict::Consistent
         && !d.remaining.is_empty()
         && d.verdict == Verdict::Unexplained
@@ -482,6 +507,10 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
         }
         outln!(o, "");
     }
+}
+
+/// The candidates tried, the fitted ones first, and the time taken.
+fn report_candidates(o: &mut String, d: &Diagnosis) {
     outln!(o, "candidates ({} tried):", d.candidates.len());
     let mut unfitted = 0;
     for c in &d.candidates {
@@ -528,7 +557,6 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
         d.time_s,
         d.time_per_candidate_s
     );
-    o
 }
 
 /// Four significant digits.
