@@ -458,40 +458,7 @@ pub fn format_report(r: &Report) -> String {
             p.name,
             p.min_backlash_allowed_um
         );
-        let (d, m) = (&p.min_backlash_um, &p.min_margin_um);
-        let mut t = table::new(
-            &["", "backlash", "95 % interval", "margin", "95 % interval"],
-            &[
-                Align::Left,
-                Align::Right,
-                Align::Left,
-                Align::Right,
-                Align::Left,
-            ],
-        );
-        let um = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.3}"));
-        let plain = |label: &str, a: f64, b: f64| {
-            vec![
-                label.to_string(),
-                format!("{a:.3}"),
-                String::new(),
-                format!("{b:.3}"),
-                String::new(),
-            ]
-        };
-        t.add_row(plain("min", d.min, m.min));
-        for (pc, pm) in d.percentiles.iter().zip(&m.percentiles) {
-            t.add_row(vec![
-                format!("p{}", pc.percent),
-                format!("{:.3}", pc.value),
-                format!("{} … {}", um(pc.ci95[0]), um(pc.ci95[1])),
-                format!("{:.3}", pm.value),
-                format!("{} … {}", um(pm.ci95[0]), um(pm.ci95[1])),
-            ]);
-        }
-        t.add_row(plain("max", d.max, m.max));
-        t.add_row(plain("mean", d.mean, m.mean));
-        o += &table::render(&t, "  ");
+        o += &distribution_table(p);
         match p.tolerance_95_95_um {
             Some(v) => outln!(
                 o,
@@ -561,6 +528,45 @@ pub fn format_report(r: &Report) -> String {
         }
     }
     o
+}
+
+/// A pair's smallest backlash and margin per sample: min, percentiles with their 95 %
+/// intervals, max and mean.
+fn distribution_table(p: &orbitlash::margins::PairReport) -> String {
+    let (d, m) = (&p.min_backlash_um, &p.min_margin_um);
+    let mut t = table::new(
+        &["", "backlash", "95 % interval", "margin", "95 % interval"],
+        &[
+            Align::Left,
+            Align::Right,
+            Align::Left,
+            Align::Right,
+            Align::Left,
+        ],
+    );
+    let um = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.3}"));
+    let plain = |label: &str, a: f64, b: f64| {
+        vec![
+            label.to_string(),
+            format!("{a:.3}"),
+            String::new(),
+            format!("{b:.3}"),
+            String::new(),
+        ]
+    };
+    t.add_row(plain("min", d.min, m.min));
+    for (pc, pm) in d.percentiles.iter().zip(&m.percentiles) {
+        t.add_row(vec![
+            format!("p{}", pc.percent),
+            format!("{:.3}", pc.value),
+            format!("{} … {}", um(pc.ci95[0]), um(pc.ci95[1])),
+            format!("{:.3}", pm.value),
+            format!("{} … {}", um(pm.ci95[0]), um(pm.ci95[1])),
+        ]);
+    }
+    t.add_row(plain("max", d.max, m.max));
+    t.add_row(plain("mean", d.mean, m.mean));
+    table::render(&t, "  ")
 }
 
 fn ordinal(r: u64) -> String {

@@ -909,6 +909,24 @@ fn write_provenance(
     Ok(())
 }
 
+/// `/orbit/faces`' message type (per face its solar, albedo and Earth-IR flux) and the
+/// channel metadata mapping each field to `<node>.<face>.<flux>_w_per_m2`.
+fn face_fluxes_type(faces: &[String]) -> (MessageType, BTreeMap<String, String>) {
+    let mut taken = Vec::new();
+    let mut message = MessageType::new("FaceFluxes");
+    let mut meta = BTreeMap::new();
+    for face in faces {
+        for q in ["solar", "albedo", "earth_ir"] {
+            let name = format!("{face}.{q}");
+            let field =
+                field_names(std::iter::once(name.clone()), "w_per_m2", &mut taken).remove(0);
+            message = message.with(&field, Kind::Double);
+            meta.insert(format!("face:{field}"), format!("{name}_w_per_m2"));
+        }
+    }
+    (message, meta)
+}
+
 /// Writes the schemas, channels, provenance and attachment of a new log and returns
 /// the writer ready for samples (runs on the writer thread).
 #[allow(clippy::too_many_arguments)]
@@ -987,18 +1005,7 @@ fn open_log_writer(
     let faces = if d.faces.is_empty() {
         None
     } else {
-        let mut taken = Vec::new();
-        let mut message = MessageType::new("FaceFluxes");
-        let mut meta = BTreeMap::new();
-        for face in &d.faces {
-            for q in ["solar", "albedo", "earth_ir"] {
-                let name = format!("{face}.{q}");
-                let field =
-                    field_names(std::iter::once(name.clone()), "w_per_m2", &mut taken).remove(0);
-                message = message.with(&field, Kind::Double);
-                meta.insert(format!("face:{field}"), format!("{name}_w_per_m2"));
-            }
-        }
+        let (message, meta) = face_fluxes_type(&d.faces);
         let s = schema(
             w,
             "orbitlash.FaceFluxes",
