@@ -34,6 +34,19 @@ pub enum Effect {
     UncertainParameter,
 }
 
+impl std::fmt::Display for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.id())
+    }
+}
+
+/// An effect equals its id (`Effect::BoreFit == "bore_fit"`).
+impl PartialEq<&str> for Effect {
+    fn eq(&self, other: &&str) -> bool {
+        self.id() == *other
+    }
+}
+
 /// What an effect is: physics the model left out, a sensor's own behaviour, or a
 /// calibration of a number the model has. Serialised as "physics", "sensor",
 /// "calibration".

@@ -252,7 +252,8 @@ pub struct Fitted {
 /// An accepted effect.
 #[derive(Debug, Clone, Serialize)]
 pub struct Finding {
-    pub effect: &'static str,
+    /// Serialised as its id (`heater_thermostat`).
+    pub effect: effects::Effect,
     pub kind: effects::EffectKind,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub node: Option<String>,
@@ -324,7 +325,7 @@ impl std::fmt::Display for CandidateStatus {
 /// One line per candidate tried.
 #[derive(Debug, Clone, Serialize)]
 pub struct CandidateReport {
-    pub effect: &'static str,
+    pub effect: effects::Effect,
     pub target: String,
     /// `accepted`, `rejected` or `not_fitted`.
     pub status: CandidateStatus,
@@ -708,7 +709,7 @@ fn judge_singles(
             .as_ref()
             .map_or(f64::NAN, |r| base.train_chi2 - r.0);
         let mut rep = CandidateReport {
-            effect: c.effect.id(),
+            effect: c.effect,
             target: c.label(),
             status: CandidateStatus::NotFitted,
             reason: String::new(),
@@ -822,7 +823,7 @@ fn findings(
             (-problem.bic_gain(step, x2, k), hx2 - step.holdout_chi2)
         };
         out.push(Finding {
-            effect: c.effect.id(),
+            effect: c.effect,
             kind: c.effect.kind(),
             node: c.target.node(),
             channel: c.target.channel(),
