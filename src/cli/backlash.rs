@@ -103,7 +103,7 @@ fn verdict_line(pair: &GearPair, states: &[(Case, MeshState)]) -> String {
 
 pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
     let loaded = super::load_with(a.scenario.as_deref(), &a.sets)?;
-    let sc = &loaded.scenario;
+    let sc = loaded.scenario();
     if sc.gears.is_empty() {
         bail!("{} has no [[gear_pair]]", loaded.file);
     }

@@ -300,7 +300,8 @@ fn bench_solver(a: &BenchArgs) -> Result<()> {
     let mut o = String::new();
     let loaded = load(a.scenario.as_deref())?;
     let sc = loaded
-        .scenario
+        .scenario()
+        .clone()
         .with_orbits(a.orbits)
         .map_err(|m| anyhow::anyhow!("--orbits {}: {m}", orbitlash::units::num(a.orbits)))?;
     let est = estimate_run(
@@ -598,7 +599,7 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
     }
     let horizon = match a.margins_horizon.as_str() {
         "steady" => {
-            orbitlash::run::steady::check_repeats(&loaded.scenario.thermal)
+            orbitlash::run::steady::check_repeats(&loaded.scenario().thermal)
                 .map_err(|e| anyhow::anyhow!("--margins-horizon steady: {e}"))?;
             Horizon::SteadyState
         }
@@ -609,7 +610,7 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
             )
         })?),
     };
-    let max_steps = super::estimate::margins(&loaded.scenario, horizon, a.samples, false)?;
+    let max_steps = super::estimate::margins(loaded.scenario(), horizon, a.samples, false)?;
     let plan = super::plan(
         &loaded,
         Sampling::Random,
@@ -650,7 +651,7 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
             Horizon::SteadyState => "one period of each sample's periodic orbit".to_string(),
             Horizon::Mission => format!(
                 "the scenario's run ({:.1} days) each",
-                loaded.scenario.run.duration_s / 86400.0
+                &loaded.scenario().run.duration_s / 86400.0
             ),
             Horizon::Orbits(n) => format!("{} each", orbitlash::units::count(n, "orbit")),
         },

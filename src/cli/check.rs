@@ -33,7 +33,7 @@ pub fn check(a: CheckArgs) -> Result<()> {
         0,
         super::SetsOnDispersed::Allowed,
     )?;
-    let sc = &loaded.scenario;
+    let sc = loaded.scenario();
     let env = &sc.thermal.environment;
     let warnings = sc.warnings();
     outln!(

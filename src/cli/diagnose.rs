@@ -77,14 +77,14 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     // Inputs that follow the recording ([[input]]) are set in the model diagnosed.
     let mut model = loaded.model.clone();
     let mut followed = Vec::new();
-    let rec = match Recording::read_with(&a.recording, &loaded.scenario.recording) {
+    let rec = match Recording::read_with(&a.recording, &loaded.scenario().recording) {
         Ok(mut r) => {
             followed = r.feed_inputs(&mut model).map_err(|m| anyhow::anyhow!(m))?;
-            r.name_channels(&loaded.scenario.sensors);
+            r.name_channels(&loaded.scenario().sensors);
             r
         }
         // An orbitlash run log: its node temperatures and backlash as the sensors read.
-        Err(e) => match recording_from_log(&a.recording, &loaded.scenario) {
+        Err(e) => match recording_from_log(&a.recording, loaded.scenario()) {
             Some(r) => r,
             None => return Err(e.into()),
         },
@@ -105,7 +105,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         .map(|c| c.iter().flatten().count())
         .sum::<usize>() as f64;
     super::estimate::diagnose(
-        &loaded.scenario,
+        loaded.scenario(),
         span_s,
         values,
         diagnose::expected_runs(&model),
@@ -275,7 +275,7 @@ fn out_files(
     ));
     let title = format!(
         "{}: {} against the model, before and after",
-        loaded.scenario.name,
+        &loaded.scenario().name,
         Path::new(recording)
             .file_name()
             .map_or(recording.to_string(), |n| n.to_string_lossy().into_owned())

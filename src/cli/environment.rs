@@ -74,7 +74,8 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
             .file("--plot", p)?;
     }
     let sc = loaded
-        .scenario
+        .scenario()
+        .clone()
         .with_orbits(a.orbits)
         .map_err(|m| anyhow::anyhow!("--orbits {}: {m}", orbitlash::units::num(a.orbits)))?;
     let env = &sc.thermal.environment;

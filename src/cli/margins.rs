@@ -108,7 +108,7 @@ pub fn samples_arg(s: &str) -> Result<u64, String> {
 
 pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
-    let sc = &loaded.scenario;
+    let sc = loaded.scenario();
     if sc.gears.is_empty() {
         bail!(
             "{} has no [[gear_pair]]: margins judge the backlash of gear pairs, so there is nothing to judge",

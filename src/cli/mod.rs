@@ -197,8 +197,8 @@ pub fn error_chain(e: &anyhow::Error) -> String {
 
 /// A scenario as loaded: the model, its TOML text and where it came from.
 pub struct Loaded {
-    pub scenario: Scenario,
-    /// The spec and model the scenario was compiled from (with the `--set` changes).
+    /// The spec and model the scenario is compiled from (with the `--set` changes): the
+    /// scenario is the model's ([`Loaded::scenario`]), never a copy beside it.
     pub model: Model,
     /// The `--set` changes applied, in order.
     pub sets: Vec<(String, f64)>,
@@ -209,6 +209,11 @@ pub struct Loaded {
 }
 
 impl Loaded {
+    /// The compiled scenario (the model's).
+    pub fn scenario(&self) -> &Scenario {
+        self.model.scenario()
+    }
+
     /// The files this scenario was read from.
     pub fn inputs(&self) -> Vec<&Path> {
         self.path.iter().map(PathBuf::as_path).collect()
@@ -256,7 +261,6 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
         })?;
     }
     Ok(Loaded {
-        scenario: model.scenario().clone(),
         model,
         toml,
         file,

@@ -113,7 +113,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         (Some(k), Some(seed)) => Some(replay_sample(&mut loaded, &a, k, seed)?),
         _ => None,
     };
-    let mut sc = loaded.scenario.clone();
+    let mut sc = loaded.scenario().clone();
     if let Some(o) = a.orbits {
         sc = sc
             .with_orbits(o)
@@ -1036,7 +1036,6 @@ fn replay_sample(loaded: &mut super::Loaded, a: &RunArgs, k: u64, seed: u64) -> 
     }
     let plan = super::plan(loaded, sampling, n, seed, super::SetsOnDispersed::Refused)?;
     let values = plan.apply(&mut loaded.model, k)?;
-    loaded.scenario = loaded.model.scenario().clone();
     let mut line = format!("sample {k} of seed {seed}:");
     for (d, v) in plan.dispersions.iter().zip(values) {
         loaded.sets.push((d.path.clone(), v));
