@@ -86,7 +86,12 @@ fn cli_bad_tles_and_dates_are_refused_with_key_and_line() {
             "shadow",
             "shadow = \"conical\"",
             "shadow = \"round\"",
-            &["`orbit.shadow`", "unknown shadow `round`"],
+            // a choice is refused by the reader, at its line (issue 28 item 2)
+            &[
+                "`orbit.shadow`",
+                "unknown variant `round`",
+                "`cylindrical` or `conical`",
+            ],
         ),
         (
             "altitude-beside-tle",

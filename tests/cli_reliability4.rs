@@ -1161,3 +1161,39 @@ fn cli_logs_stay_in_order_and_interrupted_runs_are_incomplete() {
     );
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
 }
+
+// Issue 28 item 2 (first fields): a bad choice is refused by the reader with its line,
+// key and the choices there are.
+#[test]
+fn cli_solver_choices_are_refused_by_the_reader() {
+    let dir = tmpdir("choices");
+    for (case, old, new, needles) in [
+        (
+            "method",
+            "method = \"tr-bdf2\"",
+            "method = \"rk4\"",
+            &[
+                "`solver.method`",
+                "unknown variant `rk4`",
+                "expected `tr-bdf2`",
+            ][..],
+        ),
+        (
+            "linear",
+            "method = \"tr-bdf2\"",
+            "method = \"tr-bdf2\"\nlinear = \"magic\"",
+            &["`solver.linear`", "unknown variant `magic`", "`iterative`"][..],
+        ),
+    ] {
+        assert_check_refuses(&dir, case, &reference_with(&[(old, new)]), needles);
+    }
+    // the shipped choices still read
+    let ok = reference_with(&[(
+        "method = \"tr-bdf2\"",
+        "method = \"tr-bdf2\"\nlinear = \"sparse\"",
+    )]);
+    std::fs::write(dir.join("ok.toml"), ok).unwrap();
+    let out = run_in(&dir, &["check", "ok.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(stdout(&out).contains("sparse"), "{}", stdout(&out));
+}

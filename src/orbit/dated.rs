@@ -22,8 +22,9 @@ use super::{EnvState, EnvironmentModel, Incidence, LoadKink};
 /// Mean radius of the Sun, m (IAU 2015 nominal).
 pub const SUN_RADIUS_M: f64 = 6.957e8;
 
-/// The shape of the Earth's shadow.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The shape of the Earth's shadow (`orbit.shadow`: "cylindrical" or "conical").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Shadow {
     /// A cylinder of the Earth's radius behind it: sunlit or not.
     Cylindrical,
@@ -33,16 +34,6 @@ pub enum Shadow {
 }
 
 impl Shadow {
-    pub const NAMES: [&'static str; 2] = ["cylindrical", "conical"];
-
-    pub fn from_name(name: &str) -> Option<Shadow> {
-        match name {
-            "cylindrical" => Some(Shadow::Cylindrical),
-            "conical" => Some(Shadow::Conical),
-            _ => None,
-        }
-    }
-
     pub fn name(self) -> &'static str {
         match self {
             Shadow::Cylindrical => "cylindrical",

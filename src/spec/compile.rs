@@ -1454,18 +1454,7 @@ fn dated_environment(
         TleError::Start(m) => cx.err(&op.key("start_utc"), m),
         TleError::Propagation(m) => cx.err(&tp, m),
     })?;
-    let shadow = match orbit_spec.shadow.as_deref() {
-        None => Shadow::Cylindrical,
-        Some(name) => Shadow::from_name(name).ok_or_else(|| {
-            cx.err(
-                &op.key("shadow"),
-                format!(
-                    "unknown shadow `{name}` (known: {})",
-                    Shadow::NAMES.join(", ")
-                ),
-            )
-        })?,
-    };
+    let shadow = orbit_spec.shadow.unwrap_or(Shadow::Cylindrical);
     let solar_flux = match e.solar_flux_w_per_m2 {
         None => q::SOLAR_FLUX_W_PER_M2.default_value(),
         Some(ProfileSpec::Constant(v)) => {
@@ -1556,14 +1545,6 @@ fn run_control(cx: &Cx, run_spec: &RunSpec, period_s: f64) -> Result<RunControl,
 /// The solver's settings, defaults filled in.
 fn solver_settings(cx: &Cx, solver_spec: &SolverSpec) -> Result<SolverSettings, SpecError> {
     let sp = KeyPath::new("solver");
-    if let Some(m) = &solver_spec.method
-        && m != "tr-bdf2"
-    {
-        return Err(cx.err(
-            &sp.key("method"),
-            format!("unknown method `{m}` (known: tr-bdf2)"),
-        ));
-    }
     let defaults = SolverSettings::default();
     let solver = SolverSettings {
         tolerance_k: cx.quantity(
@@ -1577,18 +1558,7 @@ fn solver_settings(cx: &Cx, solver_spec: &SolverSpec) -> Result<SolverSettings, 
             solver_spec.max_step_s.unwrap_or(defaults.max_step_s),
         )?,
         adaptive: solver_spec.adaptive.unwrap_or(defaults.adaptive),
-        linear: match solver_spec.linear.as_deref() {
-            None => defaults.linear,
-            Some(name) => LinearSolver::from_name(name).ok_or_else(|| {
-                cx.err(
-                    &sp.key("linear"),
-                    format!(
-                        "unknown linear solver `{name}` (known: {})",
-                        LinearSolver::NAMES.join(", ")
-                    ),
-                )
-            })?,
-        },
+        linear: solver_spec.linear.unwrap_or(defaults.linear),
     };
     Ok(solver)
 }

@@ -243,7 +243,7 @@ pub struct OrbitSpec {
     pub start_offset_s: Option<f64>,
     /// … with a `cylindrical` (default) or `conical` Earth shadow.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shadow: Option<String>,
+    pub shadow: Option<crate::orbit::dated::Shadow>,
     /// Eclipses given instead of the shadow's geometry: [entry, exit] windows in s
     /// (a TLE orbit only; `diagnose` sets them from a telemetry channel through
     /// `[[input]] drives = "sunlit"`).
@@ -302,7 +302,7 @@ pub struct RunSpec {
 #[serde(deny_unknown_fields)]
 pub struct SolverSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub method: Option<String>,
+    pub method: Option<SolverMethod>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tolerance_k: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -310,7 +310,15 @@ pub struct SolverSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub adaptive: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub linear: Option<String>,
+    pub linear: Option<crate::thermal::iteration::LinearSolver>,
+}
+
+/// `solver.method`: the integration method (one so far).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+pub enum SolverMethod {
+    /// TR-BDF2 (Hosea & Shampine 1996), L-stable, second order.
+    #[serde(rename = "tr-bdf2")]
+    TrBdf2,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

@@ -38,7 +38,7 @@ use super::lu::{Lu, Singular};
 
 /// How the implicit stages solve their linear systems. Serialised as its name
 /// ("auto", "dense", "sparse", "iterative").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LinearSolver {
     /// Dense up to [`AUTO_SPARSE_ABOVE_NODES`] diffusion nodes, iterative above.
@@ -55,8 +55,6 @@ pub enum LinearSolver {
 }
 
 impl LinearSolver {
-    pub const NAMES: [&'static str; 4] = ["auto", "dense", "sparse", "iterative"];
-
     pub fn name(self) -> &'static str {
         match self {
             LinearSolver::Auto => "auto",
@@ -64,16 +62,6 @@ impl LinearSolver {
             LinearSolver::Sparse => "sparse",
             LinearSolver::Iterative => "iterative",
         }
-    }
-
-    pub fn from_name(name: &str) -> Option<LinearSolver> {
-        Some(match name {
-            "auto" => LinearSolver::Auto,
-            "dense" => LinearSolver::Dense,
-            "sparse" => LinearSolver::Sparse,
-            "iterative" => LinearSolver::Iterative,
-            _ => return None,
-        })
     }
 
     /// What a network of `n` diffusion nodes is solved with (`Auto` resolved).
