@@ -20,19 +20,31 @@ fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
             "time-format",
             "time_format = \"utc\"",
             "time_format = \"gps\"",
-            &["`recording.time_format`", "unknown time format `gps`"],
+            &[
+                "`recording.time_format`",
+                "unknown variant `gps`",
+                "`seconds` or `utc`",
+            ],
         ),
         (
             "repeated",
             "repeated_rows = \"fill\"",
             "repeated_rows = \"maybe\"",
-            &["`recording.repeated_rows`", "known: data, fill"],
+            &[
+                "`recording.repeated_rows`",
+                "unknown variant `maybe`",
+                "`data` or `fill`",
+            ],
         ),
         (
             "duplicates",
             "duplicate_times = \"mean\"",
             "duplicate_times = \"last\"",
-            &["`recording.duplicate_times`", "known: refuse, mean"],
+            &[
+                "`recording.duplicate_times`",
+                "unknown variant `last`",
+                "`refuse` or `mean`",
+            ],
         ),
         (
             "unit",

@@ -465,6 +465,7 @@ fn recording_format(
     environment: &Environment,
 ) -> Result<crate::spec::scenario::RecordingFormat, SpecError> {
     use crate::spec::scenario::{DuplicateTimes, RecordingFormat, TimeFormat};
+    use crate::spec::{RepeatedRows, TimeFormatName};
     let p = KeyPath::new("recording");
     let Some(spec) = spec else {
         return Ok(RecordingFormat::default());
@@ -476,9 +477,9 @@ fn recording_format(
         }
         f.time_column = c;
     }
-    f.time = match spec.time_format.as_deref() {
-        None | Some("seconds") => TimeFormat::Seconds,
-        Some("utc") => match environment.start_utc() {
+    f.time = match spec.time_format {
+        None | Some(TimeFormatName::Seconds) => TimeFormat::Seconds,
+        Some(TimeFormatName::Utc) => match environment.start_utc() {
             Some(origin) => TimeFormat::Utc { origin },
             None => {
                 return Err(cx.err(
@@ -487,12 +488,6 @@ fn recording_format(
                 ));
             }
         },
-        Some(other) => {
-            return Err(cx.err(
-                &p.key("time_format"),
-                format!("unknown time format `{other}` (known: seconds, utc)"),
-            ));
-        }
     };
     f.ignore_columns = spec.ignore_columns.unwrap_or_default();
     if let Some(dup) = f
@@ -506,29 +501,8 @@ fn recording_format(
             format!("`{}` is listed twice or is the time column", dup.1),
         ));
     }
-    f.repeated_rows_are_fill = match spec.repeated_rows.as_deref() {
-        None | Some("data") => false,
-        Some("fill") => true,
-        Some(other) => {
-            return Err(cx.err(
-                &p.key("repeated_rows"),
-                format!("unknown meaning `{other}` (known: data, fill)"),
-            ));
-        }
-    };
-    f.duplicate_times = match spec.duplicate_times.as_deref() {
-        None | Some("refuse") => DuplicateTimes::Refuse,
-        Some("mean") => DuplicateTimes::Mean,
-        Some(other) => {
-            return Err(cx.err(
-                &p.key("duplicate_times"),
-                format!(
-                    "unknown policy `{other}` (known: {})",
-                    DuplicateTimes::NAMES.join(", ")
-                ),
-            ));
-        }
-    };
+    f.repeated_rows_are_fill = spec.repeated_rows == Some(RepeatedRows::Fill);
+    f.duplicate_times = spec.duplicate_times.unwrap_or(DuplicateTimes::Refuse);
     Ok(f)
 }
 

@@ -465,6 +465,26 @@ pub struct UncertainSpec {
     pub max: f64,
 }
 
+/// `recording.time_format`: how the time column is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TimeFormatName {
+    /// Seconds since the scenario's t = 0.
+    Seconds,
+    /// UTC date-times, counted from the scenario's `start_utc`.
+    Utc,
+}
+
+/// `recording.repeated_rows`: what a row repeating every cell of the row before is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RepeatedRows {
+    /// A measurement like any other.
+    Data,
+    /// A ground segment's fill: no reading.
+    Fill,
+}
+
 /// `[recording]`: the layout of the recordings `diagnose` reads for this scenario.
 #[derive(Debug, Clone, PartialEq, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -474,17 +494,17 @@ pub struct RecordingSpec {
     pub time_column: Option<String>,
     /// `"seconds"` since t = 0 (default) or `"utc"` date-times (a dated scenario's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub time_format: Option<String>,
+    pub time_format: Option<TimeFormatName>,
     /// Columns that are neither the time nor a sensor.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ignore_columns: Option<Vec<String>>,
     /// `"data"` (default) or `"fill"`: a row repeating every cell of the row before is
     /// a ground segment's fill, not a measurement.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub repeated_rows: Option<String>,
+    pub repeated_rows: Option<RepeatedRows>,
     /// `"refuse"` (default) or `"mean"`: rows sharing a time stamp with other readings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub duplicate_times: Option<String>,
+    pub duplicate_times: Option<crate::spec::scenario::DuplicateTimes>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

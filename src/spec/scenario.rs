@@ -434,16 +434,13 @@ pub enum TimeFormat {
 
 /// What two rows with the same time stamp mean when their cells differ (equal rows are
 /// always merged).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum DuplicateTimes {
     /// An error naming both lines.
     Refuse,
     /// Two readings within one time stamp: their mean.
     Mean,
-}
-
-impl DuplicateTimes {
-    pub const NAMES: [&'static str; 2] = ["refuse", "mean"];
 }
 
 impl Default for RecordingFormat {
