@@ -6,24 +6,12 @@
 //! naming the file, key, line or path, and nothing written when refused.
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 mod common;
 use common::{
-    assert_error, bin, first_error_line, reference_text, reference_with, snapshot, tmpdir,
+    assert_error, bin, first_error_line, reference_text, reference_with, run_in, snapshot, stderr,
+    stdout, tmpdir,
 };
-
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    bin().args(args).current_dir(dir).output().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
 
 /// The reference with a dispersion of tooth thinning (a margins scenario).
 fn margins_text() -> String {

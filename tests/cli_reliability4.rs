@@ -2,26 +2,31 @@
 //! as a case that failed before its fix. Items are numbered as in the issue.
 
 use std::path::Path;
-use std::process::Output;
 
 mod common;
-use common::{assert_check_refuses, assert_error, bin, reference_text, reference_with, tmpdir};
-
-fn run_in(dir: &Path, args: &[&str]) -> Output {
-    bin().args(args).current_dir(dir).output().unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{
+    assert_check_refuses, assert_error, bin, reference_text, reference_with, run_in, shipped,
+    stderr, stdout, tmpdir,
+};
 
 /// The path of the built binary (for runs killed from outside).
 fn bin_path() -> std::path::PathBuf {
     std::path::PathBuf::from(env!("CARGO_BIN_EXE_orbitlash"))
+}
+
+/// `args` started in `dir` and, after `after_ms`, sent `signal`: its result, the
+/// standard streams kept (the run must still be going when the signal comes).
+fn signalled(dir: &Path, args: &[&str], after_ms: u64, signal: i32) -> std::process::Output {
+    let child = std::process::Command::new(bin_path())
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(after_ms));
+    unsafe { libc::kill(child.id() as i32, signal) };
+    child.wait_with_output().unwrap()
 }
 
 // 1. A killed run keeps the previous log under its name: the new one replaces it only
@@ -186,11 +191,7 @@ fn cli_a_damaged_length_is_named_by_every_reader() {
 #[test]
 fn cli_duplicate_face_names_are_refused_naming_both_lines() {
     let dir = tmpdir("r4-faces");
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
-    )
-    .unwrap()
-    .replacen("name = \"mx\"", "name = \"px\"", 1);
+    let text = shipped("cubesat-1u.toml").replacen("name = \"mx\"", "name = \"px\"", 1);
     assert_check_refuses(
         &dir,
         "dup-face",
@@ -205,10 +206,7 @@ fn cli_duplicate_face_names_are_refused_naming_both_lines() {
 #[test]
 fn cli_huge_and_tiny_vectors_keep_their_direction() {
     let dir = tmpdir("r4-vectors");
-    let cubesat = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
-    )
-    .unwrap();
+    let cubesat = shipped("cubesat-1u.toml");
     let fluxes = |name: &str, text: &str| {
         std::fs::write(dir.join(name), text).unwrap();
         let out = run_in(
@@ -282,10 +280,7 @@ fn tle_edit(line: &str, from: usize, text: &str) -> String {
 #[test]
 fn cli_tle_fields_are_checked_and_the_sun_formula_range_is_said() {
     let dir = tmpdir("r4-tle");
-    let funcube = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml"),
-    )
-    .unwrap();
+    let funcube = shipped("funcube-1.toml");
     let l1 = "1 39444U 13066AE  16035.38257241  .00000865  00000-0  11531-3 0  9990";
     let l2 = "2 39444  97.7004  94.3150 0060634  98.1157 262.6940 14.80829622117779";
     assert!(funcube.contains(l1) && funcube.contains(l2));
@@ -369,10 +364,7 @@ fn cli_tle_fields_are_checked_and_the_sun_formula_range_is_said() {
 #[test]
 fn cli_input_misconfigurations_are_refused_by_check() {
     let dir = tmpdir("r4-inputs");
-    let funcube = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml"),
-    )
-    .unwrap();
+    let funcube = shipped("funcube-1.toml");
     let input = |column: &str| {
         format!(
             "\n[[input]]\ncolumn = \"{column}\"\ndrives = \"dissipation.electronics.power_w\"\nscale = 0.001\n"
@@ -672,10 +664,7 @@ fn cli_export_csv_streams_its_rows() {
 #[test]
 fn cli_a_long_dated_scenario_propagates_only_what_is_needed() {
     let dir = tmpdir("r4-lazy");
-    let text = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/cubesat-1u.toml"),
-    )
-    .unwrap();
+    let text = shipped("cubesat-1u.toml");
     let start = text.find("\n[run]\n").expect("a [run] table") + "\n[run]\n".len();
     let end = start + text[start..].find('\n').unwrap();
     assert!(
@@ -1002,8 +991,9 @@ fn cli_an_interrupted_margins_run_says_so() {
     let dir = tmpdir("r4-margins-signal");
     let root = env!("CARGO_MANIFEST_DIR");
     for signal in [libc::SIGINT, libc::SIGTERM] {
-        let child = std::process::Command::new(bin_path())
-            .args([
+        let out = signalled(
+            &dir,
+            &[
                 "margins",
                 &format!("{root}/scenarios/reference-hinge-margins.toml"),
                 "--samples",
@@ -1016,15 +1006,10 @@ fn cli_an_interrupted_margins_run_says_so() {
                 "--force",
                 "--json",
                 "m.json",
-            ])
-            .current_dir(&dir)
-            .stdout(std::process::Stdio::piped())
-            .stderr(std::process::Stdio::piped())
-            .spawn()
-            .unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(1500));
-        unsafe { libc::kill(child.id() as i32, signal) };
-        let out = child.wait_with_output().unwrap();
+            ],
+            1500,
+            signal,
+        );
         assert_eq!(
             out.status.code(),
             Some(2),
@@ -1108,8 +1093,9 @@ fn cli_logs_stay_in_order_and_interrupted_runs_are_incomplete() {
         }
     }
     // interrupted
-    let mut child = std::process::Command::new(bin_path())
-        .args([
+    let out = signalled(
+        &dir,
+        &[
             "run",
             "--quiet",
             "--orbits",
@@ -1119,15 +1105,11 @@ fn cli_logs_stay_in_order_and_interrupted_runs_are_incomplete() {
             "--force",
             "--out",
             "i.mcap",
-        ])
-        .current_dir(&dir)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(1500));
-    unsafe { libc::kill(child.id() as i32, libc::SIGINT) };
-    assert_eq!(child.wait().unwrap().code(), Some(2));
+        ],
+        1500,
+        libc::SIGINT,
+    );
+    assert_eq!(out.status.code(), Some(2));
     let t = orbitlash::io::mcap_read::read_log(&dir.join("i.mcap")).unwrap();
     let end = &t.metadata["orbitlash.run_end"];
     assert_eq!(end["status"], "interrupted");

@@ -181,36 +181,49 @@ pub fn check_record(op: u8, body: &[u8]) -> Result<(), String> {
 /// lz4 reach a few hundred on repetitive data; past this a size field is damaged).
 pub const MAX_COMPRESSION_RATIO: u64 = 4096;
 
-/// Checks every record of an MCAP file (`bytes` after the magic) and the records inside
-/// each uncompressed chunk; a record that runs past the end (a file cut off, or a
-/// damaged length) is an error too. `Err((offset, message))` names the first bad one.
-pub fn check_file(bytes: &[u8], magic_len: usize) -> Result<(), (usize, String)> {
-    let mut at = magic_len;
-    while at + 9 <= bytes.len() {
-        let op = bytes[at];
-        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().expect("8 bytes"));
+/// Calls `f(offset, opcode, body start, body end)` for each record of `b` from `at`
+/// (while `f` says go on), up to the last whole one; a record whose length runs past
+/// `b` is an error at its offset ("runs past `past`").
+fn walk(
+    b: &[u8],
+    mut at: usize,
+    past: &str,
+    mut f: impl FnMut(usize, u8, usize, usize) -> Result<bool, (usize, String)>,
+) -> Result<(), (usize, String)> {
+    while at + 9 <= b.len() {
+        let len = u64::from_le_bytes(b[at + 1..at + 9].try_into().expect("8 bytes"));
         let start = at + 9;
         let end = usize::try_from(len)
             .ok()
             .and_then(|l| start.checked_add(l))
-            .filter(|&e| e <= bytes.len())
-            .ok_or_else(|| {
-                (
-                    at,
-                    format!("its length {len} runs past the end of the file"),
-                )
-            })?;
-        let body = &bytes[start..end];
-        check_record(op, body).map_err(|m| (at, m))?;
-        if op == 0x06 {
-            check_chunk_records(body).map_err(|(o, m)| (start + o, m))?;
-        }
-        if op == 0x02 {
-            break; // the footer; the closing magic follows
+            .filter(|&e| e <= b.len())
+            .ok_or_else(|| (at, format!("its length {len} runs past {past}")))?;
+        if !f(at, b[at], start, end)? {
+            break;
         }
         at = end;
     }
     Ok(())
+}
+
+/// Checks every record of an MCAP file (`bytes` after the magic) and the records inside
+/// each uncompressed chunk; a record that runs past the end (a file cut off, or a
+/// damaged length) is an error too. `Err((offset, message))` names the first bad one.
+pub fn check_file(bytes: &[u8], magic_len: usize) -> Result<(), (usize, String)> {
+    walk(
+        bytes,
+        magic_len,
+        "the end of the file",
+        |at, op, start, end| {
+            let body = &bytes[start..end];
+            check_record(op, body).map_err(|m| (at, m))?;
+            if op == 0x06 {
+                check_chunk_records(body).map_err(|(o, m)| (start + o, m))?;
+            }
+            // the footer ends the records; the closing magic follows
+            Ok(op != 0x02)
+        },
+    )
 }
 
 /// The records inside an uncompressed chunk body (a compressed one is checked by its
@@ -220,21 +233,10 @@ fn check_chunk_records(body: &[u8]) -> Result<(), (usize, String)> {
     if name_len != 0 {
         return Ok(());
     }
-    let from = 32 + 8;
-    let mut at = from;
-    while at + 9 <= body.len() {
-        let op = body[at];
-        let len = u64::from_le_bytes(body[at + 1..at + 9].try_into().expect("8 bytes"));
-        let start = at + 9;
-        let end = usize::try_from(len)
-            .ok()
-            .and_then(|l| start.checked_add(l))
-            .filter(|&e| e <= body.len())
-            .ok_or_else(|| (at, format!("its length {len} runs past its chunk")))?;
+    walk(body, 32 + 8, "its chunk", |at, op, start, end| {
         check_record(op, &body[start..end]).map_err(|m| (at, m))?;
-        at = end;
-    }
-    Ok(())
+        Ok(true)
+    })
 }
 
 #[cfg(test)]

@@ -705,10 +705,12 @@ fn insert_sample(batch: &mut Batch, s: &Sample) {
     while at > 0 && item_time(batch, &batch.items[at - 1]) > s.t_s {
         at -= 1;
     }
-    let taken = batch.items[..at].iter().rev().any(|i| match i {
-        Item::Sample(v, _) => batch.values[*v] == s.t_s,
-        Item::Event { .. } => false,
-    });
+    // the items of this time are just before `at` (items are in time order)
+    let taken = batch.items[..at]
+        .iter()
+        .rev()
+        .take_while(|i| item_time(batch, i) == s.t_s)
+        .any(|i| matches!(i, Item::Sample(..)));
     if taken {
         return;
     }

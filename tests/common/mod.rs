@@ -144,3 +144,26 @@ pub fn snapshot(dir: &std::path::Path) -> std::collections::BTreeMap<std::path::
     }
     out
 }
+
+/// `args` run in `dir`: the binary's raw result.
+pub fn run_in(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    bin().args(args).current_dir(dir).output().unwrap()
+}
+
+pub fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A shipped scenario's text (`scenarios/<name>`).
+pub fn shipped(name: &str) -> String {
+    std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenarios")
+            .join(name),
+    )
+    .unwrap()
+}
