@@ -13,7 +13,7 @@ use orbitlash::io::scenario_toml::{ScenarioError, edited, parse, parse_spec};
 use orbitlash::margins::dispersion::{Plan, PlanError, Sampling};
 use orbitlash::spec::model::{Model, ModelError};
 use orbitlash::spec::quantity::{Quantity, TABLE};
-use orbitlash::spec::{DispersionSpec, ScenarioSpec, params};
+use orbitlash::spec::{DispersionSpec, ScenarioSpec, registry as params};
 
 /// What one way made of a value: accepted, or refused with (key, message).
 type Verdict = Result<(), (String, String)>;
@@ -72,13 +72,13 @@ fn check_scenario(file: &str, text: &str) -> (usize, Vec<&'static Quantity>) {
     let mut checked = 0;
     let mut seen = Vec::new();
     for p in model.params() {
-        let Some(q) = p.quantity else { continue };
+        let q = p.quantity;
         seen.push(q);
         let Some((lo, _, hi, _)) = q.interval() else {
             continue;
         };
         for v in probes(lo, hi) {
-            let what = format!("{file}: {} = {v:e} ({} {})", p.path, q.unit, q.range);
+            let what = format!("{file}: {} = {v:e} ({} {})", p.path, q.unit, q.range());
             let by_toml = through_toml(text, &spec, &p.path, v);
             let (mut set, mut fast) = (model.clone(), model.clone());
             let by_set = of_model(set.set(&p.path, v));

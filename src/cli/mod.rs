@@ -29,7 +29,7 @@ use clap::{Parser, Subcommand};
 
 use orbitlash::io::scenario_toml::{self, REFERENCE_HINGE_NAME, REFERENCE_HINGE_TOML};
 use orbitlash::spec::model::{Model, ModelError};
-use orbitlash::spec::params::parse_assignment;
+use orbitlash::spec::registry::parse_assignment;
 use orbitlash::spec::scenario::Scenario;
 
 #[derive(Parser, Debug)]

@@ -7,8 +7,9 @@
 
 use serde::Serialize;
 
-use crate::spec::keys::quote_key;
+use crate::spec::keys::{ElementKeys, quote_key};
 use crate::spec::model::Model;
+use crate::spec::registry::Param;
 use crate::spec::{
     AlbedoSpec, CenterDistanceSpec, DissipationSpec, EarthIrSpec, HeaterSpec, ProfileSpec,
     ScenarioSpec,
@@ -860,78 +861,46 @@ impl<'a> Generator<'a> {
         // Thermal masses and faces, the declared numbers, then loads and links (the
         // order breaks ties in the ranking).
         let params = self.model.params();
-        let mut out: Vec<Candidate> = params.iter().filter_map(|p| scale_of(p, true)).collect();
+        let keys = crate::spec::keys::element_keys(self.spec);
+        let scales = |first| {
+            params
+                .iter()
+                .filter_map(|p| scale_of(p, &keys, first))
+                .collect::<Vec<_>>()
+        };
+        let mut out: Vec<Candidate> = scales(true);
         out.extend(self.uncertain());
-        out.extend(params.iter().filter_map(|p| scale_of(p, false)));
+        out.extend(scales(false));
         out
     }
 }
 
-/// The scale calibration of number `p`, when it is one the vocabulary scales: a node's
-/// thermal mass or a face's ε or α (`first`), a Sun load's α or a link's conductance
-/// (not `first`). Optical properties stay within 0 … 1.
-fn scale_of(p: &crate::spec::params::Param, first: bool) -> Option<Candidate> {
-    if p.value.is_nan() || p.value <= 0.0 {
+/// The scale calibration of number `p`, when its row says `diagnose` may calibrate it
+/// (`spec::registry`'s `Calibration`): a node's thermal mass or a face's ε or α
+/// (`first`), a Sun load's α or a link's conductance (not `first`). Optical properties
+/// stay within 0 … 1.
+fn scale_of(p: &Param, keys: &ElementKeys, first: bool) -> Option<Candidate> {
+    use crate::spec::registry::{ScaleFamily, Section};
+    let row = p.id.row();
+    let c = row.calibration?;
+    if c.first != first || p.value.is_nan() || p.value <= 0.0 {
         return None;
     }
-    let (path, name) = (p.path.as_str(), element_of(&p.path));
-    let optical = path.ends_with(".absorptivity") || path.ends_with(".emissivity");
-    let upper = if optical { 1.0 / p.value } else { 20.0 };
-    let alpha_starts = vec![0.8, 0.9, 1.1f64.min(upper), 1.25f64.min(upper)];
-    let alpha = ParamDef::new("scale", 0.05, upper, 0.003);
-    let (in_first, effect, target, param, starts) =
-        if path.starts_with("node.") && path.ends_with(".capacitance_j_per_k") {
-            (
-                true,
-                Effect::CapacitanceScale,
-                Target::Node(name),
-                ParamDef::new("scale", 0.2, 5.0, 0.005),
-                vec![0.5, 0.8, 1.25, 2.0],
-            )
-        } else if path.starts_with("face.") && path.ends_with(".emissivity") {
-            (
-                true,
-                Effect::EmissivityScale,
-                Target::Face(name),
-                alpha,
-                vec![0.6, 0.85, 1.1f64.min(upper), 1.25f64.min(upper)],
-            )
-        } else if path.starts_with("face.") && path.ends_with(".absorptivity") {
-            (
-                true,
-                Effect::AbsorptivityScale,
-                Target::Face(name),
-                alpha,
-                alpha_starts,
-            )
-        } else if path.starts_with("sun.")
-            && (path.ends_with(".absorptivity") || path.ends_with(".absorptivity_area_m2"))
-        {
-            (
-                false,
-                Effect::AbsorptivityScale,
-                Target::Load(name),
-                alpha,
-                alpha_starts,
-            )
-        } else if (path.starts_with("conductor.") && path.ends_with(".conductance_w_per_k"))
-            || (path.starts_with("radiation.")
-                && (path.ends_with(".emissivity_area_m2") || path.ends_with(".emissivity")))
-        {
-            (
-                false,
-                Effect::ConductanceScale,
-                Target::Conductor(name),
-                ParamDef::new("scale", 0.02, upper, 0.01),
-                vec![0.3, 0.6, 1.5f64.min(upper), 3.0f64.min(upper)],
-            )
-        } else {
-            return None;
-        };
-    (in_first == first).then(|| Candidate {
-        params: vec![param],
+    let name = row.section.keys(keys)?[p.id.element].clone();
+    let upper = c.upper.unwrap_or(1.0 / p.value);
+    let (effect, target) = match c.family {
+        ScaleFamily::ThermalMass => (Effect::CapacitanceScale, Target::Node(name)),
+        ScaleFamily::Emissivity => (Effect::EmissivityScale, Target::Face(name)),
+        ScaleFamily::Absorptivity if row.section == Section::Face => {
+            (Effect::AbsorptivityScale, Target::Face(name))
+        }
+        ScaleFamily::Absorptivity => (Effect::AbsorptivityScale, Target::Load(name)),
+        ScaleFamily::Conductance => (Effect::ConductanceScale, Target::Conductor(name)),
+    };
+    Some(Candidate {
+        params: vec![ParamDef::new("scale", c.lower, upper, c.step)],
         setters: vec![Setter::scaled(p.path.clone(), 0, p.value)],
-        starts: starts.into_iter().map(|s| vec![s]).collect(),
+        starts: c.starts.iter().map(|s| vec![s.min(upper)]).collect(),
         null: Some(vec![1.0]),
         ..Candidate::new(effect, target, None)
     })
@@ -998,17 +967,6 @@ fn pair_name(spec: &ScenarioSpec, i: usize) -> String {
             format!("mesh{i}")
         }
     })
-}
-
-/// The element name of `kind.name.key` (name unquoted).
-fn element_of(path: &str) -> String {
-    match crate::spec::keys::parse_path(path) {
-        Ok(parts) => match parts.get(1) {
-            Some(crate::spec::keys::Part::Key(k)) => k.clone(),
-            _ => path.to_string(),
-        },
-        Err(_) => path.to_string(),
-    }
 }
 
 #[cfg(test)]

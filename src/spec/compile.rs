@@ -331,7 +331,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         earth_ir: raw.earth_ir,
         dissipation: raw.dissipation,
     };
-    let (loads, bindings) = loads(cx, &keys, &table, sections, &modes, view_factor_default)?;
+    let (loads, mut bindings) = loads(cx, &keys, &table, sections, &modes, view_factor_default)?;
     let heaters = heaters(cx, &keys, &table, raw.heater)?;
     let (mut loads, mut radiators) = (loads, radiators);
     // Each face's key and node, for the sensors that read a face.
@@ -341,7 +341,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         .zip(&raw.face)
         .map(|(k, f)| (k.clone(), f.node.clone()))
         .collect();
-    faces(
+    bindings.face = faces(
         cx,
         &keys,
         &table,
@@ -937,7 +937,8 @@ fn unique_face_names(cx: &Cx, specs: &[FaceSpec]) -> Result<(), SpecError> {
 
 /// `[attitude]` and `[[face]]`: each face a load on its node (direct Sun, albedo,
 /// Earth infrared from its orientation) and a radiative coupling εA to space, after the
-/// spec's own loads and couplings (their indices stay those of the spec).
+/// spec's own loads and couplings (their indices stay those of the spec); per face, the
+/// indices of its load and its coupling.
 fn faces(
     cx: &Cx,
     keys: &ElementKeys,
@@ -946,7 +947,7 @@ fn faces(
     specs: Vec<FaceSpec>,
     loads: &mut Vec<Load>,
     radiators: &mut Vec<Radiator>,
-) -> Result<(), SpecError> {
+) -> Result<Vec<(usize, usize)>, SpecError> {
     use crate::orbit::faces::{Attitude, Face};
     let ap = KeyPath::new("attitude");
     let a = attitude.unwrap_or_default();
@@ -1040,6 +1041,7 @@ fn faces(
     };
     let space = table.lookup(cx, &KeyPath::new("boundary"), SPACE)?;
     unique_face_names(cx, &specs)?;
+    let mut bound = Vec::with_capacity(specs.len());
     for (i, f) in specs.into_iter().enumerate() {
         let p = KeyPath::new("face").elem(i, &keys.face[i]);
         let node = table.diffusion(cx, &p.key("node"), &f.node)?;
@@ -1052,6 +1054,7 @@ fn faces(
         let area = cx.quantity(&q::AREA_M2, &p.key("area_m2"), f.area_m2)?;
         let absorptivity = cx.quantity(&q::ABSORPTIVITY, &p.key("absorptivity"), f.absorptivity)?;
         let emissivity = cx.quantity(&q::EMISSIVITY, &p.key("emissivity"), f.emissivity)?;
+        bound.push((loads.len(), radiators.len()));
         loads.push(Load {
             name: f
                 .name
@@ -1072,7 +1075,7 @@ fn faces(
             emissivity_area_m2: emissivity * area,
         });
     }
-    Ok(())
+    Ok(bound)
 }
 
 /// `[[heater]]`: thermostat-controlled heaters.

@@ -10,8 +10,8 @@
 pub(crate) mod compile;
 pub mod keys;
 pub mod model;
-pub mod params;
 pub mod quantity;
+pub mod registry;
 pub mod scenario;
 pub mod validate;
 

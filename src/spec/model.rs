@@ -6,12 +6,11 @@
 //! length in orbits on the period, a tooth thickness on its thinning) follows.
 
 use crate::spec::keys::{ElementKeys, element_keys};
-use crate::spec::params::{self, Param, ParamError};
-use crate::spec::quantity::{self as q, Quantity};
+use crate::spec::registry::{self, Fast, Param, ParamError, ParamRef, Sub};
 use crate::spec::scenario::Scenario;
 use crate::spec::{
-    AlbedoSpec, DissipationSpec, EarthIrSpec, HeaterSpec, KeyPath, ProfileSpec, ScenarioSpec,
-    SensorSpec, SpecError, SunSpec, compile,
+    AlbedoSpec, DissipationSpec, EarthIrSpec, HeaterSpec, ProfileSpec, ScenarioSpec, SensorSpec,
+    SpecError, SunSpec, compile,
 };
 
 /// Why a change to a model was refused; the model is left as it was.
@@ -101,7 +100,7 @@ impl Model {
                     message: "applies to drives = \"sunlit\" only".into(),
                     also: None,
                 });
-            } else if input_target(&self.spec, &inp.drives).is_none() {
+            } else if !input_target(&self.spec, &inp.drives) {
                 return Err(SpecError {
                     key: at.key("drives"),
                     message: format!(
@@ -231,12 +230,12 @@ impl Model {
 
     /// Every number by key path, with unit and range.
     pub fn params(&self) -> Vec<Param> {
-        params::params(&self.spec)
+        registry::params(&self.spec)
     }
 
     /// The number at `path`.
     pub fn get(&self, path: &str) -> Result<f64, ParamError> {
-        params::get(&self.spec, path)
+        registry::get(&self.spec, path)
     }
 
     /// Writes one number; on any error the model is unchanged.
@@ -249,7 +248,8 @@ impl Model {
     pub fn set_many<K: AsRef<str>>(&mut self, changes: &[(K, f64)]) -> Result<(), ModelError> {
         let mut spec = self.spec.clone();
         for (path, value) in changes {
-            params::set_with_keys(&mut spec, &self.keys, path.as_ref(), *value)?;
+            let at = registry::resolve(&self.spec, &self.keys, path.as_ref())?;
+            write(&mut spec, at, *value, path.as_ref())?;
         }
         self.replace(spec)
     }
@@ -294,20 +294,18 @@ impl Model {
 }
 
 /// A parameter resolved once ([`Model::param`]) and written many times
-/// ([`Model::set_param`]): the values Monte Carlo samples disperse. The common ones
-/// (capacitances, initial temperatures, conductances, radiative and load areas and
-/// optical properties, heater settings, albedo, Earth IR, sink, β and solar flux when
-/// constant) are written straight into the spec and the compiled model after the
-/// compiler's own check of the value; a gear-pair value recompiles that pair; any
-/// other recompiles the scenario.
+/// ([`Model::set_param`]): the values Monte Carlo samples disperse and `diagnose`
+/// fits. A number whose row has a fast write (capacitances, initial temperatures,
+/// conductances, radiative and load areas and optical properties, faces, heater
+/// settings, sensor lags and offsets, albedo, Earth IR, sink, β, solar flux and
+/// dissipations when constant) is written straight into the spec and the compiled model
+/// after the compiler's own check of the value; a gear-pair value recompiles that pair;
+/// any other recompiles the scenario (see `spec::registry`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParamId {
     path: String,
-    canonical: Vec<String>,
-    /// Its position in its section or element (see `spec::params::position`).
-    position: Option<usize>,
-    key: KeyPath,
-    target: Target,
+    canonical: String,
+    at: ParamRef,
     /// The model shape it was resolved for.
     shape: u64,
 }
@@ -321,523 +319,200 @@ impl ParamId {
     /// The path in one spelling (`node."housing" . capacitance_j_per_k` and
     /// `node.housing.capacitance_j_per_k` give the same), for messages and comparisons.
     pub fn canonical_path(&self) -> String {
-        self.canonical
-            .iter()
-            .enumerate()
-            .map(|(i, p)| {
-                // inner keys may hold dots (`coating.poisson`); only element keys quote
-                if i == 1 {
-                    crate::spec::keys::quote_key(p)
-                } else {
-                    p.clone()
-                }
-            })
-            .collect::<Vec<_>>()
-            .join(".")
+        self.canonical.clone()
     }
 
     /// True when both name the same number of the scenario, however spelled.
     pub fn same_number(&self, other: &ParamId) -> bool {
         self.canonical == other.canonical
     }
-}
 
-/// Which part of an area product.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Part3 {
-    Product,
-    Fraction,
-    Area,
-}
-
-/// The kinds of load addressed by path, in the order the compiler lists loads.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum LoadSection {
-    Sun,
-    Albedo,
-    EarthIr,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-enum Target {
-    NodeCapacitance(usize),
-    NodeInitial(usize),
-    Conductance(usize),
-    Radiation(usize, Part3),
-    Load(LoadSection, usize, Part3),
-    ViewFactor(LoadSection, usize),
-    HeaterPower(usize),
-    HeaterOn(usize),
-    HeaterOff(usize),
-    Albedo,
-    EarthIr,
-    Sink,
-    BetaConstant,
-    FluxConstant,
-    GearPair(usize),
-    Other,
+    /// The row, element and place it names.
+    pub fn at(&self) -> ParamRef {
+        self.at
+    }
 }
 
 impl Model {
-    /// Resolves `path` for [`Model::set_param`].
+    /// Resolves `path` for [`Model::set_param`]: a number the scenario has.
     pub fn param(&self, path: &str) -> Result<ParamId, ParamError> {
-        self.get(path)?; // it exists
-        let parts = crate::spec::keys::parse_path(path).map_err(|message| ParamError {
-            key: path.to_string(),
-            message,
+        let at = registry::resolve(&self.spec, &self.keys, path)?;
+        self.get(path)?; // it has a value
+        Ok(self.id(at, path.to_string()))
+    }
+
+    /// The parameter at `at` (a row, element and place of this model's spec), for
+    /// programs that name numbers by row rather than by path.
+    pub fn param_at(&self, at: ParamRef) -> Result<ParamId, ParamError> {
+        let path = at.key_path(&self.keys).to_string();
+        registry::value(&self.spec, at).ok_or_else(|| ParamError {
+            key: path.clone(),
+            message: "no such number in this scenario".into(),
         })?;
-        use crate::spec::keys::Part::Key;
-        let k: Vec<&str> = parts
-            .iter()
-            .map(|p| match p {
-                Key(s) => s.as_str(),
-                _ => "[]",
-            })
-            .collect();
-        let find = |list: &[String], key: &str| list.iter().position(|x| x == key);
-        let keys = &self.keys;
-        let elem_path = |section: &'static str, i: usize, key: &str, field: &'static str| {
-            KeyPath::new(section).elem(i, key).key(field)
-        };
-        let part3 = |f: &str| match f {
-            "emissivity_area_m2" | "absorptivity_area_m2" => Some(Part3::Product),
-            "emissivity" | "absorptivity" => Some(Part3::Fraction),
-            "area_m2" => Some(Part3::Area),
-            _ => None,
-        };
-        let env = |field: &'static str| KeyPath::new("environment").key(field);
-        let (target, key) = match k.as_slice() {
-            [
-                "node",
-                n,
-                f @ ("capacitance_j_per_k" | "initial_temperature_k"),
-            ] => {
-                let i = find(&keys.node, n).expect("exists");
-                let field = if *f == "capacitance_j_per_k" {
-                    "capacitance_j_per_k"
-                } else {
-                    "initial_temperature_k"
-                };
-                (
-                    if field == "capacitance_j_per_k" {
-                        Target::NodeCapacitance(i)
-                    } else {
-                        Target::NodeInitial(i)
-                    },
-                    elem_path("node", i, n, field),
-                )
-            }
-            ["conductor", c, "conductance_w_per_k"] => {
-                let i = find(&keys.conductor, c).expect("exists");
-                (
-                    Target::Conductance(i),
-                    elem_path("conductor", i, c, "conductance_w_per_k"),
-                )
-            }
-            ["radiation", r, f] if part3(f).is_some() => {
-                let i = find(&keys.radiation, r).expect("exists");
-                (
-                    Target::Radiation(i, part3(f).expect("some")),
-                    KeyPath::new("radiation").elem(i, r).key(static_field(f)),
-                )
-            }
-            [s @ ("sun" | "albedo" | "earth_ir"), l, f]
-                if part3(f).is_some() || *f == "view_factor" =>
-            {
-                let (section, list, name) = match *s {
-                    "sun" => (LoadSection::Sun, &keys.sun, "sun"),
-                    "albedo" => (LoadSection::Albedo, &keys.albedo, "albedo"),
-                    _ => (LoadSection::EarthIr, &keys.earth_ir, "earth_ir"),
-                };
-                let i = find(list, l).expect("exists");
-                let target = match part3(f) {
-                    Some(p) => Target::Load(section, i, p),
-                    None => Target::ViewFactor(section, i),
-                };
-                (target, KeyPath::new(name).elem(i, l).key(static_field(f)))
-            }
-            ["heater", h, f @ ("power_w" | "on_k" | "off_k")] => {
-                let i = find(&keys.heater, h).expect("exists");
-                let target = match *f {
-                    "power_w" => Target::HeaterPower(i),
-                    "on_k" => Target::HeaterOn(i),
-                    _ => Target::HeaterOff(i),
-                };
-                (
-                    target,
-                    KeyPath::new("heater").elem(i, h).key(static_field(f)),
-                )
-            }
-            ["environment", "albedo"] => (Target::Albedo, env("albedo")),
-            ["environment", "earth_ir_w_per_m2"] => (Target::EarthIr, env("earth_ir_w_per_m2")),
-            ["environment", "space_sink_k"] => (Target::Sink, env("space_sink_k")),
-            ["environment", "beta_deg"] => (Target::BetaConstant, env("beta_deg")),
-            ["environment", "solar_flux_w_per_m2"] => {
-                (Target::FluxConstant, env("solar_flux_w_per_m2"))
-            }
-            ["gear_pair", g, ..] => {
-                let i = find(&keys.gear_pair, g).expect("exists");
-                (Target::GearPair(i), KeyPath::new("gear_pair"))
-            }
-            _ => (Target::Other, KeyPath::new("scenario")),
-        };
-        let canonical = params::canonical_path(path)?;
-        Ok(ParamId {
-            path: path.to_string(),
-            position: params::position(&self.spec, &self.keys, &canonical),
-            canonical,
-            key,
-            target,
+        Ok(self.id(at, path))
+    }
+
+    fn id(&self, at: ParamRef, path: String) -> ParamId {
+        ParamId {
+            canonical: at.key_path(&self.keys).to_string(),
+            path,
+            at,
             shape: self.shape,
-        })
+        }
+    }
+
+    /// The value of a resolved parameter.
+    pub fn value(&self, id: &ParamId) -> Option<f64> {
+        registry::value(&self.spec, id.at)
     }
 
     /// Writes the value of a resolved parameter (see [`ParamId`]); on an error the
     /// model is unchanged.
     pub fn set_param(&mut self, id: &ParamId, value: f64) -> Result<(), ModelError> {
-        if id.shape != self.shape {
-            // resolved on a model with other elements: its indices may not hold here
-            let id = self.param(&id.path)?;
-            return self.set_param(&id, value);
-        }
-        use crate::spec::check;
-        use crate::thermal::LoadKind;
-        let path = &id.key;
-        let sc = &mut self.scenario;
-        let net = &mut sc.thermal.network;
-        match &id.target {
-            Target::NodeCapacitance(i) => {
-                let c = check::value(&q::CAPACITANCE_J_PER_K, path, value)?;
-                self.spec.node[*i].capacitance_j_per_k = value;
-                net.nodes[*i].capacitance_j_per_k = c;
-            }
-            Target::NodeInitial(i) => {
-                let t = check::value(&q::TEMPERATURE_K, path, value)?;
-                self.spec.node[*i].initial_temperature_k = value;
-                net.nodes[*i].initial_temperature_k = t;
-            }
-            Target::Conductance(i) => {
-                let g = check::value(&q::CONDUCTANCE_W_PER_K, path, value)?;
-                self.spec.conductor[*i].conductance_w_per_k = value;
-                net.conductors[*i].conductance_w_per_k = g;
-            }
-            Target::Radiation(i, part) => {
-                let r = &mut self.spec.radiation[*i];
-                let product = area_product(
-                    path,
-                    *part,
-                    value,
-                    (&mut r.emissivity_area_m2, &mut r.emissivity, &mut r.area_m2),
-                    &q::EMISSIVITY,
-                )?;
-                net.radiators[*i].emissivity_area_m2 = product;
-            }
-            Target::Load(section, i, part) => {
-                self.set_area_load(path, *section, *i, *part, value)?
-            }
-            Target::ViewFactor(section, i) => {
-                let f = check::value(&q::VIEW_FACTOR, path, value)?;
-                let at = match section {
-                    LoadSection::Albedo => {
-                        self.spec.albedo[*i].view_factor = Some(value);
-                        sc.bindings.albedo[*i]
-                    }
-                    _ => {
-                        self.spec.earth_ir[*i].view_factor = Some(value);
-                        sc.bindings.earth_ir[*i]
-                    }
-                };
-                match &mut net.loads[at].kind {
-                    LoadKind::Albedo { view_factor, .. }
-                    | LoadKind::EarthIr { view_factor, .. } => *view_factor = f,
-                    _ => unreachable!("a load with a view factor"),
-                }
-            }
-            Target::HeaterPower(i) => {
-                let p = check::value(&q::HEATER_POWER_W, path, value)?;
-                self.spec.heater[*i].power_w = value;
-                net.heaters[*i].power_w = p;
-            }
-            Target::HeaterOn(i) | Target::HeaterOff(i) => {
-                let on = matches!(id.target, Target::HeaterOn(_));
-                self.set_heater_switch(path, *i, on, value)?
-            }
-            Target::Albedo => {
-                let a = check::value(&q::ALBEDO, path, value)?;
-                self.spec.environment.albedo = Some(value);
-                *sc.thermal.environment.earth_and_space_mut().0 = a;
-            }
-            Target::EarthIr => {
-                let q = check::value(&q::EARTH_IR_W_PER_M2, path, value)?;
-                self.spec.environment.earth_ir_w_per_m2 = Some(value);
-                *sc.thermal.environment.earth_and_space_mut().1 = q;
-            }
-            Target::Sink => {
-                let t = check::value(&q::SPACE_SINK_K, path, value)?;
-                self.spec.environment.space_sink_k = Some(value);
-                *sc.thermal.environment.earth_and_space_mut().2 = t;
-                // the built-in boundary `space` sits at the sink temperature
-                net.boundaries[0].temperature_k = crate::orbit::Profile::Constant(t);
-            }
-            Target::BetaConstant
-                if matches!(
-                    self.spec.environment.beta_deg,
-                    Some(ProfileSpec::Constant(_))
-                ) =>
-            {
-                let b = check::value(&q::BETA_DEG, path, value)?;
-                self.spec.environment.beta_deg = Some(ProfileSpec::Constant(value));
-                sc.thermal
-                    .environment
-                    .circular_mut()
-                    .expect("β is a key of circular orbits")
-                    .beta_rad = crate::orbit::Profile::Constant(b.to_radians());
-            }
-            Target::FluxConstant
-                if !matches!(
-                    self.spec.environment.solar_flux_w_per_m2,
-                    Some(ProfileSpec::Table(_))
-                ) =>
-            {
-                let s = check::value(&q::SOLAR_FLUX_W_PER_M2, path, value)?;
-                self.spec.environment.solar_flux_w_per_m2 = Some(ProfileSpec::Constant(value));
-                match &mut sc.thermal.environment {
-                    crate::orbit::Environment::Circular(c) => {
-                        c.solar_flux_w_per_m2 = crate::orbit::Profile::Constant(s)
-                    }
-                    // a dated orbit's flux is the flux at 1 AU
-                    crate::orbit::Environment::Dated(d) => d.solar_flux_1au_w_per_m2 = s,
-                }
-            }
-            Target::GearPair(g) => self.set_gear_value(id, *g, value)?,
-            _ => return self.set(&id.path, value),
-        }
-        Ok(())
+        self.set_params(&[(id, value)])
     }
 
-    /// Writes one number of an area load (`sun`, `albedo`, `earth_ir` element `i`):
-    /// the product or one of its factors, checked as the compiler checks it; the
-    /// compiled load is found through the compiler's [`Bindings`](crate::spec::scenario::Bindings).
-    fn set_area_load(
-        &mut self,
-        path: &KeyPath,
-        section: LoadSection,
-        i: usize,
-        part: Part3,
-        value: f64,
-    ) -> Result<(), ModelError> {
-        use crate::thermal::LoadKind;
-        let (fields, what, at) = match section {
-            LoadSection::Sun => {
-                let l = &mut self.spec.sun[i];
-                (
-                    (
-                        &mut l.absorptivity_area_m2,
-                        &mut l.absorptivity,
-                        &mut l.area_m2,
-                    ),
-                    &q::ABSORPTIVITY,
-                    self.scenario.bindings.sun[i],
-                )
-            }
-            LoadSection::Albedo => {
-                let l = &mut self.spec.albedo[i];
-                (
-                    (
-                        &mut l.absorptivity_area_m2,
-                        &mut l.absorptivity,
-                        &mut l.area_m2,
-                    ),
-                    &q::ABSORPTIVITY,
-                    self.scenario.bindings.albedo[i],
-                )
-            }
-            LoadSection::EarthIr => {
-                let l = &mut self.spec.earth_ir[i];
-                (
-                    (&mut l.emissivity_area_m2, &mut l.emissivity, &mut l.area_m2),
-                    &q::EMISSIVITY,
-                    self.scenario.bindings.earth_ir[i],
-                )
-            }
-        };
-        let product = area_product(path, part, value, fields, what)?;
-        match &mut self.scenario.thermal.network.loads[at].kind {
-            LoadKind::Sun {
-                absorptivity_area_m2,
-                ..
-            }
-            | LoadKind::Albedo {
-                absorptivity_area_m2,
-                ..
-            } => *absorptivity_area_m2 = product,
-            LoadKind::EarthIr {
-                emissivity_area_m2, ..
-            } => *emissivity_area_m2 = product,
-            LoadKind::Dissipation { .. } | LoadKind::Face(_) => unreachable!("not an area load"),
+    /// Writes several resolved parameters at once, as [`Model::set_many`] does (each
+    /// value is judged beside the others' new values: a heater's `on_k` and `off_k`
+    /// moved together), through the fast writes when every one has one; on an error
+    /// the model is unchanged.
+    pub fn set_params(&mut self, values: &[(&ParamId, f64)]) -> Result<(), ModelError> {
+        let mut at = Vec::with_capacity(values.len());
+        for (id, v) in values {
+            let r = if id.shape == self.shape {
+                id.at
+            } else {
+                // resolved on a model with other elements: its indices may not hold here
+                registry::resolve(&self.spec, &self.keys, &id.path)?
+            };
+            at.push((r, *v, id.path.as_str()));
         }
-        Ok(())
-    }
-
-    /// Writes heater `i`'s switch-on (`on`) or switch-off temperature, keeping the band
-    /// valid.
-    fn set_heater_switch(
-        &mut self,
-        path: &KeyPath,
-        i: usize,
-        on: bool,
-        value: f64,
-    ) -> Result<(), ModelError> {
-        use crate::spec::check;
-        let quantity = if on {
-            &q::HEATER_ON_K
+        let direct = |r: &ParamRef| matches!(r.row().fast, Fast::Direct(_)) && r.sub == Sub::One;
+        if at.iter().all(|(r, ..)| direct(r)) {
+            self.write_direct(&at)
+        } else if at
+            .iter()
+            .all(|(r, ..)| matches!(r.row().fast, Fast::GearPair))
+        {
+            self.write_gear_pairs(&at)
         } else {
-            &q::HEATER_OFF_K
-        };
-        let t = check::value(quantity, path, value)?;
-        let h = &self.spec.heater[i];
-        let (on_k, off_k) = if on { (t, h.off_k) } else { (h.on_k, t) };
-        let off_path = KeyPath::new("heater")
-            .elem(i, &self.keys.heater[i])
-            .key("off_k");
-        check::heater_band(&off_path, on_k, off_k)?;
-        let (hs, hm) = (
-            &mut self.spec.heater[i],
-            &mut self.scenario.thermal.network.heaters[i],
-        );
-        if on {
-            hs.on_k = value;
-            hm.on_k = t;
-        } else {
-            hs.off_k = value;
-            hm.off_k = t;
+            let mut spec = self.spec.clone();
+            for (r, v, path) in &at {
+                write(&mut spec, *r, *v, path)?;
+            }
+            self.replace(spec)
         }
-        Ok(())
     }
 
-    /// Writes a number of gear pair `g` and recompiles that pair only (its checks tie
-    /// many numbers together); on an error the pair is as before.
-    fn set_gear_value(&mut self, id: &ParamId, g: usize, value: f64) -> Result<(), ModelError> {
-        let old = self.spec.gear_pair[g].clone();
-        let direct = id
-            .position
-            .is_some_and(|k| params::set_at(&mut self.spec, &self.keys, &id.canonical, k, value));
-        if !direct {
-            params::set_canonical(&mut self.spec, &self.keys, &id.path, &id.canonical, value)?;
+    /// The fast writes: each value checked by its quantity with the compiler's text,
+    /// all written into the spec, then each row's compiled value made again from it.
+    fn write_direct(&mut self, at: &[(ParamRef, f64, &str)]) -> Result<(), ModelError> {
+        for (r, v, _) in at {
+            crate::spec::check::value(r.quantity(), &r.key_path(&self.keys), *v)?;
         }
-        match crate::spec::check::gear_pair_again(
-            &self.spec,
-            g,
-            &self.keys.gear_pair[g],
-            &self.scenario.thermal.network,
-        ) {
-            Ok(pair) => self.scenario.gears[g] = pair,
-            Err(e) => {
-                self.spec.gear_pair[g] = old;
+        let mut saved = Vec::with_capacity(at.len());
+        for (r, v, path) in at {
+            saved.push(registry::save(&mut self.spec, *r).expect("a value"));
+            if let Err(e) = write(&mut self.spec, *r, *v, path) {
+                self.put_back(&at[..saved.len()], &saved, 0);
+                return Err(e);
+            }
+        }
+        for (k, (r, ..)) in at.iter().enumerate() {
+            let Fast::Direct(f) = r.row().fast else {
+                unreachable!("checked")
+            };
+            if let Err(e) = f(&self.spec, &self.keys, &mut self.scenario, r.element) {
+                self.put_back(at, &saved, k);
                 return Err(e.into());
             }
         }
         Ok(())
     }
-}
 
-/// The field name of a load or link key as a `'static str`.
-fn static_field(f: &str) -> &'static str {
-    match f {
-        "emissivity_area_m2" => "emissivity_area_m2",
-        "absorptivity_area_m2" => "absorptivity_area_m2",
-        "emissivity" => "emissivity",
-        "absorptivity" => "absorptivity",
-        "area_m2" => "area_m2",
-        "view_factor" => "view_factor",
-        "power_w" => "power_w",
-        "on_k" => "on_k",
-        _ => "off_k",
+    /// Puts `saved` back into the spec and makes the compiled values of the first
+    /// `made` writes again from it.
+    fn put_back(&mut self, at: &[(ParamRef, f64, &str)], saved: &[registry::Saved], made: usize) {
+        for ((r, ..), s) in at.iter().zip(saved).rev() {
+            registry::restore(&mut self.spec, *r, *s);
+        }
+        for (r, ..) in &at[..made] {
+            if let Fast::Direct(f) = r.row().fast {
+                f(&self.spec, &self.keys, &mut self.scenario, r.element)
+                    .expect("the model's own values are valid");
+            }
+        }
+    }
+
+    /// Writes numbers of gear pairs and recompiles those pairs only (their checks tie
+    /// many numbers together); on an error the pairs are as before.
+    fn write_gear_pairs(&mut self, at: &[(ParamRef, f64, &str)]) -> Result<(), ModelError> {
+        let mut pairs: Vec<usize> = at.iter().map(|(r, ..)| r.element).collect();
+        pairs.sort_unstable();
+        pairs.dedup();
+        let old: Vec<_> = pairs
+            .iter()
+            .map(|&g| self.spec.gear_pair[g].clone())
+            .collect();
+        let restore = |m: &mut Model| {
+            for (&g, o) in pairs.iter().zip(&old) {
+                m.spec.gear_pair[g] = o.clone();
+            }
+        };
+        for (r, v, path) in at {
+            if let Err(e) = write(&mut self.spec, *r, *v, path) {
+                restore(self);
+                return Err(e);
+            }
+        }
+        let mut made = Vec::with_capacity(pairs.len());
+        for &g in &pairs {
+            match crate::spec::check::gear_pair_again(
+                &self.spec,
+                g,
+                &self.keys.gear_pair[g],
+                &self.scenario.thermal.network,
+            ) {
+                Ok(pair) => made.push(pair),
+                Err(e) => {
+                    restore(self);
+                    return Err(e.into());
+                }
+            }
+        }
+        for (g, pair) in pairs.into_iter().zip(made) {
+            self.scenario.gears[g] = pair;
+        }
+        Ok(())
     }
 }
 
-/// Writes one part of an area product (the product itself, the fraction or the area)
-/// after the compiler's check, and returns the product the model uses.
-fn area_product(
-    path: &KeyPath,
-    part: Part3,
-    value: f64,
-    (product, fraction, area): (&mut Option<f64>, &mut Option<f64>, &mut Option<f64>),
-    fraction_q: &Quantity,
-) -> Result<f64, ModelError> {
-    use crate::spec::check;
-    let (p, x, a) = match part {
-        Part3::Product => (check::value(&q::AREA_PRODUCT_M2, path, value)?, None, None),
-        Part3::Fraction => (0.0, Some(check::value(fraction_q, path, value)?), *area),
-        Part3::Area => (
-            0.0,
-            *fraction,
-            Some(check::value(&q::AREA_M2, path, value)?),
-        ),
-    };
-    Ok(match part {
-        Part3::Product => {
-            *product = Some(value);
-            p
-        }
-        Part3::Fraction => {
-            *fraction = Some(value);
-            x.expect("checked") * a.expect("the area is given with the fraction")
-        }
-        Part3::Area => {
-            *area = Some(value);
-            x.expect("the fraction is given with the area") * a.expect("checked")
-        }
+/// Writes `value` at `at` of `spec`, the error naming `path` as given.
+fn write(spec: &mut ScenarioSpec, at: ParamRef, value: f64, path: &str) -> Result<(), ModelError> {
+    registry::write(spec, at, value).map_err(|message| {
+        ModelError::Param(ParamError {
+            key: path.to_string(),
+            message,
+        })
     })
 }
 
-/// The profile an `[[input]]`'s `drives` names, if the scenario has it.
-fn input_target<'s>(spec: &'s ScenarioSpec, drives: &str) -> Option<&'s ProfileSpec> {
-    let parts = crate::spec::keys::parse_path(drives).ok()?;
-    let key = |i: usize| match parts.get(i) {
-        Some(crate::spec::keys::Part::Key(k)) => Some(k.as_str()),
-        _ => None,
-    };
-    match (key(0)?, key(2)?, parts.len()) {
-        ("boundary", "temperature_k", 3) => spec
-            .boundary
-            .iter()
-            .find(|b| Some(b.name.as_str()) == key(1))
-            .map(|b| &b.temperature_k),
-        ("dissipation", "power_w", 3) => {
-            let keys = crate::spec::keys::element_keys(spec);
-            let i = keys
-                .dissipation
-                .iter()
-                .position(|k| Some(k.as_str()) == key(1))?;
-            spec.dissipation.get(i).map(|d| &d.power_w)
-        }
-        _ => None,
+/// The profile an `[[input]]`'s `drives` names (a boundary's temperature or a
+/// dissipation's power), if the scenario has it.
+fn input_target_mut<'s>(spec: &'s mut ScenarioSpec, drives: &str) -> Option<&'s mut ProfileSpec> {
+    let keys = element_keys(spec);
+    let (row, e) = registry::locate(&keys, drives)?;
+    if std::ptr::eq(row.field, &registry::BOUNDARY_TEMPERATURE_K) {
+        spec.boundary.get_mut(e).map(|b| &mut b.temperature_k)
+    } else if std::ptr::eq(row.field, &registry::DISSIPATION_POWER_W) {
+        spec.dissipation.get_mut(e).map(|d| &mut d.power_w)
+    } else {
+        None
     }
 }
 
-fn input_target_mut<'s>(spec: &'s mut ScenarioSpec, drives: &str) -> Option<&'s mut ProfileSpec> {
-    let parts = crate::spec::keys::parse_path(drives).ok()?;
-    let key = |i: usize| match parts.get(i) {
-        Some(crate::spec::keys::Part::Key(k)) => Some(k.clone()),
-        _ => None,
-    };
-    match (key(0)?.as_str(), key(2)?.as_str()) {
-        ("boundary", "temperature_k") => {
-            let name = key(1)?;
-            spec.boundary
-                .iter_mut()
-                .find(|b| b.name == name)
-                .map(|b| &mut b.temperature_k)
-        }
-        ("dissipation", "power_w") => {
-            let keys = crate::spec::keys::element_keys(spec);
-            let name = key(1)?;
-            let i = keys.dissipation.iter().position(|k| *k == name)?;
-            spec.dissipation.get_mut(i).map(|d| &mut d.power_w)
-        }
-        _ => None,
-    }
+fn input_target(spec: &ScenarioSpec, drives: &str) -> bool {
+    input_target_mut(&mut spec.clone(), drives).is_some()
 }
 
 /// Longest step between two readings that an eclipse edge is placed inside, s; a

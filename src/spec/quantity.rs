@@ -5,12 +5,13 @@
 //! `SolverSettings::default()` read these definitions; none of them writes a bound or
 //! a default of its own for a number listed here.
 //!
-//! Adding a key: a field in the spec (`spec/mod.rs`), one line in `spec::params`' walk
-//! naming its quantity, and the compiler reading it through [`Quantity`]'s check
-//! (`spec::compile::check::value`). A new kind of number is one constant here.
+//! A number of a scenario is a row of the registry (`spec::registry`), which names its
+//! quantity; a new kind of number is one constant here. Each range is written once, as
+//! the rule the code checks; the text `params` shows is made from it
+//! ([`Quantity::range`]), with the context a rule cannot say.
 //!
-//! This module depends on nothing else in the crate: the run layer (`sim`) and the spec
-//! layer both read it.
+//! This module depends on nothing else in the crate but `units`: the run layer (`sim`)
+//! and the spec layer both read it.
 
 /// How a value is checked. Every rule first requires a finite number.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,8 +54,9 @@ pub enum Rule {
 pub struct Quantity {
     /// As shown after values (`orbitlash params`), e.g. "W/m²"; "" for a pure number.
     pub unit: &'static str,
-    /// The valid range as `orbitlash params` and `scenarios/README.md` show it.
-    pub range: &'static str,
+    /// What the rule cannot say: the context the value is checked in by the compiler
+    /// ("below off_k"), appended to the range [`Quantity::range`] writes; "" for none.
+    pub context: &'static str,
     /// What an absent value stands for (None: required, or a default that depends on
     /// the scenario, such as the Earth view factor).
     pub default: Option<f64>,
@@ -84,6 +86,38 @@ impl Quantity {
             && self.interval().is_none_or(|(lo, lo_in, hi, hi_in)| {
                 (v > lo || (lo_in && v == lo)) && (v < hi || (hi_in && v == hi))
             })
+    }
+
+    /// The valid range as `orbitlash params` and `scenarios/README.md` show it: the
+    /// rule's interval, then the context it is checked in.
+    pub fn range(&self) -> String {
+        let n = |v: f64| {
+            // powers of ten as 1e5 and 1e-6, a negative number with a minus sign
+            let a = v.abs();
+            let e = a.log10().round();
+            let body = if a != 0.0 && (a >= 1e4 || a < 1e-3) && 10f64.powf(e) == a {
+                format!("1e{e}")
+            } else {
+                crate::units::num(a)
+            };
+            if v < 0.0 { format!("−{body}") } else { body }
+        };
+        let rule = match self.rule {
+            Rule::Within { lo, hi, .. } => format!("{} … {}", n(lo), n(hi)),
+            Rule::Span { shown, .. } => shown.to_string(),
+            Rule::Positive => "> 0".into(),
+            Rule::NonNegative => "≥ 0".into(),
+            Rule::PositiveUpTo { hi } => format!("0 < … ≤ {}", n(hi)),
+            Rule::PositiveAtLeast { lo, hi } => format!("{} … {}", n(lo), n(hi)),
+            Rule::AtLeast { lo } => format!("≥ {}", n(lo)),
+            Rule::Temperature => format!("0 … {}", n(MAX_TEMPERATURE_K)),
+            Rule::InContext => String::new(),
+        };
+        match (rule.is_empty(), self.context.is_empty()) {
+            (_, true) => rule,
+            (true, false) => self.context.to_string(),
+            (false, false) => format!("{rule}, {}", self.context),
+        }
     }
 
     /// The default; panics for a quantity without one (a programming error).
@@ -128,10 +162,15 @@ pub const MAX_SENSOR_TAU_S: f64 = 86_400.0;
 /// Largest sensor offset, K.
 pub const MAX_SENSOR_OFFSET_K: f64 = 100.0;
 
-const fn q(unit: &'static str, range: &'static str, default: Option<f64>, rule: Rule) -> Quantity {
+const fn q(
+    unit: &'static str,
+    context: &'static str,
+    default: Option<f64>,
+    rule: Rule,
+) -> Quantity {
     Quantity {
         unit,
-        range,
+        context,
         default,
         rule,
     }
@@ -143,10 +182,10 @@ const fn within(lo: f64, hi: f64, what: &'static str) -> Rule {
 
 // ---------------------------------------------------------------- thermal network
 
-pub const TEMPERATURE_K: Quantity = q("K", "0 … 5000", None, Rule::Temperature);
+pub const TEMPERATURE_K: Quantity = q("K", "", None, Rule::Temperature);
 pub const CAPACITANCE_J_PER_K: Quantity = q(
     "J/K",
-    "1e-6 … 1e12",
+    "",
     None,
     Rule::PositiveAtLeast {
         lo: MIN_CAPACITANCE_J_PER_K,
@@ -155,69 +194,65 @@ pub const CAPACITANCE_J_PER_K: Quantity = q(
 );
 pub const CONDUCTANCE_W_PER_K: Quantity = q(
     "W/K",
-    "0 < G ≤ 1e9",
+    "",
     None,
     Rule::PositiveUpTo {
         hi: MAX_CONDUCTANCE_W_PER_K,
     },
 );
 /// An emissivity or absorptivity times its area, m².
-pub const AREA_PRODUCT_M2: Quantity = q(
-    "m²",
-    "0 < … ≤ 1e4",
-    None,
-    Rule::PositiveUpTo { hi: MAX_AREA_M2 },
-);
-pub const AREA_M2: Quantity = q(
-    "m²",
-    "0 < A ≤ 1e4",
-    None,
-    Rule::PositiveUpTo { hi: MAX_AREA_M2 },
-);
-pub const ABSORPTIVITY: Quantity = q("", "0 … 1", None, within(0.0, 1.0, "absorptivity"));
-pub const EMISSIVITY: Quantity = q("", "0 … 1", None, within(0.0, 1.0, "emissivity"));
+pub const AREA_PRODUCT_M2: Quantity = q("m²", "", None, Rule::PositiveUpTo { hi: MAX_AREA_M2 });
+pub const AREA_M2: Quantity = q("m²", "", None, Rule::PositiveUpTo { hi: MAX_AREA_M2 });
+pub const ABSORPTIVITY: Quantity = q("", "", None, within(0.0, 1.0, "absorptivity"));
+pub const EMISSIVITY: Quantity = q("", "", None, within(0.0, 1.0, "emissivity"));
 /// An Earth-facing load's view factor of the Earth (default: the orbit's (R/(R+h))²).
-pub const VIEW_FACTOR: Quantity = q("", "0 … 1", None, within(0.0, 1.0, "view factor"));
+pub const VIEW_FACTOR: Quantity = q("", "", None, within(0.0, 1.0, "view factor"));
 /// A dissipation's power (constant or table value), W.
-pub const POWER_W: Quantity = q("W", "0 … 1e6", None, within(0.0, MAX_POWER_W, "power (W)"));
-pub const HEATER_POWER_W: Quantity = q(
-    "W",
-    "0 < P ≤ 1e6",
+pub const POWER_W: Quantity = q("W", "", None, within(0.0, MAX_POWER_W, "power (W)"));
+pub const HEATER_POWER_W: Quantity = q("W", "", None, Rule::PositiveUpTo { hi: MAX_POWER_W });
+pub const HEATER_ON_K: Quantity = q("K", "below off_k", None, Rule::Temperature);
+pub const HEATER_OFF_K: Quantity = q("K", "above on_k", None, Rule::Temperature);
+/// A time of a profile table, s or days.
+pub const TABLE_TIME_S: Quantity = q("s", "strictly increasing", None, Rule::InContext);
+pub const TABLE_TIME_DAYS: Quantity = q("days", "strictly increasing", None, Rule::InContext);
+/// An end of a mode's window, s or days.
+pub const WINDOW_S: Quantity = q(
+    "s",
+    "windows [start, end], increasing, not overlapping",
     None,
-    Rule::PositiveUpTo { hi: MAX_POWER_W },
+    Rule::InContext,
 );
-pub const HEATER_ON_K: Quantity = q("K", "0 … 5000, below off_k", None, Rule::Temperature);
-pub const HEATER_OFF_K: Quantity = q("K", "0 … 5000, above on_k", None, Rule::Temperature);
+pub const WINDOW_DAYS: Quantity = q(
+    "days",
+    "windows [start, end], increasing, not overlapping",
+    None,
+    Rule::InContext,
+);
 
 // ---------------------------------------------------------------- environment
 
-pub const BETA_DEG: Quantity = q(
-    "deg",
-    "−90 … 90",
-    None,
-    within(-90.0, 90.0, "beta angle (deg)"),
-);
+pub const BETA_DEG: Quantity = q("deg", "", None, within(-90.0, 90.0, "beta angle (deg)"));
 pub const SOLAR_FLUX_W_PER_M2: Quantity = q(
     "W/m²",
-    "0 … 1e5",
+    "",
     Some(crate::constants::SOLAR_CONSTANT_W_PER_M2),
     within(0.0, 1e5, "solar flux (W/m²; 14 500 at Mercury)"),
 );
 pub const SPACE_SINK_K: Quantity = q(
     "K",
-    "0 … 5000",
+    "",
     Some(crate::constants::SPACE_SINK_K),
-    within(0.0, 5000.0, "sink temperature (K)"),
+    within(0.0, MAX_TEMPERATURE_K, "sink temperature (K)"),
 );
 pub const ALBEDO: Quantity = q(
     "",
-    "0 … 1",
+    "",
     Some(crate::constants::EARTH_ALBEDO),
     within(0.0, 1.0, "albedo"),
 );
 pub const EARTH_IR_W_PER_M2: Quantity = q(
     "W/m²",
-    "0 … 1e4",
+    "",
     Some(crate::constants::EARTH_IR_W_PER_M2),
     within(0.0, 1e4, "planetary infrared flux (W/m²)"),
 );
@@ -226,20 +261,20 @@ pub const EARTH_IR_W_PER_M2: Quantity = q(
 
 pub const EARTH_RADIUS_M: Quantity = q(
     "m",
-    "1e5 … 1e8",
+    "",
     Some(crate::constants::EARTH_RADIUS_M),
     within(1e5, 1e8, "the central body's radius (m)"),
 );
 pub const MU_M3_PER_S2: Quantity = q(
     "m³/s²",
-    "1e9 … 1e17, period 10 min … 30 days",
+    "period 10 min … 30 days",
     Some(crate::constants::EARTH_MU_M3_PER_S2),
     within(1e9, 1e17, "gravitational parameter (m³/s²; Earth 3.986e14)"),
 );
 /// Height of a circular orbit above the Earth's surface.
 pub const ALTITUDE_M: Quantity = q(
     "m",
-    "100 km … 100 000 km",
+    "",
     None,
     Rule::Span {
         lo: 100e3,
@@ -252,7 +287,7 @@ pub const ALTITUDE_M: Quantity = q(
 /// The yaw of a nadir-pointing body about nadir.
 pub const YAW_DEG: Quantity = q(
     "deg",
-    "−180 … 180",
+    "",
     Some(0.0),
     within(-180.0, 180.0, "yaw angle (deg)"),
 );
@@ -260,14 +295,14 @@ pub const YAW_DEG: Quantity = q(
 /// spins are spin-averaged, `spin_averaged = true`).
 pub const SPIN_RATE_DEG_PER_S: Quantity = q(
     "deg/s",
-    "−720 … 720",
+    "",
     None,
     within(-720.0, 720.0, "spin rate (deg/s)"),
 );
 /// A shift of a dated run's start, s (a TLE is good for about a month around its epoch).
 pub const START_OFFSET_S: Quantity = q(
     "s",
-    "−30 … 30 days (in s)",
+    "±30 days",
     Some(0.0),
     within(-2_592_000.0, 2_592_000.0, "start offset (s)"),
 );
@@ -278,13 +313,21 @@ pub const ORBIT_ANGLE_AT_START_DEG: Quantity = q(
     Rule::InContext,
 );
 
+// ---------------------------------------------------------------- run
+
+/// A run's length, given one of three ways.
+pub const RUN_ORBITS: Quantity = q("orbits", "the run lasts 1 s … 1e9 s", None, Rule::InContext);
+pub const RUN_DURATION_S: Quantity = q("s", "the run lasts 1 s … 1e9 s", None, Rule::InContext);
+pub const RUN_DURATION_DAYS: Quantity =
+    q("days", "the run lasts 1 s … 1e9 s", None, Rule::InContext);
+
 // ---------------------------------------------------------------- gear pairs
 
-pub const MODULE_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
+pub const MODULE_MM: Quantity = q("mm", "", None, Rule::Positive);
 /// The pressure angle a gear is cut with (standard 20°).
 pub const PRESSURE_ANGLE_DEG: Quantity = q(
     "deg",
-    "10 … 35",
+    "",
     None,
     Rule::Span {
         lo: 10.0,
@@ -297,7 +340,7 @@ pub const PRESSURE_ANGLE_DEG: Quantity = q(
 /// Poisson's ratio of an isotropic material (a gear's, a shaft's, a coating's).
 pub const POISSON: Quantity = q(
     "",
-    "−1 … 0.5",
+    "",
     None,
     Rule::Span {
         lo: -1.0,
@@ -307,24 +350,41 @@ pub const POISSON: Quantity = q(
         got_unit: "",
     },
 );
-pub const FACE_WIDTH_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
-pub const MIN_BACKLASH_UM: Quantity = q("µm", "≥ 0", None, Rule::NonNegative);
-pub const COATING_THICKNESS_UM: Quantity = q("µm", "≥ 0", None, Rule::NonNegative);
+pub const FACE_WIDTH_MM: Quantity = q("mm", "", None, Rule::Positive);
+/// The centre distance of a pair at its reference temperature.
+pub const CENTER_DISTANCE_MM: Quantity = q(
+    "mm",
+    "a positive backlash at assembly",
+    None,
+    Rule::Positive,
+);
+pub const MIN_BACKLASH_UM: Quantity = q("µm", "", None, Rule::NonNegative);
+pub const COATING_THICKNESS_UM: Quantity = q("µm", "", None, Rule::NonNegative);
 /// A linear expansion coefficient (a material's α, a coating's).
 pub const EXPANSION_PER_K: Quantity = q(
     "1/K",
-    "−1e-3 … 1e-3",
+    "",
     None,
     within(-1e-3, 1e-3, "expansion coefficient (1/K)"),
 );
-pub const DALPHA_DT_PER_K2: Quantity = q(
-    "1/K²",
-    "−1e-5 … 1e-5",
+pub const DALPHA_DT_PER_K2: Quantity = q("1/K²", "", None, within(-1e-5, 1e-5, "dα/dT (1/K²)"));
+/// A coefficient or value of a strain law (polynomial, table): checked by the strain
+/// the whole law gives.
+pub const STRAIN_LAW: Quantity = q(
+    "",
+    "thermal strain within ±0.1 over 20 … 1000 K",
     None,
-    within(-1e-5, 1e-5, "dα/dT (1/K²)"),
+    Rule::InContext,
 );
-pub const PROFILE_SHIFT: Quantity = q("", "−2 … 2", Some(0.0), within(-2.0, 2.0, "profile shift"));
-pub const ROOT_RADIUS_MM: Quantity = q("mm", "> 0", None, Rule::Positive);
+/// A temperature of a strain table.
+pub const STRAIN_TABLE_TEMPERATURE_K: Quantity =
+    q("K", "strictly increasing", None, Rule::InContext);
+/// A material's Young's modulus, checked to be a metal's.
+pub const YOUNGS_MODULUS_PA: Quantity = q("Pa", "≥ 1e8", None, Rule::InContext);
+/// A gear's number of teeth (an integer).
+pub const TEETH: Quantity = q("", "5 … 10000", None, Rule::InContext);
+pub const PROFILE_SHIFT: Quantity = q("", "", Some(0.0), within(-2.0, 2.0, "profile shift"));
+pub const ROOT_RADIUS_MM: Quantity = q("mm", "", None, Rule::Positive);
 /// Positive, then checked against the gear's base and root radii.
 pub const TIP_RADIUS_MM: Quantity = q("mm", "above the base and root radii", None, Rule::Positive);
 pub const BORE_RADIUS_MM: Quantity = q("mm", "below the base and root radii", None, Rule::Positive);
@@ -332,16 +392,31 @@ pub const BORE_RADIUS_MM: Quantity = q("mm", "below the base and root radii", No
 /// base circles.
 pub const NODE_RADIUS_MM: Quantity = q(
     "mm",
-    "> 0, on the gear's bore … base circle",
+    "on the gear's bore … base circle",
     None,
     Rule::Positive,
 );
+/// A tooth's thickness on the reference circle, given or as a thinning below nominal.
+pub const TOOTH_THICKNESS_MM: Quantity = q(
+    "mm",
+    "0 … π m, not pointed at the tip",
+    None,
+    Rule::InContext,
+);
+pub const TOOTH_THINNING_UM: Quantity = q(
+    "µm",
+    "a tooth of 0 … π m, not pointed at the tip",
+    None,
+    Rule::InContext,
+);
+/// An elastic bore fit's radial interference.
+pub const INTERFERENCE_UM: Quantity = q("µm", "any (elastic bore fit)", None, Rule::InContext);
 
 // ---------------------------------------------------------------- run and solver
 
 pub const OUTPUT_INTERVAL_S: Quantity = q(
     "s",
-    "≥ 0.001",
+    "",
     Some(30.0),
     Rule::AtLeast {
         lo: MIN_OUTPUT_INTERVAL_S,
@@ -349,7 +424,7 @@ pub const OUTPUT_INTERVAL_S: Quantity = q(
 );
 pub const TOLERANCE_K: Quantity = q(
     "K",
-    "1e-6 … 10",
+    "",
     Some(0.002),
     within(
         MIN_TOLERANCE_K,
@@ -357,24 +432,19 @@ pub const TOLERANCE_K: Quantity = q(
         "the local error per step (K)",
     ),
 );
-pub const MAX_STEP_S: Quantity = q(
-    "s",
-    "≥ 0.001",
-    Some(300.0),
-    Rule::AtLeast { lo: MIN_MAX_STEP_S },
-);
+pub const MAX_STEP_S: Quantity = q("s", "", Some(300.0), Rule::AtLeast { lo: MIN_MAX_STEP_S });
 
 // ---------------------------------------------------------------- sensors
 
 pub const SENSOR_TAU_S: Quantity = q(
     "s",
-    "0 … 86 400",
+    "",
     Some(0.0),
     within(0.0, MAX_SENSOR_TAU_S, "a sensor time constant (s)"),
 );
 pub const SENSOR_OFFSET_K: Quantity = q(
     "K",
-    "−100 … 100",
+    "",
     Some(0.0),
     within(
         -MAX_SENSOR_OFFSET_K,

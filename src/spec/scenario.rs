@@ -25,14 +25,17 @@ pub struct Scenario {
 }
 
 /// Per load element of the spec (`[[sun]]`, `[[albedo]]`, `[[earth_ir]]`,
-/// `[[dissipation]]`, in file order), its index among the compiled
-/// `Network::loads`, recorded by `spec::compile` as it builds them.
+/// `[[dissipation]]`, `[[face]]`, in file order), its index among the compiled
+/// `Network::loads` (and a face's among the radiative couplings), recorded by
+/// `spec::compile` as it builds them.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Bindings {
     pub sun: Vec<usize>,
     pub albedo: Vec<usize>,
     pub earth_ir: Vec<usize>,
     pub dissipation: Vec<usize>,
+    /// Per `[[face]]`: the index of its load and of its radiative coupling to space.
+    pub face: Vec<(usize, usize)>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
