@@ -46,6 +46,11 @@ def cases(out: pathlib.Path):
         p = out / name
         yield name + " run", ["run", str(sc / f"{name}.toml"), "--json", f"{p}.json",
                               "--csv", f"{p}.csv", "--out", f"{p}.mcap"], [f"{p}.json", f"{p}.csv", f"{p}.mcap"]
+    # the dated scenarios (faces, TLE orbits, attitudes) over a few orbits
+    for name in ["cubesat-1u", "hinge-tle-year", "funcube-1"]:
+        p = out / name
+        yield name + " run", ["run", str(sc / f"{name}.toml"), "--orbits", "3", "--json", f"{p}.json",
+                              "--csv", f"{p}.csv", "--out", f"{p}.mcap"], [f"{p}.json", f"{p}.csv", f"{p}.mcap"]
     p = out / "margins-steady"
     yield "margins steady", ["margins", str(sc / "reference-hinge-margins.toml"), "--samples", "200",
                              "--seed", "7", "--json", f"{p}.json"], [f"{p}.json"]
@@ -56,6 +61,12 @@ def cases(out: pathlib.Path):
         p = out / f"diagnose-{r}"
         yield f"diagnose {r}", ["diagnose", str(sc / "reference-hinge.toml"), "--recording", str(rec / f"{r}.csv"),
                                 "--json", f"{p}.json"], [f"{p}.json"]
+    # FUNcube-1's day of flight telemetry
+    flight = ROOT.parent / "shared" / "data" / "funcube-1" / "funcube1_wod_2016-02-04.csv"
+    if flight.is_file():
+        p = out / "diagnose-funcube-1"
+        yield "diagnose funcube-1 flight", ["diagnose", str(sc / "funcube-1.toml"), "--recording", str(flight),
+                                            "--json", f"{p}.json"], [f"{p}.json"]
     shared = ROOT.parent / "shared" / "cases"
     for case in sorted(d.name for d in shared.iterdir()) if shared.is_dir() else []:
         p = out / f"diagnose-shared-{case}"

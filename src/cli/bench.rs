@@ -511,24 +511,29 @@ fn parameter_cost(model: &orbitlash::spec::model::Model, o: &mut String) -> Resu
             let base: Vec<f64> = ids.iter().map(|id| model.get(id.path()).unwrap()).collect();
             let rounds = 2000;
             let mut times = Vec::with_capacity(rounds);
+            let mut writes = Vec::with_capacity(rounds);
             for r in 0..rounds {
                 let start = Instant::now();
                 for (id, b) in ids.iter().zip(&base) {
                     let v = b * (1.0 + 1e-3 * ((r % 7) as f64 - 3.0));
                     model.set_param(id, v)?;
                 }
+                writes.push(start.elapsed().as_secs_f64());
                 let sc = model.scenario();
                 let setup = orbitlash::run::sim::Setup::new(&sc.thermal, &sc.gears, &sc.solver);
                 std::hint::black_box(setup.initial_state());
                 times.push(start.elapsed().as_secs_f64());
             }
             times.sort_by(f64::total_cmp);
+            writes.sort_by(f64::total_cmp);
             outln!(
                 *o,
-                "parameters: {:.2} µs to apply 10 changes by key path and start a run (median of {rounds})",
-                times[rounds / 2] * 1e6
+                "parameters: {:.2} µs to apply 10 changes by key path and start a run, {:.2} µs of it the changes (medians of {rounds})",
+                times[rounds / 2] * 1e6,
+                writes[rounds / 2] * 1e6
             );
         }
+        evaluation_write_cost(&model, o)?;
         // A change that recompiles the whole scenario (the altitude: period, view
         // factors, eclipse geometry).
         if let Ok(id) = model.param("orbit.altitude_m") {
@@ -548,6 +553,72 @@ fn parameter_cost(model: &orbitlash::spec::model::Model, o: &mut String) -> Resu
             );
         }
     }
+    Ok(())
+}
+
+/// What one evaluation of a `diagnose` fit costs before it simulates: a copy of the
+/// model with three calibrated numbers written, by key path and compiled (`set_many`,
+/// how diagnose wrote them before the registry) and by resolved parameters through
+/// the fast writes (`set_params`, how it writes them now).
+fn evaluation_write_cost(model: &orbitlash::spec::model::Model, o: &mut String) -> Result<()> {
+    let chosen: Vec<_> = model
+        .params()
+        .into_iter()
+        .filter(|p| p.id.row().calibration.is_some() && p.value > 0.0)
+        .take(3)
+        .collect();
+    if chosen.is_empty() {
+        return Ok(());
+    }
+    let ids: Vec<_> = chosen
+        .iter()
+        .map(|p| model.param(&p.path))
+        .collect::<Result<_, _>>()?;
+    let rounds = 1000;
+    let median = |f: &mut dyn FnMut(f64) -> Result<()>| -> Result<f64> {
+        let mut times = Vec::with_capacity(rounds);
+        for r in 0..rounds {
+            let scale = 1.0 + 1e-3 * ((r % 7) as f64 - 3.0);
+            let start = Instant::now();
+            f(scale)?;
+            times.push(start.elapsed().as_secs_f64());
+        }
+        times.sort_by(f64::total_cmp);
+        Ok(times[rounds / 2])
+    };
+    let by_path = median(&mut |k| {
+        let mut m = model.clone();
+        let values: Vec<(&str, f64)> = chosen
+            .iter()
+            .map(|p| (p.path.as_str(), p.value * k))
+            .collect();
+        m.set_many(&values)?;
+        std::hint::black_box(m);
+        Ok(())
+    })?;
+    let by_id = median(&mut |k| {
+        let mut m = model.clone();
+        let values: Vec<_> = ids
+            .iter()
+            .zip(&chosen)
+            .map(|(id, p)| (id, p.value * k))
+            .collect();
+        m.set_params(&values)?;
+        std::hint::black_box(m);
+        Ok(())
+    })?;
+    outln!(
+        *o,
+        "diagnose:   {:.2} µs per evaluation to copy the model and write {} calibrated numbers ({}): {:.2} µs by key path and compile (median of {rounds})",
+        by_id * 1e6,
+        chosen.len(),
+        chosen
+            .iter()
+            .map(|p| p.path.as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
+        by_path * 1e6
+    );
     Ok(())
 }
 

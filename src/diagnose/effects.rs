@@ -7,9 +7,10 @@
 
 use serde::Serialize;
 
-use crate::spec::keys::{ElementKeys, quote_key};
+use crate::spec::keys::ElementKeys;
 use crate::spec::model::Model;
-use crate::spec::registry::Param;
+use crate::spec::model::ParamId;
+use crate::spec::registry::{self, Field, Param, ParamError, Section, Sub};
 use crate::spec::{
     AlbedoSpec, CenterDistanceSpec, DissipationSpec, EarthIrSpec, HeaterSpec, ProfileSpec,
     ScenarioSpec,
@@ -147,13 +148,72 @@ pub struct ParamDef {
     pub step: f64,
 }
 
-/// A key path written as a linear function of the parameters:
+/// A number of the model written as a linear function of the parameters:
 /// value = constant + Σ coefficient · θ\[index\].
 #[derive(Debug, Clone)]
 pub struct Setter {
-    pub path: String,
+    pub number: Number,
     pub constant: f64,
     pub terms: Vec<(usize, f64)>,
+}
+
+/// A number a setter writes: a registry row, the element by its key (the element may
+/// be one an effect adds, at another position in a model with several effects) and the
+/// place in its slot. Resolved once per model ([`Number::resolve`]), written through
+/// the registry's fast writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Number {
+    pub row: usize,
+    pub element: String,
+    pub sub: Sub,
+}
+
+impl Number {
+    /// Number `field` (in `table`) of the element with key `element` of `section`, when
+    /// `m` has it.
+    fn of(
+        m: &Model,
+        section: Section,
+        table: &[&str],
+        field: &'static Field,
+        element: &str,
+    ) -> Option<Number> {
+        let n = Number {
+            row: registry::row_of(section, table, field),
+            element: element.to_string(),
+            sub: Sub::One,
+        };
+        n.resolve(m).ok().map(|_| n)
+    }
+
+    /// The number a resolved parameter of `m` names.
+    fn of_param(m: &Model, id: &ParamId) -> Number {
+        let at = id.at();
+        Number {
+            row: at.row,
+            element: m.element_key(at).to_string(),
+            sub: at.sub,
+        }
+    }
+
+    /// This number in model `m`.
+    pub fn resolve(&self, m: &Model) -> Result<ParamId, ParamError> {
+        m.param_of(self.row, &self.element, self.sub)
+    }
+
+    /// Its key path.
+    pub fn path(&self) -> String {
+        let keyed = registry::rows()[self.row]
+            .section
+            .keys(&Default::default())
+            .is_some();
+        registry::key_path(
+            self.row,
+            keyed.then_some((0, self.element.as_str())),
+            self.sub,
+        )
+        .to_string()
+    }
 }
 
 impl ParamDef {
@@ -168,25 +228,19 @@ impl ParamDef {
 }
 
 impl Setter {
-    /// The key path set to `scale` × parameter `index`.
-    pub fn scaled(path: String, index: usize, scale: f64) -> Setter {
+    /// The number set to `scale` × parameter `index`.
+    pub fn scaled(number: Number, index: usize, scale: f64) -> Setter {
         Setter {
-            path,
+            number,
             constant: 0.0,
             terms: vec![(index, scale)],
         }
     }
-}
 
-/// The key-path values of `setters` for parameters `theta`.
-pub fn values(setters: &[Setter], theta: &[f64]) -> Vec<(String, f64)> {
-    setters
-        .iter()
-        .map(|s| {
-            let v = s.constant + s.terms.iter().map(|&(i, c)| c * theta[i]).sum::<f64>();
-            (s.path.clone(), v)
-        })
-        .collect()
+    /// Its value for parameters `theta`.
+    pub fn value(&self, theta: &[f64]) -> f64 {
+        self.constant + self.terms.iter().map(|&(i, c)| c * theta[i]).sum::<f64>()
+    }
 }
 
 /// What a candidate acts on. The report names it by the fields of
@@ -358,7 +412,10 @@ impl Candidate {
 
     /// The key-path values for parameters `theta`.
     pub fn values(&self, theta: &[f64]) -> Vec<(String, f64)> {
-        values(&self.setters, theta)
+        self.setters
+            .iter()
+            .map(|s| (s.number.path(), s.value(theta)))
+            .collect()
     }
 
     /// Parameters as the report gives them (derived ones added: a heater's `off_c`).
@@ -427,12 +484,6 @@ pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> 
     }
     out.extend(g.calibrations());
     out
-}
-
-/// A key path `prefix.name.key` when `m` has it.
-fn path_of(m: &Model, prefix: &str, name: &str, key: &str) -> Option<String> {
-    let p = format!("{prefix}.{}.{key}", quote_key(name));
-    m.get(&p).ok().map(|_| p)
 }
 
 /// Builds the candidates of one model: one method per effect (or per pair of effects
@@ -527,8 +578,20 @@ impl<'a> Generator<'a> {
             })
         };
         let base = self.with(&edit)?;
-        let pa = path_of(&base, "albedo", &an, "absorptivity_area_m2")?;
-        let pe = path_of(&base, "earth_ir", &en, "emissivity_area_m2")?;
+        let pa = Number::of(
+            &base,
+            Section::Albedo,
+            &[],
+            &registry::ABSORPTIVITY_AREA_M2,
+            &an,
+        )?;
+        let pe = Number::of(
+            &base,
+            Section::EarthIr,
+            &[],
+            &registry::EMISSIVITY_AREA_M2,
+            &en,
+        )?;
         Some(Candidate {
             params: vec![
                 ParamDef::new("albedo", 1e-4, 1.0, 0.005),
@@ -567,9 +630,10 @@ impl<'a> Generator<'a> {
             })
         };
         let base = self.with(&edit)?;
-        let pp = path_of(&base, "heater", &hn, "power_w")?;
-        let pon = path_of(&base, "heater", &hn, "on_k")?;
-        let poff = path_of(&base, "heater", &hn, "off_k")?;
+        let heater = |f| Number::of(&base, Section::Heater, &[], f, &hn);
+        let pp = heater(&registry::HEATER_POWER_W)?;
+        let pon = heater(&registry::ON_K)?;
+        let poff = heater(&registry::OFF_K)?;
         let on_c = on_k - crate::constants::ZERO_CELSIUS_K;
         let mut starts = Vec::new();
         for p in [1.0, 3.0, 8.0] {
@@ -588,12 +652,12 @@ impl<'a> Generator<'a> {
             setters: vec![
                 Setter::scaled(pp, 0, 1.0),
                 Setter {
-                    path: pon,
+                    number: pon,
                     constant: crate::constants::ZERO_CELSIUS_K,
                     terms: vec![(1, 1.0)],
                 },
                 Setter {
-                    path: poff,
+                    number: poff,
                     constant: crate::constants::ZERO_CELSIUS_K,
                     terms: vec![(1, 1.0), (2, 1.0)],
                 },
@@ -637,7 +701,8 @@ impl<'a> Generator<'a> {
             let Some(base) = self.with(&edit) else {
                 continue;
             };
-            let Some(pp) = path_of(&base, "dissipation", &dn, "power_w") else {
+            let field = &registry::DISSIPATION_POWER_W;
+            let Some(pp) = Number::of(&base, Section::Dissipation, &[], field, &dn) else {
                 continue;
             };
             let target = Target::Scheduled {
@@ -688,10 +753,11 @@ impl<'a> Generator<'a> {
             let Some(base) = self.with(&edit) else {
                 continue;
             };
-            let p = format!("gear_pair.{}.center_distance.alpha_per_k", quote_key(&pair));
-            if base.get(&p).is_err() {
+            let center = [registry::CENTER_DISTANCE];
+            let field = &registry::ALPHA_PER_K;
+            let Some(p) = Number::of(&base, Section::GearPair, &center, field, &pair) else {
                 continue;
-            }
+            };
             let target = Target::NodeAndPair {
                 node: n.into(),
                 gear_pair: pair,
@@ -712,7 +778,10 @@ impl<'a> Generator<'a> {
     fn cte_temperature_and_scale(&self, gi: usize) -> Vec<Candidate> {
         let gp = &self.spec.gear_pair[gi];
         let pair = pair_name(self.spec, gi);
-        let q = quote_key(&pair);
+        let material = |m: &Model, gear, field| {
+            let table = [gear, registry::MATERIAL];
+            Number::of(m, Section::GearPair, &table, field, &pair)
+        };
         let linear = |m: &crate::spec::MaterialSpec| {
             m.alpha_per_k.is_some()
                 && m.strain_polynomial.is_none()
@@ -733,9 +802,11 @@ impl<'a> Generator<'a> {
                 s.gear_pair[gi].wheel.material.dalpha_dt_per_k2 = Some(0.0);
             });
             if let Some(base) = self.with(&edit) {
-                let p1 = format!("gear_pair.{q}.pinion.material.dalpha_dt_per_k2");
-                let p2 = format!("gear_pair.{q}.wheel.material.dalpha_dt_per_k2");
-                if base.get(&p1).is_ok() && base.get(&p2).is_ok() {
+                let dalpha = &registry::DALPHA_DT_PER_K2;
+                if let (Some(p1), Some(p2)) = (
+                    material(&base, registry::PINION, dalpha),
+                    material(&base, registry::WHEEL, dalpha),
+                ) {
                     out.push(Candidate {
                         params: vec![ParamDef::new("dalpha_dt_per_k2", -1e-6, 1e-6, 1e-9)],
                         setters: vec![Setter::scaled(p1, 0, 1.0), Setter::scaled(p2, 0, 1.0)],
@@ -750,12 +821,16 @@ impl<'a> Generator<'a> {
                 }
             }
         }
+        let alpha = &registry::ALPHA_PER_K;
+        let (Some(p1), Some(p2)) = (
+            material(self.model, registry::PINION, alpha),
+            material(self.model, registry::WHEEL, alpha),
+        ) else {
+            return out;
+        };
         out.push(Candidate {
             params: vec![ParamDef::new("scale", 0.1, 5.0, 0.005)],
-            setters: vec![
-                Setter::scaled(format!("gear_pair.{q}.pinion.material.alpha_per_k"), 0, a1),
-                Setter::scaled(format!("gear_pair.{q}.wheel.material.alpha_per_k"), 0, a2),
-            ],
+            setters: vec![Setter::scaled(p1, 0, a1), Setter::scaled(p2, 0, a2)],
             starts: vec![vec![0.8], vec![0.9], vec![1.1], vec![1.25]],
             null: Some(vec![1.0]),
             ..Candidate::new(Effect::CteScale, Target::Pair(pair), None)
@@ -769,9 +844,8 @@ impl<'a> Generator<'a> {
         let spec = self.spec;
         let gp = &spec.gear_pair[gi];
         let pair = pair_name(spec, gi);
-        let q = quote_key(&pair);
         let mut out = Vec::new();
-        for (which, g) in [("pinion", &gp.pinion), ("wheel", &gp.wheel)] {
+        for (which, g) in [(registry::PINION, &gp.pinion), (registry::WHEEL, &gp.wheel)] {
             if !matches!(g.bore_fit.as_deref(), None | Some("free")) {
                 continue;
             }
@@ -790,7 +864,7 @@ impl<'a> Generator<'a> {
             let edit: Edit = {
                 let shaft = shaft.clone();
                 std::sync::Arc::new(move |s: &mut ScenarioSpec| {
-                    let gs = if which == "pinion" {
+                    let gs = if which == registry::PINION {
                         &mut s.gear_pair[gi].pinion
                     } else {
                         &mut s.gear_pair[gi].wheel
@@ -804,10 +878,10 @@ impl<'a> Generator<'a> {
             let Some(base) = self.with(&edit) else {
                 continue;
             };
-            let p = format!("gear_pair.{q}.{which}.interference_um");
-            if base.get(&p).is_err() {
+            let field = &registry::INTERFERENCE_UM;
+            let Some(p) = Number::of(&base, Section::GearPair, &[which], field, &pair) else {
                 continue;
-            }
+            };
             let target = Target::Bore {
                 gear_pair: pair.clone(),
                 gear: format!("{pair}.{which}"),
@@ -825,15 +899,22 @@ impl<'a> Generator<'a> {
 
     /// A lag and an offset on temperature channel `col`.
     fn sensor_lag_and_offset(&self, col: &str) -> Vec<Candidate> {
-        let q = quote_key(col);
-        let (pt, po) = (format!("sensor.{q}.tau_s"), format!("sensor.{q}.offset_k"));
-        let (Ok(tau0), Ok(off0)) = (self.model.get(&pt), self.model.get(&po)) else {
+        let sensor = |f| Number::of(self.model, Section::Sensor, &[], f, col);
+        let (Some(pt), Some(po)) = (sensor(&registry::TAU_S), sensor(&registry::OFFSET_K)) else {
+            return Vec::new();
+        };
+        let value = |n: &Number| {
+            n.resolve(self.model)
+                .ok()
+                .and_then(|id| self.model.value(&id))
+        };
+        let (Some(tau0), Some(off0)) = (value(&pt), value(&po)) else {
             return Vec::new();
         };
         let lag = Candidate {
             params: vec![ParamDef::new("tau_s", 0.0, 7200.0, 1.0)],
             setters: vec![Setter {
-                path: pt,
+                number: pt,
                 constant: tau0,
                 terms: vec![(0, 1.0)],
             }],
@@ -844,7 +925,7 @@ impl<'a> Generator<'a> {
         let offset = Candidate {
             params: vec![ParamDef::new("offset_k", -50.0, 50.0, 0.05)],
             setters: vec![Setter {
-                path: po,
+                number: po,
                 constant: off0,
                 terms: vec![(0, 1.0)],
             }],
@@ -887,6 +968,11 @@ fn scale_of(p: &Param, keys: &ElementKeys, first: bool) -> Option<Candidate> {
         return None;
     }
     let name = row.section.keys(keys)?[p.id.element].clone();
+    let number = Number {
+        row: p.id.row,
+        element: name.clone(),
+        sub: p.id.sub,
+    };
     let upper = c.upper.unwrap_or(1.0 / p.value);
     let (effect, target) = match c.family {
         ScaleFamily::ThermalMass => (Effect::CapacitanceScale, Target::Node(name)),
@@ -899,7 +985,7 @@ fn scale_of(p: &Param, keys: &ElementKeys, first: bool) -> Option<Candidate> {
     };
     Some(Candidate {
         params: vec![ParamDef::new("scale", c.lower, upper, c.step)],
-        setters: vec![Setter::scaled(p.path.clone(), 0, p.value)],
+        setters: vec![Setter::scaled(number, 0, p.value)],
         starts: c.starts.iter().map(|s| vec![s.min(upper)]).collect(),
         null: Some(vec![1.0]),
         ..Candidate::new(effect, target, None)
@@ -936,7 +1022,10 @@ impl Generator<'_> {
         }
         let mut out = Vec::new();
         for (path, lo, hi) in declared {
-            let Ok(now) = self.model.get(&path) else {
+            let Ok(id) = self.model.param(&path) else {
+                continue;
+            };
+            let Some(now) = self.model.value(&id) else {
                 continue;
             };
             if lo >= hi || lo.is_nan() || hi.is_nan() || !now.is_finite() {
@@ -946,7 +1035,7 @@ impl Generator<'_> {
             let null = now.clamp(lo, hi);
             out.push(Candidate {
                 params: vec![ParamDef::new("value", lo, hi, 1e-3 * span)],
-                setters: vec![Setter::scaled(path.clone(), 0, 1.0)],
+                setters: vec![Setter::scaled(Number::of_param(self.model, &id), 0, 1.0)],
                 starts: [0.1, 0.35, 0.65, 0.9]
                     .iter()
                     .map(|f| vec![lo + f * span])

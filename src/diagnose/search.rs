@@ -11,7 +11,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::data::{Observations, Part};
-use super::effects::{self, Candidate, ParamDef, Setter};
+use super::effects::{Candidate, ParamDef, Setter};
 use super::{Options, Progress, lm, predict};
 use crate::spec::model::{Model, ModelError};
 
@@ -44,6 +44,7 @@ pub(super) struct Composite {
     base: Model,
     params: Vec<ParamDef>,
     setters: Vec<Setter>,
+    ids: Vec<crate::spec::model::ParamId>,
 }
 
 impl Composite {
@@ -66,21 +67,33 @@ impl Composite {
             let off = params.len();
             params.extend(c.params.iter().cloned());
             setters.extend(c.setters.iter().map(|s| Setter {
-                path: s.path.clone(),
+                number: s.number.clone(),
                 constant: s.constant,
                 terms: s.terms.iter().map(|&(i, k)| (i + off, k)).collect(),
             }));
         }
+        // each number resolved once in this model, then written by the fast writes
+        let ids = setters
+            .iter()
+            .map(|s| s.number.resolve(&base))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Composite {
             base,
             params,
             setters,
+            ids,
         })
     }
 
     fn model_at(&self, theta: &[f64]) -> Result<Model, ModelError> {
         let mut m = self.base.clone();
-        m.set_many(&effects::values(&self.setters, theta))?;
+        let values: Vec<_> = self
+            .ids
+            .iter()
+            .zip(&self.setters)
+            .map(|(id, s)| (id, s.value(theta)))
+            .collect();
+        m.set_params(&values)?;
         Ok(m)
     }
 }

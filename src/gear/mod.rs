@@ -7,6 +7,7 @@
 //! gear's r_b′/r_b; the coating then adds 2K′ to the base tooth thickness.
 
 pub mod backlash;
+pub mod check;
 pub mod disc;
 pub mod involute;
 pub mod paper;

@@ -292,13 +292,13 @@ mod tests {
 
     #[test]
     fn core_key_paths_parse_and_print() {
-        let p = parse_path("node.\"gear1.r2\".capacitance_j_per_k").unwrap();
+        let p = parse_path("node.\"gear1.r2\".c_j_per_k").unwrap();
         assert_eq!(
             p,
             vec![
                 Part::Key("node".into()),
                 Part::Key("gear1.r2".into()),
-                Part::Key("capacitance_j_per_k".into())
+                Part::Key("c_j_per_k".into())
             ]
         );
         let p = parse_path("environment.beta_deg.value[1]").unwrap();
@@ -306,13 +306,11 @@ mod tests {
         assert_eq!(p[3], Part::Index(1));
         assert!(parse_path("node.").is_err());
         assert!(parse_path("node.\"x").is_err());
-        let k = KeyPath::new("node")
-            .elem(3, "gear1.r2")
-            .key("capacitance_j_per_k");
-        assert_eq!(k.to_string(), "node.\"gear1.r2\".capacitance_j_per_k");
+        let k = KeyPath::new("node").elem(3, "gear1.r2").key("c_j_per_k");
+        assert_eq!(k.to_string(), "node.\"gear1.r2\".c_j_per_k");
         let k = KeyPath::new("conductor")
             .elem(0, "housing-bus")
-            .key("conductance_w_per_k");
-        assert_eq!(k.to_string(), "conductor.housing-bus.conductance_w_per_k");
+            .key("g_w_per_k");
+        assert_eq!(k.to_string(), "conductor.housing-bus.g_w_per_k");
     }
 }

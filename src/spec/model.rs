@@ -306,6 +306,7 @@ pub struct ParamId {
     path: String,
     canonical: String,
     at: ParamRef,
+    row: &'static registry::Row,
     /// The model shape it was resolved for.
     shape: u64,
 }
@@ -352,11 +353,41 @@ impl Model {
         Ok(self.id(at, path))
     }
 
+    /// The number of `row` (a registry row) in the element with key `element` (ignored
+    /// for a table), at `sub`.
+    pub fn param_of(&self, row: usize, element: &str, sub: Sub) -> Result<ParamId, ParamError> {
+        let section = registry::rows()[row].section;
+        let e = match section.keys(&self.keys) {
+            Some(list) => list
+                .iter()
+                .position(|k| k == element)
+                .ok_or_else(|| ParamError {
+                    key: registry::key_path(row, Some((0, element)), sub).to_string(),
+                    message: "no such number in this scenario".into(),
+                })?,
+            None => 0,
+        };
+        self.param_at(ParamRef {
+            row,
+            element: e,
+            sub,
+        })
+    }
+
+    /// The key of the element `at` is in ("" for a table).
+    pub fn element_key(&self, at: ParamRef) -> &str {
+        at.row()
+            .section
+            .keys(&self.keys)
+            .map_or("", |k| k[at.element].as_str())
+    }
+
     fn id(&self, at: ParamRef, path: String) -> ParamId {
         ParamId {
             canonical: at.key_path(&self.keys).to_string(),
             path,
             at,
+            row: at.row(),
             shape: self.shape,
         }
     }
@@ -369,7 +400,13 @@ impl Model {
     /// Writes the value of a resolved parameter (see [`ParamId`]); on an error the
     /// model is unchanged.
     pub fn set_param(&mut self, id: &ParamId, value: f64) -> Result<(), ModelError> {
-        self.set_params(&[(id, value)])
+        match id.row.fast {
+            // the common case, without allocating
+            Fast::Direct(f) if id.shape == self.shape && id.at.sub == Sub::One => {
+                self.write_one(id, value, f)
+            }
+            _ => self.set_params(&[(id, value)]),
+        }
     }
 
     /// Writes several resolved parameters at once, as [`Model::set_many`] does (each
@@ -408,14 +445,22 @@ impl Model {
     /// all written into the spec, then each row's compiled value made again from it.
     fn write_direct(&mut self, at: &[(ParamRef, f64, &str)]) -> Result<(), ModelError> {
         for (r, v, _) in at {
-            crate::spec::check::value(r.quantity(), &r.key_path(&self.keys), *v)?;
+            // the compiler's check; the key path is made only for its error
+            if !r.quantity().accepts(*v) {
+                crate::spec::check::value(r.quantity(), &r.key_path(&self.keys), *v)?;
+            }
         }
         let mut saved = Vec::with_capacity(at.len());
         for (r, v, path) in at {
-            saved.push(registry::save(&mut self.spec, *r).expect("a value"));
-            if let Err(e) = write(&mut self.spec, *r, *v, path) {
-                self.put_back(&at[..saved.len()], &saved, 0);
-                return Err(e);
+            match registry::swap(&mut self.spec, r.row(), *r, *v) {
+                Ok(s) => saved.push(s),
+                Err(message) => {
+                    self.put_back(&at[..saved.len()], &saved, 0);
+                    return Err(ModelError::Param(ParamError {
+                        key: path.to_string(),
+                        message,
+                    }));
+                }
             }
         }
         for (k, (r, ..)) in at.iter().enumerate() {
@@ -426,6 +471,23 @@ impl Model {
                 self.put_back(at, &saved, k);
                 return Err(e.into());
             }
+        }
+        Ok(())
+    }
+
+    /// [`Model::write_direct`] of one value.
+    fn write_one(&mut self, id: &ParamId, v: f64, f: registry::FastFn) -> Result<(), ModelError> {
+        let (r, quantity) = (id.at, id.row.field.quantity);
+        if !quantity.accepts(v) {
+            crate::spec::check::value(quantity, &r.key_path(&self.keys), v)?;
+        }
+        let saved = registry::swap(&mut self.spec, id.row, r, v).map_err(|message| ParamError {
+            key: id.path.clone(),
+            message,
+        })?;
+        if let Err(e) = f(&self.spec, &self.keys, &mut self.scenario, r.element) {
+            registry::restore(&mut self.spec, r, saved);
+            return Err(e.into());
         }
         Ok(())
     }

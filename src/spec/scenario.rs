@@ -4,6 +4,7 @@
 
 use crate::gear::GearPair;
 use crate::spec::quantity::MIN_MAX_STEP_S;
+use crate::spec::registry;
 use crate::thermal::ThermalModel;
 use crate::thermal::iteration::LinearSolver;
 
@@ -309,7 +310,7 @@ impl Scenario {
         });
         if let Some(turn_s) = spin.filter(|t| self.solver.max_step_s > t / 8.0) {
             w.push(Warning {
-                key: "attitude.spin_rate_deg_per_s".into(),
+                key: format!("attitude.{}", registry::SPIN_RATE_DEG_PER_S.name),
                 message: format!(
                     "one turn takes {turn_s:.1} s but steps may be {} s long: the faces' loads are sampled, not followed; set solver.max_step_s ≤ {:.2} s or spin_averaged = true",
                     self.solver.max_step_s,
@@ -327,7 +328,7 @@ impl Scenario {
                 .filter(|(_, t)| self.solver.max_step_s > **t)
             {
                 w.push(Warning {
-                    key: "solver.max_step_s".into(),
+                    key: format!("solver.{}", registry::MAX_STEP_S.name),
                     message: format!(
                         "the fixed step of {} s (adaptive = false) exceeds the time constant of node {} ({t:.3e} s): its transients are not resolved; {}",
                         self.solver.max_step_s,
@@ -351,7 +352,7 @@ impl Scenario {
         };
         for (i, n) in net.nodes.iter().enumerate() {
             celsius(
-                node_key(i, "initial_temperature_k"),
+                node_key(i, registry::INITIAL_TEMPERATURE_K.name),
                 n.initial_temperature_k,
                 &mut w,
             );
@@ -360,7 +361,11 @@ impl Scenario {
             let (lo, _) = b.temperature_k.range();
             if (5.0..60.0).contains(&lo) {
                 w.push(Warning {
-                    key: format!("boundary.{}.temperature_k", key_segment(&b.name)),
+                    key: format!(
+                        "boundary.{}.{}",
+                        key_segment(&b.name),
+                        registry::BOUNDARY_TEMPERATURE_K.name
+                    ),
                     message: format!(
                         "{lo} K ({:.2} °C) looks like a Celsius value typed as kelvin (cryogenic shrouds aside); {lo} °C is {:.2} K",
                         lo - crate::constants::ZERO_CELSIUS_K,
@@ -371,12 +376,16 @@ impl Scenario {
         }
         for h in &net.heaters {
             let k = format!("heater.{}", key_segment(&h.name));
-            celsius(format!("{k}.on_k"), h.on_k, &mut w);
-            celsius(format!("{k}.off_k"), h.off_k, &mut w);
+            celsius(format!("{k}.{}", registry::ON_K.name), h.on_k, &mut w);
+            celsius(format!("{k}.{}", registry::OFF_K.name), h.off_k, &mut w);
         }
         for g in &self.gears {
             celsius(
-                format!("gear_pair.{}.reference_temperature_k", key_segment(&g.name)),
+                format!(
+                    "gear_pair.{}.{}",
+                    key_segment(&g.name),
+                    registry::REFERENCE_TEMPERATURE_K.name
+                ),
                 g.reference_temperature_k,
                 &mut w,
             );

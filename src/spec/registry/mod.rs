@@ -234,6 +234,19 @@ pub struct Row {
     pub calibration: Option<Calibration>,
 }
 
+impl std::fmt::Debug for Row {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Row({})", self.pattern())
+    }
+}
+
+/// A row is itself: two rows are equal when they are one.
+impl PartialEq for Row {
+    fn eq(&self, other: &Row) -> bool {
+        std::ptr::eq(self, other)
+    }
+}
+
 impl Row {
     /// The row's slot in element `e` of `spec`; None when the scenario does not have
     /// this number (a TLE orbit's altitude, a strain law given otherwise). May add an
@@ -288,24 +301,12 @@ impl ParamRef {
 
     /// Its key path in a scenario with element keys `keys`.
     pub fn key_path(&self, keys: &ElementKeys) -> KeyPath {
-        let row = self.row();
-        let element = row
+        let element = self
+            .row()
             .section
             .keys(keys)
             .map(|k| (self.element, k[self.element].as_str()));
-        let mut p = row.section.path(element);
-        for t in row.table {
-            p = p.key(t);
-        }
-        p = row.field.key(&p);
-        match self.sub {
-            Sub::One => p,
-            Sub::Item(i) => p.at(i),
-            Sub::Time(i) => p.key(TIME_S).at(i),
-            Sub::Days(i) => p.key(TIME_DAYS).at(i),
-            Sub::Value(i) => p.key(VALUE).at(i),
-            Sub::Window(i, j) => p.at(i).at(j),
-        }
+        key_path(self.row, element, self.sub)
     }
 
     /// Its kind of number (a table's times have their own).
@@ -316,6 +317,25 @@ impl ParamRef {
             Sub::Days(_) => &super::quantity::TABLE_TIME_DAYS,
             _ => row.field.quantity,
         }
+    }
+}
+
+/// The key path of `sub` of `row` in the element at (position, key) of its section
+/// (None: a table).
+pub fn key_path(row: usize, element: Option<(usize, &str)>, sub: Sub) -> KeyPath {
+    let row = &rows()[row];
+    let mut p = row.section.path(element);
+    for t in row.table {
+        p = p.key(t);
+    }
+    p = row.field.key(&p);
+    match sub {
+        Sub::One => p,
+        Sub::Item(i) => p.at(i),
+        Sub::Time(i) => p.key(TIME_S).at(i),
+        Sub::Days(i) => p.key(TIME_DAYS).at(i),
+        Sub::Value(i) => p.key(VALUE).at(i),
+        Sub::Window(i, j) => p.at(i).at(j),
     }
 }
 
@@ -681,16 +701,23 @@ pub(crate) enum Saved {
     Optional(Option<f64>),
 }
 
-/// Saves the number at `id` (a [`Sub::One`] of a value or an optional value).
-pub(crate) fn save(spec: &mut ScenarioSpec, id: ParamRef) -> Option<Saved> {
-    match id
-        .row()
-        .slot(spec, id.element)
-        .and_then(|s| place(s, id.sub))?
-    {
-        Place::Number(v) => Some(Saved::Number(*v)),
-        Place::Optional(v) => Some(Saved::Optional(*v)),
-        Place::Integer(_) | Place::NewProfile(_) => None,
+/// Writes `value` at `id` (a [`Sub::One`] of a value or an optional value, as
+/// [`write`] does) and returns what was there, to put back if the write is refused.
+pub(crate) fn swap(
+    spec: &mut ScenarioSpec,
+    row: &Row,
+    id: ParamRef,
+    value: f64,
+) -> Result<Saved, String> {
+    let stands_for_nothing =
+        row.default == Default::OfQuantity && row.field.quantity.default.is_none();
+    match row.slot(spec, id.element).and_then(|s| place(s, id.sub)) {
+        Some(Place::Number(v)) => Ok(Saved::Number(std::mem::replace(v, value))),
+        Some(Place::Optional(v)) if v.is_none() && stands_for_nothing => {
+            Err("is not given in this scenario (it uses another form of this value)".into())
+        }
+        Some(Place::Optional(v)) => Ok(Saved::Optional(v.replace(value))),
+        _ => unreachable!("a value or an optional value"),
     }
 }
 
