@@ -56,11 +56,6 @@ use crate::units::{SECONDS_PER_DAY, exact, num};
 
 // ---------------------------------------------------------------- validation
 
-pub use crate::spec::quantity::{
-    MAX_AREA_M2, MAX_CAPACITANCE_J_PER_K, MAX_CONDUCTANCE_W_PER_K, MAX_POWER_W,
-    MIN_CAPACITANCE_J_PER_K,
-};
-
 /// The built-in boundary node.
 const SPACE: &str = "space";
 
