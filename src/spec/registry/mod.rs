@@ -16,6 +16,8 @@
 //! Adding a number: its field in the spec (`spec/mod.rs`), its row in `rows.rs`, the
 //! compiler reading it through its [`Field`], and the physics struct it lands in.
 
+mod fields;
+mod gear_rows;
 mod rows;
 
 use std::sync::LazyLock;
@@ -25,7 +27,7 @@ use super::quantity::Quantity;
 use super::scenario::Scenario;
 use super::{ProfileSpec, ScenarioSpec, SpecError};
 
-pub use rows::*;
+pub use fields::*;
 
 /// A section of a scenario file: a table (`[orbit]`) or an array of tables whose
 /// elements are named by key (`[[node]]`).

@@ -1,98 +1,18 @@
 //! The rows of the registry: every number of a scenario file, in the order `orbitlash
-//! params` lists them, and the fields they hold (each key's name and quantity, once).
+//! params` lists them (gear pairs in `gear_rows.rs`), with their fast writes and
+//! calibrations.
 
+use super::fields::*;
 use super::{Calibration, Default, Fast, Field, Row, ScaleFamily, Section, Slot};
 use crate::spec::keys::ElementKeys;
-use crate::spec::quantity::{self as q};
+use crate::spec::quantity as q;
 use crate::spec::scenario::Scenario;
-use crate::spec::{
-    GearSpec, MaterialSpec, PolynomialSpec, ScenarioSpec, SpecError, StrainTableSpec,
-};
+use crate::spec::{ScenarioSpec, SpecError};
 use crate::thermal::LoadKind;
-
-macro_rules! fields {
-    ($($(#[$doc:meta])* $id:ident = $name:literal, $q:ident;)*) => {
-        $($(#[$doc])* pub static $id: Field = Field { name: $name, quantity: &q::$q };)*
-    };
-}
-
-fields! {
-    START_OFFSET_S = "start_offset_s", START_OFFSET_S;
-    ALTITUDE_M = "altitude_m", ALTITUDE_M;
-    EARTH_RADIUS_M = "earth_radius_m", EARTH_RADIUS_M;
-    MU_M3_PER_S2 = "mu_m3_per_s2", MU_M3_PER_S2;
-    ORBIT_ANGLE_AT_START_DEG = "orbit_angle_at_start_deg", ORBIT_ANGLE_AT_START_DEG;
-    BETA_DEG = "beta_deg", BETA_DEG;
-    SOLAR_FLUX_W_PER_M2 = "solar_flux_w_per_m2", SOLAR_FLUX_W_PER_M2;
-    SPACE_SINK_K = "space_sink_k", SPACE_SINK_K;
-    ALBEDO = "albedo", ALBEDO;
-    EARTH_IR_W_PER_M2 = "earth_ir_w_per_m2", EARTH_IR_W_PER_M2;
-    ORBITS = "orbits", RUN_ORBITS;
-    DURATION_S = "duration_s", RUN_DURATION_S;
-    DURATION_DAYS = "duration_days", RUN_DURATION_DAYS;
-    OUTPUT_INTERVAL_S = "output_interval_s", OUTPUT_INTERVAL_S;
-    TOLERANCE_K = "tolerance_k", TOLERANCE_K;
-    MAX_STEP_S = "max_step_s", MAX_STEP_S;
-    CAPACITANCE_J_PER_K = "capacitance_j_per_k", CAPACITANCE_J_PER_K;
-    INITIAL_TEMPERATURE_K = "initial_temperature_k", TEMPERATURE_K;
-    RADIUS_MM = "radius_mm", NODE_RADIUS_MM;
-    BOUNDARY_TEMPERATURE_K = "temperature_k", TEMPERATURE_K;
-    CONDUCTANCE_W_PER_K = "conductance_w_per_k", CONDUCTANCE_W_PER_K;
-    EMISSIVITY_AREA_M2 = "emissivity_area_m2", AREA_PRODUCT_M2;
-    EMISSIVITY = "emissivity", EMISSIVITY;
-    ABSORPTIVITY_AREA_M2 = "absorptivity_area_m2", AREA_PRODUCT_M2;
-    ABSORPTIVITY = "absorptivity", ABSORPTIVITY;
-    AREA_M2 = "area_m2", AREA_M2;
-    VIEW_FACTOR = "view_factor", VIEW_FACTOR;
-    DISSIPATION_POWER_W = "power_w", POWER_W;
-    HEATER_POWER_W = "power_w", HEATER_POWER_W;
-    ON_K = "on_k", HEATER_ON_K;
-    OFF_K = "off_k", HEATER_OFF_K;
-    YAW_DEG = "yaw_deg", YAW_DEG;
-    SPIN_RATE_DEG_PER_S = "spin_rate_deg_per_s", SPIN_RATE_DEG_PER_S;
-    WINDOWS_S = "windows_s", WINDOW_S;
-    WINDOWS_DAYS = "windows_days", WINDOW_DAYS;
-    TAU_S = "tau_s", SENSOR_TAU_S;
-    OFFSET_K = "offset_k", SENSOR_OFFSET_K;
-    MODULE_MM = "module_mm", MODULE_MM;
-    PRESSURE_ANGLE_DEG = "pressure_angle_deg", PRESSURE_ANGLE_DEG;
-    FACE_WIDTH_MM = "face_width_mm", FACE_WIDTH_MM;
-    CENTER_DISTANCE_MM = "center_distance_mm", CENTER_DISTANCE_MM;
-    REFERENCE_TEMPERATURE_K = "reference_temperature_k", TEMPERATURE_K;
-    MIN_BACKLASH_UM = "min_backlash_um", MIN_BACKLASH_UM;
-    THICKNESS_UM = "thickness_um", COATING_THICKNESS_UM;
-    ALPHA_PER_K = "alpha_per_k", EXPANSION_PER_K;
-    DALPHA_DT_PER_K2 = "dalpha_dt_per_k2", DALPHA_DT_PER_K2;
-    COEFFICIENTS = "coefficients", STRAIN_LAW;
-    SCALE = "scale", STRAIN_LAW;
-    ALPHA_POLYNOMIAL = "alpha_polynomial", STRAIN_LAW;
-    STRAIN_TABLE_TEMPERATURE_K = "temperature_k", STRAIN_TABLE_TEMPERATURE_K;
-    STRAIN = "strain", STRAIN_LAW;
-    YOUNGS_MODULUS_PA = "youngs_modulus_pa", YOUNGS_MODULUS_PA;
-    POISSON = "poisson", POISSON;
-    TEETH = "teeth", TEETH;
-    PROFILE_SHIFT = "profile_shift", PROFILE_SHIFT;
-    TIP_RADIUS_MM = "tip_radius_mm", TIP_RADIUS_MM;
-    ROOT_RADIUS_MM = "root_radius_mm", ROOT_RADIUS_MM;
-    BORE_RADIUS_MM = "bore_radius_mm", BORE_RADIUS_MM;
-    TOOTH_THICKNESS_MM = "tooth_thickness_mm", TOOTH_THICKNESS_MM;
-    TOOTH_THINNING_UM = "tooth_thinning_um", TOOTH_THINNING_UM;
-    INTERFERENCE_UM = "interference_um", INTERFERENCE_UM;
-}
-
-/// The tables inside a gear pair that hold numbers.
-pub const COATING: &str = "coating";
-pub const CENTER_DISTANCE: &str = "center_distance";
-pub const PINION: &str = "pinion";
-pub const WHEEL: &str = "wheel";
-pub const MATERIAL: &str = "material";
-pub const SHAFT_MATERIAL: &str = "shaft_material";
-pub const STRAIN_POLYNOMIAL: &str = "strain_polynomial";
-pub const STRAIN_TABLE: &str = "strain_table";
 
 /// A row with no fast write and no calibration (add them with [`Row::fast`] and
 /// [`Row::calibrated`]).
-fn row<F>(
+pub(super) fn row<F>(
     section: Section,
     table: &'static [&'static str],
     field: &'static Field,
@@ -130,7 +50,7 @@ impl Row {
         self
     }
 
-    fn gear_pair(mut self) -> Row {
+    pub(super) fn gear_pair(mut self) -> Row {
         self.fast = Fast::GearPair;
         self
     }
@@ -184,16 +104,19 @@ const SCALE_UP_TO: Option<f64> = Some(20.0);
 /// Every row, in listing order (see the module docs of `registry`).
 pub(super) fn table() -> Vec<Row> {
     let mut t = Vec::new();
-    orbit_and_environment(&mut t);
+    orbit(&mut t);
+    environment(&mut t);
+    run_and_solver(&mut t);
     network(&mut t);
-    loads(&mut t);
+    area_loads(&mut t);
+    dissipations_and_heaters(&mut t);
     faces_modes_sensors(&mut t);
-    gear_pairs(&mut t);
+    super::gear_rows::gear_pairs(&mut t);
     t
 }
 
-fn orbit_and_environment(t: &mut Vec<Row>) {
-    use Section::{Environment as Env, Orbit, Run, Solver};
+fn orbit(t: &mut Vec<Row>) {
+    use Section::Orbit;
     let tle = |s: &ScenarioSpec| s.orbit.tle.is_some();
     t.extend([
         row(
@@ -231,6 +154,12 @@ fn orbit_and_environment(t: &mut Vec<Row>) {
             "the orbit angle θ at t = 0 (θ = 0 at orbit noon)",
             move |s, _| (!tle(s)).then_some(Slot::Optional(&mut s.orbit.orbit_angle_at_start_deg)),
         ),
+    ]);
+}
+
+fn environment(t: &mut Vec<Row>) {
+    use Section::Environment as Env;
+    t.extend([
         row(
             Env,
             &[],
@@ -309,6 +238,12 @@ fn orbit_and_environment(t: &mut Vec<Row>) {
                 s.environment.earth_ir_w_per_m2.expect("written");
             Ok(())
         }),
+    ]);
+}
+
+fn run_and_solver(t: &mut Vec<Row>) {
+    use Section::{Run, Solver};
+    t.extend([
         row(
             Run,
             &[],
@@ -472,8 +407,8 @@ fn set_view_factor(sc: &mut Scenario, at: usize, v: Option<f64>) {
     }
 }
 
-fn loads(t: &mut Vec<Row>) {
-    use Section::{Albedo, Dissipation, EarthIr, Heater, Sun};
+fn area_loads(t: &mut Vec<Row>) {
+    use Section::{Albedo, EarthIr, Sun};
     let sun: super::FastFn = |s, _, sc, e| {
         let l = &s.sun[e];
         set_load_product(
@@ -576,6 +511,12 @@ fn loads(t: &mut Vec<Row>) {
             set_view_factor(sc, sc.bindings.earth_ir[e], s.earth_ir[e].view_factor);
             Ok(())
         }),
+    ]);
+}
+
+fn dissipations_and_heaters(t: &mut Vec<Row>) {
+    use Section::{Dissipation, Heater};
+    t.extend([
         row(
             Dissipation,
             &[],
@@ -754,265 +695,4 @@ fn faces_modes_sensors(t: &mut Vec<Row>) {
         )
         .fast(sensor),
     ]);
-}
-
-/// The keys of a thermal strain law in a spec.
-struct Strain<'a> {
-    alpha: &'a mut Option<f64>,
-    dalpha: &'a mut Option<f64>,
-    poly: &'a mut Option<PolynomialSpec>,
-    alpha_poly: &'a mut Option<Vec<f64>>,
-    table: &'a mut Option<StrainTableSpec>,
-}
-
-fn strain_of(m: &mut MaterialSpec) -> Strain<'_> {
-    Strain {
-        alpha: &mut m.alpha_per_k,
-        dalpha: &mut m.dalpha_dt_per_k2,
-        poly: &mut m.strain_polynomial,
-        alpha_poly: &mut m.alpha_polynomial,
-        table: &mut m.strain_table,
-    }
-}
-
-/// A table path made once (the registry is built once).
-fn leak(parts: Vec<&'static str>) -> &'static [&'static str] {
-    Box::leak(parts.into_boxed_slice())
-}
-
-/// The rows of a strain law at `table` of a gear pair.
-fn strain_rows<F>(t: &mut Vec<Row>, table: &'static [&'static str], get: F)
-where
-    F: for<'a> Fn(&'a mut ScenarioSpec, usize) -> Option<Strain<'a>> + Copy + Send + Sync + 'static,
-{
-    let within = |k: &'static str| leak(table.iter().copied().chain([k]).collect());
-    let (poly, strain_table) = (within(STRAIN_POLYNOMIAL), within(STRAIN_TABLE));
-    let g = Section::GearPair;
-    t.extend([
-        row(
-            g,
-            table,
-            &ALPHA_PER_K,
-            "the linear expansion coefficient α",
-            move |s, e| get(s, e).map(|x| Slot::Optional(x.alpha)),
-        ),
-        row(
-            g,
-            table,
-            &DALPHA_DT_PER_K2,
-            "dα/dT, with `alpha_per_k`",
-            move |s, e| get(s, e).map(|x| Slot::Optional(x.dalpha)),
-        ),
-        row(
-            g,
-            poly,
-            &COEFFICIENTS,
-            "the strain polynomial's coefficients",
-            move |s, e| {
-                get(s, e)?
-                    .poly
-                    .as_mut()
-                    .map(|p| Slot::List(&mut p.coefficients))
-            },
-        ),
-        row(
-            g,
-            poly,
-            &SCALE,
-            "the strain polynomial's scale",
-            move |s, e| get(s, e)?.poly.as_mut().map(|p| Slot::Value(&mut p.scale)),
-        ),
-        row(
-            g,
-            table,
-            &ALPHA_POLYNOMIAL,
-            "α as a polynomial of temperature",
-            move |s, e| get(s, e)?.alpha_poly.as_mut().map(Slot::List),
-        ),
-        row(
-            g,
-            strain_table,
-            &STRAIN_TABLE_TEMPERATURE_K,
-            "the strain table's temperatures",
-            move |s, e| {
-                get(s, e)?
-                    .table
-                    .as_mut()
-                    .map(|x| Slot::List(&mut x.temperature_k))
-            },
-        ),
-        row(
-            g,
-            strain_table,
-            &STRAIN,
-            "the strain table's strains",
-            move |s, e| get(s, e)?.table.as_mut().map(|x| Slot::List(&mut x.strain)),
-        ),
-    ]);
-    for r in t.iter_mut().rev().take(7) {
-        r.fast = Fast::GearPair;
-    }
-}
-
-/// The rows of a disc material at `table`.
-fn material_rows<F>(t: &mut Vec<Row>, table: &'static [&'static str], get: F)
-where
-    F: for<'a> Fn(&'a mut ScenarioSpec, usize) -> Option<&'a mut MaterialSpec>
-        + Copy
-        + Send
-        + Sync
-        + 'static,
-{
-    strain_rows(t, table, move |s, e| get(s, e).map(strain_of));
-    let g = Section::GearPair;
-    t.extend([
-        row(
-            g,
-            table,
-            &YOUNGS_MODULUS_PA,
-            "Young's modulus E",
-            move |s, e| get(s, e).map(|m| Slot::Value(&mut m.youngs_modulus_pa)),
-        )
-        .gear_pair(),
-        row(g, table, &POISSON, "Poisson's ratio ν", move |s, e| {
-            get(s, e).map(|m| Slot::Value(&mut m.poisson))
-        })
-        .gear_pair(),
-    ]);
-}
-
-/// The rows of one gear (`pinion` or `wheel`).
-fn gear_rows(
-    t: &mut Vec<Row>,
-    which: &'static str,
-    get: for<'a> fn(&'a mut ScenarioSpec, usize) -> &'a mut GearSpec,
-) {
-    let table = leak(vec![which]);
-    let g = Section::GearPair;
-    t.extend([
-        row(g, table, &TEETH, "the number of teeth z", move |s, e| {
-            Some(Slot::Integer(&mut get(s, e).teeth))
-        }),
-        row(
-            g,
-            table,
-            &PROFILE_SHIFT,
-            "the profile shift coefficient x",
-            move |s, e| Some(Slot::Value(&mut get(s, e).profile_shift)),
-        ),
-        row(g, table, &TIP_RADIUS_MM, "the tip radius", move |s, e| {
-            Some(Slot::Value(&mut get(s, e).tip_radius_mm))
-        }),
-        row(g, table, &ROOT_RADIUS_MM, "the root radius", move |s, e| {
-            Some(Slot::Value(&mut get(s, e).root_radius_mm))
-        }),
-        row(g, table, &BORE_RADIUS_MM, "the bore radius", move |s, e| {
-            Some(Slot::Value(&mut get(s, e).bore_radius_mm))
-        }),
-        row(
-            g,
-            table,
-            &TOOTH_THICKNESS_MM,
-            "the tooth thickness on the reference circle",
-            move |s, e| Some(Slot::Optional(&mut get(s, e).tooth_thickness_mm)),
-        ),
-        row(
-            g,
-            table,
-            &TOOTH_THINNING_UM,
-            "the thinning below the profile-shifted nominal tooth",
-            move |s, e| Some(Slot::Optional(&mut get(s, e).tooth_thinning_um)),
-        ),
-        row(
-            g,
-            table,
-            &INTERFERENCE_UM,
-            "an elastic bore fit's radial interference",
-            move |s, e| Some(Slot::Optional(&mut get(s, e).interference_um)),
-        ),
-    ]);
-    for r in t.iter_mut().rev().take(8) {
-        r.fast = Fast::GearPair;
-    }
-    material_rows(t, leak(vec![which, MATERIAL]), move |s, e| {
-        Some(&mut get(s, e).material)
-    });
-    material_rows(t, leak(vec![which, SHAFT_MATERIAL]), move |s, e| {
-        get(s, e).shaft_material.as_mut()
-    });
-}
-
-fn gear_pairs(t: &mut Vec<Row>) {
-    let g = Section::GearPair;
-    t.extend([
-        row(g, &[], &MODULE_MM, "the module m", |s, e| {
-            Some(Slot::Value(&mut s.gear_pair[e].module_mm))
-        }),
-        row(
-            g,
-            &[],
-            &PRESSURE_ANGLE_DEG,
-            "the pressure angle α₀ the gears are cut with",
-            |s, e| Some(Slot::Value(&mut s.gear_pair[e].pressure_angle_deg)),
-        ),
-        row(g, &[], &FACE_WIDTH_MM, "the face width", |s, e| {
-            Some(Slot::Value(&mut s.gear_pair[e].face_width_mm))
-        }),
-        row(
-            g,
-            &[],
-            &CENTER_DISTANCE_MM,
-            "the centre distance at the reference temperature",
-            |s, e| Some(Slot::Value(&mut s.gear_pair[e].center_distance_mm)),
-        ),
-        row(
-            g,
-            &[],
-            &REFERENCE_TEMPERATURE_K,
-            "the temperature the geometry is given at",
-            |s, e| Some(Slot::Value(&mut s.gear_pair[e].reference_temperature_k)),
-        ),
-        row(
-            g,
-            &[],
-            &MIN_BACKLASH_UM,
-            "the smallest backlash allowed (the verdict's margin)",
-            |s, e| Some(Slot::Value(&mut s.gear_pair[e].min_backlash_um)),
-        ),
-        row(
-            g,
-            &[COATING],
-            &THICKNESS_UM,
-            "the tooth coating's thickness",
-            |s, e| Some(Slot::Value(&mut s.gear_pair[e].coating.thickness_um)),
-        ),
-        row(
-            g,
-            &[COATING],
-            &ALPHA_PER_K,
-            "the coating's expansion coefficient",
-            |s, e| Some(Slot::Value(&mut s.gear_pair[e].coating.alpha_per_k)),
-        ),
-        row(
-            g,
-            &[COATING],
-            &POISSON,
-            "the coating's Poisson ratio",
-            |s, e| Some(Slot::Value(&mut s.gear_pair[e].coating.poisson)),
-        ),
-    ]);
-    for r in t.iter_mut().rev().take(9) {
-        r.fast = Fast::GearPair;
-    }
-    strain_rows(t, &[CENTER_DISTANCE], |s, e| {
-        s.gear_pair[e].center_distance.as_mut().map(|c| Strain {
-            alpha: &mut c.alpha_per_k,
-            dalpha: &mut c.dalpha_dt_per_k2,
-            poly: &mut c.strain_polynomial,
-            alpha_poly: &mut c.alpha_polynomial,
-            table: &mut c.strain_table,
-        })
-    });
-    gear_rows(t, PINION, |s, e| &mut s.gear_pair[e].pinion);
-    gear_rows(t, WHEEL, |s, e| &mut s.gear_pair[e].wheel);
 }
