@@ -391,3 +391,30 @@ fn core_a_resolved_parameter_survives_a_change_of_elements() {
     assert_eq!(net.conductors[0].conductance_w_per_k, 0.01);
     assert_eq!(net.conductors[1].conductance_w_per_k, 0.05);
 }
+
+/// The key table of `scenarios/README.md` is the registry's, generated (`orbitlash
+/// params --keys`); a row added to the registry without regenerating the README fails
+/// here, and so does a hand edit of the table.
+#[test]
+fn cli_the_readme_key_table_is_the_registrys() {
+    let readme = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/README.md"),
+    )
+    .unwrap();
+    let (_, rest) = readme
+        .split_once("<!-- registry:begin -->\n")
+        .expect("the README marks its key table");
+    let (committed, _) = rest.split_once("<!-- registry:end -->").unwrap();
+    let out = bin().args(["params", "--keys"]).output().unwrap();
+    assert!(out.status.success());
+    let generated = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(
+        committed, generated,
+        "scenarios/README.md's key table differs from the registry: paste `orbitlash params --keys` between its markers"
+    );
+    // and it has every row, one line each
+    assert_eq!(
+        generated.lines().count(),
+        orbitlash::spec::registry::rows().len() + 2
+    );
+}

@@ -20,9 +20,16 @@ pub struct ParamsArgs {
     /// Only the numbers the file gives (not the defaults).
     #[arg(long)]
     given: bool,
+    /// Instead: every key a scenario file can hold a number under, as a Markdown table
+    /// (key path, unit, range, default, meaning), whatever the file.
+    #[arg(long, conflicts_with_all = ["scenario", "sets", "given"])]
+    keys: bool,
 }
 
 pub fn params(a: ParamsArgs) -> Result<()> {
+    if a.keys {
+        return print_out(&orbitlash::spec::registry::markdown_table());
+    }
     let loaded = load_with(a.scenario.as_deref(), &a.sets)?;
     let mut o = String::new();
     for p in loaded.model.params() {

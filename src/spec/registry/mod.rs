@@ -737,6 +737,38 @@ pub(crate) fn restore(spec: &mut ScenarioSpec, id: ParamRef, saved: Saved) {
     }
 }
 
+/// Every row as a Markdown table (key path with `<name>` for the element, unit, range,
+/// default, meaning): the key table of `scenarios/README.md`, which a test keeps equal
+/// to this.
+pub fn markdown_table() -> String {
+    let mut s =
+        String::from("| key path | unit | range | default | meaning |\n|---|---|---|---|---|\n");
+    for row in rows() {
+        let q = row.field.quantity;
+        let default = match (row.default, q.default) {
+            (Default::EarthViewFactor, _) => "(R/(R+h))²".to_string(),
+            (Default::OfQuantity, Some(v)) => crate::units::exact(v),
+            (Default::OfQuantity, None) => "–".to_string(),
+        };
+        let cell = |t: &str| {
+            if t.is_empty() {
+                "–".to_string()
+            } else {
+                t.replace('|', "\\|")
+            }
+        };
+        s.push_str(&format!(
+            "| `{}` | {} | {} | {} | {} |\n",
+            row.pattern(),
+            cell(q.unit),
+            cell(&q.range()),
+            default,
+            cell(row.doc)
+        ));
+    }
+    s
+}
+
 /// Parses `KEY=VALUE` (as `--set` takes it).
 pub fn parse_assignment(text: &str) -> Result<(String, f64), ParamError> {
     let (key, value) = text.split_once('=').ok_or_else(|| ParamError {
