@@ -330,7 +330,11 @@ fn cli_gear_unknown_bore_fit() {
         "fit",
         "bore_fit = \"free\"",
         "bore_fit = \"glued\"",
-        &["gear_pair.mesh.pinion.bore_fit", "free, rigid, elastic"],
+        &[
+            "gear_pair.mesh.pinion.bore_fit",
+            "unknown variant `glued`",
+            "`free`, `rigid`, `elastic`",
+        ],
     );
 }
 

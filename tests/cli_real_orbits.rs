@@ -375,7 +375,7 @@ fn cli_bad_attitudes_and_faces_are_refused_with_key_and_line() {
             "mode",
             "mode = \"nadir\"",
             "mode = \"spinning\"",
-            &["`attitude.mode`", "unknown attitude `spinning`"],
+            &["`attitude.mode`", "unknown variant `spinning`"],
         ),
         (
             "yaw-not-nadir",

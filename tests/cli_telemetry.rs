@@ -50,7 +50,7 @@ fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
             "unit",
             "name = \"chassis_black_c\"\nnode = \"chassis\"\nunit = \"C\"",
             "name = \"chassis_black_c\"\nnode = \"chassis\"\nunit = \"F\"",
-            &["`sensor.chassis_black_c.unit`", "unknown unit `F`"],
+            &["`sensor.chassis_black_c.unit`", "unknown variant `F`"],
         ),
         (
             "face",

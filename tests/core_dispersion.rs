@@ -204,7 +204,7 @@ fn core_bad_dispersions_are_named_with_their_line() {
         ),
         (
             "[[dispersion]]\npath = \"environment.albedo\"\ndistribution = \"gaussian\"\nsd = 0.01\n",
-            vec!["dispersion[0].distribution", "unknown distribution"],
+            vec!["dispersion[0].distribution", "unknown variant `gaussian`"],
         ),
         (
             "[[dispersion]]\npath = \"environment.albedo\"\ndistribution = \"uniform\"\nmin = 0.2\nsd = 0.1\n",

@@ -41,7 +41,7 @@ fn through_toml(text: &str, spec: &ScenarioSpec, path: &str, v: f64) -> Verdict 
 fn through_dispersion(model: &Model, path: &str, v: f64) -> Result<(), String> {
     let d = DispersionSpec {
         path: path.to_string(),
-        distribution: "cases".to_string(),
+        distribution: orbitlash::spec::DistributionName::Cases,
         values: Some(vec![v]),
         ..DispersionSpec::default()
     };

@@ -12,8 +12,8 @@ use crate::spec::model::Model;
 use crate::spec::model::ParamId;
 use crate::spec::registry::{self, Field, Param, ParamError, Section, Sub};
 use crate::spec::{
-    AlbedoSpec, CenterDistanceSpec, DissipationSpec, EarthIrSpec, HeaterSpec, ProfileSpec,
-    ScenarioSpec,
+    AlbedoSpec, BoreFitName, CenterDistanceSpec, DissipationSpec, EarthIrSpec, Follows, HeaterSpec,
+    ProfileSpec, ScenarioSpec, Schedule,
 };
 
 /// The effect ids of `physics.md` §6.
@@ -682,11 +682,16 @@ impl<'a> Generator<'a> {
 
     /// Internal dissipation on node `n`: always, sunlit, in eclipse, or in each mode.
     fn internal_dissipation(&self, n: &str) -> Vec<Candidate> {
-        let mut whens = vec!["always".to_string(), "sunlit".into(), "eclipse".into()];
-        whens.extend(self.spec.mode.iter().map(|m| m.name.clone()));
+        let mut whens = vec![Schedule::Always, Schedule::Sunlit, Schedule::Eclipse];
+        whens.extend(
+            self.spec
+                .mode
+                .iter()
+                .map(|m| Schedule::Mode(m.name.clone())),
+        );
         let mut out = Vec::new();
         for when in whens {
-            let dn = format!("diagnose.dissipation.{n}.{when}");
+            let dn = format!("diagnose.dissipation.{n}.{}", when.name());
             let edit: Edit = {
                 let (n, dn, when) = (n.to_string(), dn.clone(), when.clone());
                 std::sync::Arc::new(move |s: &mut ScenarioSpec| {
@@ -707,7 +712,7 @@ impl<'a> Generator<'a> {
             };
             let target = Target::Scheduled {
                 node: n.into(),
-                schedule: when,
+                schedule: when.name().to_string(),
             };
             out.push(Candidate {
                 params: vec![ParamDef::new("power_w", 0.0, 1000.0, 0.02)],
@@ -731,7 +736,7 @@ impl<'a> Generator<'a> {
             if gp
                 .center_distance
                 .as_ref()
-                .is_some_and(|c| c.follows != "fixed")
+                .is_some_and(|c| c.follows != Follows::Fixed)
             {
                 continue;
             }
@@ -740,7 +745,7 @@ impl<'a> Generator<'a> {
                 let n = n.to_string();
                 std::sync::Arc::new(move |s: &mut ScenarioSpec| {
                     s.gear_pair[gi].center_distance = Some(CenterDistanceSpec {
-                        follows: "housing".into(),
+                        follows: Follows::Housing,
                         node: Some(n.clone()),
                         alpha_per_k: Some(5e-6),
                         dalpha_dt_per_k2: None,
@@ -846,7 +851,7 @@ impl<'a> Generator<'a> {
         let pair = pair_name(spec, gi);
         let mut out = Vec::new();
         for (which, g) in [(registry::PINION, &gp.pinion), (registry::WHEEL, &gp.wheel)] {
-            if !matches!(g.bore_fit.as_deref(), None | Some("free")) {
+            if !matches!(g.bore_fit, None | Some(BoreFitName::Free)) {
                 continue;
             }
             let bore = &g.nodes[0];
@@ -869,7 +874,7 @@ impl<'a> Generator<'a> {
                     } else {
                         &mut s.gear_pair[gi].wheel
                     };
-                    gs.bore_fit = Some("elastic".into());
+                    gs.bore_fit = Some(BoreFitName::Elastic);
                     gs.shaft_node = Some(shaft.clone());
                     gs.shaft_material = Some(gs.material.clone());
                     gs.interference_um = Some(5.0);

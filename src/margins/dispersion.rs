@@ -576,21 +576,14 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
         }
     };
     // Each distribution's keys; any other key given is an error naming it.
-    let allowed: &[&str] = match d.distribution.as_str() {
-        "normal" => &["mean", "sd"],
-        "truncated_normal" => &["mean", "sd", "min", "max"],
-        "uniform" => &["min", "max"],
-        "triangular" => &["min", "max", "mode"],
-        "lognormal" => &["median", "sigma"],
-        "cases" => &["values"],
-        other => {
-            return Err(err(
-                at.key("distribution"),
-                format!(
-                    "unknown distribution `{other}`: normal, truncated_normal, uniform, triangular, lognormal or cases"
-                ),
-            ));
-        }
+    use crate::spec::DistributionName as D;
+    let allowed: &[&str] = match d.distribution {
+        D::Normal => &["mean", "sd"],
+        D::TruncatedNormal => &["mean", "sd", "min", "max"],
+        D::Uniform => &["min", "max"],
+        D::Triangular => &["min", "max", "mode"],
+        D::Lognormal => &["median", "sigma"],
+        D::Cases => &["values"],
     };
     let given = [
         ("mean", d.mean.is_some()),
@@ -608,12 +601,12 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
             format!("is not a parameter of `{}`", d.distribution),
         ));
     }
-    Ok(match d.distribution.as_str() {
-        "normal" => Distribution::Normal {
+    Ok(match d.distribution {
+        D::Normal => Distribution::Normal {
             mean: need(d.mean.or(Some(nominal)), "mean")?,
             sd: positive(need(d.sd, "sd")?, "sd")?,
         },
-        "truncated_normal" => {
+        D::TruncatedNormal => {
             let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
             ordered(min, max)?;
             Distribution::TruncatedNormal {
@@ -623,12 +616,12 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
                 max,
             }
         }
-        "uniform" => {
+        D::Uniform => {
             let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
             ordered(min, max)?;
             Distribution::Uniform { min, max }
         }
-        "triangular" => {
+        D::Triangular => {
             let (min, max) = (need(d.min, "min")?, need(d.max, "max")?);
             ordered(min, max)?;
             let mode = need(d.mode.or(Some(nominal)), "mode")?;
@@ -640,11 +633,11 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
             }
             Distribution::Triangular { min, mode, max }
         }
-        "lognormal" => Distribution::LogNormal {
+        D::Lognormal => Distribution::LogNormal {
             median: positive(need(d.median.or(Some(nominal)), "median")?, "median")?,
             sigma: positive(need(d.sigma, "sigma")?, "sigma")?,
         },
-        "cases" => {
+        D::Cases => {
             let v = d.values.clone().unwrap_or_default();
             if v.is_empty() || v.iter().any(|x| !x.is_finite()) {
                 return Err(err(
@@ -654,6 +647,5 @@ fn distribution(d: &DispersionSpec, nominal: f64, at: &KeyPath) -> Result<Distri
             }
             Distribution::Cases(v)
         }
-        _ => unreachable!("checked above"),
     })
 }

@@ -59,10 +59,6 @@ pub enum Attitude {
     },
 }
 
-impl Attitude {
-    pub const NAMES: [&'static str; 5] = ["nadir", "sun", "tumble", "inertial", "spin"];
-}
-
 /// Spin phases a spin-averaged face is evaluated at (the midpoints of equal arcs):
 /// the mean of the direct Sun, max(cos, 0) over a turn, is then within 0.07 % of 1/π
 /// whatever the phase (36 phases: 0.25 %).

@@ -93,8 +93,9 @@ impl Orbit {
     }
 }
 
-/// A face orientation for the Sun load's incidence law.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// A face orientation for the Sun load's incidence law (`sun.incidence`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Incidence {
     /// The face tracks the Sun: factor 1 whenever sunlit.
     Tracking,
@@ -124,29 +125,6 @@ impl Incidence {
             Incidence::NormalMinus => -beta_rad.sin(),
         };
         c.max(0.0)
-    }
-
-    pub const NAMES: [&'static str; 7] = [
-        "tracking",
-        "zenith",
-        "nadir",
-        "ram",
-        "wake",
-        "normal_plus",
-        "normal_minus",
-    ];
-
-    pub fn from_name(name: &str) -> Option<Incidence> {
-        Some(match name {
-            "tracking" => Incidence::Tracking,
-            "zenith" => Incidence::Zenith,
-            "nadir" => Incidence::Nadir,
-            "ram" => Incidence::Ram,
-            "wake" => Incidence::Wake,
-            "normal_plus" => Incidence::NormalPlus,
-            "normal_minus" => Incidence::NormalMinus,
-            _ => return None,
-        })
     }
 }
 

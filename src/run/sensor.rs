@@ -13,7 +13,7 @@ use crate::run::sim::{Observer, ObserverResult, RunStart, StepView};
 // The sensor types are part of the validated scenario (`spec::scenario`); kept
 // reachable here, where they are read.
 pub use crate::spec::quantity::{MAX_SENSOR_OFFSET_K, MAX_SENSOR_TAU_S};
-pub use crate::spec::scenario::{ColumnUnit, DERIVED_QUANTITIES, Sensor, SensorTarget};
+pub use crate::spec::scenario::{ColumnUnit, Sensor, SensorTarget};
 
 /// What `sensor` reads for a (lagged) temperature `sensed_k` or for the sample's
 /// backlash, in the column's unit.

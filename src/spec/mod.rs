@@ -83,7 +83,7 @@ pub struct DispersionSpec {
     /// Key path of the number, as `orbitlash params` lists it.
     pub path: String,
     /// `normal`, `truncated_normal`, `uniform`, `triangular`, `lognormal` or `cases`.
-    pub distribution: String,
+    pub distribution: DistributionName,
     /// Normal and truncated normal: the mean (default: the nominal value).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mean: Option<f64>,
@@ -132,7 +132,7 @@ pub struct GearPairSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct CenterDistanceSpec {
-    pub follows: String,
+    pub follows: Follows,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub node: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -171,7 +171,7 @@ pub struct GearSpec {
     pub nodes: Vec<String>,
     pub material: MaterialSpec,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub bore_fit: Option<String>,
+    pub bore_fit: Option<BoreFitName>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shaft_node: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -370,7 +370,7 @@ pub struct SunSpec {
     pub absorptivity: Option<f64>,
     pub area_m2: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub incidence: Option<String>,
+    pub incidence: Option<crate::orbit::Incidence>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
@@ -409,7 +409,7 @@ pub struct DissipationSpec {
     pub node: String,
     pub power_w: ProfileSpec,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub when: Option<String>,
+    pub when: Option<Schedule>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize, Default)]
@@ -417,7 +417,7 @@ pub struct DissipationSpec {
 pub struct AttitudeSpec {
     /// `nadir` (default), `sun`, `tumble`, `inertial` or `spin`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mode: Option<String>,
+    pub mode: Option<AttitudeMode>,
     /// Nadir pointing: the body frame turned about nadir, degrees.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub yaw_deg: Option<f64>,
@@ -556,7 +556,7 @@ pub struct SensorSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub node: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub quantity: Option<String>,
+    pub quantity: Option<SensorQuantity>,
     /// For a derived quantity: the gear pair (default: the first).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gear_pair: Option<String>,
@@ -572,7 +572,149 @@ pub struct SensorSpec {
     /// Temperature sensors: the column's unit, `"C"` or `"K"` (default: K when the
     /// column ends in `_k`, else °C).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub unit: Option<String>,
+    pub unit: Option<UnitName>,
+}
+
+/// `[attitude] mode`: how the body frame is oriented.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AttitudeMode {
+    Nadir,
+    Sun,
+    Tumble,
+    Inertial,
+    Spin,
+}
+
+impl AttitudeMode {
+    pub fn name(self) -> &'static str {
+        match self {
+            AttitudeMode::Nadir => "nadir",
+            AttitudeMode::Sun => "sun",
+            AttitudeMode::Tumble => "tumble",
+            AttitudeMode::Inertial => "inertial",
+            AttitudeMode::Spin => "spin",
+        }
+    }
+}
+
+/// `[[dissipation]] when`: always, in sunlight, in eclipse, or in a `[[mode]]`'s windows
+/// (by its name; the compiler checks that the mode exists).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Schedule {
+    Always,
+    Sunlit,
+    Eclipse,
+    Mode(String),
+}
+
+impl Schedule {
+    /// The names that are not modes' (a mode may not take one).
+    pub const RESERVED: [&'static str; 3] = ["always", "sunlit", "eclipse"];
+
+    pub fn name(&self) -> &str {
+        match self {
+            Schedule::Always => "always",
+            Schedule::Sunlit => "sunlit",
+            Schedule::Eclipse => "eclipse",
+            Schedule::Mode(m) => m,
+        }
+    }
+
+    pub fn from_name(name: &str) -> Schedule {
+        match name {
+            "always" => Schedule::Always,
+            "sunlit" => Schedule::Sunlit,
+            "eclipse" => Schedule::Eclipse,
+            m => Schedule::Mode(m.to_string()),
+        }
+    }
+}
+
+impl Serialize for Schedule {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for Schedule {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Schedule, D::Error> {
+        String::deserialize(d).map(|s| Schedule::from_name(&s))
+    }
+}
+
+/// `[[dispersion]] distribution`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DistributionName {
+    #[default]
+    Normal,
+    TruncatedNormal,
+    Uniform,
+    Triangular,
+    Lognormal,
+    Cases,
+}
+
+impl DistributionName {
+    pub fn name(self) -> &'static str {
+        match self {
+            DistributionName::Normal => "normal",
+            DistributionName::TruncatedNormal => "truncated_normal",
+            DistributionName::Uniform => "uniform",
+            DistributionName::Triangular => "triangular",
+            DistributionName::Lognormal => "lognormal",
+            DistributionName::Cases => "cases",
+        }
+    }
+}
+
+impl std::fmt::Display for DistributionName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(self.name())
+    }
+}
+
+/// `[[sensor]] quantity`: a quantity the model derives (not a node's temperature).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+pub enum SensorQuantity {
+    /// A gear pair's backlash, µm.
+    #[serde(rename = "backlash_um")]
+    BacklashUm,
+}
+
+impl std::fmt::Display for SensorQuantity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.pad(match self {
+            SensorQuantity::BacklashUm => "backlash_um",
+        })
+    }
+}
+
+/// `[[sensor]] unit`: a temperature column's unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+pub enum UnitName {
+    #[serde(rename = "C", alias = "°C", alias = "degC")]
+    Celsius,
+    #[serde(rename = "K")]
+    Kelvin,
+}
+
+/// `bore_fit`: how a gear's bore sits on its shaft.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoreFitName {
+    Free,
+    Rigid,
+    Elastic,
+}
+
+/// `center_distance.follows`: what the centre distance follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Follows {
+    Fixed,
+    Housing,
 }
 
 /// A whole number, also when written as a float (`20.0`); any other number is refused

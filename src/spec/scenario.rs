@@ -72,9 +72,6 @@ pub enum SensorTarget {
     Backlash(usize),
 }
 
-/// Derived quantities a sensor may name (`quantity = "…"`).
-pub const DERIVED_QUANTITIES: [&str; 1] = ["backlash_um"];
-
 /// The unit of a recording column.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ColumnUnit {

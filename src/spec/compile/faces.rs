@@ -70,8 +70,9 @@ pub(super) fn faces(
     let ap = KeyPath::new("attitude");
     let a = attitude.unwrap_or_default();
     let yaw_deg = cx.read_or_default(&r::YAW_DEG, &ap, a.yaw_deg)?;
-    let spinning = a.mode.as_deref() == Some("spin");
-    if a.quaternion.is_some() && a.mode.as_deref() != Some("inertial") && !spinning {
+    use AttitudeMode as M;
+    let spinning = a.mode == Some(M::Spin);
+    if a.quaternion.is_some() && a.mode != Some(M::Inertial) && !spinning {
         return Err(cx.err(
             &ap.key("quaternion"),
             "orients an inertially fixed or spinning body: give mode = \"inertial\" or \"spin\"",
@@ -89,19 +90,22 @@ pub(super) fn faces(
             ));
         }
     }
-    let attitude = match a.mode.as_deref() {
-        None | Some("nadir") => Attitude::Nadir {
+    let attitude = match a.mode {
+        None | Some(M::Nadir) => Attitude::Nadir {
             yaw_rad: yaw_deg.to_radians(),
         },
-        Some(m) if a.yaw_deg.is_some() && Attitude::NAMES.contains(&m) => {
+        Some(m) if a.yaw_deg.is_some() => {
             return Err(cx.err(
                 &r::YAW_DEG.key(&ap),
-                format!("turns a nadir-pointing body; mode `{m}` has no yaw"),
+                format!(
+                    "turns a nadir-pointing body; mode `{}` has no yaw",
+                    m.name()
+                ),
             ));
         }
-        Some("sun") => Attitude::Sun,
-        Some("tumble") => Attitude::Tumble,
-        Some("inertial") => {
+        Some(M::Sun) => Attitude::Sun,
+        Some(M::Tumble) => Attitude::Tumble,
+        Some(M::Inertial) => {
             let Some(q) = &a.quaternion else {
                 return Err(cx.err(
                     &ap,
@@ -117,7 +121,7 @@ pub(super) fn faces(
                 )?,
             }
         }
-        Some("spin") => {
+        Some(M::Spin) => {
             let quaternion = match &a.quaternion {
                 Some(q) => {
                     unit_vector::<4>(cx, &ap.key("quaternion"), q, "a quaternion is [w, x, y, z]")?
@@ -133,7 +137,8 @@ pub(super) fn faces(
             let axis_body =
                 unit_vector::<3>(cx, &ap.key("spin_axis"), axis, "an axis is [x, y, z]")?;
             let Some(rate) = a.spin_rate_deg_per_s else {
-                return Err(cx.err(&ap, "a spinning body needs `spin_rate_deg_per_s`"));
+                let key = r::SPIN_RATE_DEG_PER_S.name;
+                return Err(cx.err(&ap, format!("a spinning body needs `{key}`")));
             };
             let rate = cx.read(&r::SPIN_RATE_DEG_PER_S, &ap, rate)?;
             Attitude::Spin {
@@ -142,15 +147,6 @@ pub(super) fn faces(
                 rate_rad_per_s: rate.to_radians(),
                 averaged: a.spin_averaged.unwrap_or(false),
             }
-        }
-        Some(other) => {
-            return Err(cx.err(
-                &ap.key("mode"),
-                format!(
-                    "unknown attitude `{other}` (known: {})",
-                    Attitude::NAMES.join(", ")
-                ),
-            ));
         }
     };
     let space = table.lookup(cx, &KeyPath::new("boundary"), SPACE)?;

@@ -244,10 +244,10 @@ fn gear(
         Some(n) => Some(diffusion(&gp.key("shaft_node"), n)?),
         None => None,
     };
-    let fit = match raw.bore_fit.as_deref() {
-        None | Some("free") => BoreFit::Free,
-        Some("rigid") => BoreFit::Rigid,
-        Some("elastic") => {
+    let fit = match raw.bore_fit {
+        None | Some(BoreFitName::Free) => BoreFit::Free,
+        Some(BoreFitName::Rigid) => BoreFit::Rigid,
+        Some(BoreFitName::Elastic) => {
             let shaft = raw.shaft_material.ok_or_else(|| {
                 cx.err(
                     gp,
@@ -271,12 +271,6 @@ fn gear(
                 shaft_poisson: sm.poisson,
                 shaft_strain: sm.strain,
             }
-        }
-        Some(other) => {
-            return Err(cx.err(
-                &gp.key("bore_fit"),
-                format!("unknown bore fit `{other}` (known: free, rigid, elastic)"),
-            ));
         }
     };
     Ok(Gear {
@@ -379,9 +373,9 @@ fn center_distance(
         None => CenterDistance::Fixed,
         Some(c) => {
             let cp = p.key(r::CENTER_DISTANCE);
-            match c.follows.as_str() {
-                "fixed" => CenterDistance::Fixed,
-                "housing" => {
+            match c.follows {
+                Follows::Fixed => CenterDistance::Fixed,
+                Follows::Housing => {
                     let node_name = c
                         .node
                         .as_deref()
@@ -400,12 +394,6 @@ fn center_distance(
                             },
                         )?,
                     }
-                }
-                other => {
-                    return Err(cx.err(
-                        &cp.key("follows"),
-                        format!("unknown `{other}` (known: fixed, housing)"),
-                    ));
                 }
             }
         }

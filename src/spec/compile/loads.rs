@@ -47,18 +47,7 @@ pub(super) fn loads(
             (s.absorptivity, &r::ABSORPTIVITY),
             s.area_m2,
         )?;
-        let incidence = match s.incidence.as_deref() {
-            None => Incidence::Tracking,
-            Some(name) => Incidence::from_name(name).ok_or_else(|| {
-                cx.err(
-                    &p.key("incidence"),
-                    format!(
-                        "unknown incidence `{name}` (known: {})",
-                        Incidence::NAMES.join(", ")
-                    ),
-                )
-            })?,
-        };
+        let incidence = s.incidence.unwrap_or(Incidence::Tracking);
         bindings.sun.push(loads.len());
         loads.push(Load {
             name: load_name(s.name, "sun", &s.node, i),
@@ -126,18 +115,20 @@ pub(super) fn loads(
         let power = cx.profile(&field.key(&p), s.power_w, &|pp, v| {
             cx.quantity(field.quantity, pp, v)
         })?;
-        let when = match s.when.as_deref() {
-            None | Some("always") => When::Always,
-            Some("sunlit") => When::Sunlit,
-            Some("eclipse") => When::Eclipse,
-            Some(m) => When::Mode(modes.iter().position(|x| x.name == m).ok_or_else(|| {
-                cx.err(
+        let when = match s.when {
+            None | Some(Schedule::Always) => When::Always,
+            Some(Schedule::Sunlit) => When::Sunlit,
+            Some(Schedule::Eclipse) => When::Eclipse,
+            Some(Schedule::Mode(m)) => {
+                When::Mode(modes.iter().position(|x| x.name == m).ok_or_else(|| {
+                    cx.err(
                     &p.key("when"),
                     format!(
                         "`{m}` is neither always, sunlit, eclipse nor a mode defined with [[mode]]"
                     ),
                 )
-            })?),
+                })?)
+            }
         };
         bindings.dissipation.push(loads.len());
         loads.push(Load {

@@ -42,8 +42,7 @@ use crate::orbit::{CircularEnvironment, Environment, EnvironmentModel, Incidence
 use crate::spec::quantity::{Quantity, Rule};
 use crate::spec::scenario::SolverSettings;
 use crate::spec::scenario::{
-    Bindings, DERIVED_QUANTITIES, MAX_DURATION_S, MIN_DURATION_S, RunControl, Scenario, Sensor,
-    SensorTarget,
+    Bindings, MAX_DURATION_S, MIN_DURATION_S, RunControl, Scenario, Sensor, SensorTarget,
 };
 use crate::thermal::iteration::{
     DENSE_MAX_NODES, LinearSolver, SPARSE_MAX_FLOPS, direct_fill_estimate,

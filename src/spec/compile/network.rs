@@ -179,7 +179,7 @@ pub(super) fn modes(
     let mut modes = Vec::new();
     for (i, m) in specs.into_iter().enumerate() {
         let p = KeyPath::new("mode").elem(i, &keys.mode[i]);
-        if ["always", "sunlit", "eclipse"].contains(&m.name.as_str()) {
+        if Schedule::RESERVED.contains(&m.name.as_str()) {
             return Err(cx.err(
                 &KeyPath::new("mode").at(i).key("name"),
                 format!("`{}` cannot name a mode", m.name),

@@ -121,15 +121,6 @@ pub(super) fn sensors(
                 SensorTarget::Node(diffusion(&p.key("node"), &n)?)
             }
             (None, Some(q)) => {
-                if !DERIVED_QUANTITIES.contains(&q.as_str()) {
-                    return Err(cx.err(
-                        &p.key("quantity"),
-                        format!(
-                            "unknown quantity `{q}` (known: {})",
-                            DERIVED_QUANTITIES.join(", ")
-                        ),
-                    ));
-                }
                 for (key, given) in [(r::TAU_S.name, s.tau_s), (r::OFFSET_K.name, s.offset_k)] {
                     if given.is_some() {
                         return Err(cx.err(
@@ -155,7 +146,8 @@ pub(super) fn sensors(
                 return Err(cx.err(&p, "give exactly one of `node`, `face` or `quantity`"));
             }
         };
-        let unit_given = match s.unit.as_deref() {
+        use crate::spec::scenario::ColumnUnit;
+        let unit_given = match s.unit {
             None => None,
             Some(_) if matches!(target, SensorTarget::Backlash(_)) => {
                 return Err(cx.err(
@@ -163,14 +155,8 @@ pub(super) fn sensors(
                     "applies to temperature sensors only (backlash is in µm)",
                 ));
             }
-            Some("C" | "°C" | "degC") => Some(crate::spec::scenario::ColumnUnit::Celsius),
-            Some("K") => Some(crate::spec::scenario::ColumnUnit::Kelvin),
-            Some(other) => {
-                return Err(cx.err(
-                    &p.key("unit"),
-                    format!("unknown unit `{other}` (known: C, K)"),
-                ));
-            }
+            Some(UnitName::Celsius) => Some(ColumnUnit::Celsius),
+            Some(UnitName::Kelvin) => Some(ColumnUnit::Kelvin),
         };
         let tau_s = cx.read_or_default(&r::TAU_S, &p, s.tau_s)?;
         let offset_k = cx.read_or_default(&r::OFFSET_K, &p, s.offset_k)?;

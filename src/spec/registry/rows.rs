@@ -7,7 +7,7 @@ use super::{Calibration, Default, Fast, Field, Row, ScaleFamily, Section, Slot};
 use crate::spec::keys::ElementKeys;
 use crate::spec::quantity as q;
 use crate::spec::scenario::Scenario;
-use crate::spec::{ScenarioSpec, SpecError};
+use crate::spec::{AttitudeMode, ScenarioSpec, SpecError};
 use crate::thermal::LoadKind;
 
 /// A row with no fast write and no calibration (add them with [`Row::fast`] and
@@ -602,7 +602,7 @@ fn sensor(s: &ScenarioSpec, _: &ElementKeys, sc: &mut Scenario, e: usize) -> Don
 
 fn faces_modes_sensors(t: &mut Vec<Row>) {
     use Section::{Attitude, Face, Mode, Sensor};
-    let mode = |s: &ScenarioSpec| s.attitude.as_ref().and_then(|a| a.mode.clone());
+    let mode = |s: &ScenarioSpec| s.attitude.as_ref().and_then(|a| a.mode);
     t.extend([
         // a nadir-pointing body's yaw, where there are faces to turn (an absent
         // [attitude] table is written only when the yaw is)
@@ -612,7 +612,7 @@ fn faces_modes_sensors(t: &mut Vec<Row>) {
             &YAW_DEG,
             "a nadir-pointing body turned about nadir",
             move |s, _| {
-                (matches!(mode(s).as_deref(), None | Some("nadir")) && !s.face.is_empty()).then(
+                (matches!(mode(s), None | Some(AttitudeMode::Nadir)) && !s.face.is_empty()).then(
                     || {
                         Slot::Optional(
                             &mut s
@@ -630,7 +630,7 @@ fn faces_modes_sensors(t: &mut Vec<Row>) {
             &SPIN_RATE_DEG_PER_S,
             "a spinning body's rate about `spin_axis`",
             move |s, _| {
-                let spinning = mode(s).as_deref() == Some("spin") && !s.face.is_empty();
+                let spinning = mode(s) == Some(AttitudeMode::Spin) && !s.face.is_empty();
                 spinning.then(|| {
                     Slot::Optional(&mut s.attitude.as_mut().expect("spinning").spin_rate_deg_per_s)
                 })
