@@ -477,11 +477,9 @@ struct Memory {
     step_s: f64,
     restart_steps_s: RestartSteps,
     event_class: Option<EventClass>,
-    t_kink_s: f64,
-    next_shadow: Option<(f64, bool)>,
-    shadow_horizon_s: f64,
+    schedule: EventSchedule,
     modes_active: Vec<bool>,
-    mesh_flags: Vec<[bool; 3]>,
+    mesh_flags: Vec<MeshFlags>,
     stepper: StepperMemory,
     /// The setup and run that left it: that setup's stepper is still in this state.
     made_by: (u64, u64),
@@ -656,11 +654,14 @@ impl<'a> Setup<'a> {
                 // switching, anything else (table point, mode edge, load kink).
                 restart_steps_s: RestartSteps([settings.max_step_s / 30.0; 4]),
                 event_class: None,
-                t_kink_s: self.next_kink(t_start),
-                next_shadow: env.next_shadow_crossing(t_start, t_end_s),
-                shadow_horizon_s: t_end_s,
+                schedule: EventSchedule {
+                    next_shadow: env.next_shadow_crossing(t_start, t_end_s),
+                    shadow_horizon_s: t_end_s,
+                    next_breakpoint: 0,
+                    t_kink_s: self.next_kink(t_start),
+                },
                 modes_active: model.modes.iter().map(|m| m.active(t_start)).collect(),
-                mesh_flags: vec![[false; 3]; self.gears.len()],
+                mesh_flags: vec![MeshFlags::default(); self.gears.len()],
                 stepper: self.stepper.fresh_memory(),
                 made_by: (0, 0),
                 model_print: 0,
@@ -671,10 +672,12 @@ impl<'a> Setup<'a> {
         if memory.made_by != (self.id, self.runs) {
             self.stepper.restore(&memory.stepper);
         }
-        if memory.next_shadow.is_none() && memory.shadow_horizon_s < t_end_s {
+        let schedule = &mut memory.schedule;
+        if schedule.next_shadow.is_none() && schedule.shadow_horizon_s < t_end_s {
             // the last search stopped at an earlier end
-            memory.next_shadow = env.next_shadow_crossing(t_start, t_end_s);
+            schedule.next_shadow = env.next_shadow_crossing(t_start, t_end_s);
         }
+        schedule.next_breakpoint = self.breakpoints.partition_point(|&b| b <= t_start);
         (memory, fresh)
     }
 
@@ -697,14 +700,10 @@ impl<'a> Setup<'a> {
     /// see every accepted step and event. The energy balance is measured from the start
     /// state. `state` is left at the end, with the solver's memory.
     ///
-    /// Long by choice (about 350 lines): it is one step loop whose dozen locals (time,
-    /// temperatures, heaters, sunlit, controller step, restart steps, upcoming events,
-    /// mesh flags) are the run's state between steps, read and written by every
-    /// section. The sections are commented in order (next event, step, error control,
-    /// thermostats, the physical-range check, accept, events at the new time, next
-    /// step size); the parts that need none of that state are functions of their own:
-    /// [`Setup::resume`], [`plan_step`], [`next_step_s`], `earliest_thermostat_switch`,
-    /// `first_nonphysical`, `mesh_events`, [`Setup::count_solver_work`].
+    /// The loop's state between steps is a [`Stepping`]; each step is
+    /// [`Setup::advance`]: the step toward the next event of its [`EventSchedule`]
+    /// ([`Setup::try_step`]), its acceptance ([`Setup::accept`]), the events at its
+    /// end ([`Stepping::pass_events`]) and the next step size.
     pub fn run<O: Observer>(
         &mut self,
         state: &mut State,
@@ -713,32 +712,25 @@ impl<'a> Setup<'a> {
         stop: Stop<'_>,
     ) -> Result<RunStats, SimError> {
         check_span(&self.model.environment, state.t_s, t_end_s)?;
-        let model = self.model;
-        let gears = self.gears;
-        let settings = self.settings.clone();
-        let env = &model.environment;
+        let (model, gears) = (self.model, self.gears);
         let net = &model.network;
         let t_start = state.t_s;
         let (memory, fresh) = self.resume(state, t_end_s);
         let y_start = state.temperatures_k.clone();
-        let mut y = std::mem::take(&mut state.temperatures_k);
-        let mut heaters_on = std::mem::take(&mut state.heaters_on);
-        let mut sunlit = state.sunlit;
-        let Memory {
-            step_s: mut h,
-            restart_steps_s: mut h_after_event,
-            mut event_class,
-            t_kink_s: mut t_kink,
-            mut next_shadow,
-            shadow_horizon_s,
-            mut modes_active,
-            mut mesh_flags,
-            ..
-        } = memory;
-        let mut next_bp = self.breakpoints.partition_point(|&b| b <= t_start);
+        let mut s = Stepping {
+            t: t_start,
+            y: std::mem::take(&mut state.temperatures_k),
+            heaters_on: std::mem::take(&mut state.heaters_on),
+            sunlit: state.sunlit,
+            h: memory.step_s,
+            restart: memory.restart_steps_s,
+            event_class: memory.event_class,
+            schedule: memory.schedule,
+            modes_active: memory.modes_active,
+            mesh_flags: memory.mesh_flags,
+        };
         let factorizations_before = self.stepper.factorizations;
         let solves_before = self.stepper.solve_counts();
-
         let mut stats = RunStats {
             t_start_s: t_start,
             energy: EnergyBalance {
@@ -748,7 +740,7 @@ impl<'a> Setup<'a> {
             ..Default::default()
         };
         for (m, g) in self.mesh.iter_mut().zip(gears) {
-            *m = mesh_or_nan(g, &y);
+            *m = mesh_or_nan(g, &s.y);
         }
         let early = observer
             .on_start(&RunStart {
@@ -756,10 +748,10 @@ impl<'a> Setup<'a> {
                 gears,
                 t_start_s: t_start,
                 t_end_s,
-                temps_k: &y,
-                heaters_on: &heaters_on,
-                modes_active: &modes_active,
-                sunlit,
+                temps_k: &s.y,
+                heaters_on: &s.heaters_on,
+                modes_active: &s.modes_active,
+                sunlit: s.sunlit,
                 mesh: &self.mesh,
                 probe: Probe {
                     model,
@@ -773,273 +765,64 @@ impl<'a> Setup<'a> {
             })
             .and_then(|()| {
                 if fresh {
-                    mesh_events(&self.mesh, &mut mesh_flags, t_start, observer)
+                    mesh_events(&self.mesh, &mut s.mesh_flags, t_start, observer)
                 } else {
                     Ok(())
                 }
             });
         if let Err(e) = early {
             // Nothing ran: the caller keeps its start state (the solver forgotten).
-            state.temperatures_k = y;
-            state.heaters_on = heaters_on;
+            state.temperatures_k = s.y;
+            state.heaters_on = s.heaters_on;
             return Err(e);
         }
-
-        let stepper = &mut self.stepper;
-        let mesh = &mut self.mesh;
-        let probe_work = &self.probe_work;
-        let breakpoints = &self.breakpoints;
-        let kinks = &self.kinks;
-        let next_kink = |t: f64| env.next_load_kink(t, kinks);
-        let mut t = t_start;
-        let tol = settings.tolerance_k;
         let mut result: Result<(), SimError> = Ok(());
-        while t < t_end_s {
+        while s.t < t_end_s {
             if stop.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
                 stats.interrupted = true;
                 break;
             }
-            if stop.pause_after_s.is_some_and(|p| t >= p) {
+            if stop.pause_after_s.is_some_and(|p| s.t >= p) {
                 stats.paused = true;
                 break;
             }
-            // Next scheduled event.
-            let t_shadow = next_shadow.map_or(f64::INFINITY, |(ts, _)| ts);
-            let t_bp = breakpoints
-                .get(next_bp)
-                .copied()
-                .filter(|&b| b < t_end_s)
-                .unwrap_or(f64::INFINITY);
-            let t_event = t_shadow.min(t_bp).min(t_kink).min(t_end_s);
-            let (mut h_try, mut lands) = plan_step(h.min(settings.max_step_s), t_event - t);
-
-            // The step (modes as at its middle); a failed solve retries a quarter as long.
-            let phase_time = t + 0.5 * h_try;
-            for (a, m) in modes_active.iter_mut().zip(&model.modes) {
-                *a = m.active(phase_time);
-            }
-            let env_at = |tt: f64| env.state_with(tt, sunlit);
-            let sw = StepSwitches {
-                heaters_on: &heaters_on,
-                modes_active: &modes_active,
-            };
-            if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try) {
-                if h_try * 0.25 < MIN_STEP_S {
-                    result = Err(if let StepFailure::NonPhysical { node } = e {
-                        SimError::NonPhysical {
-                            node: net.nodes[node].name.clone(),
-                            t_s: t + h_try,
-                            temperature_k: stepper.data.temps1_k[node],
-                            cause: likely_cause(model, &y, t, node, h_try, settings.adaptive),
-                        }
-                    } else {
-                        SimError::StepFailed {
-                            t_s: t,
-                            h_s: h_try,
-                            cause: e,
-                        }
-                    });
-                    break;
-                }
-                h = h_try * 0.25;
-                stats.rejected_steps += 1;
-                continue;
-            }
-            stats.newton_iterations += stepper.data.newton_iterations as u64;
-            // Error control: a step over the tolerance is retried shorter.
-            let err = stepper.data.error_max_k() / tol;
-            if settings.adaptive && err > 1.0 && h_try > 1e3 * MIN_STEP_S {
-                h = h_try
-                    * (STEP_SAFETY * err.powf(STEP_ERROR_EXPONENT))
-                        .clamp(REJECTED_STEP_FACTOR_RANGE.0, REJECTED_STEP_FACTOR_RANGE.1);
-                stats.rejected_steps += 1;
-                continue;
-            }
-
-            // Thermostats: land on the earliest switching time inside the step.
-            let switch = earliest_thermostat_switch(net, &heaters_on, &stepper.data);
-            let switched = switch.map(|(k, _)| k);
-            if let Some((_, s)) = switch
-                && s * h_try > MIN_STEP_S
-                && s < 1.0
-            {
-                h_try *= s;
-                lands = false;
-                if let Err(e) = stepper.step(model, &env_at, sw, t, &y, h_try) {
-                    result = Err(SimError::StepFailed {
-                        t_s: t,
-                        h_s: h_try,
-                        cause: e,
-                    });
-                    break;
-                }
-                stats.newton_iterations += stepper.data.newton_iterations as u64;
-            }
-
-            // Every output (step ends, and the interpolant observers sample between
-            // them) must stay within 0 … 10 000 K. An adaptive run retries with a
-            // shorter step; a fixed-step run cannot, and ends with the node, the time
-            // and the likely cause.
-            if let Some((i, s, v)) = first_nonphysical(&stepper.data) {
-                let h_now = stepper.data.h_s;
-                // Below 0 K a shorter step can help; a run-away to 10 000 K cannot.
-                if v <= 0.0 && settings.adaptive && h_now * 0.5 > MIN_STEP_S {
-                    h = h_now * 0.5;
-                    stats.rejected_steps += 1;
-                    continue;
-                }
-                result = Err(SimError::NonPhysical {
-                    node: net.nodes[i].name.clone(),
-                    t_s: t + s * h_now,
-                    temperature_k: v,
-                    cause: likely_cause(model, &y, t, i, h_now, settings.adaptive),
-                });
-                break;
-            }
-
-            // Accept.
-            let t_new = if lands { t_event } else { t + h_try };
-            if t_new <= t {
-                result = Err(SimError::TimeResolution { t_s: t });
-                break;
-            }
-            stepper.data.h_s = t_new - t;
-            accumulate_energy(&mut stats.energy, &stepper.data);
-            stats.steps += 1;
-            if !sunlit {
-                stats.eclipse_time_s += t_new - t;
-            }
-            for (m, g) in mesh.iter_mut().zip(gears) {
-                *m = mesh_or_nan(g, &stepper.data.temps1_k);
-            }
-            // The stepper's loads are those of the step's end (its last stage), which is
-            // what observers see.
-            let view = StepView {
-                index: stats.steps,
-                data: &stepper.data,
-                env1: env_at(t_new),
-                heaters_on: &heaters_on,
-                modes_active: &modes_active,
-                load_w: &stepper.compiled.each_load_w,
-                mesh,
-                probe: Probe {
-                    model,
-                    gears,
-                    work: probe_work,
-                },
-            };
-            if let Err(source) = observer.on_step(&view) {
-                result = Err(SimError::Observer { t_s: t_new, source });
-                break;
-            }
-            if let Err(e) = mesh_events(mesh, &mut mesh_flags, t_new, observer) {
-                result = Err(e);
-                break;
-            }
-            t = t_new;
-            y.copy_from_slice(&stepper.data.temps1_k);
-
-            let class_before_step = event_class.take();
-            let mark = |class: EventClass, slot: &mut Option<EventClass>| {
-                // the class whose restart step is shortest wins when events coincide
-                if slot.is_none_or(|c| h_after_event[class] < h_after_event[c]) {
-                    *slot = Some(class);
-                }
-            };
-
-            // Events at the new time.
-            let mut events = Ok(());
-            if lands && t_event == t_shadow {
-                let (_, entering) = next_shadow.expect("shadow event");
-                sunlit = !entering;
-                let kind = if entering {
-                    stats.eclipse_entries += 1;
-                    EventKind::EclipseEntry
-                } else {
-                    EventKind::EclipseExit
-                };
-                events = events.and(emit(observer, t, kind));
-                next_shadow = env.next_shadow_crossing(t, t_end_s);
-                let class = if entering {
-                    EventClass::EclipseEntry
-                } else {
-                    EventClass::EclipseExit
-                };
-                mark(class, &mut event_class);
-            }
-            if t >= t_kink {
-                t_kink = next_kink(t);
-                mark(EventClass::Other, &mut event_class);
-            }
-            while breakpoints.get(next_bp).is_some_and(|&b| b <= t) {
-                next_bp += 1;
-                mark(EventClass::Other, &mut event_class);
-            }
-            for (k, m) in model.modes.iter().enumerate() {
-                let now = m.active(t + 1e-9 * (1.0 + t));
-                if now != modes_active[k] {
-                    let kind = if now {
-                        EventKind::ModeStart(k)
-                    } else {
-                        EventKind::ModeEnd(k)
-                    };
-                    events = events.and(emit(observer, t, kind));
-                }
-            }
-            if let Some(k) = switched {
-                heaters_on[k] = !heaters_on[k];
-                stats.heater_switches += 1;
-                mark(EventClass::HeaterSwitch, &mut event_class);
-                let kind = if heaters_on[k] {
-                    EventKind::HeaterOn(k)
-                } else {
-                    EventKind::HeaterOff(k)
-                };
-                events = events.and(emit(observer, t, kind));
-            }
-
-            if event_class.is_none() {
-                stepper.continue_from_last_end();
-            }
-
-            // Next step size.
-            h = if settings.adaptive {
-                next_step_s(
-                    err,
-                    h_try,
-                    h,
-                    lands || switched.is_some(),
-                    class_before_step,
-                    event_class,
-                    &mut h_after_event,
-                )
-            } else {
-                settings.max_step_s
-            };
-            if let Err(e) = events {
+            if let Err(e) = self.advance(&mut s, &mut stats, t_end_s, observer) {
                 result = Err(e);
                 break;
             }
         }
-        stats.t_end_s = t;
+        stats.t_end_s = s.t;
         self.count_solver_work(&mut stats, factorizations_before, solves_before);
-        stats.energy.stored_j = stored_energy_j(net, &y_start, &y);
-        stats.final_temperatures_k = y.clone();
-        // The state at the end, with the solver's memory: a valid start of the next run.
+        stats.energy.stored_j = stored_energy_j(net, &y_start, &s.y);
+        stats.final_temperatures_k = s.y.clone();
+        self.leave(state, s, t_end_s);
+        result?;
+        observer
+            .on_finish(&stats)
+            .map_err(|source| SimError::Observer {
+                t_s: state.t_s,
+                source,
+            })?;
+        Ok(stats)
+    }
+
+    /// Leaves `state` at the end of a run to `t_end_s` with the loop's state `s` and the
+    /// solver's memory: a valid start of the next run.
+    fn leave(&mut self, state: &mut State, s: Stepping, t_end_s: f64) {
         self.runs += 1;
-        state.t_s = t;
-        state.temperatures_k = y;
-        state.heaters_on = heaters_on;
-        state.sunlit = sunlit;
+        state.t_s = s.t;
+        state.temperatures_k = s.y;
+        state.heaters_on = s.heaters_on;
+        state.sunlit = s.sunlit;
+        let mut schedule = s.schedule;
+        schedule.shadow_horizon_s = schedule.shadow_horizon_s.max(t_end_s);
         state.memory = Some(Memory {
-            step_s: h,
-            restart_steps_s: h_after_event,
-            event_class,
-            t_kink_s: t_kink,
-            next_shadow,
-            shadow_horizon_s: shadow_horizon_s.max(t_end_s),
-            modes_active,
-            mesh_flags,
+            step_s: s.h,
+            restart_steps_s: s.restart,
+            event_class: s.event_class,
+            schedule,
+            modes_active: s.modes_active,
+            mesh_flags: s.mesh_flags,
             stepper: self.stepper.memory(),
             made_by: (self.id, self.runs),
             model_print: self.fingerprint(),
@@ -1050,11 +833,346 @@ impl<'a> Setup<'a> {
                 state.sunlit,
             ),
         });
-        result?;
+    }
+
+    /// One step of the loop: toward the next event, accepted (observers see it) or
+    /// retried shorter, then the events at its end and the next step size. An error
+    /// ends the run (after the step size, kept in the state it leaves).
+    fn advance<O: Observer>(
+        &mut self,
+        s: &mut Stepping,
+        stats: &mut RunStats,
+        t_end_s: f64,
+        observer: &mut O,
+    ) -> Result<(), SimError> {
+        let next = s.schedule.next(&self.breakpoints, t_end_s);
+        let Some(tried) = self.try_step(s, stats, next)? else {
+            return Ok(()); // retried shorter
+        };
+        self.accept(s, stats, &tried, observer)?;
+        let class_before_step = s.event_class.take();
+        let events = s.pass_events(
+            self.model,
+            &self.breakpoints,
+            &self.kinks,
+            &tried,
+            stats,
+            t_end_s,
+            observer,
+        );
+        if s.event_class.is_none() {
+            self.stepper.continue_from_last_end();
+        }
+        s.h = if self.settings.adaptive {
+            next_step_s(
+                tried.err,
+                tried.h_s,
+                s.h,
+                tried.lands || tried.switched.is_some(),
+                class_before_step,
+                s.event_class,
+                &mut s.restart,
+            )
+        } else {
+            self.settings.max_step_s
+        };
+        events
+    }
+
+    /// The step from `s.t` toward `next` (modes as at its middle), cut at the earliest
+    /// thermostat switch inside it. None when it was refused and is to be retried
+    /// shorter (`s.h` set): a failed solve (a quarter as long), an error over the
+    /// tolerance, a value below 0 K. An error when it cannot be shortened further.
+    fn try_step(
+        &mut self,
+        s: &mut Stepping,
+        stats: &mut RunStats,
+        next: NextEvent,
+    ) -> Result<Option<Tried>, SimError> {
+        let (model, settings) = (self.model, &self.settings);
+        let (net, env) = (&model.network, &model.environment);
+        let stepper = &mut self.stepper;
+        let (t, sunlit) = (s.t, s.sunlit);
+        let (mut h_try, mut lands) = plan_step(s.h.min(settings.max_step_s), next.t_s - t);
+        let phase_time = t + 0.5 * h_try;
+        for (a, m) in s.modes_active.iter_mut().zip(&model.modes) {
+            *a = m.active(phase_time);
+        }
+        let env_at = |tt: f64| env.state_with(tt, sunlit);
+        let sw = StepSwitches {
+            heaters_on: &s.heaters_on,
+            modes_active: &s.modes_active,
+        };
+        if let Err(e) = stepper.step(model, &env_at, sw, t, &s.y, h_try) {
+            if h_try * 0.25 < MIN_STEP_S {
+                return Err(if let StepFailure::NonPhysical { node } = e {
+                    SimError::NonPhysical {
+                        node: net.nodes[node].name.clone(),
+                        t_s: t + h_try,
+                        temperature_k: stepper.data.temps1_k[node],
+                        cause: likely_cause(model, &s.y, t, node, h_try, settings.adaptive),
+                    }
+                } else {
+                    SimError::StepFailed {
+                        t_s: t,
+                        h_s: h_try,
+                        cause: e,
+                    }
+                });
+            }
+            s.h = h_try * 0.25;
+            stats.rejected_steps += 1;
+            return Ok(None);
+        }
+        stats.newton_iterations += stepper.data.newton_iterations as u64;
+        // Error control: a step over the tolerance is retried shorter.
+        let err = stepper.data.error_max_k() / settings.tolerance_k;
+        if settings.adaptive && err > 1.0 && h_try > 1e3 * MIN_STEP_S {
+            s.h = h_try
+                * (STEP_SAFETY * err.powf(STEP_ERROR_EXPONENT))
+                    .clamp(REJECTED_STEP_FACTOR_RANGE.0, REJECTED_STEP_FACTOR_RANGE.1);
+            stats.rejected_steps += 1;
+            return Ok(None);
+        }
+        // Thermostats: land on the earliest switching time inside the step.
+        let switch = earliest_thermostat_switch(net, &s.heaters_on, &stepper.data);
+        if let Some((_, f)) = switch
+            && f * h_try > MIN_STEP_S
+            && f < 1.0
+        {
+            h_try *= f;
+            lands = false;
+            stepper
+                .step(model, &env_at, sw, t, &s.y, h_try)
+                .map_err(|cause| SimError::StepFailed {
+                    t_s: t,
+                    h_s: h_try,
+                    cause,
+                })?;
+            stats.newton_iterations += stepper.data.newton_iterations as u64;
+        }
+        // Every output (step ends, and the interpolant observers sample between them)
+        // must stay within 0 … 10 000 K. An adaptive run retries with a shorter step; a
+        // fixed-step run cannot, and ends with the node, the time and the likely cause.
+        if let Some((i, f, v)) = first_nonphysical(&stepper.data) {
+            let h_now = stepper.data.h_s;
+            // Below 0 K a shorter step can help; a run-away to 10 000 K cannot.
+            if v <= 0.0 && settings.adaptive && h_now * 0.5 > MIN_STEP_S {
+                s.h = h_now * 0.5;
+                stats.rejected_steps += 1;
+                return Ok(None);
+            }
+            return Err(SimError::NonPhysical {
+                node: net.nodes[i].name.clone(),
+                t_s: t + f * h_now,
+                temperature_k: v,
+                cause: likely_cause(model, &s.y, t, i, h_now, settings.adaptive),
+            });
+        }
+        Ok(Some(Tried {
+            h_s: h_try,
+            lands,
+            next,
+            err,
+            switched: switch.map(|(k, _)| k),
+        }))
+    }
+
+    /// The step `tried` accepted: its end time (the event it lands on), the energy
+    /// balance and counts, the gear pairs at its end; observers see it, then the mesh
+    /// events at its end; the loop moves to its end.
+    fn accept<O: Observer>(
+        &mut self,
+        s: &mut Stepping,
+        stats: &mut RunStats,
+        tried: &Tried,
+        observer: &mut O,
+    ) -> Result<(), SimError> {
+        let (model, gears) = (self.model, self.gears);
+        let t = s.t;
+        let t_new = if tried.lands {
+            tried.next.t_s
+        } else {
+            t + tried.h_s
+        };
+        if t_new <= t {
+            return Err(SimError::TimeResolution { t_s: t });
+        }
+        let stepper = &mut self.stepper;
+        stepper.data.h_s = t_new - t;
+        accumulate_energy(&mut stats.energy, &stepper.data);
+        stats.steps += 1;
+        if !s.sunlit {
+            stats.eclipse_time_s += t_new - t;
+        }
+        for (m, g) in self.mesh.iter_mut().zip(gears) {
+            *m = mesh_or_nan(g, &stepper.data.temps1_k);
+        }
+        // The stepper's loads are those of the step's end (its last stage), which is
+        // what observers see.
+        let view = StepView {
+            index: stats.steps,
+            data: &stepper.data,
+            env1: model.environment.state_with(t_new, s.sunlit),
+            heaters_on: &s.heaters_on,
+            modes_active: &s.modes_active,
+            load_w: &stepper.compiled.each_load_w,
+            mesh: &self.mesh,
+            probe: Probe {
+                model,
+                gears,
+                work: &self.probe_work,
+            },
+        };
         observer
-            .on_finish(&stats)
-            .map_err(|source| SimError::Observer { t_s: t, source })?;
-        Ok(stats)
+            .on_step(&view)
+            .map_err(|source| SimError::Observer { t_s: t_new, source })?;
+        mesh_events(&self.mesh, &mut s.mesh_flags, t_new, observer)?;
+        s.t = t_new;
+        s.y.copy_from_slice(&stepper.data.temps1_k);
+        Ok(())
+    }
+}
+
+/// The step loop's state between steps (what a run leaves in its [`State`] and
+/// memory).
+struct Stepping {
+    t: f64,
+    y: Vec<f64>,
+    heaters_on: Vec<bool>,
+    sunlit: bool,
+    /// The controller's step, s.
+    h: f64,
+    restart: RestartSteps,
+    /// The class of the events the last step landed on: the next step starts from its
+    /// restart step.
+    event_class: Option<EventClass>,
+    schedule: EventSchedule,
+    modes_active: Vec<bool>,
+    mesh_flags: Vec<MeshFlags>,
+}
+
+/// The events no step crosses, after the loop's time: the next shadow crossing (time,
+/// entering), searched up to `shadow_horizon_s`; the next table point or mode edge, an
+/// index into the setup's sorted breakpoints; the next load kink.
+#[derive(Debug, Clone, PartialEq)]
+struct EventSchedule {
+    next_shadow: Option<(f64, bool)>,
+    shadow_horizon_s: f64,
+    next_breakpoint: usize,
+    t_kink_s: f64,
+}
+
+/// The next event a step must land on, and when the next shadow crossing is.
+#[derive(Debug, Clone, Copy)]
+struct NextEvent {
+    t_s: f64,
+    shadow_s: f64,
+}
+
+impl EventSchedule {
+    /// The earliest of the next shadow crossing, table point or mode edge (before the
+    /// end), load kink and the run's end.
+    fn next(&self, breakpoints: &[f64], t_end_s: f64) -> NextEvent {
+        let shadow_s = self.next_shadow.map_or(f64::INFINITY, |(ts, _)| ts);
+        let t_bp = breakpoints
+            .get(self.next_breakpoint)
+            .copied()
+            .filter(|&b| b < t_end_s)
+            .unwrap_or(f64::INFINITY);
+        NextEvent {
+            t_s: shadow_s.min(t_bp).min(self.t_kink_s).min(t_end_s),
+            shadow_s,
+        }
+    }
+}
+
+/// A step tried and not refused: its length, whether it lands on `next`, its error
+/// ratio (error / tolerance) and the heater whose thermostat switches at its end.
+struct Tried {
+    h_s: f64,
+    lands: bool,
+    next: NextEvent,
+    err: f64,
+    switched: Option<usize>,
+}
+
+impl Stepping {
+    /// The events at the loop's time after the step `tried`: a shadow crossing it
+    /// landed on, load kinks, table points and mode edges passed, modes starting or
+    /// ending, the heater whose thermostat switched. Each is emitted to `observer`; the
+    /// class of the event whose restart step is shortest is kept for the next step. Every
+    /// event is emitted and counted even when one observer call fails; the first error
+    /// is returned.
+    #[allow(clippy::too_many_arguments)]
+    fn pass_events<O: Observer>(
+        &mut self,
+        model: &ThermalModel,
+        breakpoints: &[f64],
+        kinks: &[LoadKink],
+        tried: &Tried,
+        stats: &mut RunStats,
+        t_end_s: f64,
+        observer: &mut O,
+    ) -> Result<(), SimError> {
+        let env = &model.environment;
+        let t = self.t;
+        let restart = self.restart;
+        let mark = |class: EventClass, slot: &mut Option<EventClass>| {
+            // the class whose restart step is shortest wins when events coincide
+            if slot.is_none_or(|c| restart[class] < restart[c]) {
+                *slot = Some(class);
+            }
+        };
+        let mut events = Ok(());
+        let schedule = &mut self.schedule;
+        if tried.lands && tried.next.t_s == tried.next.shadow_s {
+            let (_, entering) = schedule.next_shadow.expect("shadow event");
+            self.sunlit = !entering;
+            let (kind, class) = if entering {
+                stats.eclipse_entries += 1;
+                (EventKind::EclipseEntry, EventClass::EclipseEntry)
+            } else {
+                (EventKind::EclipseExit, EventClass::EclipseExit)
+            };
+            events = events.and(emit(observer, t, kind));
+            schedule.next_shadow = env.next_shadow_crossing(t, t_end_s);
+            mark(class, &mut self.event_class);
+        }
+        if t >= schedule.t_kink_s {
+            schedule.t_kink_s = env.next_load_kink(t, kinks);
+            mark(EventClass::Other, &mut self.event_class);
+        }
+        while breakpoints
+            .get(schedule.next_breakpoint)
+            .is_some_and(|&b| b <= t)
+        {
+            schedule.next_breakpoint += 1;
+            mark(EventClass::Other, &mut self.event_class);
+        }
+        for (k, m) in model.modes.iter().enumerate() {
+            let now = m.active(t + 1e-9 * (1.0 + t));
+            if now != self.modes_active[k] {
+                let kind = if now {
+                    EventKind::ModeStart(k)
+                } else {
+                    EventKind::ModeEnd(k)
+                };
+                events = events.and(emit(observer, t, kind));
+            }
+        }
+        if let Some(k) = tried.switched {
+            self.heaters_on[k] = !self.heaters_on[k];
+            stats.heater_switches += 1;
+            mark(EventClass::HeaterSwitch, &mut self.event_class);
+            let kind = if self.heaters_on[k] {
+                EventKind::HeaterOn(k)
+            } else {
+                EventKind::HeaterOff(k)
+            };
+            events = events.and(emit(observer, t, kind));
+        }
+        events
     }
 }
 
@@ -1179,37 +1297,67 @@ fn earliest_thermostat_switch(
     best
 }
 
-/// Reports gear-pair state changes (margin, interference, validity) as events.
+/// A gear pair's state as its last events told it: below the smallest backlash
+/// allowed, in interference, its mesh invalid.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct MeshFlags {
+    margin_low: bool,
+    interference: bool,
+    invalid: bool,
+}
+
+impl MeshFlags {
+    /// The flags of mesh state `m`.
+    fn of(m: &MeshState) -> MeshFlags {
+        let invalid = m.backlash_exact_m.is_nan();
+        MeshFlags {
+            margin_low: !invalid && m.margin_m < 0.0,
+            interference: !invalid && m.backlash_exact_m <= 0.0,
+            invalid,
+        }
+    }
+}
+
+/// Reports gear-pair state changes as events (pair `k`, in the order margin,
+/// interference, validity; an invalid mesh is reported when it becomes invalid only)
+/// and brings `flags` up to date.
 fn mesh_events<O: Observer>(
     mesh: &[MeshState],
-    flags: &mut [[bool; 3]],
+    flags: &mut [MeshFlags],
     t_s: f64,
     observer: &mut O,
 ) -> Result<(), SimError> {
+    let emit = |observer: &mut O, kind| {
+        observer
+            .on_event(&Event { t_s, kind })
+            .map_err(|source| SimError::Observer { t_s, source })
+    };
     for (k, (m, f)) in mesh.iter().zip(flags.iter_mut()).enumerate() {
-        let invalid = m.backlash_exact_m.is_nan();
-        let now = [
-            !invalid && m.margin_m < 0.0,
-            !invalid && m.backlash_exact_m <= 0.0,
-            invalid,
-        ];
-        let kinds = [
-            (EventKind::MarginLow(k), EventKind::MarginRestored(k)),
-            (
-                EventKind::InterferenceStart(k),
-                EventKind::InterferenceEnd(k),
-            ),
-            (EventKind::MeshInvalid(k), EventKind::MeshInvalid(k)),
-        ];
-        for i in 0..3 {
-            if now[i] != f[i] {
-                f[i] = now[i];
-                if now[i] || i < 2 {
-                    let kind = if now[i] { kinds[i].0 } else { kinds[i].1 };
-                    observer
-                        .on_event(&Event { t_s, kind })
-                        .map_err(|source| SimError::Observer { t_s, source })?;
-                }
+        let now = MeshFlags::of(m);
+        // each flag follows before its event, so an observer's error leaves the flags
+        // of the events it saw
+        if f.margin_low != now.margin_low {
+            f.margin_low = now.margin_low;
+            let kind = if now.margin_low {
+                EventKind::MarginLow(k)
+            } else {
+                EventKind::MarginRestored(k)
+            };
+            emit(observer, kind)?;
+        }
+        if f.interference != now.interference {
+            f.interference = now.interference;
+            let kind = if now.interference {
+                EventKind::InterferenceStart(k)
+            } else {
+                EventKind::InterferenceEnd(k)
+            };
+            emit(observer, kind)?;
+        }
+        if f.invalid != now.invalid {
+            f.invalid = now.invalid;
+            if now.invalid {
+                emit(observer, EventKind::MeshInvalid(k))?;
             }
         }
     }
