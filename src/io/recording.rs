@@ -123,11 +123,11 @@ impl Recording {
         Recording::from_csv_with(bytes, file, &RecordingFormat::default())
     }
 
-    /// Parses CSV text laid out as `fmt` says; `file` names it in errors.
-    ///
-    /// Long by choice (about 230 lines): one pass over the rows that checks each
-    /// cell where it is read (header, column names, numbers, times increasing, repeated
-    /// stamps and rows), so an error names its line and column.
+    /// Parses CSV text laid out as `fmt` says; `file` names it in errors. One pass over
+    /// the rows checks each cell where it is read (header, column names, numbers,
+    /// times increasing, repeated stamps and rows), so an error names its line and
+    /// column: the header by [`CsvLayout::of`], a row's cells by [`read_cells`], its
+    /// place among the rows by [`CsvRows::add`].
     pub fn from_csv_with(
         bytes: &[u8],
         file: &str,
@@ -144,24 +144,9 @@ impl Recording {
             .trim(csv::Trim::All)
             .comment(Some(b'#'))
             .from_reader(bytes);
-        // Lines counted here: the csv crate does not count blank lines.
-        let newlines: Vec<usize> = bytes
-            .iter()
-            .enumerate()
-            .filter_map(|(i, &b)| (b == b'\n').then_some(i))
-            .collect();
-        let line_of = |p: Option<&csv::Position>| {
-            p.map_or(0, |p| {
-                // a record's position is where its reading began, before blank lines
-                let mut at = p.byte() as usize;
-                while matches!(bytes.get(at), Some(b'\n' | b'\r')) {
-                    at += 1;
-                }
-                newlines.partition_point(|&i| i < at) as u64 + 1
-            })
-        };
+        let lines = LineIndex::of(bytes);
         let csv_error = |e: csv::Error| {
-            let line = line_of(e.position());
+            let line = lines.line(e.position());
             match e.kind() {
                 csv::ErrorKind::UnequalLengths {
                     expected_len, len, ..
@@ -175,20 +160,92 @@ impl Recording {
             }
         };
         let header = reader.headers().map_err(&csv_error)?.clone();
-        let header_line = line_of(header.position()).max(1);
+        let header_line = lines.line(header.position()).max(1);
         if header.is_empty() || header.iter().all(str::is_empty) {
             return Err(RecordingError::File {
                 file: file.into(),
                 message: "is empty: a recording starts with a header row (`time_s,…`)".into(),
             });
         }
+        let layout = CsvLayout::of(&header, fmt, &|column, m| at(header_line, column, m))?;
+        let mut rows = CsvRows::new(file, layout.channels());
+        let mut row = csv::StringRecord::new();
+        let mut values: Vec<Option<f64>> = Vec::new();
+        loop {
+            match reader.read_record(&mut row) {
+                Ok(false) => break,
+                Ok(true) => {}
+                Err(e) => return Err(csv_error(e)),
+            }
+            let line = lines.line(row.position());
+            let cell_error = |column, m| at(line, column, m);
+            let time_col = layout.time_col;
+            let t = time_of(
+                row.get(time_col).unwrap_or(""),
+                &fmt.time,
+                &fmt.time_column,
+                |m| cell_error(time_col + 1, m),
+            )?;
+            read_cells(&row, &layout, &mut values, &cell_error)?;
+            rows.add(t, line, &row, &values, &layout, fmt, &cell_error)?;
+        }
+        rows.finish()
+    }
+}
+
+/// Where each line of a text begins: the csv crate does not count blank lines.
+struct LineIndex<'b> {
+    bytes: &'b [u8],
+    newlines: Vec<usize>,
+}
+
+impl<'b> LineIndex<'b> {
+    fn of(bytes: &'b [u8]) -> LineIndex<'b> {
+        let newlines = bytes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, &b)| (b == b'\n').then_some(i))
+            .collect();
+        LineIndex { bytes, newlines }
+    }
+
+    /// The line a record at `p` is on (0 when there is no position).
+    fn line(&self, p: Option<&csv::Position>) -> u64 {
+        p.map_or(0, |p| {
+            // a record's position is where its reading began, before blank lines
+            let mut at = p.byte() as usize;
+            while matches!(self.bytes.get(at), Some(b'\n' | b'\r')) {
+                at += 1;
+            }
+            self.newlines.partition_point(|&i| i < at) as u64 + 1
+        })
+    }
+}
+
+/// An error at a column (1-based; 0: the whole line) of the line at hand.
+type CellError<'e> = dyn Fn(usize, String) -> RecordingError + 'e;
+
+/// A CSV recording's columns: their names, the time column and which are channels.
+struct CsvLayout {
+    names: Vec<String>,
+    time_col: usize,
+    channel: Vec<bool>,
+}
+
+impl CsvLayout {
+    /// The layout of `header` (checked: named, unique, one column per delimiter, the
+    /// time column and the ignored ones there) as `fmt` says; errors on the header line.
+    fn of(
+        header: &csv::StringRecord,
+        fmt: &RecordingFormat,
+        at: &CellError<'_>,
+    ) -> Result<CsvLayout, RecordingError> {
         let names: Vec<String> = header.iter().map(str::to_string).collect();
         if names.len() == 1 {
             // one column: another delimiter?
             for (d, what) in [(';', "semicolons"), ('\t', "tabs"), ('|', "bars")] {
                 if names[0].contains(d) {
                     return Err(at(
-                        header_line,
                         0,
                         format!(
                             "the header is one column that holds {what} ({}): the fields seem separated by {what}; a recording separates them by commas",
@@ -200,11 +257,10 @@ impl Recording {
         }
         for (k, name) in names.iter().enumerate() {
             if name.is_empty() {
-                return Err(at(header_line, k + 1, "a column has no name".into()));
+                return Err(at(k + 1, "a column has no name".into()));
             }
             if names[..k].contains(name) {
                 return Err(at(
-                    header_line,
                     k + 1,
                     format!("column `{}` appears twice", crate::units::shown(name)),
                 ));
@@ -212,26 +268,24 @@ impl Recording {
         }
         let time_name = fmt.time_column.as_str();
         let Some(time_col) = names.iter().position(|n| n == time_name) else {
+            let joined = names.join(",");
+            let header = crate::units::shown(&joined);
             return Err(at(
-                header_line,
                 0,
                 if time_name == TIME_COLUMN {
                     format!(
-                        "no `{TIME_COLUMN}` column (the header is {}): a recording gives its time in seconds since t = 0 of the scenario (or name its time column in the scenario's [recording] time_column)",
-                        crate::units::shown(&names.join(","))
+                        "no `{TIME_COLUMN}` column (the header is {header}): a recording gives its time in seconds since t = 0 of the scenario (or name its time column in the scenario's [recording] time_column)",
                     )
                 } else {
                     format!(
-                        "no `{}` column, the time column the scenario's [recording] names (the header is {})",
+                        "no `{}` column, the time column the scenario's [recording] names (the header is {header})",
                         crate::units::shown(time_name),
-                        crate::units::shown(&names.join(","))
                     )
                 },
             ));
         };
         if let Some(missing) = fmt.ignore_columns.iter().find(|c| !names.contains(c)) {
             return Err(at(
-                header_line,
                 0,
                 format!(
                     "no `{}` column, which the scenario's [recording] ignore_columns names",
@@ -239,125 +293,166 @@ impl Recording {
                 ),
             ));
         }
-        let is_channel = |k: usize| k != time_col && !fmt.ignore_columns.contains(&names[k]);
-        let columns: Vec<String> = (0..names.len())
-            .filter(|&k| is_channel(k))
-            .map(|k| names[k].clone())
+        let channel = (0..names.len())
+            .map(|k| k != time_col && !fmt.ignore_columns.contains(&names[k]))
             .collect();
-        let mut rec = Recording {
-            file: file.into(),
-            values: vec![Vec::new(); columns.len()],
-            columns,
-            time_s: Vec::new(),
-            rows_at: Vec::new(),
-            fill_rows: Vec::new(),
-            merged_rows: Vec::new(),
-        };
-        let mut row = csv::StringRecord::new();
-        // the previous row's cells (time excluded), and per channel how many readings its
-        // value averages (an empty cell is no reading)
-        let mut previous: Vec<String> = Vec::new();
-        let mut averaged: Vec<f64> = vec![0.0; rec.columns.len()];
-        let mut values: Vec<Option<f64>> = Vec::new();
-        loop {
-            match reader.read_record(&mut row) {
-                Ok(false) => break,
-                Ok(true) => {}
-                Err(e) => return Err(csv_error(e)),
-            }
-            let line = line_of(row.position());
-            let t = time_of(row.get(time_col).unwrap_or(""), &fmt.time, time_name, |m| {
-                at(line, time_col + 1, m)
+        Ok(CsvLayout {
+            names,
+            time_col,
+            channel,
+        })
+    }
+
+    /// The channels' names, in column order.
+    fn channels(&self) -> Vec<String> {
+        self.names
+            .iter()
+            .zip(&self.channel)
+            .filter(|(_, c)| **c)
+            .map(|(n, _)| n.clone())
+            .collect()
+    }
+}
+
+/// The channels' readings of `row` into `values` (an empty cell is no reading; a cell
+/// that is not a finite number is an error at its column).
+fn read_cells(
+    row: &csv::StringRecord,
+    layout: &CsvLayout,
+    values: &mut Vec<Option<f64>>,
+    at: &CellError<'_>,
+) -> Result<(), RecordingError> {
+    values.clear();
+    for (k, cell) in row.iter().enumerate() {
+        if !layout.channel[k] {
+            continue;
+        }
+        let name = &layout.names[k];
+        values.push(if cell.is_empty() {
+            None
+        } else {
+            let v: f64 = cell.parse().map_err(|_| {
+                at(
+                    k + 1,
+                    format!("`{cell}` in column `{name}` is not a number"),
+                )
             })?;
-            values.clear();
-            for (k, cell) in row.iter().enumerate() {
-                if !is_channel(k) {
-                    continue;
-                }
-                let name = &names[k];
-                values.push(if cell.is_empty() {
-                    None
-                } else {
-                    let v: f64 = cell.parse().map_err(|_| {
-                        at(
-                            line,
-                            k + 1,
-                            format!("`{cell}` in column `{name}` is not a number"),
-                        )
-                    })?;
-                    if !v.is_finite() {
-                        return Err(at(
-                            line,
-                            k + 1,
-                            format!(
-                                "`{cell}` in column `{name}` is not a finite number (a missing sample is an empty cell)"
-                            ),
-                        ));
-                    }
-                    Some(v)
-                });
+            if !v.is_finite() {
+                return Err(at(
+                    k + 1,
+                    format!(
+                        "`{cell}` in column `{name}` is not a finite number (a missing sample is an empty cell)"
+                    ),
+                ));
             }
-            let same_cells = row
-                .iter()
-                .enumerate()
-                .filter(|&(k, _)| k != time_col)
-                .map(|(_, c)| c)
-                .eq(previous.iter().map(String::as_str));
-            if let Some(&last) = rec.time_s.last() {
-                let last_line = rec.rows_at.last().copied().unwrap_or(0);
-                if t < last {
+            Some(v)
+        });
+    }
+    Ok(())
+}
+
+/// The recording as its rows are added: a row of a new time is a sample (or a fill
+/// row, repeating the one before); a row of the same time is merged into it.
+struct CsvRows {
+    rec: Recording,
+    /// The previous row's cells (time excluded).
+    previous: Vec<String>,
+    /// Per channel, how many readings its value averages (an empty cell is no reading).
+    averaged: Vec<f64>,
+}
+
+impl CsvRows {
+    fn new(file: &str, columns: Vec<String>) -> CsvRows {
+        CsvRows {
+            averaged: vec![0.0; columns.len()],
+            rec: Recording {
+                file: file.into(),
+                values: vec![Vec::new(); columns.len()],
+                columns,
+                time_s: Vec::new(),
+                rows_at: Vec::new(),
+                fill_rows: Vec::new(),
+                merged_rows: Vec::new(),
+            },
+            previous: Vec::new(),
+        }
+    }
+
+    /// Adds `row` (on `line`, at time `t`, its channels' `values`): times must not
+    /// decrease; a repeated stamp is refused, or merged (`duplicate_times = "mean"`);
+    /// a row repeating the one before is a fill row when `fmt` says so.
+    #[allow(clippy::too_many_arguments)]
+    fn add(
+        &mut self,
+        t: f64,
+        line: u64,
+        row: &csv::StringRecord,
+        values: &[Option<f64>],
+        layout: &CsvLayout,
+        fmt: &RecordingFormat,
+        at: &CellError<'_>,
+    ) -> Result<(), RecordingError> {
+        let (time_col, rec) = (layout.time_col, &mut self.rec);
+        let same_cells = row
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| k != time_col)
+            .map(|(_, c)| c)
+            .eq(self.previous.iter().map(String::as_str));
+        if let Some(&last) = rec.time_s.last() {
+            let last_line = rec.rows_at.last().copied().unwrap_or(0);
+            let not_increasing =
+                || format!("time does not increase: {t} s after {last} s on line {last_line}");
+            if t < last {
+                return Err(at(time_col + 1, not_increasing()));
+            }
+            if t == last {
+                if !same_cells && fmt.duplicate_times == DuplicateTimes::Refuse {
                     return Err(at(
-                        line,
                         time_col + 1,
-                        format!("time does not increase: {t} s after {last} s on line {last_line}"),
+                        if fmt.time == TimeFormat::Seconds && fmt.time_column == TIME_COLUMN {
+                            not_increasing()
+                        } else {
+                            format!(
+                                "the same time stamp as line {last_line} with other readings; if they are two readings within one stamp, set [recording] duplicate_times = \"mean\""
+                            )
+                        },
                     ));
                 }
-                if t == last {
-                    if !same_cells && fmt.duplicate_times == DuplicateTimes::Refuse {
-                        return Err(at(
-                            line,
-                            time_col + 1,
-                            if fmt.time == TimeFormat::Seconds && time_name == TIME_COLUMN {
-                                format!(
-                                    "time does not increase: {t} s after {last} s on line {last_line}"
-                                )
-                            } else {
-                                format!(
-                                    "the same time stamp as line {last_line} with other readings; if they are two readings within one stamp, set [recording] duplicate_times = \"mean\""
-                                )
-                            },
-                        ));
-                    }
-                    if !same_cells {
-                        mean_into(&mut rec.values, &values, &mut averaged);
-                        // the next row of the stamp is compared with this one
-                        remember(&mut previous, &row, time_col);
-                    }
-                    rec.merged_rows.push(line);
-                    continue;
+                if !same_cells {
+                    mean_into(&mut rec.values, values, &mut self.averaged);
+                    // the next row of the stamp is compared with this one
+                    remember(&mut self.previous, row, time_col);
                 }
+                rec.merged_rows.push(line);
+                return Ok(());
             }
-            let fill = fmt.repeated_rows_are_fill && !rec.time_s.is_empty() && same_cells;
-            for (n, v) in averaged.iter_mut().zip(&values) {
-                *n = if v.is_some() && !fill { 1.0 } else { 0.0 };
-            }
-            if fill {
-                rec.fill_rows.push(line);
-            }
-            for (ch, v) in rec.values.iter_mut().zip(&values) {
-                ch.push(if fill { None } else { *v });
-            }
-            rec.time_s.push(t);
-            rec.rows_at.push(line);
-            remember(&mut previous, &row, time_col);
         }
-        if rec.time_s.is_empty() {
+        let fill = fmt.repeated_rows_are_fill && !rec.time_s.is_empty() && same_cells;
+        for (n, v) in self.averaged.iter_mut().zip(values) {
+            *n = if v.is_some() && !fill { 1.0 } else { 0.0 };
+        }
+        if fill {
+            rec.fill_rows.push(line);
+        }
+        for (ch, v) in rec.values.iter_mut().zip(values) {
+            ch.push(if fill { None } else { *v });
+        }
+        rec.time_s.push(t);
+        rec.rows_at.push(line);
+        remember(&mut self.previous, row, time_col);
+        Ok(())
+    }
+
+    /// The recording, which must hold a sample.
+    fn finish(self) -> Result<Recording, RecordingError> {
+        if self.rec.time_s.is_empty() {
             return Err(RecordingError::File {
-                file: file.into(),
+                file: self.rec.file,
                 message: "has a header but no samples".into(),
             });
         }
-        Ok(rec)
+        Ok(self.rec)
     }
 }
 
@@ -447,12 +542,11 @@ fn mean_into(rows: &mut [Vec<Option<f64>>], values: &[Option<f64>], averaged: &m
 /// The topic a recording is read from when an MCAP file has several.
 pub const RECORDING_TOPIC: &str = "/recording";
 
-/// A recording from an MCAP file: the messages of its recording topic decoded as JSON
-/// or protobuf (through the stored schema) into channels at times.
-///
-/// Long by choice (about 160 lines): one pass over the messages that checks each
-/// where it is read (schema, encoding, fields, times increasing), so that an error
-/// names its message.
+/// A recording from an MCAP file: the messages of its recording topic
+/// ([`recording_channel`]) decoded as JSON ([`json_fields`]) or protobuf (through the
+/// stored schema) into channels at times ([`add_sample`]), each checked where it is
+/// read (schema, encoding, fields, times increasing), so that an error names its
+/// message.
 fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
     use super::mcap_read::{flatten_message, message_type};
     let fail = |message: String| RecordingError::File {
@@ -471,37 +565,7 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
             ))
         })?);
     }
-    // Topics that can hold series: JSON, or protobuf other than foxglove's own types.
-    let mut topics: Vec<(&str, u16)> = Vec::new();
-    for m in &messages {
-        let ch = &m.channel;
-        let series = ch.message_encoding == "json"
-            || (ch.message_encoding == "protobuf"
-                && ch
-                    .schema
-                    .as_ref()
-                    .is_some_and(|s| !s.name.starts_with("foxglove.")));
-        if series && !topics.iter().any(|&(_, id)| id == ch.id) {
-            topics.push((ch.topic.as_str(), ch.id));
-        }
-    }
-    topics.sort();
-    let channel_id = match topics.iter().find(|(t, _)| *t == RECORDING_TOPIC) {
-        Some(&(_, id)) => id,
-        None if topics.len() == 1 => topics[0].1,
-        None if topics.is_empty() => {
-            return Err(fail(
-                "has no topic with numeric series (protobuf or JSON messages)".into(),
-            ));
-        }
-        None => {
-            let names: Vec<&str> = topics.iter().map(|(t, _)| *t).collect();
-            return Err(fail(format!(
-                "has several topics ({}); a recording is read from the topic `{RECORDING_TOPIC}`",
-                names.join(", ")
-            )));
-        }
-    };
+    let channel_id = recording_channel(&messages).map_err(fail)?;
     let mut rec = Recording {
         file: file.into(),
         columns: Vec::new(),
@@ -542,29 +606,7 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
                     .map(|(k, v)| (k.trim_start_matches('.').to_string(), Some(v))),
             );
         } else {
-            let UniqueObject(fields) = json_object(&m.data).map_err(where_)?;
-            for (k, v) in fields {
-                match v {
-                    serde_json::Value::Number(_) if text_fields.contains(&k) => {
-                        return Err(where_(format!(
-                            "field `{k}` is a number here and text in earlier messages"
-                        )));
-                    }
-                    serde_json::Value::Number(x) => flat.push((k, x.as_f64())),
-                    serde_json::Value::Null => flat.push((k, None)),
-                    other => {
-                        // A field that is never a number (a note, a label) is not a
-                        // channel; one that is a number elsewhere is a bad cell.
-                        if k == TIME_COLUMN || rec.columns.contains(&k) {
-                            return Err(where_(format!(
-                                "field `{k}` is not a number or null: {other}"
-                            )));
-                        }
-                        text_fields.insert(k);
-                        continue;
-                    }
-                }
-            }
+            json_fields(&m.data, &rec.columns, &mut text_fields, &mut flat).map_err(where_)?;
         }
         let mut time = None;
         for (name, v) in &flat {
@@ -584,33 +626,106 @@ fn read_mcap(bytes: &[u8], file: &str) -> Result<Recording, RecordingError> {
             )));
         }
         let t = time.unwrap_or(m.log_time as f64 / 1e9);
-        if let Some(&last) = rec.time_s.last()
-            && t <= last
-        {
-            return Err(where_(format!(
-                "time does not increase: {t} s after {last} s"
-            )));
-        }
-        let row = rec.time_s.len();
-        rec.time_s.push(t);
-        rec.rows_at.push(n);
-        for (name, v) in flat.drain(..) {
-            if name == TIME_COLUMN {
-                continue;
-            }
-            let k = match rec.columns.iter().position(|c| *c == name) {
-                Some(k) => k,
-                None => {
-                    rec.columns.push(name);
-                    rec.values.push(vec![None; row]);
-                    rec.columns.len() - 1
-                }
-            };
-            rec.values[k].push(v);
-        }
-        for column in &mut rec.values {
-            column.resize(row + 1, None);
-        }
+        add_sample(&mut rec, n, t, &mut flat).map_err(where_)?;
     }
     Ok(rec)
+}
+
+/// The channel a recording is read from: the topic `/recording`, or the one topic
+/// that can hold series (JSON, or protobuf other than foxglove's own types).
+fn recording_channel(messages: &[mcap::Message<'_>]) -> Result<u16, String> {
+    let mut topics: Vec<(&str, u16)> = Vec::new();
+    for m in messages {
+        let ch = &m.channel;
+        let series = ch.message_encoding == "json"
+            || (ch.message_encoding == "protobuf"
+                && ch
+                    .schema
+                    .as_ref()
+                    .is_some_and(|s| !s.name.starts_with("foxglove.")));
+        if series && !topics.iter().any(|&(_, id)| id == ch.id) {
+            topics.push((ch.topic.as_str(), ch.id));
+        }
+    }
+    topics.sort();
+    match topics.iter().find(|(t, _)| *t == RECORDING_TOPIC) {
+        Some(&(_, id)) => Ok(id),
+        None if topics.len() == 1 => Ok(topics[0].1),
+        None if topics.is_empty() => {
+            Err("has no topic with numeric series (protobuf or JSON messages)".into())
+        }
+        None => {
+            let names: Vec<&str> = topics.iter().map(|(t, _)| *t).collect();
+            Err(format!(
+                "has several topics ({}); a recording is read from the topic `{RECORDING_TOPIC}`",
+                names.join(", ")
+            ))
+        }
+    }
+}
+
+/// A JSON message's fields into `flat` (number or null). A field that is never a
+/// number (a note, a label) is not a channel and is remembered in `text_fields`; one
+/// that is a number elsewhere (a known column, the time) is a bad cell.
+fn json_fields(
+    data: &[u8],
+    columns: &[String],
+    text_fields: &mut std::collections::BTreeSet<String>,
+    flat: &mut Vec<(String, Option<f64>)>,
+) -> Result<(), String> {
+    let UniqueObject(fields) = json_object(data)?;
+    for (k, v) in fields {
+        match v {
+            serde_json::Value::Number(_) if text_fields.contains(&k) => {
+                return Err(format!(
+                    "field `{k}` is a number here and text in earlier messages"
+                ));
+            }
+            serde_json::Value::Number(x) => flat.push((k, x.as_f64())),
+            serde_json::Value::Null => flat.push((k, None)),
+            other => {
+                if k == TIME_COLUMN || columns.contains(&k) {
+                    return Err(format!("field `{k}` is not a number or null: {other}"));
+                }
+                text_fields.insert(k);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Message `n`'s fields `flat` (emptied) as the sample at `t`, after the ones before
+/// (times increase); a field not seen before is a new channel, empty until now.
+fn add_sample(
+    rec: &mut Recording,
+    n: u64,
+    t: f64,
+    flat: &mut Vec<(String, Option<f64>)>,
+) -> Result<(), String> {
+    if let Some(&last) = rec.time_s.last()
+        && t <= last
+    {
+        return Err(format!("time does not increase: {t} s after {last} s"));
+    }
+    let row = rec.time_s.len();
+    rec.time_s.push(t);
+    rec.rows_at.push(n);
+    for (name, v) in flat.drain(..) {
+        if name == TIME_COLUMN {
+            continue;
+        }
+        let k = match rec.columns.iter().position(|c| *c == name) {
+            Some(k) => k,
+            None => {
+                rec.columns.push(name);
+                rec.values.push(vec![None; row]);
+                rec.columns.len() - 1
+            }
+        };
+        rec.values[k].push(v);
+    }
+    for column in &mut rec.values {
+        column.resize(row + 1, None);
+    }
+    Ok(())
 }

@@ -187,26 +187,12 @@ fn key_path_at(text: &str, offset: usize) -> Option<String> {
 /// (its `name`, or the default of its kind), so that schema errors name it as every
 /// other error does; `None` for other arrays.
 fn element_key(section: &str, i: usize, t: &toml_edit::Table) -> Option<String> {
-    let text = |k: &str| t.get(k).and_then(|v| v.as_str()).map(str::to_string);
-    let named = text("name");
-    match section {
-        "node" | "boundary" | "mode" => named,
-        "conductor" | "radiation" => named.or_else(|| {
-            let b = t.get("between")?.as_array()?;
-            let names: Option<Vec<&str>> = b.iter().map(|v| v.as_str()).collect();
-            Some(names?.join("-"))
-        }),
-        "sun" | "albedo" | "earth_ir" | "dissipation" | "heater" => named.or_else(|| text("node")),
-        "sensor" => text("column"),
-        "gear_pair" => Some(named.unwrap_or_else(|| {
-            if i == 0 {
-                "mesh".to_string()
-            } else {
-                format!("mesh{i}")
-            }
-        })),
-        _ => None,
-    }
+    let field = |k: &str| t.get(k).and_then(|v| v.as_str()).map(str::to_string);
+    let between = t
+        .get("between")
+        .and_then(|b| b.as_array())
+        .and_then(|b| b.iter().map(|v| v.as_str().map(str::to_string)).collect());
+    crate::spec::keys::element_key(section, i, &field, between)
 }
 
 /// Byte offset of the deepest key of `path` present in `text`.

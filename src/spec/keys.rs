@@ -227,62 +227,117 @@ pub fn face_name(node: &str, i: usize) -> String {
     format!("{node}.face{i}")
 }
 
+/// The key of element `i` of the array of tables `section` (None for another array),
+/// from its fields: `field(k)` is its string field `k` (`name`, `node`, `column`),
+/// `between` a link's two nodes. Its `name`, else the default of its kind (see the
+/// module docs), before [`element_keys`] makes repeated keys unique. The TOML reader
+/// names elements by it too, so that every error names an element one way.
+pub fn element_key(
+    section: &str,
+    i: usize,
+    field: &dyn Fn(&str) -> Option<String>,
+    between: Option<Vec<String>>,
+) -> Option<String> {
+    let named = field("name");
+    match section {
+        "node" | "boundary" | "mode" => named,
+        "conductor" | "radiation" => named.or_else(|| between.map(|b| b.join("-"))),
+        "sun" | "albedo" | "earth_ir" | "dissipation" | "heater" => named.or_else(|| field("node")),
+        "sensor" => {
+            named.or_else(|| field("column").map(|c| crate::spec::scenario::sensor_name_of(&c)))
+        }
+        "face" => named.or_else(|| field("node").map(|n| face_name(&n, i))),
+        "gear_pair" => Some(named.unwrap_or_else(|| {
+            if i == 0 {
+                "mesh".to_string()
+            } else {
+                format!("mesh{i}")
+            }
+        })),
+        _ => None,
+    }
+}
+
 /// The element keys of `spec` (see the module docs).
 pub fn element_keys(spec: &ScenarioSpec) -> ElementKeys {
-    let link = |name: &Option<String>, between: &[String]| {
-        name.clone().unwrap_or_else(|| between.join("-"))
+    fn keys<T>(
+        section: &str,
+        items: &[T],
+        field: impl Fn(&T, &str) -> Option<String>,
+        between: impl Fn(&T) -> Option<Vec<String>>,
+    ) -> Vec<String> {
+        unique(items.iter().enumerate().map(|(i, x)| {
+            element_key(section, i, &|k| field(x, k), between(x)).expect("an array of tables")
+        }))
+    }
+    fn none<T>(_: &T) -> Option<Vec<String>> {
+        None
+    }
+    let link = |name: &Option<String>, k: &str| (k == "name").then(|| name.clone()).flatten();
+    let loaded = |name: &Option<String>, node: &str, k: &str| match k {
+        "name" => name.clone(),
+        "node" => Some(node.to_string()),
+        _ => None,
     };
+    let named = |name: &str, k: &str| (k == "name").then(|| name.to_string());
     ElementKeys {
-        node: unique(spec.node.iter().map(|n| n.name.clone())),
-        boundary: unique(spec.boundary.iter().map(|b| b.name.clone())),
-        conductor: unique(spec.conductor.iter().map(|c| link(&c.name, &c.between))),
-        radiation: unique(spec.radiation.iter().map(|r| link(&r.name, &r.between))),
-        sun: unique(
-            spec.sun
-                .iter()
-                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        node: keys("node", &spec.node, |n, k| named(&n.name, k), none),
+        boundary: keys("boundary", &spec.boundary, |b, k| named(&b.name, k), none),
+        conductor: keys(
+            "conductor",
+            &spec.conductor,
+            |c, k| link(&c.name, k),
+            |c| Some(c.between.clone()),
         ),
-        albedo: unique(
-            spec.albedo
-                .iter()
-                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        radiation: keys(
+            "radiation",
+            &spec.radiation,
+            |c, k| link(&c.name, k),
+            |c| Some(c.between.clone()),
         ),
-        earth_ir: unique(
-            spec.earth_ir
-                .iter()
-                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        sun: keys("sun", &spec.sun, |l, k| loaded(&l.name, &l.node, k), none),
+        albedo: keys(
+            "albedo",
+            &spec.albedo,
+            |l, k| loaded(&l.name, &l.node, k),
+            none,
         ),
-        dissipation: unique(
-            spec.dissipation
-                .iter()
-                .map(|l| l.name.clone().unwrap_or(l.node.clone())),
+        earth_ir: keys(
+            "earth_ir",
+            &spec.earth_ir,
+            |l, k| loaded(&l.name, &l.node, k),
+            none,
         ),
-        heater: unique(
-            spec.heater
-                .iter()
-                .map(|h| h.name.clone().unwrap_or(h.node.clone())),
+        dissipation: keys(
+            "dissipation",
+            &spec.dissipation,
+            |l, k| loaded(&l.name, &l.node, k),
+            none,
         ),
-        mode: unique(spec.mode.iter().map(|m| m.name.clone())),
-        face: unique(
-            spec.face
-                .iter()
-                .enumerate()
-                .map(|(i, f)| f.name.clone().unwrap_or_else(|| face_name(&f.node, i))),
+        heater: keys(
+            "heater",
+            &spec.heater,
+            |l, k| loaded(&l.name, &l.node, k),
+            none,
         ),
-        sensor: unique(spec.sensor.iter().map(|s| {
-            s.name
-                .clone()
-                .unwrap_or_else(|| crate::spec::scenario::sensor_name_of(&s.column))
-        })),
-        gear_pair: unique(spec.gear_pair.iter().enumerate().map(|(i, g)| {
-            g.name.clone().unwrap_or_else(|| {
-                if i == 0 {
-                    "mesh".to_string()
-                } else {
-                    format!("mesh{i}")
-                }
-            })
-        })),
+        mode: keys("mode", &spec.mode, |m, k| named(&m.name, k), none),
+        face: keys("face", &spec.face, |f, k| loaded(&f.name, &f.node, k), none),
+        sensor: keys(
+            "sensor",
+            &spec.sensor,
+            |x, k| match k {
+                "name" => x.name.clone(),
+                "column" => Some(x.column.clone()),
+                _ => None,
+            },
+            none,
+        ),
+        gear_pair: keys(
+            "gear_pair",
+            &spec.gear_pair,
+            |g, k| (k == "name").then(|| g.name.clone()).flatten(),
+            none,
+        ),
     }
 }
 
