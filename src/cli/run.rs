@@ -107,10 +107,13 @@ impl Observer for Progress {
     }
 }
 
-pub fn run(a: RunArgs) -> Result<Outcome> {
+/// The scenario a run steps: loaded with its `--set` changes (and a replayed
+/// margins sample, with the line that says so), its length from `--orbits` or one
+/// orbit for `--steady-state`; its warnings printed. Also the orbit's period.
+fn scenario_to_run(a: &RunArgs) -> Result<(Loaded, Option<String>, Scenario, f64)> {
     let mut loaded = load_with(a.scenario.as_deref(), &a.sets)?;
     let replay = match (a.sample, a.seed) {
-        (Some(k), Some(seed)) => Some(replay_sample(&mut loaded, &a, k, seed)?),
+        (Some(k), Some(seed)) => Some(replay_sample(&mut loaded, a, k, seed)?),
         _ => None,
     };
     let mut sc = loaded.scenario().clone();
@@ -127,7 +130,6 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             .with_orbits(1.0)
             .map_err(|m| anyhow!("--steady-state: {m}"))?;
     }
-    let t_end_s = sc.run.duration_s;
     for w in sc.warnings() {
         eprintln!(
             "warning: {}: {}",
@@ -135,9 +137,16 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
             orbitlash::units::shown(&w.to_string())
         );
     }
+    Ok((loaded, replay, sc, period_s))
+}
+
+/// `orbitlash run`: the scenario stepped under its observers (the log, the CSV, the
+/// statistics of the summary), then the report ([`report_run`]).
+pub fn run(a: RunArgs) -> Result<Outcome> {
+    let (loaded, replay, sc, period_s) = scenario_to_run(&a)?;
+    let t_end_s = sc.run.duration_s;
 
     let (outs, log_path, log_policy) = plan_outputs(&a, &loaded, &sc)?;
-    let json_out = a.json.clone();
     bounded(&a, &sc, log_path.as_deref(), loaded.toml.len())?;
     if a.steady_state {
         super::estimate::steady(&sc, a.force)?;
@@ -232,22 +241,66 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     } else {
         &stats_run
     };
+    let ran = Ran {
+        sc: &sc,
+        stats: &stats,
+        window,
+        mesh,
+        daily: &daily,
+        period_s,
+        wall_s,
+    };
+    let notes = [replay, steady.map(|(_, line)| line)];
+    report_run(&a, &ran, &notes, &outs, log_path.as_deref(), &run_end)
+}
+
+/// What a run left for its report.
+struct Ran<'r> {
+    sc: &'r Scenario,
+    stats: &'r RunStats,
+    /// The statistics of the last orbit (of the whole run, when interrupted before it).
+    window: &'r WindowStats,
+    mesh: &'r MeshStats,
+    daily: &'r orbitlash::run::summary::DailyStats,
+    period_s: f64,
+    wall_s: f64,
+}
+
+/// The report of a run: the verdict, the `notes` (a replayed sample, the periodic
+/// start), the summary, the gear pairs, the days, the solver (`--verbose`); the JSON
+/// summary written; the figure and the log named. FAIL when a pair fails; an error
+/// when the run was interrupted.
+fn report_run(
+    a: &RunArgs,
+    ran: &Ran<'_>,
+    notes: &[Option<String>],
+    outs: &Outputs,
+    log_path: Option<&Path>,
+    run_end: &orbitlash::run::summary::RunEnd,
+) -> Result<Outcome> {
+    let Ran {
+        sc,
+        stats,
+        window,
+        mesh,
+        daily,
+        period_s,
+        wall_s,
+    } = *ran;
+    let t_end_s = sc.run.duration_s;
     let verdicts: Vec<PairVerdict> = mesh.run_pairs.iter().map(PairStats::verdict).collect();
-    let mut o = format_verdict(&sc, &stats, mesh);
-    if let Some(line) = &replay {
+    let mut o = format_verdict(sc, stats, mesh);
+    for line in notes.iter().flatten() {
         outln!(o, "{line}");
     }
-    if let Some((_, line)) = &steady {
-        outln!(o, "{line}");
-    }
-    o.push_str(&format_summary(&sc.thermal, &stats, window, period_s));
-    o.push_str(&format_mesh(&sc, mesh));
-    o.push_str(&format_days(&sc, &daily, &stats));
+    o.push_str(&format_summary(&sc.thermal, stats, window, period_s));
+    o.push_str(&format_mesh(sc, mesh));
+    o.push_str(&format_days(sc, daily, stats));
     if a.verbose {
-        o.push_str(&format_solver(&stats, wall_s, t_end_s / period_s));
+        o.push_str(&format_solver(stats, wall_s, t_end_s / period_s));
     }
-    if let Some(p) = &json_out {
-        let summary = RunSummary::new(&sc, &stats, window, mesh, wall_s);
+    if let Some(p) = &a.json {
+        let summary = RunSummary::new(sc, stats, window, mesh, wall_s);
         let text = serde_json::to_string_pretty(&summary)? + "\n";
         outs.write_all(&[(p.as_path(), text.as_bytes())])?;
         outln!(o, "json: {}", p.display());
@@ -255,7 +308,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
-    o.push_str(&figure_and_log(&a, log_path.as_deref(), &stats, &run_end)?);
+    o.push_str(&figure_and_log(a, log_path, stats, run_end)?);
     print_out(&o)?;
     let pass = verdicts.iter().all(|v| v.passes());
     if stats.interrupted {

@@ -963,6 +963,15 @@ pub fn diagnose(
         .collect();
     let cands = effects::candidates(model, &channels, &hints);
     let search_started = Instant::now();
+    let cx = Search {
+        model,
+        obs: &obs,
+        noise: &base.noise,
+        problem: &problem,
+        reference: &reference,
+        cands: &cands,
+        opts,
+    };
 
     // 4. Ranking; 5. the leading candidates fitted.
     let ranked = search::rank(
@@ -972,48 +981,103 @@ pub fn diagnose(
         &problem.train_residuals(&base.pred),
         progress,
     );
-    let score = |i: usize| reference.train_chi2 - ranked[i].best.as_ref().unwrap().0;
-    let mut order: Vec<usize> = (0..cands.len())
-        .filter(|&i| ranked[i].best.is_some())
-        .collect();
-    order.sort_by(|&a, &b| score(b).total_cmp(&score(a)).then(a.cmp(&b)));
-    let to_fit: Vec<usize> = order
-        .into_iter()
-        .filter(|&i| score(i) > 0.0)
-        .take(opts.fits)
-        .collect();
+    let to_fit = cx.leading(&ranked);
     let fitted = search::fit_leading(&problem, model, &cands, &ranked, &to_fit, progress);
 
     // 6. Selection: single effects, then forward selection, one effect at a time.
     let (mut reports, singles) = judge_singles(
         &problem, &reference, &cands, &ranked, &to_fit, &fitted, opts,
     );
-    // The accepted steps: chain[k] holds k + 1 effects.
-    let mut chain: Vec<Hypothesis> = Vec::new();
-    let mut explained = false;
-    if let Some(first) = singles.first() {
-        explained = explains(&obs, &base.noise, opts, first);
+    let (chain, explained) = cx.select(&singles, &ranked, &mut report, progress);
+    let best = chain.last().cloned();
+
+    // 7. The verdict, the findings and the corrected model.
+    if let Some(h) = &best {
+        cx.conclude(h, explained, &singles, &chain, &mut report, &mut series)?;
+    }
+    settle_candidates(&mut reports, &cands, best.as_ref());
+    report.candidates = reports;
+    report.series = series;
+    report.time_per_candidate_s =
+        search_started.elapsed().as_secs_f64() / cands.len().max(1) as f64;
+    report.time_s = started.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// What steps 4 to 7 of a diagnosis share: the model, the data and their noise, the
+/// fit problem and the baseline it starts from, the candidates and the options.
+struct Search<'a> {
+    model: &'a Model,
+    obs: &'a Observations,
+    noise: &'a [f64],
+    problem: &'a Problem<'a>,
+    reference: &'a Reference<'a>,
+    cands: &'a [Candidate],
+    opts: &'a Options,
+}
+
+impl Search<'_> {
+    /// The candidates to fit: those whose best ranked point lowers the training χ²,
+    /// best first, at most `opts.fits`.
+    fn leading(&self, ranked: &[Ranking]) -> Vec<usize> {
+        let score = |i: usize| self.reference.train_chi2 - ranked[i].best.as_ref().unwrap().0;
+        let mut order: Vec<usize> = (0..self.cands.len())
+            .filter(|&i| ranked[i].best.is_some())
+            .collect();
+        order.sort_by(|&a, &b| score(b).total_cmp(&score(a)).then(a.cmp(&b)));
+        order
+            .into_iter()
+            .filter(|&i| score(i) > 0.0)
+            .take(self.opts.fits)
+            .collect()
+    }
+
+    /// Forward selection from the best single effect, one effect at a time until the
+    /// held-out orbits are explained or `opts.max_effects`: the accepted steps (step k
+    /// holds k + 1 effects; emptied when the best is not a material partial
+    /// explanation) and whether the last explains the residual. Notes say where it
+    /// stopped and why.
+    fn select(
+        &self,
+        singles: &[Hypothesis],
+        ranked: &[Ranking],
+        report: &mut Diagnosis,
+        progress: Progress<'_>,
+    ) -> (Vec<Hypothesis>, bool) {
+        let (opts, cands) = (self.opts, self.cands);
+        let mut chain: Vec<Hypothesis> = Vec::new();
+        let Some(first) = singles.first() else {
+            return (chain, false);
+        };
+        let mut explained = explains(self.obs, self.noise, opts, first);
         chain.push(first.clone());
         while !explained && chain.len() < opts.max_effects {
             let current = chain.last().expect("one step at least");
-            match search::best_extension(&problem, model, &cands, &ranked, current, opts, progress)
-            {
+            let next = search::best_extension(
+                self.problem,
+                self.model,
+                cands,
+                ranked,
+                current,
+                opts,
+                progress,
+            );
+            match next {
                 Some(h) => {
-                    explained = explains(&obs, &base.noise, opts, &h);
+                    explained = explains(self.obs, self.noise, opts, &h);
                     chain.push(h);
                 }
                 None => break,
             }
         }
         let last = chain.last().expect("one step at least");
+        let labels = |h: &Hypothesis| -> Vec<String> {
+            h.members.iter().map(|&m| cands[m].label()).collect()
+        };
         if !explained && chain.len() > 1 {
             report.notes.push(format!(
                 "{} improve{} on {} but leave a structured residual",
-                last.members
-                    .iter()
-                    .map(|&m| cands[m].label())
-                    .collect::<Vec<_>>()
-                    .join(" with "),
+                labels(last).join(" with "),
                 if last.members.len() == 2 { "s" } else { "" },
                 if last.members.len() == 2 {
                     "either alone"
@@ -1030,10 +1094,11 @@ pub fn diagnose(
         }
         // A partial explanation: kept when it removes a material share of a real
         // residual (the baseline not at the noise); the verdict stays unexplained.
+        let reference = self.reference;
         let share = 1.0 - last.holdout_chi2 / reference.holdout_chi2;
         if !explained && (report.verdict == Verdict::Consistent || share < opts.min_partial_share) {
             // What forward selection reached, and why it is not reported.
-            let names: Vec<String> = last.members.iter().map(|&m| cands[m].label()).collect();
+            let names = labels(last);
             let note = format!(
                 "the best {}, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of the \
                  baseline's held-out residual (a partial finding needs {:.0} %) and does not \
@@ -1044,19 +1109,30 @@ pub fn diagnose(
                     "set of candidates"
                 },
                 names.join(" with "),
-                problem.bic_gain(last, reference.train_chi2, last.theta.len()),
+                self.problem
+                    .bic_gain(last, reference.train_chi2, last.theta.len()),
                 100.0 * share,
                 100.0 * opts.min_partial_share
             );
             report.notes.push(note);
             chain.clear();
         }
+        (chain, explained)
     }
-    let best = chain.last().cloned();
 
-    // 7. The verdict, the findings and the corrected model.
-    if let Some(h) = &best {
-        let names = channel_names(&obs);
+    /// The verdict of the best hypothesis `h` (the last of `chain`), its residuals,
+    /// findings and corrected model and series.
+    fn conclude(
+        &self,
+        h: &Hypothesis,
+        explained: bool,
+        singles: &[Hypothesis],
+        chain: &[Hypothesis],
+        report: &mut Diagnosis,
+        series: &mut Series,
+    ) -> Result<(), DiagnoseError> {
+        let (obs, reference) = (self.obs, self.reference);
+        let names = channel_names(obs);
         let res = obs.residuals(&h.pred);
         report.verdict = if explained {
             Verdict::Explained
@@ -1074,13 +1150,13 @@ pub fn diagnose(
         }
         report.heldout_rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Holdout));
         report.rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Train));
-        report.remaining = data::mismatches(&obs, &res, &base.noise, opts.noise_ratio);
+        report.remaining = data::mismatches(obs, &res, self.noise, self.opts.noise_ratio);
         report.findings = findings(
-            &problem,
-            &reference,
-            &cands,
-            &singles,
-            &chain,
+            self.problem,
+            reference,
+            self.cands,
+            singles,
+            chain,
             &report.heldout_rmse,
         );
         // The corrected series over the whole recording (tail included).
@@ -1088,14 +1164,8 @@ pub fn diagnose(
         let (p, _) = predict(&h.model, &whole, &[], u64::MAX).map_err(DiagnoseError::Corrected)?;
         series.corrected = obs.channels.iter().map(|c| p[c.sensor].clone()).collect();
         report.corrected = Some(h.model.clone());
+        Ok(())
     }
-    settle_candidates(&mut reports, &cands, best.as_ref());
-    report.candidates = reports;
-    report.series = series;
-    report.time_per_candidate_s =
-        search_started.elapsed().as_secs_f64() / cands.len().max(1) as f64;
-    report.time_s = started.elapsed().as_secs_f64();
-    Ok(report)
 }
 
 /// Thermostat start points: the channel with the most warming residual in the

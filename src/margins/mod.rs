@@ -918,11 +918,7 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
 /// The report of `all` (every sample of the run, in index order). Statistics are over
 /// the samples that ran; the flags (below the minimum, interference) are derived from
 /// each sample's smallest backlash, never taken from the outcome. `None` when no
-/// sample ran: there is nothing to judge.
-///
-/// Long by choice (about 160 lines): one pass per gear pair gathering the report's
-/// numbers (percentiles, bounds, intervals, flags, sensitivities) into its fields;
-/// the statistics themselves are in [`stats`].
+/// sample ran: there is nothing to judge. Each gear pair's part is [`pair_report`].
 pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
     let outcomes: Vec<&SampleOutcome> = all.iter().filter(|o| o.invalid.is_none()).collect();
     let invalid: Vec<InvalidSample> = all
@@ -938,138 +934,18 @@ pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
         return None;
     }
     let n = outcomes.len() as u64;
-    let needed = stats::wilks_minimum_samples(0.95, 0.95);
-    let rank = stats::wilks_rank(n, 0.95, 0.95);
     let pairs: Vec<PairReport> = id
         .pairs
         .iter()
         .enumerate()
         .map(|(p, (name, allowed_um))| {
-            let allowed_um = *allowed_um;
-            // a lost mesh counts as no backlash at all
-            let mins: Vec<f64> = outcomes
-                .iter()
-                .map(|o| {
-                    let v = o.pairs[p].min_backlash_um;
-                    if v.is_nan() { f64::NEG_INFINITY } else { v }
-                })
-                .collect();
-            let mut sorted = mins.clone();
-            sorted.sort_by(f64::total_cmp);
-            let distribution = |sorted: &[f64]| Distribution {
-                min: sorted.first().copied().unwrap_or(f64::NAN),
-                mean: sorted.iter().sum::<f64>() / n as f64,
-                max: sorted.last().copied().unwrap_or(f64::NAN),
-                percentiles: [1.0, 5.0, 50.0, 95.0, 99.0]
-                    .iter()
-                    .map(|&pc| Percentile {
-                        percent: pc,
-                        value: stats::quantile(sorted, pc / 100.0),
-                        ci95: quantile_ci(sorted, pc / 100.0, 0.95),
-                    })
-                    .collect(),
+            let samples = Samples {
+                id,
+                outcomes: &outcomes,
+                invalid: &invalid,
+                all: all.len(),
             };
-            let margins: Vec<f64> = sorted.iter().map(|v| v - allowed_um).collect();
-            let tolerance = rank.map(|r| sorted[(r - 1) as usize]);
-            let flags: Vec<(bool, bool)> = outcomes
-                .iter()
-                .map(|o| PairOutcome::flags_from_values(o.pairs[p].min_backlash_um, allowed_um))
-                .collect();
-            let violations = flags.iter().filter(|f| f.0).count() as u64;
-            let interference = flags.iter().filter(|f| f.1).count() as u64;
-            let mut sensitivities: Vec<Sensitivity> = id
-                .dispersed
-                .iter()
-                .enumerate()
-                .map(|(d, path)| {
-                    let x: Vec<f64> = outcomes.iter().map(|o| o.values[d]).collect();
-                    Sensitivity {
-                        path: path.clone(),
-                        spearman: stats::spearman(&x, &mins),
-                    }
-                })
-                .collect();
-            sensitivities.sort_by(|a, b| {
-                b.spearman
-                    .abs()
-                    .total_cmp(&a.spearman.abs())
-                    .then(a.path.cmp(&b.path))
-            });
-            let mut order: Vec<usize> = (0..outcomes.len()).collect();
-            order.sort_by(|&a, &b| mins[a].total_cmp(&mins[b]).then(a.cmp(&b)));
-            let worst = order
-                .iter()
-                .take(5)
-                .map(|&i| {
-                    let o = &outcomes[i];
-                    Worst {
-                        index: o.index,
-                        min_backlash_um: o.pairs[p].min_backlash_um,
-                        t_min_s: o.pairs[p].t_min_s,
-                        orbit_number: o.pairs[p].orbit_number,
-                        orbit_phase_deg: o.pairs[p].orbit_phase_deg,
-                        values: id
-                            .dispersed
-                            .iter()
-                            .zip(&o.values)
-                            .map(|(d, v)| (d.clone(), *v))
-                            .collect(),
-                    }
-                })
-                .collect();
-            let (verdict, reason) = if !invalid.is_empty() {
-                (
-                    PassFail::Fail,
-                    format!(
-                        "{} of {} samples could not be run (first: sample {}: {}); the tolerances allow combinations the model cannot take, so 95/95 cannot be shown",
-                        invalid.len(),
-                        all.len(),
-                        invalid[0].index,
-                        invalid[0].reason
-                    ),
-                )
-            } else if interference > 0 {
-                (
-                    PassFail::Fail,
-                    format!("{interference} of {n} samples interfere or lose the mesh"),
-                )
-            } else {
-                match tolerance {
-                    None => (
-                        PassFail::Fail,
-                        format!(
-                            "{n} samples cannot show 95/95: a one-sided Wilks bound needs at least {needed}"
-                        ),
-                    ),
-                    Some(t) if t >= allowed_um => (
-                        PassFail::Pass,
-                        format!(
-                            "95/95 lower bound of the smallest backlash {t:.3} µm ≥ {allowed_um:.1} µm minimum"
-                        ),
-                    ),
-                    Some(t) => (
-                        PassFail::Fail,
-                        format!(
-                            "95/95 lower bound of the smallest backlash {t:.3} µm < {allowed_um:.1} µm minimum"
-                        ),
-                    ),
-                }
-            };
-            PairReport {
-                name: name.clone(),
-                verdict,
-                reason,
-                min_backlash_allowed_um: allowed_um,
-                min_backlash_um: distribution(&sorted),
-                min_margin_um: distribution(&margins),
-                tolerance_95_95_um: tolerance,
-                tolerance_rank: rank,
-                tolerance_samples_needed: needed,
-                violations: probability(violations, n),
-                interference: probability(interference, n),
-                sensitivities,
-                worst,
-            }
+            samples.pair_report(p, name, *allowed_um)
         })
         .collect();
     Some(Report {
@@ -1084,4 +960,177 @@ pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
         dispersed: id.dispersed.clone(),
         pairs,
     })
+}
+
+/// The samples a report judges: those that ran, in index order, and those that could
+/// not (`all` in all).
+struct Samples<'a> {
+    id: &'a RunIdentity,
+    outcomes: &'a [&'a SampleOutcome],
+    invalid: &'a [InvalidSample],
+    all: usize,
+}
+
+impl Samples<'_> {
+    /// Pair `p`'s part of the report (`name`, its smallest backlash allowed): the
+    /// distribution of each sample's smallest backlash and margin, the 95/95 bound,
+    /// the probabilities of a violation and of interference, the sensitivities, the
+    /// worst samples and the verdict.
+    fn pair_report(&self, p: usize, name: &str, allowed_um: f64) -> PairReport {
+        let outcomes = self.outcomes;
+        let n = outcomes.len() as u64;
+        let needed = stats::wilks_minimum_samples(0.95, 0.95);
+        let rank = stats::wilks_rank(n, 0.95, 0.95);
+        // a lost mesh counts as no backlash at all
+        let mins: Vec<f64> = outcomes
+            .iter()
+            .map(|o| {
+                let v = o.pairs[p].min_backlash_um;
+                if v.is_nan() { f64::NEG_INFINITY } else { v }
+            })
+            .collect();
+        let mut sorted = mins.clone();
+        sorted.sort_by(f64::total_cmp);
+        let distribution = |sorted: &[f64]| Distribution {
+            min: sorted.first().copied().unwrap_or(f64::NAN),
+            mean: sorted.iter().sum::<f64>() / n as f64,
+            max: sorted.last().copied().unwrap_or(f64::NAN),
+            percentiles: [1.0, 5.0, 50.0, 95.0, 99.0]
+                .iter()
+                .map(|&pc| Percentile {
+                    percent: pc,
+                    value: stats::quantile(sorted, pc / 100.0),
+                    ci95: quantile_ci(sorted, pc / 100.0, 0.95),
+                })
+                .collect(),
+        };
+        let margins: Vec<f64> = sorted.iter().map(|v| v - allowed_um).collect();
+        let tolerance = rank.map(|r| sorted[(r - 1) as usize]);
+        let flags: Vec<(bool, bool)> = outcomes
+            .iter()
+            .map(|o| PairOutcome::flags_from_values(o.pairs[p].min_backlash_um, allowed_um))
+            .collect();
+        let violations = flags.iter().filter(|f| f.0).count() as u64;
+        let interference = flags.iter().filter(|f| f.1).count() as u64;
+        let (verdict, reason) = self.verdict(n, interference, tolerance, allowed_um);
+        PairReport {
+            name: name.to_string(),
+            verdict,
+            reason,
+            min_backlash_allowed_um: allowed_um,
+            min_backlash_um: distribution(&sorted),
+            min_margin_um: distribution(&margins),
+            tolerance_95_95_um: tolerance,
+            tolerance_rank: rank,
+            tolerance_samples_needed: needed,
+            violations: probability(violations, n),
+            interference: probability(interference, n),
+            sensitivities: self.sensitivities(&mins),
+            worst: self.worst(p, &mins),
+        }
+    }
+
+    /// Each dispersed number's Spearman correlation with the smallest backlash `mins`,
+    /// strongest first.
+    fn sensitivities(&self, mins: &[f64]) -> Vec<Sensitivity> {
+        let mut sensitivities: Vec<Sensitivity> = self
+            .id
+            .dispersed
+            .iter()
+            .enumerate()
+            .map(|(d, path)| {
+                let x: Vec<f64> = self.outcomes.iter().map(|o| o.values[d]).collect();
+                Sensitivity {
+                    path: path.clone(),
+                    spearman: stats::spearman(&x, mins),
+                }
+            })
+            .collect();
+        sensitivities.sort_by(|a, b| {
+            b.spearman
+                .abs()
+                .total_cmp(&a.spearman.abs())
+                .then(a.path.cmp(&b.path))
+        });
+        sensitivities
+    }
+
+    /// The five samples of pair `p` with the smallest backlash `mins`, with their
+    /// dispersed values.
+    fn worst(&self, p: usize, mins: &[f64]) -> Vec<Worst> {
+        let mut order: Vec<usize> = (0..self.outcomes.len()).collect();
+        order.sort_by(|&a, &b| mins[a].total_cmp(&mins[b]).then(a.cmp(&b)));
+        order
+            .iter()
+            .take(5)
+            .map(|&i| {
+                let o = &self.outcomes[i];
+                Worst {
+                    index: o.index,
+                    min_backlash_um: o.pairs[p].min_backlash_um,
+                    t_min_s: o.pairs[p].t_min_s,
+                    orbit_number: o.pairs[p].orbit_number,
+                    orbit_phase_deg: o.pairs[p].orbit_phase_deg,
+                    values: self
+                        .id
+                        .dispersed
+                        .iter()
+                        .zip(&o.values)
+                        .map(|(d, v)| (d.clone(), *v))
+                        .collect(),
+                }
+            })
+            .collect()
+    }
+
+    /// The pair's verdict and why: every sample must run, none interfere, and the
+    /// 95/95 bound `tolerance` (from `n` samples) reach the minimum `allowed_um`.
+    fn verdict(
+        &self,
+        n: u64,
+        interference: u64,
+        tolerance: Option<f64>,
+        allowed_um: f64,
+    ) -> (PassFail, String) {
+        let invalid = self.invalid;
+        if !invalid.is_empty() {
+            return (
+                PassFail::Fail,
+                format!(
+                    "{} of {} samples could not be run (first: sample {}: {}); the tolerances allow combinations the model cannot take, so 95/95 cannot be shown",
+                    invalid.len(),
+                    self.all,
+                    invalid[0].index,
+                    invalid[0].reason
+                ),
+            );
+        }
+        if interference > 0 {
+            return (
+                PassFail::Fail,
+                format!("{interference} of {n} samples interfere or lose the mesh"),
+            );
+        }
+        let needed = stats::wilks_minimum_samples(0.95, 0.95);
+        match tolerance {
+            None => (
+                PassFail::Fail,
+                format!(
+                    "{n} samples cannot show 95/95: a one-sided Wilks bound needs at least {needed}"
+                ),
+            ),
+            Some(t) if t >= allowed_um => (
+                PassFail::Pass,
+                format!(
+                    "95/95 lower bound of the smallest backlash {t:.3} µm ≥ {allowed_um:.1} µm minimum"
+                ),
+            ),
+            Some(t) => (
+                PassFail::Fail,
+                format!(
+                    "95/95 lower bound of the smallest backlash {t:.3} µm < {allowed_um:.1} µm minimum"
+                ),
+            ),
+        }
+    }
 }
