@@ -27,7 +27,13 @@ fn summary(name: &str, d: &Diagnosis) -> String {
     for f in &d.findings {
         s += &format!(
             " {} node={:?} channel={:?} conductor={:?} schedule={:?} gear={:?} {:?};",
-            f.effect, f.node, f.channel, f.conductor, f.schedule, f.gear, f.parameters
+            f.effect,
+            f.target.node(),
+            f.target.channel(),
+            f.target.conductor(),
+            f.target.schedule(),
+            f.target.gear(),
+            f.parameters
         );
     }
     for c in d.candidates.iter().take(
@@ -90,12 +96,12 @@ fn check(name: &str, recipe: &Recipe, want: Option<Want>) {
             .find(|f| f.effect == *effect)
             .unwrap_or_else(|| panic!("{}", summary(name, &d)));
         let on = [
-            &f.node,
-            &f.channel,
-            &f.conductor,
-            &f.load,
-            &f.gear,
-            &f.gear_pair,
+            &f.target.node(),
+            &f.target.channel(),
+            &f.target.conductor(),
+            &f.target.load(),
+            &f.target.gear(),
+            &f.target.gear_pair(),
         ];
         assert!(
             on.iter().any(|t| t.as_deref() == Some(*target)),
@@ -155,7 +161,7 @@ fn val_generator_internal_dissipation_on_motor_while_sunlit() {
         )
     };
     let d = run("dissipation", &r);
-    assert_eq!(d.findings[0].schedule.as_deref(), Some("sunlit"));
+    assert_eq!(d.findings[0].target.schedule().as_deref(), Some("sunlit"));
     check(
         "dissipation",
         &r,
@@ -574,7 +580,12 @@ fn heater_within_tolerance(name: &str, power_w: f64, seed: u64) {
         .iter()
         .find(|f| f.effect == "heater_thermostat")
         .unwrap_or_else(|| panic!("{}", summary(name, &d)));
-    assert_eq!(f.node.as_deref(), Some("housing"), "{}", summary(name, &d));
+    assert_eq!(
+        f.target.node().as_deref(),
+        Some("housing"),
+        "{}",
+        summary(name, &d)
+    );
     let p = &f.parameters;
     eprintln!(
         "{name}: power {:.3} W (truth {power_w}), on {:.3} °C (−16), off {:.3} °C (−11); verdict {}",

@@ -65,7 +65,7 @@ fn check_case(case: &str) {
     let f = &d.findings[0];
     assert_eq!(f.effect, exp["effect"].as_str().unwrap(), "{case}");
     if let Some(node) = exp.get("node").and_then(Value::as_str) {
-        assert_eq!(f.node.as_deref(), Some(node), "{case}");
+        assert_eq!(f.target.node().as_deref(), Some(node), "{case}");
     }
     if let Some(params) = exp.get("parameters").and_then(Value::as_object) {
         for (k, v) in params {

@@ -293,19 +293,20 @@ fn out_files(
 
 fn finding_target(f: &diagnose::Finding) -> String {
     let mut parts = Vec::new();
+    let t = &f.target;
     for (k, v) in [
-        ("node", &f.node),
-        ("channel", &f.channel),
-        ("conductor", &f.conductor),
-        ("load", &f.load),
-        ("face", &f.face),
-        ("key path", &f.path),
-        ("gear", &f.gear),
-        ("gear pair", &f.gear_pair),
-        ("schedule", &f.schedule),
+        ("node", t.node()),
+        ("channel", t.channel()),
+        ("conductor", t.conductor()),
+        ("load", t.load()),
+        ("face", t.face()),
+        ("key path", t.path()),
+        ("gear", t.gear()),
+        ("gear pair", t.gear_pair()),
+        ("schedule", t.schedule()),
     ] {
         if let Some(v) = v {
-            if k == "gear pair" && f.gear.is_some() {
+            if k == "gear pair" && t.gear().is_some() {
                 continue;
             }
             parts.push(format!("{k} {v}"));

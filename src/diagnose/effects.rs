@@ -243,9 +243,8 @@ impl Setter {
     }
 }
 
-/// What a candidate acts on. The report names it by the fields of
-/// [`super::Finding`] (`node`, `channel`, …), which [`Target::node`] and its siblings
-/// give.
+/// What a candidate acts on. The report names it by the keys [`Target::node`] and its
+/// siblings give (`node`, `channel`, …), as a [`super::Finding`]'s JSON does.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Target {
     /// A diffusion node (Earth albedo and IR, a heater).
@@ -273,6 +272,21 @@ pub enum Target {
     /// A number the user declared uncertain (`[[uncertain]]`, `[[dispersion]]`), by its
     /// key path.
     Path(String),
+}
+
+impl Serialize for Target {
+    /// The keys it has, in [`Target::fields`]' order (flattened into a finding).
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let fields = self.fields();
+        let mut m = s.serialize_map(Some(fields.iter().filter(|f| f.1.is_some()).count()))?;
+        for (k, v) in fields {
+            if let Some(v) = v {
+                m.serialize_entry(k, &v)?;
+            }
+        }
+        m.end()
+    }
 }
 
 impl Target {
@@ -334,6 +348,21 @@ impl Target {
             Target::Scheduled { schedule, .. } => Some(schedule.clone()),
             _ => None,
         }
+    }
+
+    /// The keys it is reported by, in order, with the element each names.
+    fn fields(&self) -> [(&'static str, Option<String>); 9] {
+        [
+            ("node", self.node()),
+            ("channel", self.channel()),
+            ("conductor", self.conductor()),
+            ("load", self.load()),
+            ("face", self.face()),
+            ("path", self.path()),
+            ("gear_pair", self.gear_pair()),
+            ("gear", self.gear()),
+            ("schedule", self.schedule()),
+        ]
     }
 
     /// The element a label names: the node, channel, conductor, load, gear or gear

@@ -255,26 +255,11 @@ pub struct Finding {
     /// Serialised as its id (`heater_thermostat`).
     pub effect: effects::Effect,
     pub kind: effects::EffectKind,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub node: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub channel: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub conductor: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub load: Option<String>,
-    /// A face (its absorptivity or emissivity).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub face: Option<String>,
-    /// A number declared uncertain, by key path.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub path: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub gear_pair: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub gear: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub schedule: Option<String>,
+    /// What it acts on: serialised as the keys it has, in the order `node`,
+    /// `channel`, `conductor`, `load`, `face`, `path` (a number declared uncertain, by
+    /// key path), `gear_pair`, `gear`, `schedule`.
+    #[serde(flatten)]
+    pub target: effects::Target,
     /// Fitted values in SI (°C where the name ends in `_c`).
     pub parameters: BTreeMap<String, f64>,
     /// Standard errors (from the Jacobian at the optimum, scaled by the residual
@@ -825,15 +810,7 @@ fn findings(
         out.push(Finding {
             effect: c.effect,
             kind: c.effect.kind(),
-            node: c.target.node(),
-            channel: c.target.channel(),
-            conductor: c.target.conductor(),
-            load: c.target.load(),
-            face: c.target.face(),
-            path: c.target.path(),
-            gear_pair: c.target.gear_pair(),
-            gear: c.target.gear(),
-            schedule: c.target.schedule(),
+            target: c.target.clone(),
             parameters: params.iter().map(|(n, v, _)| (n.clone(), *v)).collect(),
             std_errors: params
                 .iter()
