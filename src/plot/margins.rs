@@ -4,10 +4,15 @@
 //! key path in full, each ρ with its 95 % interval, weak ones pale, a constant input
 //! said as such rather than drawn as 0).
 
+use plotters::chart::DualCoordChartContext;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
 use super::labels::{Placer, Rect, Side};
-use super::{FAMILY, Figure, Label, PlotError, decimals, draw_err, nice_step, text_width};
+use super::{
+    Annotations, Area, FAMILY, Figure, Label, PlotError, decimals, draw_err, nice_step, plot_rect,
+    text_width,
+};
 
 /// What the distribution figure shows.
 #[derive(Debug, Clone)]
@@ -51,61 +56,35 @@ fn label(
     .map_err(draw_err)
 }
 
-/// Histogram (left axis: samples per bin) and empirical CDF (right axis: the fraction
-/// of samples at or below), with the minimum allowed (red) and the 95/95 bound (blue).
-pub fn distribution(d: &DistributionInput<'_>) -> Result<Figure, PlotError> {
-    let mut v: Vec<f64> = d.values.iter().copied().filter(|x| x.is_finite()).collect();
-    v.sort_by(f64::total_cmp);
-    let mut svg = String::new();
-    let mut labels = Vec::new();
-    let mut placer = Placer::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
-        root.fill(&WHITE).map_err(draw_err)?;
-        // Title, then the verdict and counts on a line of their own.
-        let verdict = format!(
-            "{}: {} samples, {} below the minimum, {} interfering",
-            if d.pass { "PASS" } else { "FAIL" },
-            v.len(),
-            d.below,
-            d.interfering
-        );
-        for (text, y, size, color) in [
-            (d.title.as_str(), 10.0, 17.0, BLACK),
-            (
-                verdict.as_str(),
-                34.0,
-                15.0,
-                if d.pass {
-                    RGBColor(0, 120, 60)
-                } else {
-                    RGBColor(200, 0, 0)
-                },
-            ),
-        ] {
-            let ((x, y), r) = placer.place(
-                text,
-                size,
-                (20.0 - 6.0, y + 6.0 + 1.2 * size),
-                &[Side::AboveRight],
-                &Rect::new(0.0, 0.0, W as f64, H as f64),
-            );
-            label(&root, text, size, (x, y), &color, false)?;
-            labels.push(Label {
-                text: text.to_string(),
-                rect: r,
-            });
-        }
-        if v.is_empty() {
-            root.present().map_err(draw_err)?;
-            drop(root);
-            return Ok(Figure {
-                svg,
-                width: W,
-                height: H,
-                labels,
-            });
-        }
+/// The distribution figure's chart: the histogram's axes (µm, samples per bin) and
+/// the CDF's on the right (µm, fraction of samples).
+type DualChart<'a, 'b> = DualCoordChartContext<
+    'a,
+    SVGBackend<'b>,
+    Cartesian2d<RangedCoordf64, RangedCoordf64>,
+    Cartesian2d<RangedCoordf64, RangedCoordf64>,
+>;
+
+/// The histogram of the smallest backlash: the x axis's range (the values, the
+/// minimum allowed and the bound, with a little room), the bins and the y axis.
+#[derive(Debug, Clone)]
+struct Histogram {
+    /// The x axis's ends, µm.
+    lo: f64,
+    hi: f64,
+    /// A bin's width, µm.
+    width: f64,
+    /// Samples per bin.
+    counts: Vec<usize>,
+    /// The y axis's tick step and top (room above the tallest bar for the labels of
+    /// the two lines).
+    ystep: f64,
+    ytop: f64,
+}
+
+impl Histogram {
+    /// Of the valid samples `v` (ascending, at least one), in `d.bins` bins.
+    fn of(v: &[f64], d: &DistributionInput<'_>) -> Histogram {
         let mut lo = v[0]
             .min(d.limit_um)
             .min(d.bound_um.unwrap_or(f64::INFINITY));
@@ -116,122 +95,43 @@ pub fn distribution(d: &DistributionInput<'_>) -> Result<Figure, PlotError> {
         let bins = d.bins.max(1);
         let width = (hi - lo) / bins as f64;
         let mut counts = vec![0usize; bins];
-        for x in &v {
+        for x in v {
             counts[(((x - lo) / width) as usize).min(bins - 1)] += 1;
         }
         let top = *counts.iter().max().unwrap_or(&1) as f64;
-        // Room above the tallest bar for the labels of the two lines.
         let ystep = nice_step(top, 5.0).max(1.0);
         let ytop = ((top * 1.35) / ystep).ceil() * ystep;
-        let area = root.clone().shrink((0, 60), (W, H - 60));
-        let mut chart = ChartBuilder::on(&area)
-            .margin(12)
-            .x_label_area_size(48)
-            .y_label_area_size(64)
-            .right_y_label_area_size(70)
-            .build_cartesian_2d(lo..hi, 0.0..ytop)
-            .map_err(draw_err)?
-            .set_secondary_coord(lo..hi, 0.0..1.0);
-        let xstep = nice_step(hi - lo, 8.0);
-        let xdec = decimals(xstep);
-        chart
-            .configure_mesh()
-            .x_desc("smallest backlash of a sample (µm)")
-            .y_desc("samples per bin (bars)")
-            .x_labels(((hi - lo) / xstep) as usize + 1)
-            .y_labels((ytop / ystep) as usize + 1)
-            .x_label_formatter(&|x| format!("{x:.xdec$}"))
-            .y_label_formatter(&|y| format!("{y:.0}"))
-            .light_line_style(TRANSPARENT)
-            .bold_line_style(RGBColor(230, 230, 230))
-            .label_style((FAMILY, 13))
-            .axis_desc_style((FAMILY, 14))
-            .draw()
-            .map_err(draw_err)?;
-        chart
-            .configure_secondary_axes()
-            .y_desc("cumulative fraction of samples (line)")
-            .y_labels(6)
-            .y_label_formatter(&|y| format!("{y:.1}"))
-            .label_style((FAMILY, 13))
-            .axis_desc_style((FAMILY, 14))
-            .draw()
-            .map_err(draw_err)?;
-        let plot_px = {
-            let (xr, yr) = chart.plotting_area().get_pixel_range();
-            Rect::new(
-                xr.start as f64,
-                yr.start as f64,
-                xr.end as f64,
-                yr.end as f64,
-            )
-        };
-        for (k, c) in counts.iter().enumerate() {
-            let (xa, xb) = (lo + k as f64 * width, lo + (k + 1) as f64 * width);
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(xa, 0.0), (xb, *c as f64)],
-                    RGBColor(150, 175, 200).filled(),
-                )))
-                .map_err(draw_err)?;
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(xa, 0.0), (xb, *c as f64)],
-                    WHITE.stroke_width(1),
-                )))
-                .map_err(draw_err)?;
-            if *c > 0 {
-                let (pa, pb) = (
-                    chart.backend_coord(&(xa, *c as f64)),
-                    chart.backend_coord(&(xb, 0.0)),
-                );
-                placer.avoid(Rect::new(
-                    pa.0 as f64,
-                    pa.1 as f64,
-                    pb.0 as f64,
-                    pb.1 as f64,
-                ));
-            }
+        Histogram {
+            lo,
+            hi,
+            width,
+            counts,
+            ystep,
+            ytop,
         }
-        let n = v.len() as f64;
-        let cdf: Vec<(f64, f64)> = v
-            .iter()
-            .enumerate()
-            .flat_map(|(i, x)| [(*x, i as f64 / n), (*x, (i + 1) as f64 / n)])
-            .collect();
-        chart
-            .draw_secondary_series(LineSeries::new(cdf, BLACK.stroke_width(2)))
-            .map_err(draw_err)?;
-        let mut marks: Vec<(f64, RGBColor, String)> = vec![(
-            d.limit_um,
-            RGBColor(200, 0, 0),
-            format!("minimum {} µm", crate::units::num(d.limit_um)),
-        )];
-        if let Some(b) = d.bound_um {
-            marks.push((b, RGBColor(0, 80, 170), format!("95/95 bound {b:.3} µm")));
-        }
-        for (x, color, _) in &marks {
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    vec![(*x, 0.0), (*x, ytop)],
-                    color.stroke_width(2),
-                )))
-                .map_err(draw_err)?;
-        }
-        for (x, color, text) in &marks {
-            let (px, py) = chart.backend_coord(&(*x, ytop));
-            let (pos, r) = placer.place(
-                text,
-                14.0,
-                (px as f64, py as f64 + 22.0),
-                &[Side::Right, Side::Left],
-                &plot_px,
-            );
-            label(&root, text, 14.0, pos, color, true)?;
-            labels.push(Label {
-                text: text.clone(),
-                rect: r,
-            });
+    }
+}
+
+/// Histogram (left axis: samples per bin) and empirical CDF (right axis: the fraction
+/// of samples at or below), with the minimum allowed (red) and the 95/95 bound (blue).
+pub fn distribution(d: &DistributionInput<'_>) -> Result<Figure, PlotError> {
+    let mut v: Vec<f64> = d.values.iter().copied().filter(|x| x.is_finite()).collect();
+    v.sort_by(f64::total_cmp);
+    let mut svg = String::new();
+    let mut notes = Annotations::default();
+    {
+        let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        draw_headings(&root, d, v.len(), &mut notes)?;
+        // No valid sample: the headings alone.
+        if !v.is_empty() {
+            let hist = Histogram::of(&v, d);
+            let area = root.clone().shrink((0, 60), (W, H - 60));
+            let mut chart = distribution_chart(&area, &hist)?;
+            let plot_px = plot_rect(&chart);
+            draw_bars(&mut chart, &hist, &mut notes.placer)?;
+            draw_cdf(&mut chart, &v)?;
+            draw_marks(&root, &mut chart, d, hist.ytop, &plot_px, &mut notes)?;
         }
         root.present().map_err(draw_err)?;
     }
@@ -239,8 +139,185 @@ pub fn distribution(d: &DistributionInput<'_>) -> Result<Figure, PlotError> {
         svg,
         width: W,
         height: H,
-        labels,
+        labels: notes.labels,
     })
+}
+
+/// Draws the title, then the verdict and the counts (of `n_valid` samples) on a line
+/// of their own.
+fn draw_headings(
+    root: &Area<'_>,
+    d: &DistributionInput<'_>,
+    n_valid: usize,
+    notes: &mut Annotations,
+) -> Result<(), PlotError> {
+    let verdict = format!(
+        "{}: {} samples, {} below the minimum, {} interfering",
+        if d.pass { "PASS" } else { "FAIL" },
+        n_valid,
+        d.below,
+        d.interfering
+    );
+    for (text, y, size, color) in [
+        (d.title.as_str(), 10.0, 17.0, BLACK),
+        (
+            verdict.as_str(),
+            34.0,
+            15.0,
+            if d.pass {
+                RGBColor(0, 120, 60)
+            } else {
+                RGBColor(200, 0, 0)
+            },
+        ),
+    ] {
+        let ((x, y), r) = notes.placer.place(
+            text,
+            size,
+            (20.0 - 6.0, y + 6.0 + 1.2 * size),
+            &[Side::AboveRight],
+            &Rect::new(0.0, 0.0, W as f64, H as f64),
+        );
+        label(root, text, size, (x, y), &color, false)?;
+        notes.keep(text, r);
+    }
+    Ok(())
+}
+
+/// Draws the axes and grid of the histogram (left) and of the CDF (right).
+fn distribution_chart<'a, 'b>(
+    area: &'a Area<'b>,
+    hist: &Histogram,
+) -> Result<DualChart<'a, 'b>, PlotError> {
+    let (lo, hi, ystep, ytop) = (hist.lo, hist.hi, hist.ystep, hist.ytop);
+    let mut chart = ChartBuilder::on(area)
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(64)
+        .right_y_label_area_size(70)
+        .build_cartesian_2d(lo..hi, 0.0..ytop)
+        .map_err(draw_err)?
+        .set_secondary_coord(lo..hi, 0.0..1.0);
+    let xstep = nice_step(hi - lo, 8.0);
+    let xdec = decimals(xstep);
+    chart
+        .configure_mesh()
+        .x_desc("smallest backlash of a sample (µm)")
+        .y_desc("samples per bin (bars)")
+        .x_labels(((hi - lo) / xstep) as usize + 1)
+        .y_labels((ytop / ystep) as usize + 1)
+        .x_label_formatter(&|x| format!("{x:.xdec$}"))
+        .y_label_formatter(&|y| format!("{y:.0}"))
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(RGBColor(230, 230, 230))
+        .label_style((FAMILY, 13))
+        .axis_desc_style((FAMILY, 14))
+        .draw()
+        .map_err(draw_err)?;
+    chart
+        .configure_secondary_axes()
+        .y_desc("cumulative fraction of samples (line)")
+        .y_labels(6)
+        .y_label_formatter(&|y| format!("{y:.1}"))
+        .label_style((FAMILY, 13))
+        .axis_desc_style((FAMILY, 14))
+        .draw()
+        .map_err(draw_err)?;
+    Ok(chart)
+}
+
+/// Draws the histogram's bars (white edges between them); no label may cover a
+/// drawn bar.
+fn draw_bars(
+    chart: &mut DualChart<'_, '_>,
+    hist: &Histogram,
+    placer: &mut Placer,
+) -> Result<(), PlotError> {
+    let (lo, width) = (hist.lo, hist.width);
+    for (k, c) in hist.counts.iter().enumerate() {
+        let (xa, xb) = (lo + k as f64 * width, lo + (k + 1) as f64 * width);
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(xa, 0.0), (xb, *c as f64)],
+                RGBColor(150, 175, 200).filled(),
+            )))
+            .map_err(draw_err)?;
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(xa, 0.0), (xb, *c as f64)],
+                WHITE.stroke_width(1),
+            )))
+            .map_err(draw_err)?;
+        if *c > 0 {
+            let (pa, pb) = (
+                chart.backend_coord(&(xa, *c as f64)),
+                chart.backend_coord(&(xb, 0.0)),
+            );
+            placer.avoid(Rect::new(
+                pa.0 as f64,
+                pa.1 as f64,
+                pb.0 as f64,
+                pb.1 as f64,
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Draws the empirical CDF of the samples `v` (ascending) as a step line on the
+/// right axis.
+fn draw_cdf(chart: &mut DualChart<'_, '_>, v: &[f64]) -> Result<(), PlotError> {
+    let n = v.len() as f64;
+    let cdf: Vec<(f64, f64)> = v
+        .iter()
+        .enumerate()
+        .flat_map(|(i, x)| [(*x, i as f64 / n), (*x, (i + 1) as f64 / n)])
+        .collect();
+    chart
+        .draw_secondary_series(LineSeries::new(cdf, BLACK.stroke_width(2)))
+        .map_err(draw_err)?;
+    Ok(())
+}
+
+/// Draws the minimum allowed (red) and the 95/95 bound (blue) as vertical lines up to
+/// `ytop`, then labels them near their tops inside `plot_px`.
+fn draw_marks(
+    root: &Area<'_>,
+    chart: &mut DualChart<'_, '_>,
+    d: &DistributionInput<'_>,
+    ytop: f64,
+    plot_px: &Rect,
+    notes: &mut Annotations,
+) -> Result<(), PlotError> {
+    let mut marks: Vec<(f64, RGBColor, String)> = vec![(
+        d.limit_um,
+        RGBColor(200, 0, 0),
+        format!("minimum {} µm", crate::units::num(d.limit_um)),
+    )];
+    if let Some(b) = d.bound_um {
+        marks.push((b, RGBColor(0, 80, 170), format!("95/95 bound {b:.3} µm")));
+    }
+    for (x, color, _) in &marks {
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(*x, 0.0), (*x, ytop)],
+                color.stroke_width(2),
+            )))
+            .map_err(draw_err)?;
+    }
+    for (x, color, text) in &marks {
+        let (px, py) = chart.backend_coord(&(*x, ytop));
+        let (pos, r) = notes.placer.place(
+            text,
+            14.0,
+            (px as f64, py as f64 + 22.0),
+            &[Side::Right, Side::Left],
+            plot_px,
+        );
+        label(root, text, 14.0, pos, color, true)?;
+        notes.keep(text.clone(), r);
+    }
+    Ok(())
 }
 
 /// The 95 % interval of a Spearman ρ of `n` samples (Fisher's z, standard error

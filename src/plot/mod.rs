@@ -197,6 +197,79 @@ pub fn time_unit(t_end_s: f64) -> (f64, &'static str) {
     }
 }
 
+/// A drawing area of a figure: the whole page, or a panel cut from it.
+pub(crate) type Area<'b> =
+    plotters::drawing::DrawingArea<plotters::prelude::SVGBackend<'b>, plotters::coord::Shift>;
+
+/// A chart with linear x and y axes, drawn on an [`Area`].
+pub(crate) type Chart<'a, 'b> = plotters::prelude::ChartContext<
+    'a,
+    plotters::prelude::SVGBackend<'b>,
+    plotters::prelude::Cartesian2d<
+        plotters::coord::types::RangedCoordf64,
+        plotters::coord::types::RangedCoordf64,
+    >,
+>;
+
+/// The plotting area of `chart` (inside its axes), px.
+pub(crate) fn plot_rect(chart: &Chart<'_, '_>) -> Rect {
+    let (xr, yr) = chart.plotting_area().get_pixel_range();
+    Rect::new(
+        xr.start as f64,
+        yr.start as f64,
+        xr.end as f64,
+        yr.end as f64,
+    )
+}
+
+/// The time axis of a figure: the unit of [`time_unit`] and the axis's ends in it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TimeAxis {
+    /// Seconds per unit.
+    pub unit_s: f64,
+    /// The unit's name ("h" or "days").
+    pub unit: &'static str,
+    /// The axis's ends, in the unit.
+    pub x0: f64,
+    pub x1: f64,
+}
+
+impl TimeAxis {
+    /// The axis from `start_s` over `span_s`, its unit chosen by where it ends.
+    pub fn new(start_s: f64, span_s: f64) -> TimeAxis {
+        let (unit_s, unit) = time_unit(span_s + start_s);
+        TimeAxis {
+            unit_s,
+            unit,
+            x0: start_s / unit_s,
+            x1: (start_s + span_s) / unit_s,
+        }
+    }
+
+    /// A time, s, on the axis (in its unit).
+    pub fn x(&self, t_s: f64) -> f64 {
+        t_s / self.unit_s
+    }
+}
+
+/// The labels of a figure being drawn: the placer that keeps them apart and the list
+/// the [`Figure`] reports.
+#[derive(Debug, Default)]
+pub(crate) struct Annotations {
+    pub placer: Placer,
+    pub labels: Vec<Label>,
+}
+
+impl Annotations {
+    /// Keeps a label drawn at `rect`.
+    pub fn keep(&mut self, text: impl Into<String>, rect: Rect) {
+        self.labels.push(Label {
+            text: text.into(),
+            rect,
+        });
+    }
+}
+
 /// Shading of eclipses, and of a diagnosis's held-out orbits.
 pub(crate) const ECLIPSE: plotters::style::RGBColor = plotters::style::RGBColor(222, 226, 236);
 pub(crate) const HELD_OUT: plotters::style::RGBColor = plotters::style::RGBColor(254, 243, 216);

@@ -13,8 +13,8 @@ use plotters::prelude::*;
 
 use super::labels::{Placer, Rect, Side};
 use super::{
-    ECLIPSE, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, palette, text_width,
-    time_unit,
+    Annotations, Area, Chart, ECLIPSE, Figure, PlotError, Swatch, TimeAxis, decimals, draw_err,
+    nice_range, palette, plot_rect, text_width,
 };
 use crate::constants::ZERO_CELSIUS_K;
 pub use crate::run::summary::RunEnd;
@@ -287,16 +287,108 @@ fn range_of<'a>(v: impl Iterator<Item = &'a f64>) -> (f64, f64) {
         })
 }
 
-/// Draws the run figure.
-pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
-    let t0 = s.time_s[0];
-    let span = (s.time_s.last().unwrap() - t0).max(1.0);
-    let (unit_s, unit) = time_unit(span + t0);
-    let long = span > ENVELOPE_DAYS * 86_400.0 || s.time_s.len() > ENVELOPE_POINTS;
-    let tx = |t: f64| t / unit_s;
-    let (x0, x1) = (tx(t0), tx(t0 + span));
+/// What every panel of the run figure shares: the series shown, the time axis, the
+/// eclipses, each pair's smallest backlash and where the panels go.
+struct RunLayout<'s> {
+    s: &'s RunSeries,
+    /// The temperature series shown, °C: all, or the [`MAX_TEMPS`] (on a long run
+    /// [`MAX_ENVELOPE_TEMPS`]) that swing most.
+    temps_c: Vec<(String, Vec<f64>)>,
+    /// The run's nodes, shown or not.
+    n_nodes: usize,
+    /// Drawn as per-bin envelopes (a long run).
+    long: bool,
+    axis: TimeAxis,
+    /// Eclipse spans (t0, t1), s; none shaded on a long run.
+    eclipses_s: Vec<(f64, f64)>,
+    /// Each pair's smallest backlash: (pair, time s, value µm).
+    smallest: Vec<(String, f64, f64)>,
+    /// Each panel's top and bottom, px: temperatures above the backlash, or either alone.
+    panels_px: Vec<(i32, i32)>,
+}
 
-    // The temperature series shown: all, or the MAX_TEMPS that swing most.
+impl<'s> RunLayout<'s> {
+    /// The layout of `s`'s figure.
+    fn new(s: &'s RunSeries) -> RunLayout<'s> {
+        let t0 = s.time_s[0];
+        let span = (s.time_s.last().unwrap() - t0).max(1.0);
+        let long = span > ENVELOPE_DAYS * 86_400.0 || s.time_s.len() > ENVELOPE_POINTS;
+        let (temps_c, n_nodes) = shown_temps_c(s, long);
+        let panels_px = if !s.backlash_um.is_empty() && !temps_c.is_empty() {
+            vec![(50, 420), (450, 800)]
+        } else {
+            vec![(50, 800)]
+        };
+        RunLayout {
+            s,
+            temps_c,
+            n_nodes,
+            long,
+            axis: TimeAxis::new(t0, span),
+            eclipses_s: if long { Vec::new() } else { eclipses(s) },
+            smallest: smallest_points(s),
+            panels_px,
+        }
+    }
+
+    /// Panel `pi` shows the temperatures (else the backlash).
+    fn temps_panel(&self, pi: usize) -> bool {
+        pi == 0 && !self.temps_c.is_empty()
+    }
+
+    /// The range of the values a panel shows (the backlash's with the smallest allowed).
+    fn value_range(&self, temps_panel: bool) -> (f64, f64) {
+        if temps_panel {
+            range_of(self.temps_c.iter().flat_map(|t| t.1.iter()))
+        } else {
+            let (a, b) = range_of(self.s.backlash_um.iter().flat_map(|b| b.1.iter()));
+            let (c, d) = range_of(self.s.allowed_um.iter().map(|a| &a.1));
+            (a.min(c), b.max(d))
+        }
+    }
+
+    /// The description of the time axis (and on a long run, of the envelopes).
+    fn time_desc(&self) -> String {
+        format!(
+            "simulated time ({}){}",
+            self.axis.unit,
+            if self.long {
+                format!(
+                    "; each series: its smallest and largest per {}",
+                    envelope(self.s, &[]).per
+                )
+            } else {
+                String::new()
+            }
+        )
+    }
+
+    /// The series a panel draws, each with its name in the legend.
+    fn series(&self, temps_panel: bool) -> Vec<(String, &Vec<f64>)> {
+        if temps_panel {
+            self.temps_c.iter().map(|(n, v)| (n.clone(), v)).collect()
+        } else {
+            self.s
+                .backlash_um
+                .iter()
+                .map(|(p, v)| {
+                    (
+                        if p.is_empty() {
+                            "backlash".into()
+                        } else {
+                            format!("{p} backlash")
+                        },
+                        v,
+                    )
+                })
+                .collect()
+        }
+    }
+}
+
+/// The temperature series shown, °C, and the number of nodes: all, or the ones that
+/// swing most.
+fn shown_temps_c(s: &RunSeries, long: bool) -> (Vec<(String, Vec<f64>)>, usize) {
     let mut temps: Vec<(String, Vec<f64>)> = s
         .temps_k
         .iter()
@@ -312,295 +404,25 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
         temps.sort_by(|a, b| swing(&b.1).total_cmp(&swing(&a.1)).then(a.0.cmp(&b.0)));
         temps.truncate(max_temps);
     }
+    (temps, n_nodes)
+}
 
+/// Draws the run figure.
+pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
+    let layout = RunLayout::new(s);
     let mut svg = String::new();
-    let mut labels: Vec<Label> = Vec::new();
-    let mut placer = Placer::new();
+    let mut notes = Annotations::default();
     {
         let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        let title_style = TextStyle::from((super::FAMILY, 20).into_font()).color(&BLACK);
-
-        // The verdict, when the run's end or the log's margins give it.
-        let smallest = smallest_points(s);
-        let verdict = verdict_suffix(s, &smallest);
-        let title = format!("{}{}", s.title, verdict);
-        root.draw(&Text::new(title.clone(), (20, 12), title_style.clone()))
-            .map_err(draw_err)?;
-        labels.push(Label {
-            text: title.clone(),
-            rect: Placer::text_box(&title, 20.0, 20.0, 12.0),
-        });
-        placer.avoid(Placer::text_box(&title, 20.0, 20.0, 12.0));
-
-        let x_desc = format!(
-            "simulated time ({unit}){}",
-            if long {
-                format!(
-                    "; each series: its smallest and largest per {}",
-                    envelope(s, &[]).per
-                )
-            } else {
-                String::new()
-            }
-        );
-        let has_backlash = !s.backlash_um.is_empty();
-        let panels: Vec<(i32, i32)> = if has_backlash && !temps.is_empty() {
-            vec![(50, 420), (450, 800)]
-        } else {
-            vec![(50, 800)]
-        };
-        let ecl = if long { Vec::new() } else { eclipses(s) };
+        draw_title(&root, &layout, &mut notes)?;
         let mut legend_top: f64 = 60.0;
-        for (pi, &(y_top, y_bottom)) in panels.iter().enumerate() {
-            let temps_panel = pi == 0 && !temps.is_empty();
-            let area = root
-                .clone()
-                .shrink((0, y_top), (LEGEND_X as u32, (y_bottom - y_top) as u32));
-            let (lo, hi) = if temps_panel {
-                range_of(temps.iter().flat_map(|t| t.1.iter()))
-            } else {
-                let (a, b) = range_of(s.backlash_um.iter().flat_map(|b| b.1.iter()));
-                let (c, d) = range_of(s.allowed_um.iter().map(|a| &a.1));
-                (a.min(c), b.max(d))
-            };
-            let (ylo, yhi) = nice_range(lo, hi);
-            let y_desc = if temps_panel {
-                "temperature (°C)"
-            } else {
-                "backlash (µm)"
-            };
-            let mut chart = ChartBuilder::on(&area)
-                .margin_left(10)
-                .margin_right(10)
-                .x_label_area_size(if pi + 1 == panels.len() { 50 } else { 30 })
-                .y_label_area_size(70)
-                .build_cartesian_2d(x0..x1, ylo..yhi)
-                .map_err(draw_err)?;
-            let mut mesh = chart.configure_mesh();
-            let ystep = super::nice_step(yhi - ylo, 6.0);
-            let ydec = decimals(ystep);
-            let xstep = super::nice_step(x1 - x0, 10.0);
-            let xdec = decimals(xstep);
-            let yfmt = move |v: &f64| format!("{v:.ydec$}");
-            let xfmt = move |v: &f64| format!("{v:.xdec$}");
-            mesh.y_desc(y_desc)
-                .y_label_formatter(&yfmt)
-                .x_label_formatter(&xfmt)
-                .y_labels(((yhi - ylo) / ystep).round() as usize + 1)
-                .x_labels(((x1 - x0) / xstep).round() as usize + 1)
-                .label_style((super::FAMILY, 14))
-                .axis_desc_style((super::FAMILY, 15))
-                .light_line_style(TRANSPARENT)
-                .bold_line_style(RGBColor(215, 215, 215));
-            if pi + 1 == panels.len() {
-                mesh.x_desc(x_desc.clone());
-            }
-            mesh.draw().map_err(draw_err)?;
-            // Eclipses, under the lines.
-            chart
-                .draw_series(
-                    ecl.iter().map(|&(a, b)| {
-                        Rectangle::new([(tx(a), ylo), (tx(b), yhi)], ECLIPSE.filled())
-                    }),
-                )
-                .map_err(draw_err)?;
-            let plot_px = {
-                let (xr, yr) = chart.plotting_area().get_pixel_range();
-                Rect::new(
-                    xr.start as f64,
-                    yr.start as f64,
-                    xr.end as f64,
-                    yr.end as f64,
-                )
-            };
-            let series: Vec<(String, &Vec<f64>)> = if temps_panel {
-                temps.iter().map(|(n, v)| (n.clone(), v)).collect()
-            } else {
-                s.backlash_um
-                    .iter()
-                    .map(|(p, v)| {
-                        (
-                            if p.is_empty() {
-                                "backlash".into()
-                            } else {
-                                format!("{p} backlash")
-                            },
-                            v,
-                        )
-                    })
-                    .collect()
-            };
-            let mut legend: Vec<String> = Vec::new();
-            if long {
-                let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
-                let env = envelope(s, &refs);
-                for (k, (name, _)) in series.iter().enumerate() {
-                    let c = palette(k);
-                    let band: Vec<(f64, f64)> = env
-                        .t
-                        .iter()
-                        .zip(&env.hi[k])
-                        .map(|(t, v)| (tx(*t), *v))
-                        .chain(
-                            env.t
-                                .iter()
-                                .zip(&env.lo[k])
-                                .rev()
-                                .map(|(t, v)| (tx(*t), *v)),
-                        )
-                        .collect();
-                    // Temperature envelopes as their two edges (bands of several nodes
-                    // would hide each other), the backlash as a filled band.
-                    if !temps_panel {
-                        chart
-                            .draw_series(std::iter::once(Polygon::new(band, c.mix(0.25).filled())))
-                            .map_err(draw_err)?;
-                    }
-                    for edge in [&env.hi[k], &env.lo[k]] {
-                        chart
-                            .draw_series(LineSeries::new(
-                                env.t.iter().zip(edge).map(|(t, v)| (tx(*t), *v)),
-                                c.stroke_width(if temps_panel { 2 } else { 1 }),
-                            ))
-                            .map_err(draw_err)?;
-                    }
-                    legend.push(name.clone());
-                }
-            } else {
-                for (k, (name, v)) in series.iter().enumerate() {
-                    let c = palette(k);
-                    chart
-                        .draw_series(LineSeries::new(
-                            s.time_s
-                                .iter()
-                                .zip(v.iter())
-                                .filter(|(_, y)| y.is_finite())
-                                .map(|(t, y)| (tx(*t), *y)),
-                            c.stroke_width(if temps_panel { 1 } else { 2 }),
-                        ))
-                        .map_err(draw_err)?;
-                    legend.push(name.clone());
-                }
-            }
-            // The smallest allowed backlash and the run's smallest.
-            if !temps_panel {
-                for (pair, a) in &s.allowed_um {
-                    chart
-                        .draw_series(DashedLineSeries::new(
-                            vec![(x0, *a), (x1, *a)],
-                            8,
-                            5,
-                            RED.stroke_width(2),
-                        ))
-                        .map_err(draw_err)?;
-                    let (ax, ay) = chart.backend_coord(&(x1, *a));
-                    let text = format!(
-                        "smallest allowed {a:.3} µm{}",
-                        if pair.is_empty() {
-                            String::new()
-                        } else {
-                            format!(" ({pair})")
-                        }
-                    );
-                    let (pos, r) = placer.place(
-                        &text,
-                        14.0,
-                        (ax as f64 - 4.0, ay as f64),
-                        &[Side::AboveLeft, Side::BelowLeft],
-                        &plot_px,
-                    );
-                    root.draw(&Text::new(
-                        text.clone(),
-                        (pos.0 as i32, pos.1 as i32),
-                        (super::FAMILY, 14).into_font().color(&RED),
-                    ))
-                    .map_err(draw_err)?;
-                    labels.push(Label { text, rect: r });
-                }
-                for (pair, t, m) in &smallest {
-                    if !m.is_finite() {
-                        continue;
-                    }
-                    let t = *t;
-                    let (px, py) = chart.backend_coord(&(tx(t), *m));
-                    root.draw(&Circle::new((px, py), 6, BLACK.stroke_width(2)))
-                        .map_err(draw_err)?;
-                    placer.avoid(Rect::new(
-                        px as f64 - 7.0,
-                        py as f64 - 7.0,
-                        px as f64 + 7.0,
-                        py as f64 + 7.0,
-                    ));
-                    let text = format!(
-                        "smallest{} {m:.3} µm at {:.2} {unit}",
-                        if pair.is_empty() {
-                            String::new()
-                        } else {
-                            format!(" ({pair})")
-                        },
-                        tx(t)
-                    );
-                    let (pos, r) = placer.place(
-                        &text,
-                        14.0,
-                        (px as f64, py as f64),
-                        &[
-                            Side::BelowRight,
-                            Side::BelowLeft,
-                            Side::AboveRight,
-                            Side::AboveLeft,
-                        ],
-                        &plot_px,
-                    );
-                    root.draw(&Text::new(
-                        text.clone(),
-                        (pos.0 as i32, pos.1 as i32),
-                        (super::FAMILY, 14).into_font().color(&BLACK),
-                    ))
-                    .map_err(draw_err)?;
-                    labels.push(Label { text, rect: r });
-                }
-            }
-            // The legend, right of the plot, a swatch and a name per line.
-            let mut lines: Vec<String> = legend.clone();
-            if temps_panel && n_nodes > temps.len() {
-                lines.push(format!("({} of {n_nodes} nodes:", temps.len()));
-                lines.push(" the largest swings)".to_string());
-            }
-            if pi == 0 && !ecl.is_empty() {
-                lines.push("eclipse".to_string());
-            }
-            legend_top = legend_top.max(plot_px.y0);
-            let entries: Vec<(String, Swatch)> = lines
-                .iter()
-                .enumerate()
-                .map(|(k, t)| {
-                    let swatch = if k < legend.len() {
-                        Swatch::Line(palette(k), if long { 8 } else { 3 })
-                    } else if t == "eclipse" {
-                        Swatch::Patch(ECLIPSE)
-                    } else {
-                        Swatch::None
-                    };
-                    (t.clone(), swatch)
-                })
-                .collect();
-            let placed = super::legend(
-                &root,
-                &mut placer,
-                &mut labels,
-                LEGEND_X,
-                legend_top,
-                &entries,
-            )?;
-            legend_top = placed
-                .last()
-                .map_or(legend_top, |r| r.y1 + 24.0)
-                .max(panels.get(pi + 1).map_or(0.0, |p| p.0 as f64 + 10.0));
+        for pi in 0..layout.panels_px.len() {
+            legend_top = draw_panel(&root, &layout, pi, legend_top, &mut notes)?;
         }
         root.present().map_err(draw_err)?;
     }
+    let labels = notes.labels;
     debug_assert!(labels.iter().all(|l| text_width(&l.text, 14.0) > 0.0));
     Ok(Figure {
         svg,
@@ -608,4 +430,336 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
         height: H,
         labels,
     })
+}
+
+/// Draws the title with the verdict, when the run's end or the log's margins give it.
+fn draw_title(
+    root: &Area<'_>,
+    layout: &RunLayout<'_>,
+    notes: &mut Annotations,
+) -> Result<(), PlotError> {
+    let title_style = TextStyle::from((super::FAMILY, 20).into_font()).color(&BLACK);
+    let verdict = verdict_suffix(layout.s, &layout.smallest);
+    let title = format!("{}{}", layout.s.title, verdict);
+    root.draw(&Text::new(title.clone(), (20, 12), title_style))
+        .map_err(draw_err)?;
+    notes.keep(title.clone(), Placer::text_box(&title, 20.0, 20.0, 12.0));
+    notes
+        .placer
+        .avoid(Placer::text_box(&title, 20.0, 20.0, 12.0));
+    Ok(())
+}
+
+/// Draws panel `pi`: its axes, the eclipses, its series, on the backlash panel the
+/// smallest allowed and the run's smallest, and its legend (from `legend_top` down);
+/// returns where the next panel's legend may start.
+fn draw_panel(
+    root: &Area<'_>,
+    layout: &RunLayout<'_>,
+    pi: usize,
+    legend_top: f64,
+    notes: &mut Annotations,
+) -> Result<f64, PlotError> {
+    let temps_panel = layout.temps_panel(pi);
+    let (y_top, y_bottom) = layout.panels_px[pi];
+    let area = root
+        .clone()
+        .shrink((0, y_top), (LEGEND_X as u32, (y_bottom - y_top) as u32));
+    let (lo, hi) = layout.value_range(temps_panel);
+    let (ylo, yhi) = nice_range(lo, hi);
+    let last = pi + 1 == layout.panels_px.len();
+    let mut chart = panel_chart(&area, layout, (ylo, yhi), temps_panel, last)?;
+    // Eclipses, under the lines.
+    let axis = &layout.axis;
+    chart
+        .draw_series(
+            layout.eclipses_s.iter().map(|&(a, b)| {
+                Rectangle::new([(axis.x(a), ylo), (axis.x(b), yhi)], ECLIPSE.filled())
+            }),
+        )
+        .map_err(draw_err)?;
+    let plot_px = plot_rect(&chart);
+    let series = layout.series(temps_panel);
+    let legend = if layout.long {
+        draw_envelopes(&mut chart, layout, &series, temps_panel)?
+    } else {
+        draw_lines(&mut chart, layout, &series, temps_panel)?
+    };
+    // The smallest allowed backlash and the run's smallest.
+    if !temps_panel {
+        draw_allowed(root, &mut chart, layout, &plot_px, notes)?;
+        draw_smallest(root, &chart, layout, &plot_px, notes)?;
+    }
+    draw_panel_legend(root, layout, pi, &legend, legend_top.max(plot_px.y0), notes)
+}
+
+/// Draws a panel's axes and grid over the run's time and `y` (°C or µm); the time
+/// axis is described on the bottom panel (`last`).
+fn panel_chart<'a, 'b>(
+    area: &'a Area<'b>,
+    layout: &RunLayout<'_>,
+    (ylo, yhi): (f64, f64),
+    temps_panel: bool,
+    last: bool,
+) -> Result<Chart<'a, 'b>, PlotError> {
+    let (x0, x1) = (layout.axis.x0, layout.axis.x1);
+    let y_desc = if temps_panel {
+        "temperature (°C)"
+    } else {
+        "backlash (µm)"
+    };
+    let mut chart = ChartBuilder::on(area)
+        .margin_left(10)
+        .margin_right(10)
+        .x_label_area_size(if last { 50 } else { 30 })
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, ylo..yhi)
+        .map_err(draw_err)?;
+    let mut mesh = chart.configure_mesh();
+    let ystep = super::nice_step(yhi - ylo, 6.0);
+    let ydec = decimals(ystep);
+    let xstep = super::nice_step(x1 - x0, 10.0);
+    let xdec = decimals(xstep);
+    let yfmt = move |v: &f64| format!("{v:.ydec$}");
+    let xfmt = move |v: &f64| format!("{v:.xdec$}");
+    mesh.y_desc(y_desc)
+        .y_label_formatter(&yfmt)
+        .x_label_formatter(&xfmt)
+        .y_labels(((yhi - ylo) / ystep).round() as usize + 1)
+        .x_labels(((x1 - x0) / xstep).round() as usize + 1)
+        .label_style((super::FAMILY, 14))
+        .axis_desc_style((super::FAMILY, 15))
+        .light_line_style(TRANSPARENT)
+        .bold_line_style(RGBColor(215, 215, 215));
+    if last {
+        mesh.x_desc(layout.time_desc());
+    }
+    mesh.draw().map_err(draw_err)?;
+    Ok(chart)
+}
+
+/// Draws a long run's series as per-bin envelopes: temperatures as their two edges
+/// (bands of several nodes would hide each other), the backlash as a filled band;
+/// returns the legend's names.
+fn draw_envelopes(
+    chart: &mut Chart<'_, '_>,
+    layout: &RunLayout<'_>,
+    series: &[(String, &Vec<f64>)],
+    temps_panel: bool,
+) -> Result<Vec<String>, PlotError> {
+    let tx = |t: f64| layout.axis.x(t);
+    let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
+    let env = envelope(layout.s, &refs);
+    let mut legend = Vec::new();
+    for (k, (name, _)) in series.iter().enumerate() {
+        let c = palette(k);
+        let band: Vec<(f64, f64)> = env
+            .t
+            .iter()
+            .zip(&env.hi[k])
+            .map(|(t, v)| (tx(*t), *v))
+            .chain(
+                env.t
+                    .iter()
+                    .zip(&env.lo[k])
+                    .rev()
+                    .map(|(t, v)| (tx(*t), *v)),
+            )
+            .collect();
+        if !temps_panel {
+            chart
+                .draw_series(std::iter::once(Polygon::new(band, c.mix(0.25).filled())))
+                .map_err(draw_err)?;
+        }
+        for edge in [&env.hi[k], &env.lo[k]] {
+            chart
+                .draw_series(LineSeries::new(
+                    env.t.iter().zip(edge).map(|(t, v)| (tx(*t), *v)),
+                    c.stroke_width(if temps_panel { 2 } else { 1 }),
+                ))
+                .map_err(draw_err)?;
+        }
+        legend.push(name.clone());
+    }
+    Ok(legend)
+}
+
+/// Draws each series as a line through its finite samples; returns the legend's names.
+fn draw_lines(
+    chart: &mut Chart<'_, '_>,
+    layout: &RunLayout<'_>,
+    series: &[(String, &Vec<f64>)],
+    temps_panel: bool,
+) -> Result<Vec<String>, PlotError> {
+    let mut legend = Vec::new();
+    for (k, (name, v)) in series.iter().enumerate() {
+        let c = palette(k);
+        chart
+            .draw_series(LineSeries::new(
+                layout
+                    .s
+                    .time_s
+                    .iter()
+                    .zip(v.iter())
+                    .filter(|(_, y)| y.is_finite())
+                    .map(|(t, y)| (layout.axis.x(*t), *y)),
+                c.stroke_width(if temps_panel { 1 } else { 2 }),
+            ))
+            .map_err(draw_err)?;
+        legend.push(name.clone());
+    }
+    Ok(legend)
+}
+
+/// Draws each pair's smallest allowed backlash as a dashed red line, labelled at its
+/// right end.
+fn draw_allowed(
+    root: &Area<'_>,
+    chart: &mut Chart<'_, '_>,
+    layout: &RunLayout<'_>,
+    plot_px: &Rect,
+    notes: &mut Annotations,
+) -> Result<(), PlotError> {
+    let (x0, x1) = (layout.axis.x0, layout.axis.x1);
+    for (pair, a) in &layout.s.allowed_um {
+        chart
+            .draw_series(DashedLineSeries::new(
+                vec![(x0, *a), (x1, *a)],
+                8,
+                5,
+                RED.stroke_width(2),
+            ))
+            .map_err(draw_err)?;
+        let (ax, ay) = chart.backend_coord(&(x1, *a));
+        let text = format!(
+            "smallest allowed {a:.3} µm{}",
+            if pair.is_empty() {
+                String::new()
+            } else {
+                format!(" ({pair})")
+            }
+        );
+        let (pos, r) = notes.placer.place(
+            &text,
+            14.0,
+            (ax as f64 - 4.0, ay as f64),
+            &[Side::AboveLeft, Side::BelowLeft],
+            plot_px,
+        );
+        root.draw(&Text::new(
+            text.clone(),
+            (pos.0 as i32, pos.1 as i32),
+            (super::FAMILY, 14).into_font().color(&RED),
+        ))
+        .map_err(draw_err)?;
+        notes.keep(text, r);
+    }
+    Ok(())
+}
+
+/// Marks each pair's smallest backlash with a circle and labels it with its value and
+/// time.
+fn draw_smallest(
+    root: &Area<'_>,
+    chart: &Chart<'_, '_>,
+    layout: &RunLayout<'_>,
+    plot_px: &Rect,
+    notes: &mut Annotations,
+) -> Result<(), PlotError> {
+    let axis = &layout.axis;
+    for (pair, t, m) in &layout.smallest {
+        if !m.is_finite() {
+            continue;
+        }
+        let t = *t;
+        let (px, py) = chart.backend_coord(&(axis.x(t), *m));
+        root.draw(&Circle::new((px, py), 6, BLACK.stroke_width(2)))
+            .map_err(draw_err)?;
+        notes.placer.avoid(Rect::new(
+            px as f64 - 7.0,
+            py as f64 - 7.0,
+            px as f64 + 7.0,
+            py as f64 + 7.0,
+        ));
+        let text = format!(
+            "smallest{} {m:.3} µm at {:.2} {}",
+            if pair.is_empty() {
+                String::new()
+            } else {
+                format!(" ({pair})")
+            },
+            axis.x(t),
+            axis.unit
+        );
+        let (pos, r) = notes.placer.place(
+            &text,
+            14.0,
+            (px as f64, py as f64),
+            &[
+                Side::BelowRight,
+                Side::BelowLeft,
+                Side::AboveRight,
+                Side::AboveLeft,
+            ],
+            plot_px,
+        );
+        root.draw(&Text::new(
+            text.clone(),
+            (pos.0 as i32, pos.1 as i32),
+            (super::FAMILY, 14).into_font().color(&BLACK),
+        ))
+        .map_err(draw_err)?;
+        notes.keep(text, r);
+    }
+    Ok(())
+}
+
+/// Draws panel `pi`'s legend right of the plot from `top` down, a swatch and a name
+/// per line (with a note when not every node is shown, and the eclipse's shade under
+/// the first panel's); returns where the next panel's legend may start.
+fn draw_panel_legend(
+    root: &Area<'_>,
+    layout: &RunLayout<'_>,
+    pi: usize,
+    legend: &[String],
+    top: f64,
+    notes: &mut Annotations,
+) -> Result<f64, PlotError> {
+    let mut lines: Vec<String> = legend.to_vec();
+    let shown = layout.temps_c.len();
+    if layout.temps_panel(pi) && layout.n_nodes > shown {
+        lines.push(format!("({shown} of {} nodes:", layout.n_nodes));
+        lines.push(" the largest swings)".to_string());
+    }
+    if pi == 0 && !layout.eclipses_s.is_empty() {
+        lines.push("eclipse".to_string());
+    }
+    let entries: Vec<(String, Swatch)> = lines
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let swatch = if k < legend.len() {
+                Swatch::Line(palette(k), if layout.long { 8 } else { 3 })
+            } else if t == "eclipse" {
+                Swatch::Patch(ECLIPSE)
+            } else {
+                Swatch::None
+            };
+            (t.clone(), swatch)
+        })
+        .collect();
+    let placed = super::legend(
+        root,
+        &mut notes.placer,
+        &mut notes.labels,
+        LEGEND_X,
+        top,
+        &entries,
+    )?;
+    Ok(placed.last().map_or(top, |r| r.y1 + 24.0).max(
+        layout
+            .panels_px
+            .get(pi + 1)
+            .map_or(0.0, |p| p.0 as f64 + 10.0),
+    ))
 }
