@@ -95,7 +95,7 @@ impl Quantity {
             // powers of ten as 1e5 and 1e-6, a negative number with a minus sign
             let a = v.abs();
             let e = a.log10().round();
-            let body = if a != 0.0 && (a >= 1e4 || a < 1e-3) && 10f64.powf(e) == a {
+            let body = if a != 0.0 && !(1e-3..1e4).contains(&a) && 10f64.powf(e) == a {
                 format!("1e{e}")
             } else {
                 crate::units::num(a)

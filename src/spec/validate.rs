@@ -349,7 +349,7 @@ fn gear_pair(k: usize, p: &GearPair, n: usize) -> Result<(), Invalid> {
         }
         geometry::node_ends(&g.node_radii_m, g.bore_radius_m, r_b).map_err(|e| geometry(&w, e))?;
         let mt = &g.material;
-        if !(mt.youngs_modulus_pa > 0.0) {
+        if mt.youngs_modulus_pa.is_nan() || mt.youngs_modulus_pa <= 0.0 {
             return Err(bad(&w, "the material needs E > 0"));
         }
         geometry::youngs_modulus(mt.youngs_modulus_pa).map_err(|e| geometry(&w, e))?;
