@@ -291,26 +291,18 @@ fn out_files(
     Ok(files)
 }
 
+/// A finding's target as the report says it: `node housing, schedule sunlit` (a gear
+/// stands for its pair).
 fn finding_target(f: &diagnose::Finding) -> String {
-    let mut parts = Vec::new();
     let t = &f.target;
-    for (k, v) in [
-        ("node", t.node()),
-        ("channel", t.channel()),
-        ("conductor", t.conductor()),
-        ("load", t.load()),
-        ("face", t.face()),
-        ("key path", t.path()),
-        ("gear", t.gear()),
-        ("gear pair", t.gear_pair()),
-        ("schedule", t.schedule()),
-    ] {
-        if let Some(v) = v {
-            if k == "gear pair" && t.gear().is_some() {
-                continue;
-            }
-            parts.push(format!("{k} {v}"));
+    let mut parts = Vec::new();
+    for (k, v) in t.fields() {
+        let Some(v) = v else { continue };
+        if k == "gear_pair" && t.gear().is_some() {
+            continue;
         }
+        let k = if k == "path" { "key path" } else { k };
+        parts.push(format!("{} {v}", k.replace('_', " ")));
     }
     parts.join(", ")
 }

@@ -351,7 +351,7 @@ impl Target {
     }
 
     /// The keys it is reported by, in order, with the element each names.
-    fn fields(&self) -> [(&'static str, Option<String>); 9] {
+    pub fn fields(&self) -> [(&'static str, Option<String>); 9] {
         [
             ("node", self.node()),
             ("channel", self.channel()),
@@ -623,8 +623,8 @@ impl<'a> Generator<'a> {
         )?;
         Some(Candidate {
             params: vec![
-                ParamDef::new("albedo", 1e-4, 1.0, 0.005),
-                ParamDef::new("earth_ir_w_per_m2", 0.01, 500.0, 2.0),
+                ParamDef::new(registry::ALBEDO.name, 1e-4, 1.0, 0.005),
+                ParamDef::new(registry::EARTH_IR_W_PER_M2.name, 0.01, 500.0, 2.0),
             ],
             setters: vec![
                 Setter::scaled(pa, 0, a_ref / env_albedo),
@@ -674,7 +674,7 @@ impl<'a> Generator<'a> {
         }
         Some(Candidate {
             params: vec![
-                ParamDef::new("power_w", 0.01, 1000.0, 0.02),
+                ParamDef::new(registry::HEATER_POWER_W.name, 0.01, 1000.0, 0.02),
                 ParamDef::new("on_c", on_c - 30.0, on_c + 30.0, 0.05),
                 ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05),
             ],
@@ -744,7 +744,12 @@ impl<'a> Generator<'a> {
                 schedule: when.name().to_string(),
             };
             out.push(Candidate {
-                params: vec![ParamDef::new("power_w", 0.0, 1000.0, 0.02)],
+                params: vec![ParamDef::new(
+                    registry::DISSIPATION_POWER_W.name,
+                    0.0,
+                    1000.0,
+                    0.02,
+                )],
                 setters: vec![Setter::scaled(pp, 0, 1.0)],
                 starts: vec![vec![0.25], vec![1.0], vec![4.0]],
                 null: Some(vec![0.0]),
@@ -797,7 +802,7 @@ impl<'a> Generator<'a> {
                 gear_pair: pair,
             };
             out.push(Candidate {
-                params: vec![ParamDef::new("alpha_per_k", -2e-5, 1e-4, 1e-7)],
+                params: vec![ParamDef::new(registry::ALPHA_PER_K.name, -2e-5, 1e-4, 1e-7)],
                 setters: vec![Setter::scaled(p, 0, 1.0)],
                 starts: vec![vec![2e-6], vec![8e-6], vec![2e-5]],
                 null: Some(vec![0.0]),
@@ -842,7 +847,12 @@ impl<'a> Generator<'a> {
                     material(&base, registry::WHEEL, dalpha),
                 ) {
                     out.push(Candidate {
-                        params: vec![ParamDef::new("dalpha_dt_per_k2", -1e-6, 1e-6, 1e-9)],
+                        params: vec![ParamDef::new(
+                            registry::DALPHA_DT_PER_K2.name,
+                            -1e-6,
+                            1e-6,
+                            1e-9,
+                        )],
                         setters: vec![Setter::scaled(p1, 0, 1.0), Setter::scaled(p2, 0, 1.0)],
                         starts: vec![vec![-5e-8], vec![-1.5e-8], vec![1.5e-8], vec![5e-8]],
                         null: Some(vec![0.0]),
@@ -922,7 +932,12 @@ impl<'a> Generator<'a> {
                 shaft,
             };
             out.push(Candidate {
-                params: vec![ParamDef::new("interference_um", 0.0, 500.0, 0.2)],
+                params: vec![ParamDef::new(
+                    registry::INTERFERENCE_UM.name,
+                    0.0,
+                    500.0,
+                    0.2,
+                )],
                 setters: vec![Setter::scaled(p, 0, 1.0)],
                 starts: vec![vec![2.0], vec![10.0], vec![40.0]],
                 ..Candidate::new(Effect::BoreFit, target, Some(edit))
@@ -946,7 +961,7 @@ impl<'a> Generator<'a> {
             return Vec::new();
         };
         let lag = Candidate {
-            params: vec![ParamDef::new("tau_s", 0.0, 7200.0, 1.0)],
+            params: vec![ParamDef::new(registry::TAU_S.name, 0.0, 7200.0, 1.0)],
             setters: vec![Setter {
                 number: pt,
                 constant: tau0,
@@ -957,7 +972,7 @@ impl<'a> Generator<'a> {
             ..Candidate::new(Effect::SensorLag, Target::Channel(col.into()), None)
         };
         let offset = Candidate {
-            params: vec![ParamDef::new("offset_k", -50.0, 50.0, 0.05)],
+            params: vec![ParamDef::new(registry::OFFSET_K.name, -50.0, 50.0, 0.05)],
             setters: vec![Setter {
                 number: po,
                 constant: off0,

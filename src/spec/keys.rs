@@ -243,9 +243,7 @@ pub fn element_key(
         "node" | "boundary" | "mode" => named,
         "conductor" | "radiation" => named.or_else(|| between.map(|b| b.join("-"))),
         "sun" | "albedo" | "earth_ir" | "dissipation" | "heater" => named.or_else(|| field("node")),
-        "sensor" => {
-            named.or_else(|| field("column").map(|c| crate::spec::scenario::sensor_name_of(&c)))
-        }
+        "sensor" => named.or_else(|| field("column").map(|c| sensor_name_of(&c))),
         "face" => named.or_else(|| field("node").map(|n| face_name(&n, i))),
         "gear_pair" => Some(named.unwrap_or_else(|| {
             if i == 0 {
@@ -339,6 +337,74 @@ pub fn element_keys(spec: &ScenarioSpec) -> ElementKeys {
             none,
         ),
     }
+}
+
+// ---------------------------------------------------------------- names
+
+/// Longest name of a scenario, node, boundary, load, heater, mode or gear pair.
+pub const MAX_NAME_LEN: usize = 100;
+
+/// Checks a name given in a scenario: 1 … 100 characters from `A–Z a–z 0–9 _ - .`,
+/// beginning with a letter, a digit or `_`. Names become file names (the default log
+/// `logs/<scenario>.mcap`), log field names and key paths, so nothing that could leave
+/// a folder (`/`, `..`) or break a CSV header (`,`, spaces) gets in.
+pub fn check_name(name: &str) -> Result<(), String> {
+    let first_ok = name
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_');
+    let rest_ok = name
+        .chars()
+        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
+    if name.is_empty() {
+        Err("must not be empty".into())
+    } else if name.len() > MAX_NAME_LEN {
+        Err(format!("is longer than {MAX_NAME_LEN} characters"))
+    } else if !(first_ok && rest_ok) {
+        Err(format!(
+            "{name:?} is not a valid name: use letters, digits, `_`, `-` and `.`, beginning with a letter, digit or `_`"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// A name as a key-path segment: quoted as in TOML when it holds a dot.
+pub fn key_segment(name: &str) -> String {
+    if name.contains('.') {
+        format!("\"{name}\"")
+    } else {
+        name.to_string()
+    }
+}
+
+/// The channel name of a recording column: the column itself when it is a valid name
+/// ([`check_name`]), else lower-cased with each run of other characters made one `_`,
+/// a sign before a letter or digit kept as `p` or `m` (`Solar Panel -X deg. C` →
+/// `solar_panel_mx_deg_c`).
+pub fn sensor_name_of(column: &str) -> String {
+    if check_name(column).is_ok() {
+        return column.to_string();
+    }
+    let chars: Vec<char> = column.chars().collect();
+    let mut out = String::new();
+    for (i, &c) in chars.iter().enumerate() {
+        let next_alnum = chars.get(i + 1).is_some_and(|n| n.is_ascii_alphanumeric());
+        let prev_alnum = i > 0 && chars[i - 1].is_ascii_alphanumeric();
+        if c.is_ascii_alphanumeric() || c == '_' {
+            out.push(c.to_ascii_lowercase());
+        } else if matches!(c, '+' | '-') && next_alnum && !prev_alnum {
+            out.push(if c == '+' { 'p' } else { 'm' });
+        } else if !out.ends_with('_') {
+            out.push('_');
+        }
+    }
+    let out = out.trim_matches('_');
+    let mut out: String = out.chars().take(MAX_NAME_LEN).collect();
+    if out.is_empty() {
+        out.push_str("channel");
+    }
+    out
 }
 
 #[cfg(test)]

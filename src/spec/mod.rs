@@ -14,6 +14,7 @@ pub mod quantity;
 pub mod registry;
 pub mod scenario;
 pub mod validate;
+mod warnings;
 
 pub(crate) use compile::check;
 pub use compile::{SpecError, compile};

@@ -4,8 +4,9 @@
 
 use crate::gear::GearPair;
 use crate::spec::quantity::MIN_MAX_STEP_S;
-use crate::spec::registry;
 use crate::thermal::ThermalModel;
+
+pub use crate::spec::keys::{MAX_NAME_LEN, check_name, key_segment, sensor_name_of};
 use crate::thermal::iteration::LinearSolver;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -155,34 +156,6 @@ pub const MIN_DURATION_S: f64 = 1.0;
 
 pub use crate::spec::quantity::MIN_OUTPUT_INTERVAL_S;
 
-/// Longest name of a scenario, node, boundary, load, heater, mode or gear pair.
-pub const MAX_NAME_LEN: usize = 100;
-
-/// Checks a name given in a scenario: 1 … 100 characters from `A–Z a–z 0–9 _ - .`,
-/// beginning with a letter, a digit or `_`. Names become file names (the default log
-/// `logs/<scenario>.mcap`), log field names and key paths, so nothing that could leave
-/// a folder (`/`, `..`) or break a CSV header (`,`, spaces) gets in.
-pub fn check_name(name: &str) -> Result<(), String> {
-    let first_ok = name
-        .chars()
-        .next()
-        .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_');
-    let rest_ok = name
-        .chars()
-        .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'));
-    if name.is_empty() {
-        Err("must not be empty".into())
-    } else if name.len() > MAX_NAME_LEN {
-        Err(format!("is longer than {MAX_NAME_LEN} characters"))
-    } else if !(first_ok && rest_ok) {
-        Err(format!(
-            "{name:?} is not a valid name: use letters, digits, `_`, `-` and `.`, beginning with a letter, digit or `_`"
-        ))
-    } else {
-        Ok(())
-    }
-}
-
 /// A likely mistake that leaves the scenario valid: `check` and `run` print these.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Warning {
@@ -197,199 +170,11 @@ impl std::fmt::Display for Warning {
     }
 }
 
-/// A name as a key-path segment: quoted as in TOML when it holds a dot.
-pub fn key_segment(name: &str) -> String {
-    if name.contains('.') {
-        format!("\"{name}\"")
-    } else {
-        name.to_string()
-    }
-}
-
-/// The channel name of a recording column: the column itself when it is a valid name
-/// ([`check_name`]), else lower-cased with each run of other characters made one `_`,
-/// a sign before a letter or digit kept as `p` or `m` (`Solar Panel -X deg. C` →
-/// `solar_panel_mx_deg_c`).
-pub fn sensor_name_of(column: &str) -> String {
-    if check_name(column).is_ok() {
-        return column.to_string();
-    }
-    let chars: Vec<char> = column.chars().collect();
-    let mut out = String::new();
-    for (i, &c) in chars.iter().enumerate() {
-        let next_alnum = chars.get(i + 1).is_some_and(|n| n.is_ascii_alphanumeric());
-        let prev_alnum = i > 0 && chars[i - 1].is_ascii_alphanumeric();
-        if c.is_ascii_alphanumeric() || c == '_' {
-            out.push(c.to_ascii_lowercase());
-        } else if matches!(c, '+' | '-') && next_alnum && !prev_alnum {
-            out.push(if c == '+' { 'p' } else { 'm' });
-        } else if !out.ends_with('_') {
-            out.push('_');
-        }
-    }
-    let out = out.trim_matches('_');
-    let mut out: String = out.chars().take(MAX_NAME_LEN).collect();
-    if out.is_empty() {
-        out.push_str("channel");
-    }
-    out
-}
-
 /// Temperatures (K) below which a node's initial or reference temperature or a heater
 /// set point most likely is a Celsius value typed as kelvin (150 K = −123 °C).
 pub const CELSIUS_AS_KELVIN_BELOW_K: f64 = 150.0;
 
 impl Scenario {
-    /// Likely mistakes: a node with no path to a boundary (its temperature can run
-    /// away), a fixed step longer than the fastest node's time constant, temperatures
-    /// that look like °C typed as kelvin. O(nodes + links).
-    pub fn warnings(&self) -> Vec<Warning> {
-        use crate::thermal::analysis::{node_time_constants_s, unanchored_nodes};
-        let net = &self.thermal.network;
-        let mut w = Vec::new();
-        let node_key =
-            |i: usize, key: &str| format!("node.{}.{key}", key_segment(&net.nodes[i].name));
-        let loose: Vec<usize> = unanchored_nodes(net)
-            .iter()
-            .enumerate()
-            .filter_map(|(i, &u)| u.then_some(i))
-            .collect();
-        if let Some(&first) = loose.first() {
-            let names: Vec<&str> = loose
-                .iter()
-                .take(8)
-                .map(|&i| net.nodes[i].name.as_str())
-                .collect();
-            w.push(Warning {
-                key: node_key(first, "name"),
-                message: format!(
-                    "{} node(s) have no conductive or radiative path to a boundary (space or a [[boundary]]): {}{}; their temperature can run away under any load",
-                    loose.len(),
-                    names.join(", "),
-                    if loose.len() > names.len() { ", …" } else { "" }
-                ),
-            });
-        }
-        if let crate::orbit::Environment::Dated(d) = &self.thermal.environment {
-            let year = sgp4::chrono::Datelike::year(&d.orbit.start_utc);
-            let (lo, hi) = crate::orbit::sun::STATED_YEARS;
-            if !(lo..=hi).contains(&year) {
-                w.push(Warning {
-                    key: "orbit.start_utc".into(),
-                    message: format!(
-                        "is in {year}: the Sun's position (the Astronomical Almanac's low-precision formulas) is stated to 0.01° for {lo} … {hi} only; beyond, its error grows slowly"
-                    ),
-                });
-            }
-            let days = d.orbit.epoch_age_days();
-            if days.abs() > crate::orbit::tle::EPOCH_WARN_DAYS {
-                w.push(Warning {
-                    key: "orbit.start_utc".into(),
-                    message: format!(
-                        "starts {:.1} days from the TLE's epoch; a LEO TLE's along-track error grows to tens of km within a few days (β and eclipse lengths stay close, the minute of each eclipse drifts): a TLE nearer the start is better",
-                        days.abs()
-                    ),
-                });
-            }
-        }
-        // A resolved spin needs steps shorter than its turn.
-        let spin = net.loads.iter().find_map(|l| match l.kind {
-            crate::thermal::LoadKind::Face(crate::orbit::faces::Face {
-                attitude:
-                    crate::orbit::faces::Attitude::Spin {
-                        rate_rad_per_s,
-                        averaged: false,
-                        ..
-                    },
-                ..
-            }) if rate_rad_per_s != 0.0 => Some(2.0 * std::f64::consts::PI / rate_rad_per_s.abs()),
-            _ => None,
-        });
-        if let Some(turn_s) = spin.filter(|t| self.solver.max_step_s > t / 8.0) {
-            w.push(Warning {
-                key: format!("attitude.{}", registry::SPIN_RATE_DEG_PER_S.name),
-                message: format!(
-                    "one turn takes {turn_s:.1} s but steps may be {} s long: the faces' loads are sampled, not followed; set solver.max_step_s ≤ {:.2} s or spin_averaged = true",
-                    self.solver.max_step_s,
-                    turn_s / 8.0
-                ),
-            });
-        }
-        if !self.solver.adaptive {
-            let temps = net.initial_temperatures_k();
-            let tau = node_time_constants_s(&self.thermal, &temps, 0.0);
-            if let Some((i, &t)) = tau
-                .iter()
-                .enumerate()
-                .min_by(|a, b| a.1.total_cmp(b.1))
-                .filter(|(_, t)| self.solver.max_step_s > **t)
-            {
-                w.push(Warning {
-                    key: format!("solver.{}", registry::MAX_STEP_S.name),
-                    message: format!(
-                        "the fixed step of {} s (adaptive = false) exceeds the time constant of node {} ({t:.3e} s): its transients are not resolved; {}",
-                        self.solver.max_step_s,
-                        net.nodes[i].name,
-                        fixed_step_advice(t)
-                    ),
-                });
-            }
-        }
-        let celsius = |key: String, v: f64, w: &mut Vec<Warning>| {
-            if v < CELSIUS_AS_KELVIN_BELOW_K {
-                w.push(Warning {
-                    key,
-                    message: format!(
-                        "{v} K ({:.2} °C) looks like a Celsius value typed as kelvin; {v} °C is {:.2} K",
-                        v - crate::constants::ZERO_CELSIUS_K,
-                        v + crate::constants::ZERO_CELSIUS_K
-                    ),
-                });
-            }
-        };
-        for (i, n) in net.nodes.iter().enumerate() {
-            celsius(
-                node_key(i, registry::INITIAL_TEMPERATURE_K.name),
-                n.initial_temperature_k,
-                &mut w,
-            );
-        }
-        for b in net.boundaries.iter().skip(1) {
-            let (lo, _) = b.temperature_k.range();
-            if (5.0..60.0).contains(&lo) {
-                w.push(Warning {
-                    key: format!(
-                        "boundary.{}.{}",
-                        key_segment(&b.name),
-                        registry::BOUNDARY_TEMPERATURE_K.name
-                    ),
-                    message: format!(
-                        "{lo} K ({:.2} °C) looks like a Celsius value typed as kelvin (cryogenic shrouds aside); {lo} °C is {:.2} K",
-                        lo - crate::constants::ZERO_CELSIUS_K,
-                        lo + crate::constants::ZERO_CELSIUS_K
-                    ),
-                });
-            }
-        }
-        for h in &net.heaters {
-            let k = format!("heater.{}", key_segment(&h.name));
-            celsius(format!("{k}.{}", registry::ON_K.name), h.on_k, &mut w);
-            celsius(format!("{k}.{}", registry::OFF_K.name), h.off_k, &mut w);
-        }
-        for g in &self.gears {
-            celsius(
-                format!(
-                    "gear_pair.{}.{}",
-                    key_segment(&g.name),
-                    registry::REFERENCE_TEMPERATURE_K.name
-                ),
-                g.reference_temperature_k,
-                &mut w,
-            );
-        }
-        w
-    }
-
     /// Orbital period, s.
     pub fn period_s(&self) -> f64 {
         use crate::orbit::EnvironmentModel;

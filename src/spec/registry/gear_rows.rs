@@ -3,8 +3,7 @@
 //! shaft material, the centre distance's law).
 
 use super::fields::*;
-use super::rows::row;
-use super::{Fast, Row, Section, Slot};
+use super::{Fast, Row, Section, Slot, row};
 use crate::spec::{GearSpec, MaterialSpec, PolynomialSpec, ScenarioSpec, StrainTableSpec};
 
 /// The keys of a thermal strain law in a spec.

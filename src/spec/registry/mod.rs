@@ -275,8 +275,58 @@ impl Row {
 
 /// Every row, in listing order.
 pub fn rows() -> &'static [Row] {
-    static ROWS: LazyLock<Vec<Row>> = LazyLock::new(rows::table);
+    static ROWS: LazyLock<Vec<Row>> = LazyLock::new(|| {
+        let mut t = rows::table();
+        gear_rows::gear_pairs(&mut t);
+        t
+    });
     &ROWS
+}
+
+/// A row with no fast write and no calibration (add them with [`Row::fast`] and
+/// [`Row::calibrated`]).
+fn row<F>(
+    section: Section,
+    table: &'static [&'static str],
+    field: &'static Field,
+    doc: &'static str,
+    slot: F,
+) -> Row
+where
+    F: for<'a> Fn(&'a mut ScenarioSpec, usize) -> Option<Slot<'a>> + Send + Sync + 'static,
+{
+    Row {
+        section,
+        table,
+        field,
+        default: Default::OfQuantity,
+        doc,
+        slot: Box::new(slot),
+        fast: Fast::Recompile,
+        calibration: None,
+    }
+}
+
+impl Row {
+    fn fast(mut self, f: FastFn) -> Row {
+        self.fast = Fast::Direct(f);
+        self
+    }
+
+    fn calibrated(mut self, c: Calibration) -> Row {
+        self.calibration = Some(c);
+        self
+    }
+
+    fn earth_view_factor(mut self) -> Row {
+        self.default = Default::EarthViewFactor;
+        self
+    }
+
+    fn gear_pair(mut self) -> Row {
+        self.fast = Fast::GearPair;
+        self
+    }
 }
 
 /// The index of the row of `field` in `section` and `table`.

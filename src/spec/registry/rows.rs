@@ -3,58 +3,12 @@
 //! calibrations.
 
 use super::fields::*;
-use super::{Calibration, Default, Fast, Field, Row, ScaleFamily, Section, Slot};
+use super::{Calibration, Row, ScaleFamily, Section, Slot, row};
 use crate::spec::keys::ElementKeys;
 use crate::spec::quantity as q;
 use crate::spec::scenario::Scenario;
 use crate::spec::{AttitudeMode, ScenarioSpec, SpecError};
 use crate::thermal::LoadKind;
-
-/// A row with no fast write and no calibration (add them with [`Row::fast`] and
-/// [`Row::calibrated`]).
-pub(super) fn row<F>(
-    section: Section,
-    table: &'static [&'static str],
-    field: &'static Field,
-    doc: &'static str,
-    slot: F,
-) -> Row
-where
-    F: for<'a> Fn(&'a mut ScenarioSpec, usize) -> Option<Slot<'a>> + Send + Sync + 'static,
-{
-    Row {
-        section,
-        table,
-        field,
-        default: Default::OfQuantity,
-        doc,
-        slot: Box::new(slot),
-        fast: Fast::Recompile,
-        calibration: None,
-    }
-}
-
-impl Row {
-    fn fast(mut self, f: super::FastFn) -> Row {
-        self.fast = Fast::Direct(f);
-        self
-    }
-
-    fn calibrated(mut self, c: Calibration) -> Row {
-        self.calibration = Some(c);
-        self
-    }
-
-    fn earth_view_factor(mut self) -> Row {
-        self.default = Default::EarthViewFactor;
-        self
-    }
-
-    pub(super) fn gear_pair(mut self) -> Row {
-        self.fast = Fast::GearPair;
-        self
-    }
-}
 
 type Done = Result<(), SpecError>;
 
@@ -111,7 +65,6 @@ pub(super) fn table() -> Vec<Row> {
     area_loads(&mut t);
     dissipations_and_heaters(&mut t);
     faces_modes_sensors(&mut t);
-    super::gear_rows::gear_pairs(&mut t);
     t
 }
 
