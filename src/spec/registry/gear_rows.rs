@@ -2,9 +2,45 @@
 //! numbers and materials, built for every place they sit (pinion and wheel, material and
 //! shaft material, the centre distance's law).
 
-use super::fields::*;
-use super::{Fast, Row, Section, Slot, row};
+use super::{Fast, Field, Row, Section, Slot, row};
 use crate::spec::{GearSpec, MaterialSpec, PolynomialSpec, ScenarioSpec, StrainTableSpec};
+
+fields! {
+    MODULE_MM = "module_mm", MODULE_MM;
+    PRESSURE_ANGLE_DEG = "pressure_angle_deg", PRESSURE_ANGLE_DEG;
+    FACE_WIDTH_MM = "face_width_mm", FACE_WIDTH_MM;
+    CENTER_DISTANCE_MM = "center_distance_mm", CENTER_DISTANCE_MM;
+    REFERENCE_TEMPERATURE_K = "reference_temperature_k", TEMPERATURE_K;
+    MIN_BACKLASH_UM = "min_backlash_um", MIN_BACKLASH_UM;
+    THICKNESS_UM = "thickness_um", COATING_THICKNESS_UM;
+    ALPHA_PER_K = "alpha_per_k", EXPANSION_PER_K;
+    DALPHA_DT_PER_K2 = "dalpha_dt_per_k2", DALPHA_DT_PER_K2;
+    COEFFICIENTS = "coefficients", STRAIN_LAW;
+    SCALE = "scale", STRAIN_LAW;
+    ALPHA_POLYNOMIAL = "alpha_polynomial", STRAIN_LAW;
+    STRAIN_TABLE_TEMPERATURE_K = "temperature_k", STRAIN_TABLE_TEMPERATURE_K;
+    STRAIN = "strain", STRAIN_LAW;
+    YOUNGS_MODULUS_PA = "youngs_modulus_pa", YOUNGS_MODULUS_PA;
+    POISSON = "poisson", POISSON;
+    TEETH = "teeth", TEETH;
+    PROFILE_SHIFT = "profile_shift", PROFILE_SHIFT;
+    TIP_RADIUS_MM = "tip_radius_mm", TIP_RADIUS_MM;
+    ROOT_RADIUS_MM = "root_radius_mm", ROOT_RADIUS_MM;
+    BORE_RADIUS_MM = "bore_radius_mm", BORE_RADIUS_MM;
+    TOOTH_THICKNESS_MM = "tooth_thickness_mm", TOOTH_THICKNESS_MM;
+    TOOTH_THINNING_UM = "tooth_thinning_um", TOOTH_THINNING_UM;
+    INTERFERENCE_UM = "interference_um", INTERFERENCE_UM;
+}
+
+/// The tables inside a gear pair that hold numbers.
+pub const COATING: &str = "coating";
+pub const CENTER_DISTANCE: &str = "center_distance";
+pub const PINION: &str = "pinion";
+pub const WHEEL: &str = "wheel";
+pub const MATERIAL: &str = "material";
+pub const SHAFT_MATERIAL: &str = "shaft_material";
+pub const STRAIN_POLYNOMIAL: &str = "strain_polynomial";
+pub const STRAIN_TABLE: &str = "strain_table";
 
 /// The keys of a thermal strain law in a spec.
 struct Strain<'a> {

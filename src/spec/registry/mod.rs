@@ -16,7 +16,17 @@
 //! Adding a number: its field in the spec (`spec/mod.rs`), its row in `rows.rs`, the
 //! compiler reading it through its [`Field`], and the physics struct it lands in.
 
-mod fields;
+/// Defines the fields a rows file holds (`NAME = "key", QUANTITY;`): each key of a
+/// scenario file once, with its quantity from `spec::quantity`.
+macro_rules! fields {
+    ($($(#[$doc:meta])* $id:ident = $name:literal, $q:ident;)*) => {
+        $($(#[$doc])* pub static $id: Field = Field {
+            name: $name,
+            quantity: &crate::spec::quantity::$q,
+        };)*
+    };
+}
+
 mod gear_rows;
 mod rows;
 
@@ -27,7 +37,8 @@ use super::quantity::Quantity;
 use super::scenario::Scenario;
 use super::{ProfileSpec, ScenarioSpec, SpecError};
 
-pub use fields::*;
+pub use gear_rows::*;
+pub use rows::*;
 
 /// A section of a scenario file: a table (`[orbit]`) or an array of tables whose
 /// elements are named by key (`[[node]]`).

@@ -2,13 +2,52 @@
 //! params` lists them (gear pairs in `gear_rows.rs`), with their fast writes and
 //! calibrations.
 
-use super::fields::*;
-use super::{Calibration, Row, ScaleFamily, Section, Slot, row};
+use super::{Calibration, Field, Row, ScaleFamily, Section, Slot, row};
 use crate::spec::keys::ElementKeys;
 use crate::spec::quantity as q;
 use crate::spec::scenario::Scenario;
 use crate::spec::{AttitudeMode, ScenarioSpec, SpecError};
 use crate::thermal::LoadKind;
+
+fields! {
+    START_OFFSET_S = "start_offset_s", START_OFFSET_S;
+    ALTITUDE_M = "altitude_m", ALTITUDE_M;
+    EARTH_RADIUS_M = "earth_radius_m", EARTH_RADIUS_M;
+    MU_M3_PER_S2 = "mu_m3_per_s2", MU_M3_PER_S2;
+    ORBIT_ANGLE_AT_START_DEG = "orbit_angle_at_start_deg", ORBIT_ANGLE_AT_START_DEG;
+    BETA_DEG = "beta_deg", BETA_DEG;
+    SOLAR_FLUX_W_PER_M2 = "solar_flux_w_per_m2", SOLAR_FLUX_W_PER_M2;
+    SPACE_SINK_K = "space_sink_k", SPACE_SINK_K;
+    ALBEDO = "albedo", ALBEDO;
+    EARTH_IR_W_PER_M2 = "earth_ir_w_per_m2", EARTH_IR_W_PER_M2;
+    ORBITS = "orbits", RUN_ORBITS;
+    DURATION_S = "duration_s", RUN_DURATION_S;
+    DURATION_DAYS = "duration_days", RUN_DURATION_DAYS;
+    OUTPUT_INTERVAL_S = "output_interval_s", OUTPUT_INTERVAL_S;
+    TOLERANCE_K = "tolerance_k", TOLERANCE_K;
+    MAX_STEP_S = "max_step_s", MAX_STEP_S;
+    CAPACITANCE_J_PER_K = "capacitance_j_per_k", CAPACITANCE_J_PER_K;
+    INITIAL_TEMPERATURE_K = "initial_temperature_k", TEMPERATURE_K;
+    RADIUS_MM = "radius_mm", NODE_RADIUS_MM;
+    BOUNDARY_TEMPERATURE_K = "temperature_k", TEMPERATURE_K;
+    CONDUCTANCE_W_PER_K = "conductance_w_per_k", CONDUCTANCE_W_PER_K;
+    EMISSIVITY_AREA_M2 = "emissivity_area_m2", AREA_PRODUCT_M2;
+    EMISSIVITY = "emissivity", EMISSIVITY;
+    ABSORPTIVITY_AREA_M2 = "absorptivity_area_m2", AREA_PRODUCT_M2;
+    ABSORPTIVITY = "absorptivity", ABSORPTIVITY;
+    AREA_M2 = "area_m2", AREA_M2;
+    VIEW_FACTOR = "view_factor", VIEW_FACTOR;
+    DISSIPATION_POWER_W = "power_w", POWER_W;
+    HEATER_POWER_W = "power_w", HEATER_POWER_W;
+    ON_K = "on_k", HEATER_ON_K;
+    OFF_K = "off_k", HEATER_OFF_K;
+    YAW_DEG = "yaw_deg", YAW_DEG;
+    SPIN_RATE_DEG_PER_S = "spin_rate_deg_per_s", SPIN_RATE_DEG_PER_S;
+    WINDOWS_S = "windows_s", WINDOW_S;
+    WINDOWS_DAYS = "windows_days", WINDOW_DAYS;
+    TAU_S = "tau_s", SENSOR_TAU_S;
+    OFFSET_K = "offset_k", SENSOR_OFFSET_K;
+}
 
 type Done = Result<(), SpecError>;
 
