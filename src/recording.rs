@@ -52,14 +52,19 @@ impl Recording {
     /// Takes each of `model`'s `[[input]]` channels out of the recording (an input, not
     /// a measurement to fit) and makes the model follow its readings
     /// ([`Model::follow_input`]). Returns what it did, a line per input.
-    pub fn feed_inputs(&mut self, model: &mut Model) -> Result<Vec<String>, String> {
+    pub fn feed_inputs(
+        &mut self,
+        model: &mut Model,
+    ) -> Result<Vec<String>, crate::spec::model::InputError> {
+        use crate::spec::model::InputError;
         let mut done = Vec::new();
         for (i, inp) in model.spec().input.clone().iter().enumerate() {
             let Some(k) = self.columns.iter().position(|c| *c == inp.column) else {
-                return Err(format!(
-                    "{}: no column `{}`, which [[input]] drives `{}` from",
-                    self.file, inp.column, inp.drives
-                ));
+                return Err(InputError::NoColumn {
+                    file: self.file.clone(),
+                    column: inp.column.clone(),
+                    drives: inp.drives.clone(),
+                });
             };
             let readings: Vec<(f64, f64)> = self
                 .time_s
@@ -68,10 +73,10 @@ impl Recording {
                 .filter_map(|(t, v)| v.map(|v| (*t, v)))
                 .collect();
             if readings.is_empty() {
-                return Err(format!(
-                    "{}: column `{}` has no readings",
-                    self.file, inp.column
-                ));
+                return Err(InputError::NoReadings {
+                    file: self.file.clone(),
+                    column: inp.column.clone(),
+                });
             }
             done.push(model.follow_input(i, &readings)?);
             self.columns.remove(k);

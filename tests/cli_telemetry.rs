@@ -233,7 +233,7 @@ fn cli_inputs_follow_recording_channels() {
         orbitlash::io::recording::Recording::from_csv(b"time_s,housing_c\n0,20\n", "r.csv")
             .unwrap();
     let e = rec.feed_inputs(&mut model).unwrap_err();
-    assert!(e.contains("no column `bus_c`"), "{e}");
+    assert!(e.to_string().contains("no column `bus_c`"), "{e}");
 
     // FUNcube-1's dissipation from its system current
     let Some(csv) = shared("data/funcube-1/funcube1_wod_2016-02-04.csv") else {

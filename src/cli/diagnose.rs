@@ -79,7 +79,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     let mut followed = Vec::new();
     let rec = match Recording::read_with(&a.recording, &loaded.scenario().recording) {
         Ok(mut r) => {
-            followed = r.feed_inputs(&mut model).map_err(|m| anyhow::anyhow!(m))?;
+            followed = r.feed_inputs(&mut model)?;
             r.name_channels(&loaded.scenario().sensors);
             r
         }

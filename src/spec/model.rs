@@ -24,6 +24,31 @@ pub enum ModelError {
     Invalid(#[from] SpecError),
 }
 
+/// Why an `[[input]]` could not follow its channel: the recording lacks it, or the model
+/// refused what its readings make.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InputError {
+    /// The recording has no such column.
+    #[error("{file}: no column `{column}`, which [[input]] drives `{drives}` from")]
+    NoColumn {
+        file: String,
+        column: String,
+        drives: String,
+    },
+    /// The column has no reading.
+    #[error("{file}: column `{column}` has no readings")]
+    NoReadings { file: String, column: String },
+    /// The model refused the profile (or eclipses) the readings make.
+    #[error("[[input]] {drives} from `{column}`: {source}")]
+    Refused {
+        /// `sunlit`, or the driven key path in backquotes.
+        drives: String,
+        column: String,
+        #[source]
+        source: ModelError,
+    },
+}
+
 /// A load to add to a model.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LoadSpec {
@@ -154,7 +179,11 @@ impl Model {
     /// the driven profile becomes the table of `scale` × reading + `offset` (linear
     /// between readings), or, for `sunlit`, the eclipse windows of the readings below
     /// `below`. Returns what it did, in a line.
-    pub fn follow_input(&mut self, i: usize, readings: &[(f64, f64)]) -> Result<String, String> {
+    pub fn follow_input(
+        &mut self,
+        i: usize,
+        readings: &[(f64, f64)],
+    ) -> Result<String, InputError> {
         let inp = self.spec.input[i].clone();
         let (scale, offset) = (inp.scale.unwrap_or(1.0), inp.offset.unwrap_or(0.0));
         let time_s: Vec<f64> = readings.iter().map(|r| r.0).collect();
@@ -167,7 +196,11 @@ impl Model {
             let windows = eclipse_windows(&time_s, &value, below, period);
             let count = windows.len();
             self.modify(|s| s.orbit.eclipses_s = Some(windows))
-                .map_err(|e| format!("[[input]] sunlit from `{}`: {e}", inp.column))?;
+                .map_err(|source| InputError::Refused {
+                    drives: "sunlit".into(),
+                    column: inp.column.clone(),
+                    source,
+                })?;
             return Ok(format!(
                 "eclipses follow `{}` below {below} ({n} readings, {count} eclipses)",
                 inp.column
@@ -183,7 +216,11 @@ impl Model {
                 *p = table;
             }
         })
-        .map_err(|e| format!("[[input]] `{}` from `{}`: {e}", inp.drives, inp.column))?;
+        .map_err(|source| InputError::Refused {
+            drives: format!("`{}`", inp.drives),
+            column: inp.column.clone(),
+            source,
+        })?;
         Ok(format!(
             "`{}` follows `{}` ({n} readings × {scale} + {offset})",
             inp.drives, inp.column
@@ -458,7 +495,7 @@ impl Model {
                     self.put_back(&at[..saved.len()], &saved, 0);
                     return Err(ModelError::Param(ParamError {
                         key: path.to_string(),
-                        message,
+                        message: message.to_string(),
                     }));
                 }
             }
@@ -483,7 +520,7 @@ impl Model {
         }
         let saved = registry::swap(&mut self.spec, id.row, r, v).map_err(|message| ParamError {
             key: id.path.clone(),
-            message,
+            message: message.to_string(),
         })?;
         if let Err(e) = f(&self.spec, &self.keys, &mut self.scenario, r.element) {
             registry::restore(&mut self.spec, r, saved);
@@ -551,10 +588,10 @@ impl Model {
 
 /// Writes `value` at `at` of `spec`, the error naming `path` as given.
 fn write(spec: &mut ScenarioSpec, at: ParamRef, value: f64, path: &str) -> Result<(), ModelError> {
-    registry::write(spec, at, value).map_err(|message| {
+    registry::write(spec, at, value).map_err(|e| {
         ModelError::Param(ParamError {
             key: path.to_string(),
-            message,
+            message: e.to_string(),
         })
     })
 }

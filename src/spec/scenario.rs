@@ -182,19 +182,29 @@ impl Scenario {
     }
 
     /// The same scenario run for `orbits` orbits; refused beyond [`MAX_DURATION_S`].
-    pub fn with_orbits(mut self, orbits: f64) -> Result<Scenario, String> {
+    pub fn with_orbits(mut self, orbits: f64) -> Result<Scenario, RunLengthError> {
         let d = orbits * self.period_s();
         if !(d.is_finite() && (MIN_DURATION_S..=MAX_DURATION_S).contains(&d)) {
-            return Err(format!(
-                "gives a run of {d:.3e} s; runs last {MIN_DURATION_S} s … {MAX_DURATION_S:.0e} s (31.7 years)"
-            ));
+            return Err(RunLengthError::OutOfRange { duration_s: d });
         }
         if let crate::orbit::Environment::Dated(e) = &mut self.thermal.environment {
-            e.set_horizon_s(d)?;
+            e.set_horizon_s(d).map_err(RunLengthError::Orbit)?;
         }
         self.run.duration_s = d;
         Ok(self)
     }
+}
+
+/// Why a scenario cannot run for a length.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunLengthError {
+    #[error(
+        "gives a run of {duration_s:.3e} s; runs last {MIN_DURATION_S} s … {MAX_DURATION_S:.0e} s (31.7 years)"
+    )]
+    OutOfRange { duration_s: f64 },
+    /// A real orbit that cannot be propagated that far (it decays).
+    #[error("{0}")]
+    Orbit(String),
 }
 
 /// The column every recording gives its time in (unless `[recording]` names another).

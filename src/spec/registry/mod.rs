@@ -719,11 +719,11 @@ pub fn get(spec: &ScenarioSpec, path: &str) -> Result<f64, ParamError> {
 /// integer for a number of teeth) and that the scenario gives this form of it are
 /// checked here; whether the value is valid is the compiler's call (`spec::compile`),
 /// so a value set by path and the same value in a TOML file give the same error.
-pub fn write(spec: &mut ScenarioSpec, id: ParamRef, value: f64) -> Result<(), String> {
+pub fn write(spec: &mut ScenarioSpec, id: ParamRef, value: f64) -> Result<(), WriteError> {
     let row = id.row();
     let default = default_of(row, spec);
     let Some(p) = row.slot(spec, id.element).and_then(|s| place(s, id.sub)) else {
-        return Err("no such number in this scenario".into());
+        return Err(WriteError::NoSuchNumber);
     };
     match p {
         Place::Number(v) => *v = value,
@@ -731,14 +731,12 @@ pub fn write(spec: &mut ScenarioSpec, id: ParamRef, value: f64) -> Result<(), St
             if value.fract() == 0.0 && value.abs() < 1e15 {
                 *v = value as i64
             } else {
-                return Err(format!("must be an integer (got {value})"));
+                return Err(WriteError::NotAnInteger(value));
             }
         }
         Place::Optional(v) => {
             if v.is_none() && default.is_none() {
-                return Err(
-                    "is not given in this scenario (it uses another form of this value)".into(),
-                );
+                return Err(WriteError::OtherForm);
             }
             *v = Some(value);
         }
@@ -747,13 +745,27 @@ pub fn write(spec: &mut ScenarioSpec, id: ParamRef, value: f64) -> Result<(), St
     Ok(())
 }
 
+/// Why a value could not be written at a number's place.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum WriteError {
+    #[error("no such number in this scenario")]
+    NoSuchNumber,
+    /// A number of teeth.
+    #[error("must be an integer (got {0})")]
+    NotAnInteger(f64),
+    /// An optional value standing for nothing: the scenario gives another form of it
+    /// (α and A, not the product).
+    #[error("is not given in this scenario (it uses another form of this value)")]
+    OtherForm,
+}
+
 /// Writes `value` at `path` (see [`write`]).
 pub fn set(spec: &mut ScenarioSpec, path: &str, value: f64) -> Result<(), ParamError> {
     let keys = element_keys(spec);
     let id = resolve(spec, &keys, path)?;
-    write(spec, id, value).map_err(|message| ParamError {
+    write(spec, id, value).map_err(|e| ParamError {
         key: path.to_string(),
-        message,
+        message: e.to_string(),
     })
 }
 
@@ -771,14 +783,12 @@ pub(crate) fn swap(
     row: &Row,
     id: ParamRef,
     value: f64,
-) -> Result<Saved, String> {
+) -> Result<Saved, WriteError> {
     let stands_for_nothing =
         row.default == Default::OfQuantity && row.field.quantity.default.is_none();
     match row.slot(spec, id.element).and_then(|s| place(s, id.sub)) {
         Some(Place::Number(v)) => Ok(Saved::Number(std::mem::replace(v, value))),
-        Some(Place::Optional(v)) if v.is_none() && stands_for_nothing => {
-            Err("is not given in this scenario (it uses another form of this value)".into())
-        }
+        Some(Place::Optional(v)) if v.is_none() && stands_for_nothing => Err(WriteError::OtherForm),
         Some(Place::Optional(v)) => Ok(Saved::Optional(v.replace(value))),
         _ => unreachable!("a value or an optional value"),
     }
