@@ -195,12 +195,16 @@ impl Cx {
 
     pub(super) fn temperature(&self, path: &KeyPath, v: f64) -> Result<f64, SpecError> {
         self.finite(path, v)?;
-        if v > 0.0 && v < 5000.0 {
+        use crate::constants::ZERO_CELSIUS_K;
+        use crate::spec::quantity::MAX_TEMPERATURE_K;
+        if v > 0.0 && v < MAX_TEMPERATURE_K {
             Ok(v)
         } else {
             Err(self.err(
                 path,
-                format!("is a temperature in kelvin and must be above 0 and below 5000 K (got {v}; °C values need + 273.15)"),
+                format!(
+                    "is a temperature in kelvin and must be above 0 and below {MAX_TEMPERATURE_K} K (got {v}; °C values need + {ZERO_CELSIUS_K})"
+                ),
             ))
         }
     }
