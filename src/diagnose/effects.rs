@@ -1022,7 +1022,7 @@ impl<'a> Generator<'a> {
         let scales = |first| {
             params
                 .iter()
-                .filter_map(|p| scale_of(p, &keys, first))
+                .filter_map(|p| calibration_of(p, &keys, first))
                 .collect::<Vec<_>>()
         };
         let mut out: Vec<Candidate> = scales(true);
@@ -1036,7 +1036,7 @@ impl<'a> Generator<'a> {
 /// (`spec::registry`'s `Calibration`): a node's thermal mass or a face's ε or α
 /// (`first`), a Sun load's α or a link's conductance (not `first`). Optical properties
 /// stay within 0 … 1.
-fn scale_of(p: &Param, keys: &ElementKeys, first: bool) -> Option<Candidate> {
+fn calibration_of(p: &Param, keys: &ElementKeys, first: bool) -> Option<Candidate> {
     use crate::spec::registry::{ScaleFamily, Section};
     let row = p.id.row();
     let c = row.calibration?;
