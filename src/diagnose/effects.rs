@@ -59,6 +59,9 @@ vocabulary! {
     HeaterThermostat = "heater_thermostat", Physics, Scope::Node(|g, n| g.heater_thermostat(n).into_iter().collect());
     InternalDissipation = "internal_dissipation", Physics, Scope::Node(|g, n| g.internal_dissipation(n));
     HousingExpansion = "housing_expansion", Physics, Scope::Node(|g, n| g.housing_expansion(n));
+    /// A dissipation switched on at a time (a payload, a mode change): node, power and
+    /// time fitted.
+    SwitchedDissipation = "switched_dissipation", Physics, Scope::Node(|g, n| g.switched_dissipation(n).into_iter().collect());
     CteTemperature = "cte_temperature", Physics, Scope::Pair(|g, p| g.cte_temperature(p).into_iter().collect());
     CteScale = "cte_scale", Calibration, Scope::Pair(|g, p| g.cte_scale(p).into_iter().collect());
     BoreFit = "bore_fit", Physics, Scope::Pair(|g, p| g.bore_fits(p));
@@ -71,6 +74,12 @@ vocabulary! {
     AbsorptivityScale = "absorptivity_scale", Calibration, Scope::Shared;
     ConductanceScale = "conductance_scale", Calibration, Scope::Shared;
     UncertainParameter = "uncertain_parameter", Calibration, Scope::Shared;
+    /// Every face's and Sun load's absorptivity scaled by one factor: the level of
+    /// absorbed sunlight an unknown attitude sets.
+    SunlightScale = "sunlight_scale", Calibration, Scope::Model(|g| g.sunlight_scale().into_iter().collect());
+    /// Every face's emissivity and every radiative coupling to space scaled by one
+    /// factor.
+    InfraredScale = "infrared_scale", Calibration, Scope::Model(|g| g.infrared_scale().into_iter().collect());
 }
 
 /// Where an effect's candidates are made: its generator, tried on each element of a
@@ -277,6 +286,8 @@ pub enum Target {
     /// A number the user declared uncertain (`[[uncertain]]`, `[[dispersion]]`), by its
     /// key path.
     Path(String),
+    /// Every face (and Sun load, or coupling to space) at once: a global scale.
+    Spacecraft,
 }
 
 impl Serialize for Target {
@@ -386,7 +397,13 @@ impl Target {
         .into_iter()
         .flatten()
         .next()
-        .unwrap_or_default()
+        .unwrap_or_else(|| {
+            if *self == Target::Spacecraft {
+                "the spacecraft".into()
+            } else {
+                String::new()
+            }
+        })
     }
 }
 
@@ -484,6 +501,13 @@ impl Candidate {
 pub struct Hints {
     pub heater_on_k: Vec<Option<f64>>,
 }
+
+/// A switched dissipation's window lasts until this time, s (beyond any recording).
+const SWITCHED_UNTIL_S: f64 = 1e9;
+
+/// A switched dissipation is fitted from its best ranked points, this many: each start
+/// time is a basin of its own.
+const SWITCH_STARTS: usize = 3;
 
 /// A thermostat is fitted from its best ranked points, this many: one long on-period
 /// and several short cycles are separate basins of its cost (measured in
@@ -1009,6 +1033,137 @@ impl<'a> Generator<'a> {
             starts: vec![vec![-0.5], vec![0.5]],
             null: Some(vec![0.0]),
             ..Candidate::new(Effect::SensorOffset, Target::Channel(col.into()), None)
+        })
+    }
+
+    /// One scale on every number of `params` that `pick` chooses (with whether it is an
+    /// optical property, which stays ≤ 1), as `effect` on the whole spacecraft.
+    fn global_scale(
+        &self,
+        effect: Effect,
+        starts: &[f64],
+        pick: &dyn Fn(&Param) -> Option<bool>,
+    ) -> Option<Candidate> {
+        let keys = crate::spec::keys::element_keys(self.spec);
+        let mut upper = 20.0f64;
+        let mut setters = Vec::new();
+        for p in self.model.params() {
+            let Some(optical) = pick(&p) else { continue };
+            if p.value.is_nan() || p.value <= 0.0 {
+                continue;
+            }
+            if optical {
+                upper = upper.min(1.0 / p.value);
+            }
+            let row = p.id.row();
+            let element = row
+                .section
+                .keys(&keys)
+                .map_or(String::new(), |k| k[p.id.element].clone());
+            let number = Number {
+                row: p.id.row,
+                element,
+                sub: p.id.sub,
+            };
+            setters.push(Setter::scaled(number, 0, p.value));
+        }
+        // one number is a per-element scale the vocabulary has already
+        if setters.len() < 2 || upper <= 1.0 {
+            return None;
+        }
+        Some(Candidate {
+            params: vec![ParamDef::new("scale", 0.05, upper, 0.003)],
+            setters,
+            starts: starts.iter().map(|s| vec![s.min(upper)]).collect(),
+            null: Some(vec![1.0]),
+            ..Candidate::new(effect, Target::Spacecraft, None)
+        })
+    }
+
+    /// Every face's and Sun load's absorptivity (or αA) scaled by one factor.
+    fn sunlight_scale(&self) -> Option<Candidate> {
+        self.global_scale(Effect::SunlightScale, &[0.6, 0.8, 1.15, 1.3], &|p| {
+            let row = p.id.row();
+            let (alpha, product) = (
+                std::ptr::eq(row.field, &registry::ABSORPTIVITY),
+                std::ptr::eq(row.field, &registry::ABSORPTIVITY_AREA_M2),
+            );
+            match row.section {
+                Section::Face if alpha => Some(true),
+                Section::Sun if alpha || product => Some(alpha),
+                _ => None,
+            }
+        })
+    }
+
+    /// Every face's emissivity and every radiative coupling to `space` (its ε or εA)
+    /// scaled by one factor.
+    fn infrared_scale(&self) -> Option<Candidate> {
+        let to_space = |e: usize| self.spec.radiation[e].between.iter().any(|n| n == "space");
+        self.global_scale(Effect::InfraredScale, &[0.7, 0.85, 1.1, 1.2], &|p| {
+            let row = p.id.row();
+            let (eps, product) = (
+                std::ptr::eq(row.field, &registry::EMISSIVITY),
+                std::ptr::eq(row.field, &registry::EMISSIVITY_AREA_M2),
+            );
+            match row.section {
+                Section::Face if eps => Some(true),
+                Section::Radiation if (eps || product) && to_space(p.id.element) => Some(eps),
+                _ => None,
+            }
+        })
+    }
+
+    /// A dissipation on node `ni` switched on at a time and left on: a mode whose one
+    /// window starts at the fitted time (s from t = 0) and outlasts the recording.
+    fn switched_dissipation(&self, ni: usize) -> Option<Candidate> {
+        let n = self.spec.node[ni].name.clone();
+        let (mode, dn) = (
+            format!("diagnose.switch.{n}"),
+            format!("diagnose.switched.{n}"),
+        );
+        let end_s = self.model.scenario().run.duration_s;
+        let edit: Edit = {
+            let (n, mode, dn) = (n.clone(), mode.clone(), dn.clone());
+            std::sync::Arc::new(move |s: &mut ScenarioSpec| {
+                s.mode.push(crate::spec::ModeSpec {
+                    name: mode.clone(),
+                    windows_s: Some(vec![vec![0.5 * end_s, SWITCHED_UNTIL_S]]),
+                    windows_days: None,
+                });
+                s.dissipation.push(DissipationSpec {
+                    name: Some(dn.clone()),
+                    node: n.clone(),
+                    power_w: ProfileSpec::Constant(0.5),
+                    when: Some(Schedule::Mode(mode.clone())),
+                })
+            })
+        };
+        let base = self.with(&edit)?;
+        let field = &registry::DISSIPATION_POWER_W;
+        let power = Number::of(&base, Section::Dissipation, &[], field, &dn)?;
+        let on = Number {
+            row: registry::row_of(Section::Mode, &[], &registry::WINDOWS_S),
+            element: mode,
+            sub: Sub::Window(0, 0),
+        };
+        on.resolve(&base).ok()?;
+        let mut starts = Vec::new();
+        for f in [0.15, 0.35, 0.55, 0.75] {
+            for p in [0.3, 1.0] {
+                starts.push(vec![p, f * end_s]);
+            }
+        }
+        Some(Candidate {
+            params: vec![
+                ParamDef::new(field.name, 0.0, 1000.0, 0.02),
+                ParamDef::new("on_s", 0.0, end_s, 30.0),
+            ],
+            setters: vec![Setter::scaled(power, 0, 1.0), Setter::scaled(on, 1, 1.0)],
+            starts,
+            null: None,
+            multi_start: SWITCH_STARTS,
+            ..Candidate::new(Effect::SwitchedDissipation, Target::Node(n), Some(edit))
         })
     }
 

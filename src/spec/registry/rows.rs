@@ -671,7 +671,7 @@ fn faces_modes_sensors(t: &mut Vec<Row>) {
             "a temperature sensor's first-order time constant",
             |s, e| {
                 let x = &mut s.sensor[e];
-                x.node.is_some().then_some(Slot::Optional(&mut x.tau_s))
+                x.quantity.is_none().then_some(Slot::Optional(&mut x.tau_s))
             },
         )
         .fast(sensor),
@@ -682,7 +682,9 @@ fn faces_modes_sensors(t: &mut Vec<Row>) {
             "a temperature sensor's constant bias",
             |s, e| {
                 let x = &mut s.sensor[e];
-                x.node.is_some().then_some(Slot::Optional(&mut x.offset_k))
+                x.quantity
+                    .is_none()
+                    .then_some(Slot::Optional(&mut x.offset_k))
             },
         )
         .fast(sensor),
