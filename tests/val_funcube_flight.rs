@@ -122,4 +122,37 @@ fn val_funcube_flight_diagnose_improves_every_held_out_channel() {
         assert!(after < before, "{ch}: {before} → {after}");
     }
     assert_eq!(d.heldout_rmse.0.len(), 8);
+    // The calibration is fitted first and reported as calibration: the global sunlight
+    // and infrared scales and the two largest thermal masses (chassis, stack), which
+    // remove most of the baseline's held-out residual on this day; none of them is a
+    // finding.
+    let calibrated: Vec<(&str, String)> = d
+        .calibration
+        .iter()
+        .map(|c| (c.effect.id(), c.target.node().unwrap_or_default()))
+        .collect();
+    for want in [
+        ("capacitance_scale", "chassis"),
+        ("capacitance_scale", "stack"),
+        ("sunlight_scale", ""),
+        ("infrared_scale", ""),
+    ] {
+        assert!(
+            calibrated.iter().any(|(e, n)| *e == want.0 && n == want.1),
+            "{want:?} not in the calibration {calibrated:?}"
+        );
+    }
+    let share = d.calibration_heldout_share.expect("a calibration share");
+    eprintln!(
+        "the calibration removes {:.0} % of the held-out χ²",
+        100.0 * share
+    );
+    assert!(share > 0.5, "{share}");
+    for f in &d.findings {
+        assert!(
+            !matches!(f.effect.id(), "sunlight_scale" | "infrared_scale"),
+            "a calibration number reported as a finding: {}",
+            f.effect
+        );
+    }
 }

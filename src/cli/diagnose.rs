@@ -41,6 +41,11 @@ pub struct DiagnoseArgs {
     #[arg(long, value_name = "N", default_value_t = Options::default().max_effects as u8,
           value_parser = clap::value_parser!(u8).range(1..=8))]
     max_effects: u8,
+    /// Search the vocabulary on the model as it is, without fitting the calibration
+    /// set first (`[[uncertain]]`, and for a model with faces the global sunlight and
+    /// infrared scales and its two largest thermal masses).
+    #[arg(long)]
+    no_calibration: bool,
     /// Change a number of the scenario by its key path (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
@@ -114,6 +119,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     let opts = Options {
         holdout_orbits: a.holdout_orbits,
         max_effects: usize::from(a.max_effects),
+        calibrate: !a.no_calibration,
         ..Options::default()
     };
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
@@ -294,7 +300,14 @@ fn out_files(
 /// A finding's target as the report says it: `node housing, schedule sunlit` (a gear
 /// stands for its pair).
 fn finding_target(f: &diagnose::Finding) -> String {
-    let t = &f.target;
+    target_text(&f.target)
+}
+
+/// What an effect acts on, as the report says it.
+fn target_text(t: &diagnose::effects::Target) -> String {
+    if *t == diagnose::effects::Target::Spacecraft {
+        return "the spacecraft".into();
+    }
     let mut parts = Vec::new();
     for (k, v) in t.fields() {
         let Some(v) = v else { continue };
@@ -337,6 +350,7 @@ pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
     report_head(&mut o, d, scenario, recording);
     report_channels(&mut o, d);
     report_where(&mut o, d);
+    report_calibration(&mut o, d);
     report_findings(&mut o, d);
     report_remaining(&mut o, d);
     report_candidates(&mut o, d);
@@ -440,6 +454,47 @@ fn report_where(o: &mut String, d: &Diagnosis) {
 }
 
 /// What the model left out: each finding's parameters, correlations and evidence.
+/// The calibration: the model's own numbers, adjusted (never missing physics).
+fn report_calibration(o: &mut String, d: &Diagnosis) {
+    if d.calibration.is_empty() {
+        return;
+    }
+    outln!(
+        o,
+        "the model's numbers, adjusted (calibration{}):",
+        d.calibration_heldout_share
+            .map_or(String::new(), |s| format!(
+                ": alone it removes {:.0} % of the baseline's held-out residual",
+                100.0 * s
+            ))
+    );
+    for c in &d.calibration {
+        let values: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(k, v)| {
+                let se = c.std_errors.get(k).copied().flatten();
+                let nominal = c
+                    .nominal
+                    .get(k)
+                    .map_or(String::new(), |n| format!(", nominal {}", sig(*n)));
+                match se {
+                    Some(se) => format!("{k} = {} ± {}{nominal}", sig(*v), sig(se)),
+                    None => format!("{k} = {}{nominal}", sig(*v)),
+                }
+            })
+            .collect();
+        outln!(
+            o,
+            "  {} on {}: {}",
+            c.effect,
+            target_text(&c.target),
+            values.join("; ")
+        );
+    }
+    outln!(o, "");
+}
+
 fn report_findings(o: &mut String, d: &Diagnosis) {
     if !d.findings.is_empty() {
         outln!(o, "what the model left out:");

@@ -160,6 +160,9 @@ pub struct ParamDef {
     pub upper: f64,
     /// Finite-difference step.
     pub step: f64,
+    /// A prior toward a value, (centre, standard deviation): a calibration number stays
+    /// near nominal unless the data move it.
+    pub prior: Option<(f64, f64)>,
 }
 
 /// A number of the model written as a linear function of the parameters:
@@ -237,6 +240,7 @@ impl ParamDef {
             lower,
             upper,
             step,
+            prior: None,
         }
     }
 }
@@ -500,6 +504,49 @@ impl Candidate {
 #[derive(Debug, Clone, Default)]
 pub struct Hints {
     pub heater_on_k: Vec<Option<f64>>,
+}
+
+/// The calibration set of `model`, taken out of `cands` (the vocabulary's candidates),
+/// each parameter with its prior toward nominal: the numbers the user declared
+/// uncertain (`[[uncertain]]`, `[[dispersion]]`; prior sd a quarter of the range), and
+/// for a model with faces (a flight model, whose attitude and coatings set its level
+/// of absorbed sunlight) the global sunlight scale (sd 25 %) and infrared scale (sd
+/// 15 %) and the thermal masses of its two largest nodes (sd 30 %). Returns the set and
+/// its nominal parameters.
+pub fn calibration_set(model: &Model, cands: &mut Vec<Candidate>) -> (Vec<Candidate>, Vec<f64>) {
+    let spec = model.spec();
+    let mut largest: Vec<(f64, &str)> = spec
+        .node
+        .iter()
+        .map(|n| (n.capacitance_j_per_k, n.name.as_str()))
+        .collect();
+    largest.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(b.1)));
+    let masses: Vec<String> = largest.iter().take(2).map(|(_, n)| n.to_string()).collect();
+    let faces = !spec.face.is_empty();
+    let sd_of = |c: &Candidate| -> Option<f64> {
+        match (c.effect, &c.target) {
+            (Effect::UncertainParameter, _) => Some(0.25 * (c.params[0].upper - c.params[0].lower)),
+            (Effect::SunlightScale, _) if faces => Some(0.25),
+            (Effect::InfraredScale, _) if faces => Some(0.15),
+            (Effect::CapacitanceScale, Target::Node(n)) if faces && masses.contains(n) => Some(0.3),
+            _ => None,
+        }
+    };
+    let mut set = Vec::new();
+    let mut nominal = Vec::new();
+    let mut rest = Vec::new();
+    for mut c in cands.drain(..) {
+        match (sd_of(&c), c.null.clone()) {
+            (Some(sd), Some(null)) if c.params.len() == 1 => {
+                c.params[0].prior = Some((null[0], sd));
+                nominal.push(null[0]);
+                set.push(c);
+            }
+            _ => rest.push(c),
+        }
+    }
+    *cands = rest;
+    (set, nominal)
 }
 
 /// A switched dissipation's window lasts until this time, s (beyond any recording).

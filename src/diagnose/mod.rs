@@ -159,6 +159,10 @@ pub struct Options {
     /// takes a fifth of a real residual away names physics worth modelling; one that
     /// trims a few per cent mostly soaks up what it cannot model.
     pub min_partial_share: f64,
+    /// Fit the calibration set first (`[[uncertain]]`, and for a model with faces the
+    /// global sunlight and infrared scales and its two largest thermal masses), then
+    /// search the vocabulary with it re-fitted jointly.
+    pub calibrate: bool,
 }
 
 impl Default for Options {
@@ -173,6 +177,7 @@ impl Default for Options {
             pair_partners: 4,
             max_effects: 3,
             min_partial_share: 0.2,
+            calibrate: true,
         }
     }
 }
@@ -281,6 +286,20 @@ pub struct Finding {
     pub set: BTreeMap<String, f64>,
 }
 
+/// A calibrated number set: its effect and what it acts on, the fitted values (in the
+/// final joint fit with the findings), their standard errors and the nominal values.
+#[derive(Debug, Clone, Serialize)]
+pub struct Calibrated {
+    pub effect: effects::Effect,
+    #[serde(flatten)]
+    pub target: effects::Target,
+    pub parameters: BTreeMap<String, f64>,
+    pub std_errors: BTreeMap<String, Option<f64>>,
+    pub nominal: BTreeMap<String, f64>,
+    /// The key-path values written into the corrected scenario.
+    pub set: BTreeMap<String, f64>,
+}
+
 /// What became of a candidate: serialised as "accepted", "rejected", "not_fitted".
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -336,6 +355,12 @@ pub struct Diagnosis {
     pub baseline: Baseline,
     pub mismatches: Vec<Mismatch>,
     pub findings: Vec<Finding>,
+    /// The model's own numbers, adjusted (fitted first, then again with the findings):
+    /// calibration, never missing physics. Empty when none was kept.
+    pub calibration: Vec<Calibrated>,
+    /// The share of the baseline's held-out χ² the calibration alone removes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibration_heldout_share: Option<f64>,
     /// Held-out RMS of the corrected model (the baseline's when nothing is accepted).
     pub heldout_rmse: ChannelMap,
     /// Training RMS of the corrected model.
@@ -638,6 +663,8 @@ fn baseline_report(
         baseline,
         mismatches: mismatches.clone(),
         findings: Vec::new(),
+        calibration: Vec::new(),
+        calibration_heldout_share: None,
         heldout_rmse: cmap(&rms_heldout),
         rmse: cmap(&rms),
         remaining: mismatches,
@@ -724,7 +751,7 @@ fn judge_singles(
                         rep.delta_bic = Some(-problem.bic_gain(h, base.train_chi2, c.params.len()));
                         rep.heldout_chi2_drop = Some(base.holdout_chi2 - h.holdout_chi2);
                         rep.parameters = Some(
-                            c.report_params(&h.theta, None)
+                            c.report_params(&h.theta[problem.calibration_len()..], None)
                                 .into_iter()
                                 .map(|(k, v, _)| (k, v))
                                 .collect(),
@@ -742,7 +769,8 @@ fn judge_singles(
         }
         reports.push(rep);
     }
-    let gain = |h: &Hypothesis| problem.bic_gain(h, base.train_chi2, h.theta.len());
+    let k = |h: &Hypothesis| h.theta.len() - problem.calibration_len();
+    let gain = |h: &Hypothesis| problem.bic_gain(h, base.train_chi2, k(h));
     singles.sort_by(|a, b| gain(b).total_cmp(&gain(a)));
     (reports, singles)
 }
@@ -771,7 +799,8 @@ fn findings(
     });
     let corr = h.fit.correlation();
     let mut out = Vec::new();
-    let mut off = 0;
+    // the calibration's parameters come first
+    let mut off = problem.calibration_len();
     for (m, &ci) in h.members.iter().enumerate() {
         let c = &cands[ci];
         let k = c.params.len();
@@ -911,7 +940,7 @@ pub fn diagnose(
     progress("baseline", 0, 1);
     let base = baseline(model, &obs, validate, &mut notes)?;
     let warnings = noise_warnings(&obs, &base, validate);
-    let problem = Problem::new(&obs, base.noise.clone(), base.steps);
+    let mut problem = Problem::new(&obs, base.noise.clone(), base.steps);
     let (mut report, mut series) = baseline_report(&obs, &base, &problem, opts, notes, warnings);
     report.recording = RecordingRows {
         rows: recording.time_s.len(),
@@ -938,8 +967,51 @@ pub fn diagnose(
         .iter()
         .map(|c| (c.name.clone(), c.is_temperature))
         .collect();
-    let cands = effects::candidates(model, &channels, &hints);
+    let mut cands = effects::candidates(model, &channels, &hints);
     let search_started = Instant::now();
+
+    // 3½. The calibration, fitted first and taken out of the vocabulary's search.
+    let (set, nominal) = if opts.calibrate {
+        effects::calibration_set(model, &mut cands)
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    progress("calibration", 0, 1);
+    let calibration = problem.calibrate(model, set, nominal, &reference);
+    progress("calibration", 1, 1);
+    let calibrated = match &calibration {
+        Some(Ok(h)) if problem.calibration_len() > 0 => Some(h.clone()),
+        Some(Ok(_)) => {
+            report
+                .notes
+                .push("the calibration did not improve the held-out orbits and is not used".into());
+            None
+        }
+        Some(Err(e)) => {
+            report
+                .notes
+                .push(format!("the calibration could not be fitted: {e}"));
+            None
+        }
+        None => None,
+    };
+    let baseline_reference = reference;
+    let reference = match &calibrated {
+        Some(h) => Reference {
+            train_chi2: h.train_chi2,
+            holdout_chi2: h.holdout_chi2,
+            pred: &h.pred,
+        },
+        None => Reference {
+            train_chi2: baseline_reference.train_chi2,
+            holdout_chi2: baseline_reference.holdout_chi2,
+            pred: baseline_reference.pred,
+        },
+    };
+    report.calibration_heldout_share = calibrated
+        .as_ref()
+        .map(|h| 1.0 - h.holdout_chi2 / baseline_reference.holdout_chi2);
+    let start_pred = calibrated.as_ref().map_or(&base.pred, |h| &h.pred);
     let cx = Search {
         model,
         obs: &obs,
@@ -955,7 +1027,7 @@ pub fn diagnose(
         &problem,
         model,
         &cands,
-        &problem.train_residuals(&base.pred),
+        &problem.train_residuals(start_pred),
         progress,
     );
     let to_fit = cx.leading(&ranked);
@@ -968,9 +1040,17 @@ pub fn diagnose(
     let (chain, explained) = cx.select(&singles, &ranked, &mut report, progress);
     let best = chain.last().cloned();
 
-    // 7. The verdict, the findings and the corrected model.
-    if let Some(h) = &best {
-        cx.conclude(h, explained, &singles, &chain, &mut report, &mut series)?;
+    // 7. The verdict, the findings, the calibration and the corrected model.
+    match (&best, &calibrated) {
+        (Some(h), _) => {
+            cx.conclude(h, explained, &singles, &chain, &mut report, &mut series)?;
+            report.heldout_share = Some(1.0 - h.holdout_chi2 / baseline_reference.holdout_chi2);
+        }
+        (None, Some(h)) => cx.calibrated_only(h, &mut report, &mut series)?,
+        (None, None) => {}
+    }
+    if let Some(h) = best.as_ref().or(calibrated.as_ref()) {
+        report.calibration = calibrated_numbers(&problem, h);
     }
     settle_candidates(&mut reports, &cands, best.as_ref());
     report.candidates = reports;
@@ -979,6 +1059,44 @@ pub fn diagnose(
         search_started.elapsed().as_secs_f64() / cands.len().max(1) as f64;
     report.time_s = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// The calibration's numbers in hypothesis `h` (its first parameters): values with
+/// their standard errors (from `h`'s covariance), the nominal values, the key paths
+/// written.
+fn calibrated_numbers(problem: &Problem<'_>, h: &Hypothesis) -> Vec<Calibrated> {
+    let cov = h.fit.covariance.as_ref();
+    let mut out = Vec::new();
+    let mut off = 0;
+    for c in &problem.calibration {
+        let k = c.params.len();
+        let theta = &h.theta[off..off + k];
+        let sub: Option<Vec<Vec<f64>>> = cov.map(|cv| {
+            (off..off + k)
+                .map(|i| (off..off + k).map(|j| cv[(i, j)]).collect())
+                .collect()
+        });
+        let params = c.report_params(theta, sub.as_deref());
+        let nominal = c.null.clone().unwrap_or_else(|| theta.to_vec());
+        out.push(Calibrated {
+            effect: c.effect,
+            target: c.target.clone(),
+            parameters: params.iter().map(|(n, v, _)| (n.clone(), *v)).collect(),
+            std_errors: params
+                .iter()
+                .map(|(n, _, s)| (n.clone(), finite(*s)))
+                .collect(),
+            nominal: c
+                .params
+                .iter()
+                .zip(&nominal)
+                .map(|(p, v)| (p.name.to_string(), *v))
+                .collect(),
+            set: c.values(theta).into_iter().collect(),
+        });
+        off += k;
+    }
+    out
 }
 
 /// What steps 4 to 7 of a diagnosis share: the model, the data and their noise, the
@@ -1086,8 +1204,11 @@ impl Search<'_> {
                     "set of candidates"
                 },
                 names.join(" with "),
-                self.problem
-                    .bic_gain(last, reference.train_chi2, last.theta.len()),
+                self.problem.bic_gain(
+                    last,
+                    reference.train_chi2,
+                    last.theta.len() - self.problem.calibration_len()
+                ),
                 100.0 * share,
                 100.0 * opts.min_partial_share
             );
@@ -1095,6 +1216,35 @@ impl Search<'_> {
             chain.clear();
         }
         (chain, explained)
+    }
+
+    /// The verdict when the calibration `h` is all that was kept (no finding): explained
+    /// when it brings every channel to the noise (a baseline at the noise stays
+    /// consistent); its residuals and corrected model and series.
+    fn calibrated_only(
+        &self,
+        h: &Hypothesis,
+        report: &mut Diagnosis,
+        series: &mut Series,
+    ) -> Result<(), DiagnoseError> {
+        let obs = self.obs;
+        if report.verdict != Verdict::Consistent {
+            report.verdict = if explains(obs, self.noise, self.opts, h) {
+                Verdict::Explained
+            } else {
+                Verdict::Unexplained
+            };
+        }
+        let names = channel_names(obs);
+        let res = obs.residuals(&h.pred);
+        report.heldout_rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Holdout));
+        report.rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Train));
+        report.remaining = data::mismatches(obs, &res, self.noise, self.opts.noise_ratio);
+        let whole: Arc<[f64]> = obs.time_s.clone().into();
+        let (p, _) = predict(&h.model, &whole, &[], u64::MAX).map_err(DiagnoseError::Corrected)?;
+        series.corrected = obs.channels.iter().map(|c| p[c.sensor].clone()).collect();
+        report.corrected = Some(h.model.clone());
+        Ok(())
     }
 
     /// The verdict of the best hypothesis `h` (the last of `chain`), its residuals,
@@ -1118,8 +1268,13 @@ impl Search<'_> {
         };
         report.heldout_share = Some(1.0 - h.holdout_chi2 / reference.holdout_chi2);
         if !explained {
+            let against = if self.problem.calibration_len() > 0 {
+                "the calibrated model's"
+            } else {
+                "the baseline's"
+            };
             report.notes.push(format!(
-                "a partial explanation: the findings remove {:.0} % of the baseline's held-out \
+                "a partial explanation: the findings remove {:.0} % of {against} held-out \
                  residual; the rest, below, is physics outside the vocabulary or parameters it \
                  does not fit",
                 100.0 * report.heldout_share.unwrap_or(0.0)

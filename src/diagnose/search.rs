@@ -1,8 +1,14 @@
 //! The candidate search of a diagnosis (steps 4–6 of the module doc): candidates
 //! ranked at their start points, the leading ones fitted, each fit judged against a
-//! reference (the baseline, or the best single effect when a second is tried with it),
-//! and forward selection, one effect at a time, while the accepted effects leave a
-//! structured residual.
+//! reference (the baseline or the calibrated model, or the best single effect when a
+//! second is tried with it), and forward selection, one effect at a time, while the
+//! accepted effects leave a structured residual.
+//!
+//! The calibration ([`Problem::calibrate`]): a few numbers of the model itself, fitted
+//! first with a prior toward nominal, then present in every model of the search as the
+//! first parameters of every composite, re-fitted jointly with each candidate; so a
+//! calibration number cannot keep what a new effect explains, and a candidate cannot
+//! stand in for it.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -39,7 +45,8 @@ impl<'a> Counter<'a> {
     }
 }
 
-/// A model with one or more candidates' effects, parameters concatenated.
+/// A model with the calibration's and one or more candidates' effects, parameters
+/// concatenated (the calibration's first).
 pub(super) struct Composite {
     base: Model,
     params: Vec<ParamDef>,
@@ -48,7 +55,13 @@ pub(super) struct Composite {
 }
 
 impl Composite {
-    fn new(model: &Model, members: &[&Candidate]) -> Result<Composite, ModelError> {
+    fn new(
+        model: &Model,
+        calibration: &[Candidate],
+        members: &[&Candidate],
+    ) -> Result<Composite, ModelError> {
+        let members: Vec<&Candidate> = calibration.iter().chain(members.iter().copied()).collect();
+        let members = members.as_slice();
         let mut base = model.clone();
         let edits: Vec<_> = members
             .iter()
@@ -109,6 +122,10 @@ pub(super) struct Problem<'a> {
     max_steps: u64,
     /// ln n of the number of training residuals: BIC's price of a parameter.
     ln_n: f64,
+    /// The calibration: its candidates, first in every composite (empty: none).
+    pub calibration: Vec<Candidate>,
+    /// Their values in the calibrated model (where every search starts from).
+    pub calibrated: Vec<f64>,
 }
 
 impl<'a> Problem<'a> {
@@ -140,7 +157,43 @@ impl<'a> Problem<'a> {
             all_times: times_to(&|t| t <= obs.split.holdout_end_s),
             max_steps: 20 * baseline_steps + 5000,
             ln_n: (n_train.max(2) as f64).ln(),
+            calibration: Vec::new(),
+            calibrated: Vec::new(),
         }
+    }
+
+    /// How many parameters the calibration puts first in every hypothesis.
+    pub(super) fn calibration_len(&self) -> usize {
+        self.calibrated.len()
+    }
+
+    /// Step 3½: the calibration `set` fitted on the training orbits from its nominal
+    /// values `nominal`, each with its prior. Kept (and made the start of every later
+    /// search) when it lowers the training and the held-out χ² of `reference`; None
+    /// otherwise, and the problem keeps no calibration.
+    pub(super) fn calibrate(
+        &mut self,
+        model: &Model,
+        set: Vec<Candidate>,
+        nominal: Vec<f64>,
+        reference: &Reference<'_>,
+    ) -> Option<Result<Hypothesis, String>> {
+        if set.is_empty() {
+            return None;
+        }
+        self.calibration = set;
+        self.calibrated = nominal.clone();
+        let h = fit(self, model, &[], &[], &nominal);
+        let keep = h.as_ref().is_ok_and(|h| {
+            h.train_chi2 < reference.train_chi2 && h.holdout_chi2 < reference.holdout_chi2
+        });
+        if keep {
+            self.calibrated = h.as_ref().expect("kept").theta.clone();
+        } else {
+            self.calibration.clear();
+            self.calibrated.clear();
+        }
+        Some(h)
     }
 
     /// Weighted training residuals (recorded − predicted)/noise.
@@ -374,9 +427,9 @@ pub(super) fn rank(
         .par_iter()
         .map(|c| {
             let t0 = Instant::now();
-            let (mut all, error) = match Composite::new(model, &[c]) {
+            let (mut all, error) = match Composite::new(model, &problem.calibration, &[c]) {
                 Err(e) => (Vec::new(), e.to_string()),
-                Ok(comp) => ranked_starts(problem, &comp, c, &[], r0),
+                Ok(comp) => ranked_starts(problem, &comp, c, &problem.calibrated, r0),
             };
             counter.tick();
             let best = if all.is_empty() {
@@ -425,7 +478,7 @@ pub(super) fn fit_leading(
             let best_ranked = ranked[i].best.as_ref().unwrap().clone();
             let mut others: Vec<(f64, Vec<f64>)> = Vec::new();
             if robust.contains(&i)
-                && let Ok(comp) = Composite::new(model, &[c])
+                && let Ok(comp) = Composite::new(model, &problem.calibration, &[c])
             {
                 others = global_stage(
                     problem,
@@ -437,9 +490,14 @@ pub(super) fn fit_leading(
                 others.retain(|o| o.1 != best_ranked.1);
                 others.truncate(c.multi_start.saturating_sub(1));
             }
-            let starts = std::iter::once(&best_ranked)
-                .chain(&others)
-                .map(|(_, th)| th.clone());
+            let starts = std::iter::once(&best_ranked).chain(&others).map(|(_, th)| {
+                problem
+                    .calibrated
+                    .iter()
+                    .chain(th)
+                    .copied()
+                    .collect::<Vec<_>>()
+            });
             let mut best: Option<Result<Hypothesis, String>> = None;
             for start in starts {
                 let h = fit(problem, model, cands, &[i], &start);
@@ -472,8 +530,9 @@ fn global_stage(
     mut points: Vec<(f64, Vec<f64>)>,
 ) -> Vec<(f64, Vec<f64>)> {
     let cost = |th: &[f64]| {
+        let theta: Vec<f64> = problem.calibrated.iter().chain(th).copied().collect();
         problem
-            .train_residuals_at(comp, th)
+            .train_residuals_at(comp, &theta)
             .map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum())
     };
     let mut grid: Vec<(f64, Vec<f64>)> = c.grid.iter().map(|g| (cost(g), g.clone())).collect();
@@ -576,7 +635,7 @@ pub(super) fn best_extension(
                 return None;
             }
             let refs: Vec<&Candidate> = with(j).iter().map(|&i| &cands[i]).collect();
-            let comp = Composite::new(model, &refs).ok()?;
+            let comp = Composite::new(model, &problem.calibration, &refs).ok()?;
             best_start(problem, &comp, &cands[j], &current.theta, &r_current).0
         })
         .collect();
@@ -665,14 +724,23 @@ pub(super) fn fit(
     start: &[f64],
 ) -> Result<Hypothesis, String> {
     let refs: Vec<&Candidate> = members.iter().map(|&i| &cands[i]).collect();
-    let comp = Composite::new(model, &refs).map_err(|e| e.to_string())?;
+    let comp = Composite::new(model, &problem.calibration, &refs).map_err(|e| e.to_string())?;
     let lower: Vec<f64> = comp.params.iter().map(|p| p.lower).collect();
     let upper: Vec<f64> = comp.params.iter().map(|p| p.upper).collect();
     let steps: Vec<f64> = comp.params.iter().map(|p| p.step).collect();
+    // A calibration number's prior toward its nominal value: one more residual each.
+    let priors: Vec<(usize, f64, f64)> = comp
+        .params
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| p.prior.map(|(c, sd)| (i, c, sd)))
+        .collect();
     let f = |theta: &[f64]| -> Result<Vec<f64>, String> {
         let m = comp.model_at(theta).map_err(|e| e.to_string())?;
         let pred = problem.predict(&m, &problem.train_times)?;
-        Ok(problem.train_residuals(&pred))
+        let mut r = problem.train_residuals(&pred);
+        r.extend(priors.iter().map(|&(i, c, sd)| (theta[i] - c) / sd));
+        Ok(r)
     };
     let opts = lm::LmOptions {
         max_iterations: 40,
