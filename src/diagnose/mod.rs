@@ -67,6 +67,11 @@ pub enum DiagnoseError {
     Model(#[from] ModelError),
 }
 
+/// The smallest share a finding must remove, in the final joint fit, of the held-out χ²
+/// that fit leaves without it (the reference's, for a single finding); smaller ones are
+/// dropped.
+pub const MIN_FINDING_SHARE: f64 = 0.01;
+
 /// The smallest noise assumed for a channel (K or µm): a recording can resolve no
 /// better, and the model itself is computed to a tolerance of this order.
 pub const NOISE_FLOOR: f64 = 1e-3;
@@ -775,23 +780,18 @@ fn judge_singles(
     (reports, singles)
 }
 
-/// The findings of the accepted hypothesis, the last of forward selection's `chain`,
-/// one per member, each with its parameters, their errors and correlations, and its
-/// own evidence: the hypothesis against the same set without that member where that
-/// set was fitted (the baseline for one member; a single accepted effect, or an
-/// earlier step, for more), else what the member earned at the step that added it.
+/// The findings of the accepted hypothesis `h`, one per member, each with its
+/// parameters, their errors and correlations, and its own evidence in this final joint
+/// fit: `h` against `without[m]`, the fit without that member (None: the reference,
+/// for a single member).
 fn findings(
     problem: &Problem<'_>,
     base: &Reference<'_>,
     cands: &[Candidate],
-    singles: &[Hypothesis],
-    chain: &[Hypothesis],
+    h: &Hypothesis,
+    without: &[Option<Hypothesis>],
     heldout_rmse: &ChannelMap,
 ) -> Vec<Finding> {
-    let h = chain
-        .last()
-        .expect("a finding needs an accepted hypothesis");
-    let same_set = |a: &[usize], b: &[usize]| a.len() == b.len() && a.iter().all(|x| b.contains(x));
     let cov = h.fit.covariance.as_ref().map(|c| {
         (0..c.nrows())
             .map(|i| (0..c.ncols()).map(|j| c[(i, j)]).collect::<Vec<f64>>())
@@ -811,30 +811,15 @@ fn findings(
                 .collect()
         });
         let params = c.report_params(theta, sub_cov.as_deref());
-        let without: Vec<usize> = h.members.iter().copied().filter(|&x| x != ci).collect();
-        let (delta_bic, hdrop) = if without.is_empty() {
-            (
+        let (delta_bic, hdrop) = match &without[m] {
+            None => (
                 -problem.bic_gain(h, base.train_chi2, k),
                 base.holdout_chi2 - h.holdout_chi2,
-            )
-        } else if let Some(a) = singles
-            .iter()
-            .chain(chain)
-            .find(|s| same_set(&s.members, &without))
-        {
-            (
-                -problem.bic_gain(h, a.train_chi2, k),
-                a.holdout_chi2 - h.holdout_chi2,
-            )
-        } else {
-            // The step that added member m, against the step before it.
-            let step = &chain[m];
-            let (x2, hx2) = if m == 0 {
-                (base.train_chi2, base.holdout_chi2)
-            } else {
-                (chain[m - 1].train_chi2, chain[m - 1].holdout_chi2)
-            };
-            (-problem.bic_gain(step, x2, k), hx2 - step.holdout_chi2)
+            ),
+            Some(w) => (
+                -problem.bic_gain(h, w.train_chi2, k),
+                w.holdout_chi2 - h.holdout_chi2,
+            ),
         };
         out.push(Finding {
             effect: c.effect,
@@ -1215,7 +1200,105 @@ impl Search<'_> {
             report.notes.push(note);
             chain.clear();
         }
+        if let Some(last) = chain.last().cloned() {
+            let kept = self.drop_small(last, singles, &chain, report);
+            if kept
+                .as_ref()
+                .is_none_or(|k| k.members != chain.last().unwrap().members)
+            {
+                chain = kept.into_iter().collect();
+                explained = chain
+                    .last()
+                    .is_some_and(|h| explains(self.obs, self.noise, opts, h));
+            }
+        }
         (chain, explained)
+    }
+
+    /// For each member of `h`, the fit of `h` without it: one found among `fitted` (the
+    /// same set), else fitted from `h`'s values; None for a single member (whose
+    /// reference is the calibrated model or the baseline), or when that fit fails.
+    fn without_each(&self, h: &Hypothesis, fitted: &[&Hypothesis]) -> Vec<Option<Hypothesis>> {
+        if h.members.len() < 2 {
+            return vec![None; h.members.len()];
+        }
+        let same = |a: &[usize], b: &[usize]| a.len() == b.len() && a.iter().all(|x| b.contains(x));
+        let cal = self.problem.calibration_len();
+        let mut spans = Vec::new();
+        let mut off = cal;
+        for &m in &h.members {
+            let k = self.cands[m].params.len();
+            spans.push((off, off + k));
+            off += k;
+        }
+        use rayon::prelude::*;
+        (0..h.members.len())
+            .into_par_iter()
+            .map(|i| {
+                let without: Vec<usize> = h
+                    .members
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, &m)| m)
+                    .collect();
+                if let Some(f) = fitted.iter().find(|f| same(&f.members, &without)) {
+                    return Some((*f).clone());
+                }
+                let start: Vec<f64> = h
+                    .theta
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| !(spans[i].0..spans[i].1).contains(j))
+                    .map(|(_, v)| *v)
+                    .collect();
+                search::fit(self.problem, self.model, self.cands, &without, &start).ok()
+            })
+            .collect()
+    }
+
+    /// `h` without the members that remove less than [`MIN_FINDING_SHARE`] of what `h`
+    /// without them leaves of the held-out χ² (in the final joint fit),
+    /// the smallest first, one at a time (None: nothing is left). Each dropped member
+    /// is named in a note.
+    fn drop_small(
+        &self,
+        mut h: Hypothesis,
+        singles: &[Hypothesis],
+        chain: &[Hypothesis],
+        report: &mut Diagnosis,
+    ) -> Option<Hypothesis> {
+        let total = self.reference.holdout_chi2;
+        loop {
+            let fitted: Vec<&Hypothesis> = singles.iter().chain(chain).collect();
+            let without = self.without_each(&h, &fitted);
+            let shares: Vec<f64> = without
+                .iter()
+                .map(|w| {
+                    let before = w.as_ref().map_or(total, |w| w.holdout_chi2);
+                    (before - h.holdout_chi2) / before
+                })
+                .collect();
+            let Some((i, share)) = shares
+                .iter()
+                .copied()
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .filter(|(_, s)| !(*s >= MIN_FINDING_SHARE))
+            else {
+                return Some(h);
+            };
+            report.notes.push(format!(
+                "{} removes {:.2} % of the held-out residual the final fit leaves without it (under {:.0} %): not a finding",
+                self.cands[h.members[i]].label(),
+                100.0 * share,
+                100.0 * MIN_FINDING_SHARE
+            ));
+            match without.into_iter().nth(i).flatten() {
+                Some(w) => h = w,
+                None => return None,
+            }
+        }
     }
 
     /// The verdict when the calibration `h` is all that was kept (no finding): explained
@@ -1283,12 +1366,14 @@ impl Search<'_> {
         report.heldout_rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Holdout));
         report.rmse = ChannelMap::of(&names, &obs.rms(&res, Part::Train));
         report.remaining = data::mismatches(obs, &res, self.noise, self.opts.noise_ratio);
+        let fitted: Vec<&Hypothesis> = singles.iter().chain(chain).collect();
+        let without = self.without_each(h, &fitted);
         report.findings = findings(
             self.problem,
             reference,
             self.cands,
-            singles,
-            chain,
+            h,
+            &without,
             &report.heldout_rmse,
         );
         // The corrected series over the whole recording (tail included).
