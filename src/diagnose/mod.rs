@@ -1284,7 +1284,7 @@ impl Search<'_> {
                 .copied()
                 .enumerate()
                 .min_by(|a, b| a.1.total_cmp(&b.1))
-                .filter(|(_, s)| !(*s >= MIN_FINDING_SHARE))
+                .filter(|(_, s)| s.is_nan() || *s < MIN_FINDING_SHARE)
             else {
                 return Some(h);
             };
