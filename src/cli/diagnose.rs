@@ -46,6 +46,12 @@ pub struct DiagnoseArgs {
     /// infrared scales and its two largest thermal masses).
     #[arg(long)]
     no_calibration: bool,
+    /// The most one channel may weigh against the typical channel of its unit (weight
+    /// = 1/noise², 1 … 1e6): a smooth channel's estimated noise is raised to keep it
+    /// there.
+    #[arg(long, value_name = "RATIO", default_value_t = Options::default().max_weight_ratio,
+          value_parser = weight_ratio_arg)]
+    max_weight_ratio: f64,
     /// Change a number of the scenario by its key path (repeatable).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     sets: Vec<String>,
@@ -120,6 +126,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         holdout_orbits: a.holdout_orbits,
         max_effects: usize::from(a.max_effects),
         calibrate: !a.no_calibration,
+        max_weight_ratio: a.max_weight_ratio,
         ..Options::default()
     };
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
@@ -131,7 +138,15 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         b
     });
     let stage = Mutex::new(String::new());
+    let t0 = std::time::Instant::now();
+    let trace = std::env::var_os("ORBITLASH_TRACE").is_some();
     let progress = |name: &str, done: usize, total: usize| {
+        if trace && done == total {
+            eprintln!(
+                "TRACE {name} {total} at {:.2} s",
+                t0.elapsed().as_secs_f64()
+            );
+        }
         if let Some(b) = &bar {
             let mut s = stage.lock().unwrap();
             if *s != name {
@@ -318,6 +333,14 @@ fn target_text(t: &diagnose::effects::Target) -> String {
         parts.push(format!("{} {v}", k.replace('_', " ")));
     }
     parts.join(", ")
+}
+
+/// `--max-weight-ratio`: a number within 1 … 1e6.
+fn weight_ratio_arg(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (1.0..=1e6).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a number within 1 … 1e6")),
+    }
 }
 
 fn unit_of(name: &str) -> &'static str {

@@ -525,6 +525,17 @@ pub fn noise(
     Some(1.4826 * median(&mut dev))
 }
 
+/// A channel's resolution: the smallest step between two consecutive readings (none
+/// when no reading changes). A quantised sensor cannot be fitted closer than its
+/// quantum / √12, however smooth its residual.
+pub fn resolution(values: &[Option<f64>]) -> Option<f64> {
+    let read: Vec<f64> = values.iter().flatten().copied().collect();
+    read.windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .filter(|d| *d > 1e-9)
+        .min_by(f64::total_cmp)
+}
+
 pub fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();

@@ -638,6 +638,12 @@ impl<'a> Generator<'a> {
     fn earth_albedo_ir(&self, ni: usize) -> Option<Candidate> {
         let spec = self.spec;
         let n = spec.node[ni].name.as_str();
+        // A node with a face has its Earth loads from the face's geometry: more Earth
+        // on it is its attitude or its optics (the calibration's scales, the face's
+        // absorptivity), not a load left out; fitted, it stands in for more heat.
+        if spec.face.iter().any(|f| f.node == n) {
+            return None;
+        }
         let sun_aa: f64 = spec
             .sun
             .iter()

@@ -168,6 +168,9 @@ pub struct Options {
     /// global sunlight and infrared scales and its two largest thermal masses), then
     /// search the vocabulary with it re-fitted jointly.
     pub calibrate: bool,
+    /// The most a channel may weigh against the typical channel of its unit (weight =
+    /// 1/noise²): a smoother channel's noise is raised to keep it there.
+    pub max_weight_ratio: f64,
 }
 
 impl Default for Options {
@@ -183,6 +186,7 @@ impl Default for Options {
             max_effects: 3,
             min_partial_share: 0.2,
             calibrate: true,
+            max_weight_ratio: 10.0,
         }
     }
 }
@@ -509,11 +513,14 @@ struct BaselineRun {
 
 /// Step 2: the baseline simulated over the whole recording, with every diffusion node
 /// read too; its residuals; each channel's noise from them (the training orbits only,
-/// when there are held-out ones). A channel smoother than the floor gets a note.
+/// when there are held-out ones), floored by the channel's resolution (its smallest
+/// step between readings, / √12) and capped in weight against the others
+/// ([`cap_weights`]). A channel smoother than the floor gets a note.
 fn baseline(
     model: &Model,
     obs: &Observations,
     validate: bool,
+    opts: &Options,
     notes: &mut Vec<String>,
 ) -> Result<BaselineRun, DiagnoseError> {
     let whole: Arc<[f64]> = obs.time_s.clone().into();
@@ -541,8 +548,10 @@ fn baseline(
                 obs.channels[c].name, obs.channels[c].unit
             ));
         }
-        noise.push(sigma.max(NOISE_FLOOR));
+        let quantum = data::resolution(&obs.values[c]).unwrap_or(0.0);
+        noise.push(sigma.max(NOISE_FLOOR).max(quantum / 12f64.sqrt()));
     }
+    cap_weights(obs, &mut noise, opts.max_weight_ratio, notes);
     Ok(BaselineRun {
         pred,
         node_temps_k,
@@ -550,6 +559,40 @@ fn baseline(
         noise,
         steps,
     })
+}
+
+/// No channel weighs more than `max_ratio` times the typical channel of its unit (the
+/// median noise's weight): a channel whose residual is smooth (a lagged sensor, a
+/// model output) has a noise estimate far below the others' and would otherwise take
+/// the fit; its noise is raised to median / √max_ratio, with a note.
+fn cap_weights(obs: &Observations, noise: &mut [f64], max_ratio: f64, notes: &mut Vec<String>) {
+    for unit in ["K", "um"] {
+        let mut of_unit: Vec<f64> = obs
+            .channels
+            .iter()
+            .zip(noise.iter())
+            .filter(|(c, _)| c.unit == unit)
+            .map(|(_, n)| *n)
+            .collect();
+        if of_unit.len() < 2 {
+            continue;
+        }
+        let floor = data::median(&mut of_unit) / max_ratio.sqrt();
+        let shown = if unit == "um" { "µm" } else { unit };
+        for (c, n) in obs.channels.iter().zip(noise.iter_mut()) {
+            if c.unit == unit && *n < floor {
+                notes.push(format!(
+                    "channel `{}`'s noise ({} {shown}) is under the typical channel's / √{}: taken as {} {shown}, so that it weighs at most {}× a typical channel (--max-weight-ratio)",
+                    c.name,
+                    crate::units::num(*n),
+                    crate::units::num(max_ratio),
+                    crate::units::num(floor),
+                    crate::units::num(max_ratio)
+                ));
+                *n = floor;
+            }
+        }
+    }
 }
 
 /// Temperature channels whose every reading is implausible in their stated unit but
@@ -923,7 +966,7 @@ pub fn diagnose(
 
     // 2. The baseline.
     progress("baseline", 0, 1);
-    let base = baseline(model, &obs, validate, &mut notes)?;
+    let base = baseline(model, &obs, validate, opts, &mut notes)?;
     let warnings = noise_warnings(&obs, &base, validate);
     let mut problem = Problem::new(&obs, base.noise.clone(), base.steps);
     let (mut report, mut series) = baseline_report(&obs, &base, &problem, opts, notes, warnings);
