@@ -30,6 +30,20 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// A number to four significant digits, in exponent form outside 1e-3 … 1e5 (a
+/// fitted value and its error in a report).
+pub fn sig(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let e = v.abs().log10().floor() as i32;
+    if (-3..5).contains(&e) {
+        format!("{:.*}", (3 - e).max(0) as usize, v)
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
 /// A number with every digit it has (round-trips), compact: plain between 1e-4 and
 /// 1e7, in exponent form otherwise (6378137, 3.986004418e14).
 pub fn exact(v: f64) -> String {

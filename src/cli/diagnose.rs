@@ -10,6 +10,7 @@ use clap::Args;
 use orbitlash::diagnose::{self, CandidateStatus, Diagnosis, Options, Verdict};
 use orbitlash::io::output::{OutputPolicy, Outputs};
 use orbitlash::io::recording::Recording;
+use orbitlash::units::sig;
 
 use super::{Outcome, load_with, print_out};
 
@@ -252,6 +253,24 @@ fn out_files(
         header.push(format!(
             "--set {k}={} of the diagnosed model is written in",
             orbitlash::units::exact(*v)
+        ));
+    }
+    for c in &d.calibration {
+        let values: Vec<String> = c
+            .parameters
+            .iter()
+            .map(|(k, v)| match c.nominal.get(k) {
+                Some(n) => format!("{k} = {} (nominal {})", sig(*v), sig(*n)),
+                None => format!("{k} = {}", sig(*v)),
+            })
+            .collect();
+        let keys: Vec<&str> = c.set.keys().map(String::as_str).collect();
+        header.push(format!(
+            "calibrated: {} on {}: {}; written into {}",
+            c.effect,
+            target_text(&c.target),
+            values.join(", "),
+            keys.join(", ")
         ));
     }
     for f in &d.findings {
@@ -525,9 +544,16 @@ fn report_findings(o: &mut String, d: &Diagnosis) {
             outln!(o, "  {} ({}) on {}", f.effect, f.kind, finding_target(f));
             for (k, v) in &f.parameters {
                 let se = f.std_errors.get(k).copied().flatten();
-                match se {
-                    Some(se) => outln!(o, "      {k} = {} ± {}", sig(*v), sig(se)),
-                    None => outln!(o, "      {k} = {}", sig(*v)),
+                match (se, f.intervals_95.get(k).copied().flatten()) {
+                    (Some(se), Some([lo, hi])) => outln!(
+                        o,
+                        "      {k} = {} ± {} (95 %: {} … {})",
+                        sig(*v),
+                        sig(se),
+                        sig(lo),
+                        sig(hi)
+                    ),
+                    _ => outln!(o, "      {k} = {} (its interval is not defined)", sig(*v)),
                 }
             }
             if f.correlation.len() > 1 {
@@ -547,12 +573,40 @@ fn report_findings(o: &mut String, d: &Diagnosis) {
             }
             outln!(
                 o,
-                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0}",
+                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0} ({:.1} % of the baseline's, in the final joint fit)",
                 f.delta_bic,
-                f.heldout_chi2_drop
+                f.heldout_chi2_drop,
+                100.0 * f.heldout_share
             );
+            report_doubts(o, f);
         }
         outln!(o, "");
+    }
+}
+
+/// What weakens a finding: numbers it is confounded with, rivals that explain about
+/// as well, a size that moves when another effect is allowed.
+fn report_doubts(o: &mut String, f: &orbitlash::diagnose::Finding) {
+    for c in &f.correlated {
+        outln!(
+            o,
+            "      confounded: {} correlates {:+.2} with {} of {}",
+            c.parameter,
+            c.correlation,
+            c.with_parameter,
+            c.with
+        );
+    }
+    if !f.alternatives.is_empty() {
+        let alts: Vec<String> = f
+            .alternatives
+            .iter()
+            .map(|a| format!("{} (ΔBIC {:+.1})", a.candidate, a.delta_bic))
+            .collect();
+        outln!(o, "      explains about as well: {}", alts.join("; "));
+    }
+    if let Some(why) = &f.unstable {
+        outln!(o, "      unstable: {why}");
     }
 }
 
@@ -628,19 +682,6 @@ fn report_candidates(o: &mut String, d: &Diagnosis) {
         d.time_s,
         d.time_per_candidate_s
     );
-}
-
-/// Four significant digits.
-fn sig(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let e = v.abs().log10().floor() as i32;
-    if (-3..5).contains(&e) {
-        format!("{:.*}", (3 - e).max(0) as usize, v)
-    } else {
-        format!("{v:.3e}")
-    }
 }
 
 /// A run log of `orbitlash run` as a recording: each sensor's node temperature (in the

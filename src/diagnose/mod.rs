@@ -293,7 +293,56 @@ pub struct Finding {
     pub heldout_share: f64,
     /// The key-path values written into the corrected scenario.
     pub set: BTreeMap<String, f64>,
+    /// 95 % intervals, value ± 1.96 standard errors (None where the error is not
+    /// defined).
+    pub intervals_95: BTreeMap<String, Option<[f64; 2]>>,
+    /// Parameters of other findings or of the calibration that one of this finding's
+    /// correlates with beyond [`CORRELATED`] in the final fit: the data barely tell
+    /// them apart.
+    pub correlated: Vec<Correlated>,
+    /// Candidates that explain about as well (their BIC within 2 of this finding's,
+    /// fitted in its place at the step it entered), best first.
+    pub alternatives: Vec<Alternative>,
+    /// Set when a parameter moves by more than its 95 % interval between the fit
+    /// without another finding and the final one (an effect allowed more): its size
+    /// is then not a fact about the hardware.
+    pub unstable: Option<String>,
 }
+
+/// Above this |correlation| two fitted numbers are flagged.
+pub const CORRELATED: f64 = 0.9;
+
+/// A parameter correlated with one of a finding's.
+#[derive(Debug, Clone, Serialize)]
+pub struct Correlated {
+    pub parameter: String,
+    /// The other finding (`effect on target`) or `calibration: effect on target`.
+    pub with: String,
+    pub with_parameter: String,
+    pub correlation: f64,
+}
+
+/// A candidate that explains about as well as a finding.
+#[derive(Debug, Clone, Serialize)]
+pub struct Alternative {
+    /// `effect on target`.
+    pub candidate: String,
+    /// Its BIC minus the finding's (≥ 0: worse).
+    pub delta_bic: f64,
+}
+
+/// What the search fitted on its way to the best hypothesis: the accepted single
+/// effects, the chain of forward selection, and each step's rivals.
+#[derive(Clone, Copy)]
+struct Steps<'a> {
+    singles: &'a [Hypothesis],
+    chain: &'a [Hypothesis],
+    rivals: &'a Rivals,
+}
+
+/// Per step of forward selection, the member it accepted and its rivals (candidate,
+/// ΔBIC).
+type Rivals = Vec<(usize, Vec<(usize, f64)>)>;
 
 /// A calibrated number set: its effect and what it acts on, the fitted values (in the
 /// final joint fit with the findings), their standard errors and the nominal values.
@@ -833,6 +882,7 @@ fn findings(
     cands: &[Candidate],
     h: &Hypothesis,
     without: &[Option<Hypothesis>],
+    rivals: &Rivals,
     heldout_rmse: &ChannelMap,
 ) -> Vec<Finding> {
     let cov = h.fit.covariance.as_ref().map(|c| {
@@ -882,10 +932,116 @@ fn findings(
             heldout_chi2_drop: hdrop,
             heldout_share: hdrop / base.holdout_chi2,
             set: c.values(theta).into_iter().collect(),
+            intervals_95: params
+                .iter()
+                .map(|(n, v, s)| (n.clone(), finite(*s).map(|s| [v - 1.96 * s, v + 1.96 * s])))
+                .collect(),
+            correlated: correlated(problem, cands, h, off, k),
+            alternatives: rivals
+                .iter()
+                .find(|r| r.0 == ci)
+                .map(|r| {
+                    r.1.iter()
+                        .map(|&(j, d)| Alternative {
+                            candidate: cands[j].label(),
+                            delta_bic: d,
+                        })
+                        .collect()
+                })
+                .unwrap_or_default(),
+            unstable: unstable(problem, cands, h, m, without),
         });
         off += k;
     }
     out
+}
+
+/// Who owns each parameter of `h`: (label, parameter name), the calibration's first.
+fn owners(problem: &Problem<'_>, cands: &[Candidate], h: &Hypothesis) -> Vec<(String, String)> {
+    let cal = problem
+        .calibration
+        .iter()
+        .map(|c| (format!("calibration: {}", c.label()), c));
+    let found = h.members.iter().map(|&m| (cands[m].label(), &cands[m]));
+    cal.chain(found)
+        .flat_map(|(l, c)| {
+            c.params
+                .iter()
+                .map(move |p| (l.clone(), p.name.to_string()))
+        })
+        .collect()
+}
+
+/// The parameters outside `off..off + k` (one finding's) that one of its parameters
+/// correlates with beyond [`CORRELATED`] in `h`'s fit.
+fn correlated(
+    problem: &Problem<'_>,
+    cands: &[Candidate],
+    h: &Hypothesis,
+    off: usize,
+    k: usize,
+) -> Vec<Correlated> {
+    let corr = h.fit.correlation();
+    let who = owners(problem, cands, h);
+    let mut out = Vec::new();
+    for i in off..off + k {
+        for (j, (label, name)) in who.iter().enumerate() {
+            let r = corr[i][j];
+            if !(off..off + k).contains(&j) && r.abs() > CORRELATED {
+                out.push(Correlated {
+                    parameter: who[i].1.clone(),
+                    with: label.clone(),
+                    with_parameter: name.clone(),
+                    correlation: r,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Whether member `m` of `h` is unstable: one of its parameters differs by more than
+/// 1.96 of its standard errors between `h` and the fit of `h` without another member
+/// (`without`), i.e. when one more effect is allowed. Says which and how.
+fn unstable(
+    problem: &Problem<'_>,
+    cands: &[Candidate],
+    h: &Hypothesis,
+    m: usize,
+    without: &[Option<Hypothesis>],
+) -> Option<String> {
+    let start = |hyp: &Hypothesis, member: usize| -> Option<usize> {
+        let at = hyp.members.iter().position(|&x| x == member)?;
+        Some(
+            problem.calibration_len()
+                + hyp.members[..at]
+                    .iter()
+                    .map(|&x| cands[x].params.len())
+                    .sum::<usize>(),
+        )
+    };
+    let ci = h.members[m];
+    let here = start(h, ci)?;
+    let se = h.fit.std_errors();
+    for (other, w) in without.iter().enumerate() {
+        let Some(w) = w.as_ref().filter(|_| other != m) else {
+            continue;
+        };
+        let Some(there) = start(w, ci) else { continue };
+        for (p, def) in cands[ci].params.iter().enumerate() {
+            let (a, b) = (w.theta[there + p], h.theta[here + p]);
+            if se[here + p].is_finite() && (a - b).abs() > 1.96 * se[here + p] {
+                return Some(format!(
+                    "{} moves from {} to {} (beyond its 95 % interval) when {} is added",
+                    def.name,
+                    crate::units::sig(a),
+                    crate::units::sig(b),
+                    cands[h.members[other]].label()
+                ));
+            }
+        }
+    }
+    None
 }
 
 /// The candidates' final statuses once the best hypothesis is known (None: nothing
@@ -1065,13 +1221,24 @@ pub fn diagnose(
     let (mut reports, singles) = judge_singles(
         &problem, &reference, &cands, &ranked, &to_fit, &fitted, opts,
     );
-    let (chain, explained) = cx.select(&singles, &ranked, &mut report, progress);
+    let tried: Vec<&Hypothesis> = fitted.iter().filter_map(|f| f.0.as_ref().ok()).collect();
+    let mut rivals: Rivals = singles
+        .first()
+        .map(|h| (h.members[0], search::rivals(&problem, h, &tried)))
+        .into_iter()
+        .collect();
+    let (chain, explained) = cx.select(&singles, &ranked, &mut report, &mut rivals, progress);
     let best = chain.last().cloned();
 
     // 7. The verdict, the findings, the calibration and the corrected model.
     match (&best, &calibrated) {
         (Some(h), _) => {
-            cx.conclude(h, explained, &singles, &chain, &mut report, &mut series)?;
+            let steps = Steps {
+                singles: &singles,
+                chain: &chain,
+                rivals: &rivals,
+            };
+            cx.conclude(h, explained, steps, &mut report, &mut series)?;
             report.heldout_share = Some(1.0 - h.holdout_chi2 / baseline_reference.holdout_chi2);
         }
         (None, Some(h)) => cx.calibrated_only(h, &mut report, &mut series)?,
@@ -1165,6 +1332,7 @@ impl Search<'_> {
         singles: &[Hypothesis],
         ranked: &[Ranking],
         report: &mut Diagnosis,
+        rivals: &mut Rivals,
         progress: Progress<'_>,
     ) -> (Vec<Hypothesis>, bool) {
         let (opts, cands) = (self.opts, self.cands);
@@ -1186,11 +1354,14 @@ impl Search<'_> {
                 progress,
             );
             match next {
-                Some(h) => {
+                (Some(h), tried) => {
+                    let tried: Vec<&Hypothesis> = tried.iter().collect();
+                    let last = *h.members.last().expect("a member");
+                    rivals.push((last, search::rivals(self.problem, &h, &tried)));
                     explained = explains(self.obs, self.noise, opts, &h);
                     chain.push(h);
                 }
-                None => break,
+                (None, _) => break,
             }
         }
         let last = chain.last().expect("one step at least");
@@ -1379,11 +1550,15 @@ impl Search<'_> {
         &self,
         h: &Hypothesis,
         explained: bool,
-        singles: &[Hypothesis],
-        chain: &[Hypothesis],
+        steps: Steps<'_>,
         report: &mut Diagnosis,
         series: &mut Series,
     ) -> Result<(), DiagnoseError> {
+        let Steps {
+            singles,
+            chain,
+            rivals,
+        } = steps;
         let (obs, reference) = (self.obs, self.reference);
         let names = channel_names(obs);
         let res = obs.residuals(&h.pred);
@@ -1417,6 +1592,7 @@ impl Search<'_> {
             self.cands,
             h,
             &without,
+            rivals,
             &report.heldout_rmse,
         );
         // The corrected series over the whole recording (tail included).

@@ -120,6 +120,10 @@ pub(super) struct Problem<'a> {
     all_times: Arc<[f64]>,
     /// Step budget of one simulation of the whole recording.
     max_steps: u64,
+    /// The tighter budget of a point of a global stage (a grid point or a compass
+    /// move): a thermostat that chatters on a light node at a power far too high costs
+    /// many short steps and is a poor fit anyway.
+    quick_steps: u64,
     /// ln n of the number of training residuals: BIC's price of a parameter.
     ln_n: f64,
     /// The calibration: its candidates, first in every composite (empty: none).
@@ -156,6 +160,7 @@ impl<'a> Problem<'a> {
             train_times: times_to(&|t| t < obs.split.train_end_s),
             all_times: times_to(&|t| t <= obs.split.holdout_end_s),
             max_steps: 20 * baseline_steps + 5000,
+            quick_steps: 3 * baseline_steps + 500,
             ln_n: (n_train.max(2) as f64).ln(),
             calibration: Vec::new(),
             calibrated: Vec::new(),
@@ -257,6 +262,15 @@ impl<'a> Problem<'a> {
         Ok(self.train_residuals(&pred))
     }
 
+    /// The training residuals at `theta` within the global stage's step budget.
+    fn quick_residuals_at(&self, comp: &Composite, theta: &[f64]) -> Result<Vec<f64>, String> {
+        let m = comp.model_at(theta).map_err(|e| e.to_string())?;
+        let pred = predict(&m, &self.train_times, &[], self.quick_steps)
+            .map(|p| p.0)
+            .map_err(|e| crate::error_chain(&e))?;
+        Ok(self.train_residuals(&pred))
+    }
+
     pub(super) fn predict(&self, m: &Model, times: &Arc<[f64]>) -> Result<Vec<Vec<f64>>, String> {
         predict(m, times, &[], self.max_steps)
             .map(|p| p.0)
@@ -280,6 +294,11 @@ pub(super) struct Hypothesis {
 /// simulated), the last error, and the wall time, s.
 pub(super) struct Ranking {
     pub best: Option<(f64, Vec<f64>)>,
+    /// The change each start point makes to the weighted training residuals (the
+    /// calibrated residual minus the residual with the candidate at that point), with
+    /// the point: the linear model by which later steps rank the candidate on another
+    /// residual without simulating it again.
+    pub signatures: Vec<(Vec<f64>, Arc<[f64]>)>,
     /// The runners-up after `best`, best first (distinct points): further starts for a
     /// candidate fitted from several ([`Candidate::multi_start`]).
     pub runners_up: Vec<(f64, Vec<f64>)>,
@@ -362,28 +381,8 @@ impl Problem<'_> {
     }
 }
 
-/// The best training χ² of candidate `c` (parameters after those of `fixed`, which
-/// keep the values `fixed_theta`) over its start points and, for an effect with a
-/// null, along the line from the null through each (residuals `r0` without it).
-fn best_start(
-    problem: &Problem<'_>,
-    comp: &Composite,
-    c: &Candidate,
-    fixed_theta: &[f64],
-    r0: &[f64],
-) -> (Option<(f64, Vec<f64>)>, String) {
-    let (mut all, err) = ranked_starts(problem, comp, c, fixed_theta, r0);
-    (
-        if all.is_empty() {
-            None
-        } else {
-            Some(all.remove(0))
-        },
-        err,
-    )
-}
-
-/// Every point [`best_start`] evaluates, best first (a stable sort: ties keep the
+/// Every point a candidate's start points give (the starts and, for an effect with a
+/// null, the best point on each line from it), best first (a stable sort: ties keep the
 /// order of the start points), without repeats.
 fn ranked_starts(
     problem: &Problem<'_>,
@@ -391,8 +390,9 @@ fn ranked_starts(
     c: &Candidate,
     fixed_theta: &[f64],
     r0: &[f64],
-) -> (Vec<(f64, Vec<f64>)>, String) {
+) -> StartPoints {
     let mut all: Vec<(f64, Vec<f64>)> = Vec::new();
+    let mut signatures = Vec::new();
     let mut err = String::new();
     for s in &c.starts {
         let mut theta = fixed_theta.to_vec();
@@ -404,12 +404,28 @@ fn ranked_starts(
                         all.push((x2, th));
                     }
                 }
+                let d: Arc<[f64]> = r0.iter().zip(&r1).map(|(a, b)| a - b).collect();
+                if d.iter().all(|v| v.is_finite()) {
+                    signatures.push((s.clone(), d));
+                }
             }
             Err(e) => err = e,
         }
     }
     all.sort_by(|a, b| a.0.total_cmp(&b.0));
-    (all, err)
+    StartPoints {
+        all,
+        signatures,
+        error: err,
+    }
+}
+
+/// What [`ranked_starts`] finds: every point, best first; each simulated start's
+/// signature; the last error.
+struct StartPoints {
+    all: Vec<(f64, Vec<f64>)>,
+    signatures: Vec<(Vec<f64>, Arc<[f64]>)>,
+    error: String,
 }
 
 /// Step 4: every candidate's training χ² at its start points, and along the line
@@ -427,8 +443,16 @@ pub(super) fn rank(
         .par_iter()
         .map(|c| {
             let t0 = Instant::now();
-            let (mut all, error) = match Composite::new(model, &problem.calibration, &[c]) {
-                Err(e) => (Vec::new(), e.to_string()),
+            let StartPoints {
+                mut all,
+                signatures,
+                error,
+            } = match Composite::new(model, &problem.calibration, &[c]) {
+                Err(e) => StartPoints {
+                    all: Vec::new(),
+                    signatures: Vec::new(),
+                    error: e.to_string(),
+                },
                 Ok(comp) => ranked_starts(problem, &comp, c, &problem.calibrated, r0),
             };
             counter.tick();
@@ -440,6 +464,7 @@ pub(super) fn rank(
             all.truncate(c.multi_start.saturating_sub(1));
             Ranking {
                 best,
+                signatures,
                 runners_up: all,
                 error,
                 time_s: t0.elapsed().as_secs_f64(),
@@ -498,21 +523,44 @@ pub(super) fn fit_leading(
                     .copied()
                     .collect::<Vec<_>>()
             });
-            let mut best: Option<Result<Hypothesis, String>> = None;
-            for start in starts {
-                let h = fit(problem, model, cands, &[i], &start);
-                best = match (best, h) {
-                    (None, h) => Some(h),
-                    (Some(Ok(b)), Ok(h)) if h.train_chi2 < b.train_chi2 => Some(Ok(h)),
-                    (Some(Err(_)), Ok(h)) => Some(Ok(h)),
-                    (b, _) => b,
-                };
-            }
+            let starts: Vec<Vec<f64>> = starts.collect();
+            let tg = t0.elapsed().as_secs_f64();
+            let best = if starts.len() > 1 && problem.calibration_len() > 0 {
+                // Several starts: each fitted with the calibration held (its own
+                // parameters only, the cheap part), the best then fitted jointly.
+                let held: Vec<(f64, Vec<f64>)> = starts
+                    .par_iter()
+                    .filter_map(|s| fit_held(problem, model, cands, &[i], s).ok())
+                    .collect();
+                let held = held.into_iter().min_by(|a, b| a.0.total_cmp(&b.0));
+                let from = held.map_or_else(|| starts[0].clone(), |h| h.1);
+                let th = t0.elapsed().as_secs_f64();
+                let r = fit(problem, model, cands, &[i], &from);
+                if std::env::var_os("ORBITLASH_TRACE").is_some() {
+                    eprintln!(
+                        "TRACE fit {}: global {tg:.2} held {:.2} joint {:.2} evals {:?}",
+                        c.label(),
+                        th - tg,
+                        t0.elapsed().as_secs_f64() - th,
+                        r.as_ref().map(|h| (h.fit.evaluations, h.fit.iterations))
+                    );
+                }
+                r
+            } else {
+                let mut best: Option<Result<Hypothesis, String>> = None;
+                for start in starts {
+                    let h = fit(problem, model, cands, &[i], &start);
+                    best = match (best, h) {
+                        (None, h) => Some(h),
+                        (Some(Ok(b)), Ok(h)) if h.train_chi2 < b.train_chi2 => Some(Ok(h)),
+                        (Some(Err(_)), Ok(h)) => Some(Ok(h)),
+                        (b, _) => b,
+                    };
+                }
+                best.expect("one start at least")
+            };
             counter.tick();
-            (
-                best.expect("one start at least"),
-                t0.elapsed().as_secs_f64(),
-            )
+            (best, t0.elapsed().as_secs_f64())
         })
         .collect()
 }
@@ -532,10 +580,10 @@ fn global_stage(
     let cost = |th: &[f64]| {
         let theta: Vec<f64> = problem.calibrated.iter().chain(th).copied().collect();
         problem
-            .train_residuals_at(comp, &theta)
+            .quick_residuals_at(comp, &theta)
             .map_or(f64::INFINITY, |r| r.iter().map(|v| v * v).sum())
     };
-    let mut grid: Vec<(f64, Vec<f64>)> = c.grid.iter().map(|g| (cost(g), g.clone())).collect();
+    let mut grid: Vec<(f64, Vec<f64>)> = c.grid.par_iter().map(|g| (cost(g), g.clone())).collect();
     grid.sort_by(|a, b| a.0.total_cmp(&b.0));
     points.push(best);
     points.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -557,39 +605,51 @@ fn global_stage(
             seeds.push(g.clone());
         }
     }
-    let mut refined = Vec::new();
-    for (x0, th0) in seeds {
-        let (mut x, mut th) = (x0, th0);
-        let mut step: Vec<f64> = th
-            .iter()
-            .zip(&c.params)
-            .map(|(v, p)| (0.15 * v.abs()).max(10.0 * p.step))
-            .collect();
-        for _ in 0..COMPASS_EVALUATIONS / (2 * th.len()) {
-            let mut moved = false;
-            for k in 0..th.len() {
-                for sign in [1.0, -1.0] {
-                    let mut t = th.clone();
-                    t[k] = (t[k] + sign * step[k]).clamp(c.params[k].lower, c.params[k].upper);
-                    let xt = cost(&t);
-                    if xt < x {
-                        (x, th) = (xt, t);
-                        moved = true;
-                        break;
-                    }
-                }
-            }
-            if !moved {
-                if step.iter().zip(&c.params).all(|(s, p)| *s <= 2.0 * p.step) {
-                    break;
-                }
-                step.iter_mut().for_each(|s| *s *= 0.5);
-            }
-        }
-        refined.push((x, th));
-    }
+    let mut refined: Vec<(f64, Vec<f64>)> = seeds
+        .into_par_iter()
+        .map(|(x0, th0)| compass(&cost, c, x0, th0))
+        .collect();
     refined.sort_by(|a, b| a.0.total_cmp(&b.0));
     refined
+}
+
+/// A compass search from `th0` (cost `x0`): each parameter stepped up and down by
+/// 15 % (at least 10 finite-difference steps), the first move that helps taken, the
+/// steps halved when none does, at most [`COMPASS_EVALUATIONS`] costs.
+fn compass(
+    cost: &(dyn Fn(&[f64]) -> f64 + Sync),
+    c: &Candidate,
+    x0: f64,
+    th0: Vec<f64>,
+) -> (f64, Vec<f64>) {
+    let (mut x, mut th) = (x0, th0);
+    let mut step: Vec<f64> = th
+        .iter()
+        .zip(&c.params)
+        .map(|(v, p)| (0.15 * v.abs()).max(10.0 * p.step))
+        .collect();
+    for _ in 0..COMPASS_EVALUATIONS / (2 * th.len()) {
+        let mut moved = false;
+        for k in 0..th.len() {
+            for sign in [1.0, -1.0] {
+                let mut t = th.clone();
+                t[k] = (t[k] + sign * step[k]).clamp(c.params[k].lower, c.params[k].upper);
+                let xt = cost(&t);
+                if xt < x {
+                    (x, th) = (xt, t);
+                    moved = true;
+                    break;
+                }
+            }
+        }
+        if !moved {
+            if step.iter().zip(&c.params).all(|(s, p)| *s <= 2.0 * p.step) {
+                break;
+            }
+            step.iter_mut().for_each(|s| *s *= 0.5);
+        }
+    }
+    (x, th)
 }
 
 /// Seeds of the global stage refined by compass search (besides the best grid point
@@ -613,7 +673,7 @@ pub(super) fn best_extension(
     current: &Hypothesis,
     opts: &Options,
     progress: Progress<'_>,
-) -> Option<Hypothesis> {
+) -> (Option<Hypothesis>, Vec<Hypothesis>) {
     let n = current.members.len() + 1;
     let with = |j: usize| -> Vec<usize> {
         let mut m = current.members.clone();
@@ -634,9 +694,7 @@ pub(super) fn best_extension(
             if current.members.contains(&j) || ranked[j].best.is_none() {
                 return None;
             }
-            let refs: Vec<&Candidate> = with(j).iter().map(|&i| &cands[i]).collect();
-            let comp = Composite::new(model, &problem.calibration, &refs).ok()?;
-            best_start(problem, &comp, &cands[j], &current.theta, &r_current).0
+            linear_best(&r_current, &cands[j], &ranked[j].signatures)
         })
         .collect();
     let mut partners: Vec<usize> = (0..cands.len())
@@ -667,13 +725,63 @@ pub(super) fn best_extension(
         holdout_chi2: current.holdout_chi2,
         pred: &current.pred,
     };
+    let fitted: Vec<Hypothesis> = fitted.into_iter().flatten().collect();
     let mut best: Option<Hypothesis> = None;
-    for h in fitted.into_iter().flatten() {
+    for h in &fitted {
         let k_extra = cands[*h.members.last().unwrap()].params.len();
-        if problem.judge(&h, &reference, k_extra, opts).is_ok()
+        if problem.judge(h, &reference, k_extra, opts).is_ok()
             && best.as_ref().is_none_or(|b| h.train_chi2 < b.train_chi2)
         {
-            best = Some(h);
+            best = Some(h.clone());
+        }
+    }
+    (best, fitted)
+}
+
+/// The rivals of `accepted` among `others` (hypotheses of the same step: the same
+/// members but the last): each other last member whose BIC is within
+/// [`RIVAL_DELTA_BIC`] of the accepted one's, with that difference (≥ 0 is worse).
+pub(super) fn rivals(
+    problem: &Problem<'_>,
+    accepted: &Hypothesis,
+    others: &[&Hypothesis],
+) -> Vec<(usize, f64)> {
+    let bic = |h: &Hypothesis| -problem.bic_gain(h, 0.0, h.theta.len());
+    let last = *accepted.members.last().expect("a member");
+    let mut out: Vec<(usize, f64)> = others
+        .iter()
+        .filter(|o| o.members.last() != Some(&last))
+        .map(|o| (*o.members.last().expect("a member"), bic(o) - bic(accepted)))
+        .filter(|(_, d)| *d <= RIVAL_DELTA_BIC)
+        .collect();
+    out.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+    out
+}
+
+/// Alternatives within this BIC of a finding "explain about as well" (Kass & Raftery:
+/// a difference under 2 is not worth more than a bare mention).
+pub(super) const RIVAL_DELTA_BIC: f64 = 2.0;
+
+/// The best point of candidate `c` on the residual `r` by the linear model of its
+/// `signatures` (the change each start point made to the calibrated residual): its
+/// start points and, for an effect with a null, the best point on each line from the
+/// null; no simulation. Ranks the candidates of a later step of forward selection,
+/// which are then fitted properly.
+fn linear_best(
+    r: &[f64],
+    c: &Candidate,
+    signatures: &[(Vec<f64>, Arc<[f64]>)],
+) -> Option<(f64, Vec<f64>)> {
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for (s, d) in signatures {
+        if d.len() != r.len() {
+            continue;
+        }
+        let r1: Vec<f64> = r.iter().zip(d.iter()).map(|(a, b)| a - b).collect();
+        for (x2, th) in rank_point(r, &r1, c, s) {
+            if !x2.is_nan() && best.as_ref().is_none_or(|b| x2 < b.0) {
+                best = Some((x2, th));
+            }
         }
     }
     best
@@ -714,6 +822,37 @@ fn rank_point(r0: &[f64], r1: &[f64], c: &Candidate, s: &[f64]) -> Vec<(f64, Vec
     out
 }
 
+/// Fits the parameters of `members` from `start` with the calibration's (the first
+/// [`Problem::calibration_len`]) held at their values in `start`: the training cost
+/// (priors included) and the whole parameter vector reached.
+fn fit_held(
+    problem: &Problem<'_>,
+    model: &Model,
+    cands: &[Candidate],
+    members: &[usize],
+    start: &[f64],
+) -> Result<(f64, Vec<f64>), String> {
+    let refs: Vec<&Candidate> = members.iter().map(|&i| &cands[i]).collect();
+    let comp = Composite::new(model, &problem.calibration, &refs).map_err(|e| e.to_string())?;
+    let held = problem.calibration_len();
+    let free = &comp.params[held..];
+    let lower: Vec<f64> = free.iter().map(|p| p.lower).collect();
+    let upper: Vec<f64> = free.iter().map(|p| p.upper).collect();
+    let steps: Vec<f64> = free.iter().map(|p| p.step).collect();
+    let whole = |x: &[f64]| -> Vec<f64> { start[..held].iter().chain(x).copied().collect() };
+    let f = |x: &[f64]| problem.train_residuals_at(&comp, &whole(x));
+    let fit = lm::minimize(f, &start[held..], &lower, &upper, &steps, FIT_OPTIONS)?;
+    Ok((fit.sum_squares, whole(&fit.x)))
+}
+
+/// The stopping rules of every fit of the search.
+const FIT_OPTIONS: lm::LmOptions = lm::LmOptions {
+    max_iterations: 40,
+    ftol: 1e-6,
+    xtol: 1e-4,
+    cost_floor: 0.0,
+};
+
 /// Fits `members` together from `start` on the training orbits, then predicts the
 /// held-out orbits.
 pub(super) fn fit(
@@ -742,13 +881,7 @@ pub(super) fn fit(
         r.extend(priors.iter().map(|&(i, c, sd)| (theta[i] - c) / sd));
         Ok(r)
     };
-    let opts = lm::LmOptions {
-        max_iterations: 40,
-        ftol: 1e-6,
-        xtol: 1e-4,
-        cost_floor: 0.0,
-    };
-    let fit = lm::minimize(f, start, &lower, &upper, &steps, opts)?;
+    let fit = lm::minimize(f, start, &lower, &upper, &steps, FIT_OPTIONS)?;
     let m = comp.model_at(&fit.x).map_err(|e| e.to_string())?;
     let pred = problem.predict(&m, &problem.all_times)?;
     Ok(Hypothesis {

@@ -293,14 +293,7 @@ pub fn over_earth_disc(
 /// sunlit ground left out. The faces of one instant share it: it is kept per thread
 /// for the last environment asked for.
 fn albedo_cells(e: &FaceEnvironment, out: &mut Vec<([f64; 3], f64)>) {
-    use std::sync::OnceLock;
-    static SECTORS: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
-    let sectors = SECTORS.get_or_init(|| {
-        let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
-        (0..ALBEDO_SECTORS)
-            .map(|j| ((j as f64 + 0.5) * d_phi).sin_cos())
-            .collect()
-    });
+    let sectors = sectors();
     out.clear();
     let (r, earth_r, sun) = (e.radius_m, e.earth_radius_m, e.sun_lvlh);
     let scale = e.albedo * e.solar_on_earth_w_per_m2 / PI;
@@ -348,17 +341,67 @@ fn albedo_sum(e: &FaceEnvironment, weight: &dyn Fn([f64; 3]) -> f64) -> f64 {
     })
 }
 
+/// Σ over the albedo cells of `e` of radiance × cell: [`albedo_sum`] with weight 1,
+/// the same cells added in the same order (so the same bits), without keeping the
+/// cells; kept per thread for the last environment asked for, which every tumbling
+/// face of one instant shares.
+fn albedo_total(e: &FaceEnvironment) -> f64 {
+    use std::cell::Cell;
+    thread_local! {
+        static TOTAL: Cell<Option<(FaceEnvironment, f64)>> = const { Cell::new(None) };
+    }
+    if let Some((last, total)) = TOTAL.get()
+        && last == *e
+    {
+        return total;
+    }
+    let (r, earth_r, sun) = (e.radius_m, e.earth_radius_m, e.sun_lvlh);
+    let scale = e.albedo * e.solar_on_earth_w_per_m2 / PI;
+    let eta_max = (earth_r / r).min(1.0).asin();
+    let d_eta = eta_max / ALBEDO_RINGS as f64;
+    let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
+    let mut total = 0.0;
+    for i in 0..ALBEDO_RINGS {
+        let eta = (i as f64 + 0.5) * d_eta;
+        let (se, ce) = eta.sin_cos();
+        let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
+        let cell = se * d_eta * d_phi;
+        for &(sp, cp) in sectors() {
+            let u = [se * cp, se * sp, ce];
+            let p = [
+                d * u[0] / earth_r,
+                d * u[1] / earth_r,
+                (d * u[2] - r) / earth_r,
+            ];
+            let cos_zenith = dot(p, sun);
+            if cos_zenith > 0.0 {
+                total += scale * cos_zenith * cell;
+            }
+        }
+    }
+    TOTAL.set(Some((*e, total)));
+    total
+}
+
+/// (sin, cos) of the middle of each of the [`ALBEDO_SECTORS`] sectors.
+fn sectors() -> &'static [(f64, f64)] {
+    use std::sync::OnceLock;
+    static SECTORS: OnceLock<Vec<(f64, f64)>> = OnceLock::new();
+    SECTORS.get_or_init(|| {
+        let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
+        (0..ALBEDO_SECTORS)
+            .map(|j| ((j as f64 + 0.5) * d_phi).sin_cos())
+            .collect()
+    })
+}
+
 /// What `face` receives in environment `e`.
 pub fn incident(face: &Face, e: &FaceEnvironment) -> Incident {
     let h = e.radius_m / e.earth_radius_m;
     let lit_earth = e.albedo > 0.0 && e.solar_on_earth_w_per_m2 > 0.0;
     if let Attitude::Tumble = face.attitude {
         let cap = 1.0 - (1.0 - 1.0 / (h * h)).max(0.0).sqrt();
-        let albedo_all = if lit_earth {
-            albedo_sum(e, &|_| 1.0)
-        } else {
-            0.0
-        };
+        let albedo_all = if lit_earth { albedo_total(e) } else { 0.0 };
         return Incident {
             solar_w_per_m2: e.solar_w_per_m2 / 4.0,
             albedo_w_per_m2: albedo_all / 4.0,

@@ -108,10 +108,9 @@ pub struct Case {
 /// (`docs/validation.md`: panel +X's coupling and capacity, +X's absorptivity, the
 /// silver chassis' offset), so that a hit is the injected effect and not the day's own
 /// residual: the lag on −X, the absorptivity on +Y, the offset on the black chassis,
-/// the drift on −Y. `chassis_lag` is one more than the brief's list: `diagnose` offers
-/// sensor effects only on channels whose `[[sensor]]` names a `node` (the registry
-/// gives a `face` sensor no `tau_s` or `offset_k` key path), so the panel lag cannot
-/// be found as a lag; the silver chassis can.
+/// the drift on −Y. `chassis_lag` is one more than the brief's list (written when
+/// `diagnose` offered sensor effects only on channels whose `[[sensor]]` names a
+/// `node`; face channels have them now).
 pub fn cases() -> Vec<Case> {
     vec![
         Case {
@@ -563,12 +562,16 @@ pub fn describe(
             json!({"power_w": power_w, "on_c": on_c, "off_c": off_c}),
             json!({"power_w": rel(0.25), "on_c": abs(1.5), "off_c": abs(1.5)}),
         ),
-        Effect::SwitchedDissipation { node, power_w, .. } => (
-            "internal_dissipation",
+        Effect::SwitchedDissipation {
+            node,
+            power_w,
+            switch_utc,
+        } => (
+            "switched_dissipation",
             "physics",
             Some(("node", node)),
-            json!({"power_w": power_w}),
-            json!({"power_w": rel(0.25)}),
+            json!({"power_w": power_w, "on_s": seconds_of_day(switch_utc)}),
+            json!({"power_w": rel(0.25), "on_s": abs(1800.0)}),
         ),
         Effect::SensorLag { channel, tau_s } => (
             "sensor_lag",
@@ -592,4 +595,14 @@ pub fn describe(
             json!({"scale": rel(0.20)}),
         ),
     }
+}
+
+/// Seconds after midnight of a UTC time `YYYY-MM-DDTHH:MM:SSZ` (the scenario starts at
+/// midnight of the day).
+fn seconds_of_day(utc: &str) -> f64 {
+    let hms: Vec<f64> = utc[11..19]
+        .split(':')
+        .map(|v| v.parse().expect("a UTC time"))
+        .collect();
+    hms[0] * 3600.0 + hms[1] * 60.0 + hms[2]
 }

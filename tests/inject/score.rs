@@ -92,21 +92,27 @@ fn short(x: f64) -> String {
 
 /// Runs `orbitlash diagnose` on `recording`, writing its JSON to `json`; the report and
 /// the wall time (s). Extra arguments from `INJECT_DIAGNOSE_ARGS`.
-pub fn run_diagnose(recording: &Path, json: &Path) -> (Value, f64) {
-    let scenario = super::repo_root().join(super::scenario::SCENARIO);
+pub fn run_diagnose(
+    scenario: &Path,
+    recording: &Path,
+    json: &Path,
+    out_dir: Option<&Path>,
+) -> (Value, f64) {
     let extra = std::env::var("INJECT_DIAGNOSE_ARGS").unwrap_or_default();
     let start = Instant::now();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_orbitlash"))
-        .arg("diagnose")
-        .arg(&scenario)
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_orbitlash"));
+    cmd.arg("diagnose")
+        .arg(scenario)
         .arg("--recording")
         .arg(recording)
         .arg("--json")
         .arg(json)
         .arg("--quiet")
-        .args(extra.split_whitespace())
-        .output()
-        .expect("the orbitlash binary runs");
+        .args(extra.split_whitespace());
+    if let Some(d) = out_dir {
+        cmd.arg("--out").arg(d);
+    }
+    let out = cmd.output().expect("the orbitlash binary runs");
     let wall = start.elapsed().as_secs_f64();
     assert!(
         out.status.success(),
@@ -271,11 +277,36 @@ fn cell(s: &str) -> String {
     s.replace('|', "\\|")
 }
 
-/// Runs diagnose on the untouched day (`flight`) and on every case written in `dir`;
-/// the scoring table as Markdown.
+/// Runs diagnose on the untouched day (`flight`) and on every case written in `dir`,
+/// twice: single shot (the shipped scenario) and after calibration (the workflow:
+/// the scenario `diagnose --out` corrected on the untouched day, then each case
+/// against it, so that what it names is what changed). The two scoring tables as
+/// Markdown, with a count of each.
 pub fn score_all(dir: &Path, flight: &Path) -> String {
-    let (day, day_s) = run_diagnose(flight, &dir.join("untouched.json"));
-    let untouched = findings(&day);
+    let shipped = super::repo_root().join(super::scenario::SCENARIO);
+    let day_dir = dir.join("untouched");
+    let _ = std::fs::remove_dir_all(&day_dir);
+    let (day, day_s) = run_diagnose(
+        &shipped,
+        flight,
+        &dir.join("untouched.json"),
+        Some(&day_dir),
+    );
+    let mut out = String::from("### Single shot (scenarios/funcube-1.toml)\n\n");
+    out += &score_pass(dir, &shipped, (&day, day_s), "");
+    let corrected = day_dir.join("corrected.toml");
+    let (again, again_s) =
+        run_diagnose(&corrected, flight, &dir.join("untouched-again.json"), None);
+    out += "\n### After calibration (against the untouched day's corrected.toml)\n\n";
+    out += &score_pass(dir, &corrected, (&again, again_s), "-calibrated");
+    out
+}
+
+/// One pass of [`score_all`]: every case against `scenario`, judged against what the
+/// untouched day (`day`, its wall time) already names; reports `diagnose<suffix>.json`.
+fn score_pass(dir: &Path, scenario: &Path, day: (&Value, f64), suffix: &str) -> String {
+    let (day, day_s) = day;
+    let untouched = findings(day);
     let mut out = String::from(
         "| case | expected | verdict | diagnose named | result | parameters / candidate | time |\n|---|---|---|---|---|---|---:|\n",
     );
@@ -290,15 +321,27 @@ pub fn score_all(dir: &Path, flight: &Path) -> String {
     out += &format!(
         "| untouched day | (reference) | {} | {} | | | {day_s:.0} s |\n",
         day["verdict"].as_str().unwrap_or("?"),
-        cell(&named(&day))
+        cell(&named(day))
     );
+    let (mut hits, mut effects, mut clean, mut controls) = (0, 0, 0, 0);
     for case in cases() {
         let folder = dir.join(case.name);
         let text = std::fs::read_to_string(folder.join("expected.json")).expect("expected.json");
         let expected: Value = serde_json::from_str(&text).expect("expected.json parses");
-        let (report, wall) =
-            run_diagnose(&folder.join("recording.csv"), &folder.join("diagnose.json"));
+        let (report, wall) = run_diagnose(
+            scenario,
+            &folder.join("recording.csv"),
+            &folder.join(format!("diagnose{suffix}.json")),
+            None,
+        );
         let (result, detail) = judge(&expected, &report, &untouched);
+        if expected["effect"] == "none" {
+            controls += 1;
+            clean += usize::from(result.starts_with("PASS"));
+        } else {
+            effects += 1;
+            hits += usize::from(result == "HIT (parameters within tolerance)");
+        }
         out += &format!(
             "| {} | {} | {} | {} | {} | {} | {wall:.0} s |\n",
             case.name,
@@ -309,5 +352,8 @@ pub fn score_all(dir: &Path, flight: &Path) -> String {
             cell(&detail)
         );
     }
+    out += &format!(
+        "\n{hits} of {effects} effects named with every parameter within tolerance; {clean} of {controls} cases without an effect in the vocabulary name nothing new.\n"
+    );
     out
 }
