@@ -47,6 +47,12 @@ pub struct DiagnoseArgs {
     /// infrared scales and its two largest thermal masses).
     #[arg(long)]
     no_calibration: bool,
+    /// A partial explanation (one that leaves the held-out orbits above the noise) is
+    /// reported only when it removes at least this share of the reference's held-out
+    /// residual (0 … 1).
+    #[arg(long, value_name = "SHARE", default_value_t = Options::default().min_partial_share,
+          value_parser = share_arg)]
+    min_partial_share: f64,
     /// The most one channel may weigh against the typical channel of its unit (weight
     /// = 1/noise², 1 … 1e6): a smooth channel's estimated noise is raised to keep it
     /// there.
@@ -128,6 +134,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         max_effects: usize::from(a.max_effects),
         calibrate: !a.no_calibration,
         max_weight_ratio: a.max_weight_ratio,
+        min_partial_share: a.min_partial_share,
         ..Options::default()
     };
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
@@ -352,6 +359,14 @@ fn target_text(t: &diagnose::effects::Target) -> String {
         parts.push(format!("{} {v}", k.replace('_', " ")));
     }
     parts.join(", ")
+}
+
+/// `--min-partial-share`: a share within 0 … 1.
+fn share_arg(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("`{s}` is not a share within 0 … 1")),
+    }
 }
 
 /// `--max-weight-ratio`: a number within 1 … 1e6.

@@ -98,6 +98,19 @@ pub fn run_diagnose(
     json: &Path,
     out_dir: Option<&Path>,
 ) -> (Value, f64) {
+    match out_dir {
+        Some(d) => run_diagnose_with(scenario, recording, json, &["--out", d.to_str().unwrap()]),
+        None => run_diagnose_with(scenario, recording, json, &[]),
+    }
+}
+
+/// [`run_diagnose`] with `args` added.
+pub fn run_diagnose_with(
+    scenario: &Path,
+    recording: &Path,
+    json: &Path,
+    args: &[&str],
+) -> (Value, f64) {
     let extra = std::env::var("INJECT_DIAGNOSE_ARGS").unwrap_or_default();
     let start = Instant::now();
     let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_orbitlash"));
@@ -109,9 +122,7 @@ pub fn run_diagnose(
         .arg(json)
         .arg("--quiet")
         .args(extra.split_whitespace());
-    if let Some(d) = out_dir {
-        cmd.arg("--out").arg(d);
-    }
+    cmd.args(args);
     let out = cmd.output().expect("the orbitlash binary runs");
     let wall = start.elapsed().as_secs_f64();
     assert!(
@@ -280,7 +291,8 @@ fn cell(s: &str) -> String {
 /// Runs diagnose on the untouched day (`flight`) and on every case written in `dir`,
 /// twice: single shot (the shipped scenario) and after calibration (the workflow:
 /// the scenario `diagnose --out` corrected on the untouched day, then each case
-/// against it, so that what it names is what changed). The two scoring tables as
+/// against it with `--no-calibration`, the model being calibrated already, so that
+/// what it names is what changed). The two scoring tables as
 /// Markdown, with a count of each.
 pub fn score_all(dir: &Path, flight: &Path) -> String {
     let shipped = super::repo_root().join(super::scenario::SCENARIO);
@@ -293,18 +305,34 @@ pub fn score_all(dir: &Path, flight: &Path) -> String {
         Some(&day_dir),
     );
     let mut out = String::from("### Single shot (scenarios/funcube-1.toml)\n\n");
-    out += &score_pass(dir, &shipped, (&day, day_s), "");
+    out += &score_pass(dir, &shipped, (&day, day_s), "", &[]);
     let corrected = day_dir.join("corrected.toml");
-    let (again, again_s) =
-        run_diagnose(&corrected, flight, &dir.join("untouched-again.json"), None);
+    let (again, again_s) = run_diagnose_with(
+        &corrected,
+        flight,
+        &dir.join("untouched-again.json"),
+        &["--no-calibration"],
+    );
     out += "\n### After calibration (against the untouched day's corrected.toml)\n\n";
-    out += &score_pass(dir, &corrected, (&again, again_s), "-calibrated");
+    out += &score_pass(
+        dir,
+        &corrected,
+        (&again, again_s),
+        "-calibrated",
+        &["--no-calibration"],
+    );
     out
 }
 
 /// One pass of [`score_all`]: every case against `scenario`, judged against what the
 /// untouched day (`day`, its wall time) already names; reports `diagnose<suffix>.json`.
-fn score_pass(dir: &Path, scenario: &Path, day: (&Value, f64), suffix: &str) -> String {
+fn score_pass(
+    dir: &Path,
+    scenario: &Path,
+    day: (&Value, f64),
+    suffix: &str,
+    extra: &[&str],
+) -> String {
     let (day, day_s) = day;
     let untouched = findings(day);
     let mut out = String::from(
@@ -328,11 +356,11 @@ fn score_pass(dir: &Path, scenario: &Path, day: (&Value, f64), suffix: &str) -> 
         let folder = dir.join(case.name);
         let text = std::fs::read_to_string(folder.join("expected.json")).expect("expected.json");
         let expected: Value = serde_json::from_str(&text).expect("expected.json parses");
-        let (report, wall) = run_diagnose(
+        let (report, wall) = run_diagnose_with(
             scenario,
             &folder.join("recording.csv"),
             &folder.join(format!("diagnose{suffix}.json")),
-            None,
+            extra,
         );
         let (result, detail) = judge(&expected, &report, &untouched);
         if expected["effect"] == "none" {
