@@ -575,3 +575,80 @@ fn val_inject_funcube_diagnose_score() {
     eprintln!("{table}");
     std::fs::write(dir.join("score.md"), &table).unwrap();
 }
+
+/// The operator workflow (README, "Two workflows"): the untouched day diagnosed with
+/// `--out D` writes a calibrated `D/corrected.toml`; a later recording diagnosed
+/// against it with `--no-calibration` names what changed, and only that. Here the
+/// later recordings are the day with a 1.5 K offset on the black chassis channel
+/// (found, within ±0.5 K, and nothing else new) and with a drift outside the
+/// vocabulary (nothing named).
+#[test]
+fn val_inject_funcube_workflow_names_what_changed() {
+    let Some(g) = generator() else { return };
+    let dir = inject::repo_root().join("target/inject-workflow");
+    let _ = std::fs::remove_dir_all(&dir);
+    g.write_cases(&dir).unwrap();
+    let flight = common::shared(WOD).unwrap();
+    let shipped = inject::repo_root().join(inject::scenario::SCENARIO);
+    let day_dir = dir.join("day");
+    let (day, _) =
+        inject::score::run_diagnose(&shipped, &flight, &dir.join("day.json"), Some(&day_dir));
+    let corrected = day_dir.join("corrected.toml");
+    let text = std::fs::read_to_string(&corrected).expect("diagnose --out wrote corrected.toml");
+    assert!(
+        text.contains("# calibrated: sunlight_scale on the spacecraft"),
+        "corrected.toml names its calibration in its header"
+    );
+    assert!(
+        day["calibration"].as_array().is_some_and(|c| !c.is_empty()),
+        "the day is calibrated"
+    );
+    let run = |case: &str| {
+        inject::score::run_diagnose_with(
+            &corrected,
+            &dir.join(case).join("recording.csv"),
+            &dir.join(format!("{case}.json")),
+            &["--no-calibration"],
+        )
+        .0
+    };
+    let named = |r: &serde_json::Value| -> Vec<(String, String, f64)> {
+        r["findings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| {
+                let on = f["channel"].as_str().or(f["node"].as_str()).unwrap_or("");
+                let share = f["heldout_share"].as_f64().unwrap();
+                (f["effect"].as_str().unwrap().to_string(), on.to_string(), share)
+            })
+            .collect()
+    };
+    let again = named(&run("null"));
+    let offset = run("chassis_offset");
+    let found = named(&offset);
+    let hit = offset["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["effect"] == "sensor_offset" && f["channel"] == "chassis_black_c")
+        .unwrap_or_else(|| panic!("the offset on chassis_black_c is named: {found:?}"));
+    let k = hit["parameters"]["offset_k"].as_f64().unwrap();
+    assert!((k - 1.5).abs() <= 0.5, "offset {k} K, truth 1.5 K");
+    assert_eq!(found[0].0, "sensor_offset", "the offset leads: {found:?}");
+    let news: Vec<_> = found
+        .iter()
+        .filter(|f| !(f.0 == "sensor_offset" && f.1 == "chassis_black_c"))
+        .filter(|f| !again.iter().any(|a| a.0 == f.0 && a.1 == f.1))
+        .collect();
+    assert!(
+        news.iter().all(|f| f.2 < 0.03),
+        "besides the offset, nothing new above 3 % of the residual: {news:?}"
+    );
+    let control = named(&run("control"));
+    let news: Vec<_> = control
+        .iter()
+        .filter(|f| !again.iter().any(|a| a.0 == f.0 && a.1 == f.1))
+        .collect();
+    assert!(news.is_empty(), "a drift outside the vocabulary names nothing new: {news:?}");
+}
