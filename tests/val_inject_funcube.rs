@@ -620,7 +620,11 @@ fn val_inject_funcube_workflow_names_what_changed() {
             .map(|f| {
                 let on = f["channel"].as_str().or(f["node"].as_str()).unwrap_or("");
                 let share = f["heldout_share"].as_f64().unwrap();
-                (f["effect"].as_str().unwrap().to_string(), on.to_string(), share)
+                (
+                    f["effect"].as_str().unwrap().to_string(),
+                    on.to_string(),
+                    share,
+                )
             })
             .collect()
     };
@@ -650,5 +654,8 @@ fn val_inject_funcube_workflow_names_what_changed() {
         .iter()
         .filter(|f| !again.iter().any(|a| a.0 == f.0 && a.1 == f.1))
         .collect();
-    assert!(news.is_empty(), "a drift outside the vocabulary names nothing new: {news:?}");
+    assert!(
+        news.is_empty(),
+        "a drift outside the vocabulary names nothing new: {news:?}"
+    );
 }

@@ -47,6 +47,11 @@ pub struct DiagnoseArgs {
     /// infrared scales and its two largest thermal masses).
     #[arg(long)]
     no_calibration: bool,
+    /// Fit at most this many single candidates, the best ranked first (1 … 200); the
+    /// report says how many more could have passed on their ranking.
+    #[arg(long, value_name = "N", default_value_t = Options::default().fits as u16,
+          value_parser = clap::value_parser!(u16).range(1..=200))]
+    fits: u16,
     /// A partial explanation (one that leaves the held-out orbits above the noise) is
     /// reported only when it removes at least this share of the reference's held-out
     /// residual (0 … 1).
@@ -135,6 +140,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         calibrate: !a.no_calibration,
         max_weight_ratio: a.max_weight_ratio,
         min_partial_share: a.min_partial_share,
+        fits: usize::from(a.fits),
         ..Options::default()
     };
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {

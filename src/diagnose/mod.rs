@@ -441,6 +441,9 @@ pub struct Diagnosis {
     /// Reasons to doubt the verdict (a channel whose noise is far larger than its
     /// signal); also printed on standard error.
     pub warnings: Vec<String>,
+    /// Candidates that could pass on their ranking but were not fitted (the fit budget,
+    /// `Options::fits`, cut the search; a note says so).
+    pub passable_unfitted: usize,
     /// Wall time of the whole analysis, s, and of the candidate search per candidate.
     pub time_s: f64,
     pub time_per_candidate_s: f64,
@@ -775,6 +778,7 @@ fn baseline_report(
         warnings,
         time_s: 0.0,
         time_per_candidate_s: 0.0,
+        passable_unfitted: 0,
         series: Series::default(),
         corrected: None,
     };
@@ -1217,6 +1221,13 @@ pub fn diagnose(
         progress,
     );
     let to_fit = cx.leading(&ranked);
+    report.passable_unfitted = cx.passable_unfitted(&ranked, &to_fit);
+    if report.passable_unfitted > 0 {
+        report.notes.push(format!(
+            "the fit budget cut the search: {} more candidate(s) could pass on their ranking (a training χ² drop above the BIC margin) and were not fitted (--fits {}; raise it to try them)",
+            report.passable_unfitted, opts.fits
+        ));
+    }
     let fitted = search::fit_leading(&problem, model, &cands, &ranked, &to_fit, progress);
 
     // 6. Selection: single effects, then forward selection, one effect at a time.
@@ -1322,6 +1333,21 @@ impl Search<'_> {
             .filter(|&i| score(i) > 0.0)
             .take(self.opts.fits)
             .collect()
+    }
+
+    /// How many candidates outside `to_fit` could pass the BIC test on their ranking
+    /// (their best ranked point lowers the training χ² by more than the margin and
+    /// their parameters' price): the search the fit budget cut.
+    fn passable_unfitted(&self, ranked: &[Ranking], to_fit: &[usize]) -> usize {
+        (0..self.cands.len())
+            .filter(|i| !to_fit.contains(i))
+            .filter(|&i| {
+                ranked[i].best.as_ref().is_some_and(|b| {
+                    let k = self.cands[i].params.len() as f64;
+                    self.reference.train_chi2 - b.0 - k * self.problem.ln_n() > self.opts.bic_margin
+                })
+            })
+            .count()
     }
 
     /// Forward selection from the best single effect, one effect at a time until the

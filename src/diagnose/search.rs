@@ -167,6 +167,11 @@ impl<'a> Problem<'a> {
         }
     }
 
+    /// ln n of the training residuals: BIC's price of one parameter.
+    pub(super) fn ln_n(&self) -> f64 {
+        self.ln_n
+    }
+
     /// How many parameters the calibration puts first in every hypothesis.
     pub(super) fn calibration_len(&self) -> usize {
         self.calibrated.len()
