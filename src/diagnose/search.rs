@@ -661,7 +661,7 @@ fn compass(
 /// of each power), its evaluations per seed, and how many of the fitted candidates
 /// get it (the best ranked rugged ones).
 const GLOBAL_SEEDS: usize = 2;
-const COMPASS_EVALUATIONS: usize = 36;
+const COMPASS_EVALUATIONS: usize = 24;
 const GLOBAL_CANDIDATES: usize = 2;
 
 /// One step of forward selection when the accepted effects `current` do not explain
