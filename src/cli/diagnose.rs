@@ -594,10 +594,15 @@ fn report_findings(o: &mut String, d: &Diagnosis) {
             }
             outln!(
                 o,
-                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0} ({:.1} % of the baseline's, in the final joint fit)",
+                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0} ({:.1} % of the {}'s, in the final joint fit)",
                 f.delta_bic,
                 f.heldout_chi2_drop,
-                100.0 * f.heldout_share
+                100.0 * f.heldout_share,
+                if d.calibration.is_empty() {
+                    "baseline"
+                } else {
+                    "calibrated model"
+                }
             );
             report_doubts(o, f);
         }

@@ -290,8 +290,9 @@ pub struct Finding {
     pub delta_bic: f64,
     /// Held-out χ² drop this effect brings.
     pub heldout_chi2_drop: f64,
-    /// The share of the baseline's held-out χ² (noise-weighted squared residual) this
-    /// effect removes.
+    /// The share of the reference's held-out χ² (noise-weighted squared residual) this
+    /// effect removes in the final joint fit (the reference: the calibrated model, or
+    /// the baseline without a calibration).
     pub heldout_share: f64,
     /// The key-path values written into the corrected scenario.
     pub set: BTreeMap<String, f64>,
