@@ -498,7 +498,7 @@ fn val_inject_funcube_recordings_differ_by_the_signature() {
 }
 
 /// The effect ids of `docs/vocabulary.md` an expected finding may name.
-const VOCABULARY: [&str; 14] = [
+const VOCABULARY: [&str; 17] = [
     "earth_albedo_ir",
     "heater_thermostat",
     "internal_dissipation",
@@ -513,6 +513,9 @@ const VOCABULARY: [&str; 14] = [
     "capacitance_scale",
     "emissivity_scale",
     "uncertain_parameter",
+    "switched_dissipation",
+    "sunlight_scale",
+    "infrared_scale",
 ];
 
 /// Each `expected.json` names an effect of the vocabulary (or `none`), a target the

@@ -1162,30 +1162,15 @@ pub fn diagnose(
     let search_started = Instant::now();
 
     // 3½. The calibration, fitted first and taken out of the vocabulary's search.
-    let (set, nominal) = if opts.calibrate {
-        effects::calibration_set(model, &mut cands)
-    } else {
-        (Vec::new(), Vec::new())
-    };
-    progress("calibration", 0, 1);
-    let calibration = problem.calibrate(model, set, nominal, &reference);
-    progress("calibration", 1, 1);
-    let calibrated = match &calibration {
-        Some(Ok(h)) if problem.calibration_len() > 0 => Some(h.clone()),
-        Some(Ok(_)) => {
-            report
-                .notes
-                .push("the calibration did not improve the held-out orbits and is not used".into());
-            None
-        }
-        Some(Err(e)) => {
-            report
-                .notes
-                .push(format!("the calibration could not be fitted: {e}"));
-            None
-        }
-        None => None,
-    };
+    let calibrated = calibration_step(
+        &mut problem,
+        model,
+        &mut cands,
+        &reference,
+        opts,
+        &mut report.notes,
+        progress,
+    );
     let baseline_reference = reference;
     let reference = match &calibrated {
         Some(h) => Reference {
@@ -1268,6 +1253,42 @@ pub fn diagnose(
         search_started.elapsed().as_secs_f64() / cands.len().max(1) as f64;
     report.time_s = started.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// Step 3½: the calibration set taken out of `cands` and fitted first from nominal
+/// (none when `opts.calibrate` is off); the calibrated hypothesis, or None when there
+/// is no set, or when it does not improve the held-out orbits or cannot be fitted (a
+/// note says which).
+fn calibration_step(
+    problem: &mut Problem<'_>,
+    model: &Model,
+    cands: &mut Vec<Candidate>,
+    reference: &Reference<'_>,
+    opts: &Options,
+    notes: &mut Vec<String>,
+    progress: Progress<'_>,
+) -> Option<Hypothesis> {
+    let (set, nominal) = if opts.calibrate {
+        effects::calibration_set(model, cands)
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    progress("calibration", 0, 1);
+    let calibration = problem.calibrate(model, set, nominal, reference);
+    progress("calibration", 1, 1);
+    match calibration {
+        Some(Ok(h)) if problem.calibration_len() > 0 => Some(h),
+        Some(Ok(_)) => {
+            notes
+                .push("the calibration did not improve the held-out orbits and is not used".into());
+            None
+        }
+        Some(Err(e)) => {
+            notes.push(format!("the calibration could not be fitted: {e}"));
+            None
+        }
+        None => None,
+    }
 }
 
 /// The calibration's numbers in hypothesis `h` (its first parameters): values with

@@ -858,8 +858,28 @@ const FIT_OPTIONS: lm::LmOptions = lm::LmOptions {
     cost_floor: 0.0,
 };
 
+/// How much wider the parameters' errors are than white noise would make them, when
+/// the residuals `r` (one channel after another, in time order) are correlated from
+/// one sample to the next: (1 + ρ₁)/(1 − ρ₁) for their lag-1 autocorrelation ρ₁ (an
+/// AR(1) residual: the effective number of independent samples is n (1 − ρ₁)/(1 + ρ₁)),
+/// 1 when ρ₁ ≤ 0, at most 400 (ρ₁ capped at 0.995).
+pub(super) fn correlated_noise_factor(r: &[f64]) -> f64 {
+    if r.len() < 3 {
+        return 1.0;
+    }
+    let mean = r.iter().sum::<f64>() / r.len() as f64;
+    let var: f64 = r.iter().map(|v| (v - mean).powi(2)).sum();
+    let lag: f64 = r.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum();
+    if !(var > 0.0) {
+        return 1.0;
+    }
+    let rho = (lag / var).clamp(0.0, 0.995);
+    (1.0 + rho) / (1.0 - rho)
+}
+
 /// Fits `members` together from `start` on the training orbits, then predicts the
-/// held-out orbits.
+/// held-out orbits. Its covariance is widened for residuals correlated in time
+/// ([`correlated_noise_factor`]).
 pub(super) fn fit(
     problem: &Problem<'_>,
     model: &Model,
@@ -886,7 +906,12 @@ pub(super) fn fit(
         r.extend(priors.iter().map(|&(i, c, sd)| (theta[i] - c) / sd));
         Ok(r)
     };
-    let fit = lm::minimize(f, start, &lower, &upper, &steps, FIT_OPTIONS)?;
+    let mut fit = lm::minimize(f, start, &lower, &upper, &steps, FIT_OPTIONS)?;
+    let data = fit.residuals.len() - priors.len();
+    let inflation = correlated_noise_factor(&fit.residuals[..data]);
+    if let Some(c) = fit.covariance.as_mut() {
+        *c *= inflation;
+    }
     let m = comp.model_at(&fit.x).map_err(|e| e.to_string())?;
     let pred = problem.predict(&m, &problem.all_times)?;
     Ok(Hypothesis {

@@ -293,8 +293,14 @@ pub fn over_earth_disc(
 /// sunlit ground left out. The faces of one instant share it: it is kept per thread
 /// for the last environment asked for.
 fn albedo_cells(e: &FaceEnvironment, out: &mut Vec<([f64; 3], f64)>) {
-    let sectors = sectors();
     out.clear();
+    each_albedo_cell(e, |u, l| out.push((u, l)));
+}
+
+/// Calls `f(direction, radiance × solid angle)` for every cell of the Earth's disc seen
+/// in environment `e` that has sunlit ground, rings outward, sectors in order: the one
+/// integral [`albedo_cells`] and [`albedo_total`] share.
+fn each_albedo_cell(e: &FaceEnvironment, mut f: impl FnMut([f64; 3], f64)) {
     let (r, earth_r, sun) = (e.radius_m, e.earth_radius_m, e.sun_lvlh);
     let scale = e.albedo * e.solar_on_earth_w_per_m2 / PI;
     let eta_max = (earth_r / r).min(1.0).asin();
@@ -305,7 +311,7 @@ fn albedo_cells(e: &FaceEnvironment, out: &mut Vec<([f64; 3], f64)>) {
         let (se, ce) = eta.sin_cos();
         let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
         let cell = se * d_eta * d_phi;
-        for &(sp, cp) in sectors {
+        for &(sp, cp) in sectors() {
             let u = [se * cp, se * sp, ce];
             let p = [
                 d * u[0] / earth_r,
@@ -314,7 +320,7 @@ fn albedo_cells(e: &FaceEnvironment, out: &mut Vec<([f64; 3], f64)>) {
             ];
             let cos_zenith = dot(p, sun);
             if cos_zenith > 0.0 {
-                out.push((u, scale * cos_zenith * cell));
+                f(u, scale * cos_zenith * cell);
             }
         }
     }
@@ -355,30 +361,8 @@ fn albedo_total(e: &FaceEnvironment) -> f64 {
     {
         return total;
     }
-    let (r, earth_r, sun) = (e.radius_m, e.earth_radius_m, e.sun_lvlh);
-    let scale = e.albedo * e.solar_on_earth_w_per_m2 / PI;
-    let eta_max = (earth_r / r).min(1.0).asin();
-    let d_eta = eta_max / ALBEDO_RINGS as f64;
-    let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
     let mut total = 0.0;
-    for i in 0..ALBEDO_RINGS {
-        let eta = (i as f64 + 0.5) * d_eta;
-        let (se, ce) = eta.sin_cos();
-        let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
-        let cell = se * d_eta * d_phi;
-        for &(sp, cp) in sectors() {
-            let u = [se * cp, se * sp, ce];
-            let p = [
-                d * u[0] / earth_r,
-                d * u[1] / earth_r,
-                (d * u[2] - r) / earth_r,
-            ];
-            let cos_zenith = dot(p, sun);
-            if cos_zenith > 0.0 {
-                total += scale * cos_zenith * cell;
-            }
-        }
-    }
+    each_albedo_cell(e, |_, l| total += l);
     TOTAL.set(Some((*e, total)));
     total
 }
