@@ -870,7 +870,7 @@ pub(super) fn correlated_noise_factor(r: &[f64]) -> f64 {
     let mean = r.iter().sum::<f64>() / r.len() as f64;
     let var: f64 = r.iter().map(|v| (v - mean).powi(2)).sum();
     let lag: f64 = r.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum();
-    if !(var > 0.0) {
+    if var.is_nan() || var <= 0.0 {
         return 1.0;
     }
     let rho = (lag / var).clamp(0.0, 0.995);
