@@ -154,5 +154,37 @@ fn val_funcube_flight_diagnose_improves_every_held_out_channel() {
             "a calibration number reported as a finding: {}",
             f.effect
         );
+        // no stand-in for "more heat": Earth loads are not offered on a faced node
+        assert_ne!(f.effect.id(), "earth_albedo_ir", "{:?}", f.target);
+        // every finding lowers the held-out χ² in the final joint fit, and carries its
+        // intervals around its values
+        assert!(
+            f.heldout_chi2_drop > 0.0,
+            "{}: {}",
+            f.effect,
+            f.heldout_chi2_drop
+        );
+        for (k, v) in &f.parameters {
+            if let Some(Some([lo, hi])) = f.intervals_95.get(k) {
+                assert!(lo <= v && v <= hi, "{k}: {lo} … {hi} around {v}");
+            }
+        }
     }
+    // The goals of issue 29 this day meets: the silver chassis at ≤ 2 °C and the
+    // panels at ≤ 3 °C held out; the black chassis (goal 2 °C, docs/validation.md) is
+    // kept from getting worse than it is (2.10).
+    let rmse = |ch: &str| d.heldout_rmse.get(ch).unwrap();
+    assert!(
+        rmse("chassis_silver_c") <= 2.0,
+        "{}",
+        rmse("chassis_silver_c")
+    );
+    for ch in ["panel_px_c", "panel_mx_c", "panel_py_c", "panel_my_c"] {
+        assert!(rmse(ch) <= 3.0, "{ch}: {}", rmse(ch));
+    }
+    assert!(
+        rmse("chassis_black_c") <= 2.2,
+        "{}",
+        rmse("chassis_black_c")
+    );
 }

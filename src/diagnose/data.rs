@@ -721,3 +721,25 @@ pub fn orbit_rms(obs: &Observations, residuals: &[Vec<Option<f64>>]) -> Vec<Vec<
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The resolution is the smallest change between consecutive readings: repeats
+    /// and gaps are skipped.
+    #[test]
+    fn core_resolution_is_the_smallest_step_between_readings() {
+        let v = [
+            Some(1.0),
+            Some(1.0),
+            None,
+            Some(1.25),
+            Some(2.0),
+            Some(1.5),
+            Some(1.75),
+        ];
+        assert_eq!(resolution(&v), Some(0.25));
+        assert_eq!(resolution(&[Some(3.0), None, Some(3.0)]), None);
+    }
+}

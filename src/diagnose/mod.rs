@@ -606,7 +606,7 @@ fn baseline(
         let quantum = data::resolution(&obs.values[c]).unwrap_or(0.0);
         noise.push(sigma.max(NOISE_FLOOR).max(quantum / 12f64.sqrt()));
     }
-    cap_weights(obs, &mut noise, opts.max_weight_ratio, notes);
+    cap_weights(&obs.channels, &mut noise, opts.max_weight_ratio, notes);
     Ok(BaselineRun {
         pred,
         node_temps_k,
@@ -620,10 +620,14 @@ fn baseline(
 /// median noise's weight): a channel whose residual is smooth (a lagged sensor, a
 /// model output) has a noise estimate far below the others' and would otherwise take
 /// the fit; its noise is raised to median / √max_ratio, with a note.
-fn cap_weights(obs: &Observations, noise: &mut [f64], max_ratio: f64, notes: &mut Vec<String>) {
+fn cap_weights(
+    channels: &[data::Channel],
+    noise: &mut [f64],
+    max_ratio: f64,
+    notes: &mut Vec<String>,
+) {
     for unit in ["K", "um"] {
-        let mut of_unit: Vec<f64> = obs
-            .channels
+        let mut of_unit: Vec<f64> = channels
             .iter()
             .zip(noise.iter())
             .filter(|(c, _)| c.unit == unit)
@@ -634,7 +638,7 @@ fn cap_weights(obs: &Observations, noise: &mut [f64], max_ratio: f64, notes: &mu
         }
         let floor = data::median(&mut of_unit) / max_ratio.sqrt();
         let shown = if unit == "um" { "µm" } else { unit };
-        for (c, n) in obs.channels.iter().zip(noise.iter_mut()) {
+        for (c, n) in channels.iter().zip(noise.iter_mut()) {
             if c.unit == unit && *n < floor {
                 notes.push(format!(
                     "channel `{}`'s noise ({} {shown}) is under the typical channel's / √{}: taken as {} {shown}, so that it weighs at most {}× a typical channel (--max-weight-ratio)",
@@ -1727,4 +1731,45 @@ fn warming_starts(obs: &Observations, smooth: &[Option<f64>], noise: f64) -> Vec
         }
     }
     starts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn channel(name: &str, unit: &'static str) -> data::Channel {
+        data::Channel {
+            name: name.into(),
+            sensor: 0,
+            unit,
+            value_unit: "K",
+            is_temperature: unit == "K",
+        }
+    }
+
+    /// A channel far smoother than the others of its unit is raised to the median /
+    /// √ratio (weight at most ratio × the typical one), with a note; the others, and a
+    /// lone channel of another unit, keep their noise.
+    #[test]
+    fn core_a_smooth_channel_cannot_take_the_fit() {
+        let chans = [
+            channel("a", "K"),
+            channel("b", "K"),
+            channel("c", "K"),
+            channel("lagged", "K"),
+            channel("backlash", "um"),
+        ];
+        let mut noise = [1.0, 1.2, 0.9, 0.06, 0.001];
+        let mut notes = Vec::new();
+        cap_weights(&chans, &mut noise, 10.0, &mut notes);
+        let floor = 0.95 / 10f64.sqrt();
+        assert!((noise[3] - floor).abs() < 1e-12, "{}", noise[3]);
+        assert_eq!(&noise[..3], &[1.0, 1.2, 0.9]);
+        assert_eq!(noise[4], 0.001);
+        assert_eq!(notes.len(), 1);
+        assert!(notes[0].contains("`lagged`"), "{}", notes[0]);
+        // the weight ratio is what was asked for
+        let median_weight = 1.0 / 0.95f64.powi(2);
+        assert!((1.0 / noise[3].powi(2) / median_weight - 10.0).abs() < 1e-9);
+    }
 }

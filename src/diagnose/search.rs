@@ -924,3 +924,40 @@ pub(super) fn fit(
         model: m,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic AR(1) series x_k = ρ x_{k-1} + e_k (e from a fixed LCG, uniform):
+    /// the factor is (1 + ρ)/(1 − ρ) within sampling error; white noise gives ≈ 1.
+    #[test]
+    fn val_closed_form_ar1_noise_factor() {
+        let mut state: u64 = 12345;
+        let mut uniform = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        let series = |rho: f64, u: &mut dyn FnMut() -> f64| -> Vec<f64> {
+            let mut x = 0.0;
+            (0..200_000)
+                .map(|_| {
+                    x = rho * x + u();
+                    x
+                })
+                .collect()
+        };
+        let white = correlated_noise_factor(&series(0.0, &mut uniform));
+        assert!((white - 1.0).abs() < 0.02, "{white}");
+        let ar = correlated_noise_factor(&series(0.8, &mut uniform));
+        assert!((ar - 9.0).abs() < 0.3, "{ar}");
+        // anticorrelated residuals do not narrow the errors; short ones are left alone
+        let alternating: Vec<f64> = (0..100)
+            .map(|k| if k % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
+        assert_eq!(correlated_noise_factor(&alternating), 1.0);
+        assert_eq!(correlated_noise_factor(&[1.0, 2.0]), 1.0);
+    }
+}
