@@ -484,6 +484,20 @@ fn report_channels(o: &mut String, d: &Diagnosis) {
             ch / sigma
         );
     }
+    let scatter: Vec<String> = d
+        .orbit_scatter
+        .0
+        .iter()
+        .filter(|(_, v)| v.is_finite())
+        .map(|(n, v)| format!("{n} {v:.3} {}", unit_of(n)))
+        .collect();
+    if !scatter.is_empty() {
+        outln!(
+            o,
+            "orbit-to-orbit scatter (readings about the mean orbit; no periodic model fits closer): {}",
+            scatter.join(", ")
+        );
+    }
     outln!(o, "");
 }
 

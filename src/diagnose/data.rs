@@ -525,6 +525,33 @@ pub fn noise(
     Some(1.4826 * median(&mut dev))
 }
 
+/// A channel's orbit-to-orbit scatter: its readings binned by orbit phase (1-minute
+/// bins of `period_s`, from t = 0), the RMS of each about its bin's mean over the
+/// orbits, with one degree of freedom per bin used. None when fewer than two orbits
+/// share a bin anywhere.
+pub fn orbit_scatter(time_s: &[f64], values: &[Option<f64>], period_s: f64) -> Option<f64> {
+    if period_s.is_nan() || period_s <= 60.0 {
+        return None;
+    }
+    let bins = (period_s / 60.0).ceil() as usize;
+    // Welford per bin: mean and the sum of squared deviations, without cancellation
+    let mut mean = vec![0.0; bins];
+    let mut m2 = vec![0.0; bins];
+    let mut count = vec![0usize; bins];
+    for (t, v) in time_s.iter().zip(values) {
+        if let Some(v) = v {
+            let b = ((t.rem_euclid(period_s) / 60.0) as usize).min(bins - 1);
+            count[b] += 1;
+            let d = v - mean[b];
+            mean[b] += d / count[b] as f64;
+            m2[b] += d * (v - mean[b]);
+        }
+    }
+    let ss: f64 = m2.iter().sum();
+    let dof: usize = count.iter().map(|&n| n.saturating_sub(1)).sum();
+    (dof > 0).then(|| (ss / dof as f64).sqrt())
+}
+
 /// A channel's resolution: the smallest step between two consecutive readings (none
 /// when no reading changes). A quantised sensor cannot be fitted closer than its
 /// quantum / √12, however smooth its residual.
@@ -741,5 +768,32 @@ mod tests {
         ];
         assert_eq!(resolution(&v), Some(0.25));
         assert_eq!(resolution(&[Some(3.0), None, Some(3.0)]), None);
+    }
+
+    /// A signal that repeats every orbit has no scatter; added ±a alternating from
+    /// orbit to orbit, its scatter is a (corrected for the bins' means).
+    #[test]
+    fn core_orbit_scatter_of_a_periodic_signal() {
+        let period = 600.0;
+        // one reading a minute over 10 orbits: one reading per bin and orbit
+        let t: Vec<f64> = (0..100).map(|k| k as f64 * 60.0).collect();
+        let periodic: Vec<Option<f64>> = t
+            .iter()
+            .map(|t| Some((2.0 * std::f64::consts::PI * t / period).sin()))
+            .collect();
+        assert!(orbit_scatter(&t, &periodic, period).unwrap() < 1e-9);
+        let shaken: Vec<Option<f64>> = t
+            .iter()
+            .zip(&periodic)
+            .map(|(t, v)| {
+                let orbit = (t / period) as i64;
+                Some(v.unwrap() + if orbit % 2 == 0 { 0.5 } else { -0.5 })
+            })
+            .collect();
+        // 10 readings per bin, 5 at +0.5 and 5 at −0.5 about its mean:
+        // Σ (x − mean)² / (n − 1) = 10 · 0.25 / 9 in every bin
+        let want = (10.0 * 0.25 / 9.0f64).sqrt();
+        let got = orbit_scatter(&t, &shaken, period).unwrap();
+        assert!((got - want).abs() < 1e-9, "{got} {want}");
     }
 }

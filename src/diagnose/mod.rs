@@ -413,6 +413,10 @@ pub struct CandidateReport {
 pub struct Diagnosis {
     pub verdict: Verdict,
     pub noise: ChannelMap,
+    /// Each channel's orbit-to-orbit scatter: the RMS of its readings about the mean
+    /// orbit at equal phase (1-minute bins); no orbit-periodic model fits it closer.
+    /// (null: too few orbits to tell.)
+    pub orbit_scatter: ChannelMap,
     pub baseline: Baseline,
     pub mismatches: Vec<Mismatch>,
     pub findings: Vec<Finding>,
@@ -767,6 +771,14 @@ fn baseline_report(
             Verdict::Unexplained
         },
         noise: cmap(&base.noise),
+        orbit_scatter: cmap(
+            &obs.values
+                .iter()
+                .map(|v| {
+                    data::orbit_scatter(&obs.time_s, v, obs.split.period_s).unwrap_or(f64::NAN)
+                })
+                .collect::<Vec<_>>(),
+        ),
         baseline,
         mismatches: mismatches.clone(),
         findings: Vec::new(),
