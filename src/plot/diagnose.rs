@@ -34,6 +34,8 @@ struct Reading {
 /// The channel a figure shows, with what both its panels need.
 struct ChannelView<'s> {
     s: &'s Series,
+    /// Its index in the series.
+    c: usize,
     name: &'s str,
     /// The unit of the values as recorded (the channel's own).
     unit: &'static str,
@@ -67,6 +69,7 @@ impl<'s> ChannelView<'s> {
             .collect();
         ChannelView {
             s,
+            c,
             name: &s.channels[c],
             unit: s
                 .value_units
@@ -91,6 +94,16 @@ impl<'s> ChannelView<'s> {
             for r in [p.recorded - p.baseline, p.recorded - p.corrected] {
                 rlo = rlo.min(r);
                 rhi = rhi.max(r);
+            }
+        }
+        // the models are drawn between readings too (fill rows)
+        for v in self.s.baseline[self.c]
+            .iter()
+            .chain(&self.s.corrected[self.c])
+        {
+            if v.is_finite() {
+                vlo = vlo.min(*v);
+                vhi = vhi.max(*v);
             }
         }
         if self.sigma.is_finite() {
@@ -169,7 +182,7 @@ fn draw_panel(
     // Shading under everything: held-out orbits, then eclipses.
     shade_held_out_and_eclipses(&mut chart, view.s, &view.axis, (ylo, yhi))?;
     if values {
-        draw_values(&mut chart, &view.readings)?;
+        draw_values(&mut chart, view)?;
     } else {
         draw_residuals(&mut chart, view)?;
     }
@@ -265,20 +278,21 @@ pub(super) fn shade_held_out_and_eclipses(
     Ok(())
 }
 
-/// Draws the models as lines, then the recording's readings over them as dots.
-fn draw_values(chart: &mut Chart<'_, '_>, readings: &[Reading]) -> Result<(), PlotError> {
-    chart
-        .draw_series(LineSeries::new(
-            readings.iter().map(|p| (p.t, p.baseline)),
-            BEFORE.stroke_width(2),
-        ))
-        .map_err(draw_err)?;
-    chart
-        .draw_series(LineSeries::new(
-            readings.iter().map(|p| (p.t, p.corrected)),
-            AFTER.stroke_width(2),
-        ))
-        .map_err(draw_err)?;
+/// Draws the models as lines over every time they were computed (as the overview
+/// does: through fill rows, broken at gaps), then the recording's readings over them
+/// as dots.
+fn draw_values(chart: &mut Chart<'_, '_>, view: &ChannelView<'_>) -> Result<(), PlotError> {
+    let (s, c, readings) = (view.s, view.c, &view.readings);
+    for (series, color) in [(&s.baseline[c], BEFORE), (&s.corrected[c], AFTER)] {
+        for seg in super::line_segments(&s.time_s, series) {
+            chart
+                .draw_series(LineSeries::new(
+                    seg.into_iter().map(|(t, v)| (view.axis.x(t), v)),
+                    color.stroke_width(2),
+                ))
+                .map_err(draw_err)?;
+        }
+    }
     chart
         .draw_series(
             readings

@@ -271,6 +271,32 @@ impl Annotations {
 }
 
 /// Shading of eclipses, and of a diagnosis's held-out orbits.
+/// A series as the lines to draw: (t, v) points split where v is not finite and
+/// where the time step exceeds 3 × the series' median step (a gap in the recording,
+/// which a straight line across would fill with a ramp the model never made).
+pub(crate) fn line_segments(time_s: &[f64], values: &[f64]) -> Vec<Vec<(f64, f64)>> {
+    let mut steps: Vec<f64> = time_s.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let gap = steps
+        .get(steps.len() / 2)
+        .map_or(f64::INFINITY, |m| 3.0 * m);
+    let mut out: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut last_t = f64::NAN;
+    for (&t, &v) in time_s.iter().zip(values) {
+        if !v.is_finite() {
+            last_t = f64::NAN;
+            continue;
+        }
+        // a new segment at the start, after a non-finite value (last_t NaN) or a gap
+        if last_t.is_nan() || t - last_t > gap {
+            out.push(Vec::new());
+        }
+        out.last_mut().expect("a segment").push((t, v));
+        last_t = t;
+    }
+    out
+}
+
 pub(crate) const ECLIPSE: plotters::style::RGBColor = plotters::style::RGBColor(222, 226, 236);
 pub(crate) const HELD_OUT: plotters::style::RGBColor = plotters::style::RGBColor(254, 243, 216);
 /// The model before a diagnosis (orange) and after it (blue).
@@ -339,4 +365,23 @@ pub(crate) fn legend(
         });
     }
     Ok(placed.into_iter().map(|p| p.1).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::line_segments;
+
+    /// A gap over 3 × the median step and a non-finite value each end a line; a
+    /// fill row (a finite model value between readings) does not.
+    #[test]
+    fn core_model_lines_break_at_gaps_and_holes() {
+        let t = [0.0, 60.0, 120.0, 180.0, 1200.0, 1260.0, 1320.0, 1380.0];
+        let v = [1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN, 7.0, 8.0];
+        let segs = line_segments(&t, &v);
+        let lens: Vec<usize> = segs.iter().map(Vec::len).collect();
+        assert_eq!(lens, vec![4, 1, 2], "{segs:?}");
+        assert_eq!(segs[1], vec![(1200.0, 5.0)]);
+        assert_eq!(line_segments(&t[..4], &v[..4]).len(), 1);
+        assert!(line_segments(&[], &[]).is_empty());
+    }
 }

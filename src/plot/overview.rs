@@ -202,16 +202,14 @@ fn draw_channel(
     let mut chart = panel_chart(panel, axis, (ylo, yhi))?;
     shade_held_out_and_eclipses(&mut chart, s, axis, (ylo, yhi))?;
     for (series, color) in [(&s.baseline[c], BEFORE), (&s.corrected[c], AFTER)] {
-        chart
-            .draw_series(LineSeries::new(
-                s.time_s
-                    .iter()
-                    .zip(series.iter())
-                    .filter(|(_, v)| v.is_finite())
-                    .map(|(t, v)| (axis.x(*t), *v)),
-                color.stroke_width(2),
-            ))
-            .map_err(draw_err)?;
+        for seg in super::line_segments(&s.time_s, series) {
+            chart
+                .draw_series(LineSeries::new(
+                    seg.into_iter().map(|(t, v)| (axis.x(t), v)),
+                    color.stroke_width(2),
+                ))
+                .map_err(draw_err)?;
+        }
     }
     chart
         .draw_series(
