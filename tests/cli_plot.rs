@@ -604,3 +604,56 @@ fn cli_environment_plot_draws_the_face_fluxes() {
     common::assert_error("no faces", &out, &["--plot", "no [[face]]"]);
     assert!(!dir.join("r.svg").exists());
 }
+
+/// `plot --nodes` draws the nodes named, in that order, and says in the legend that
+/// they were chosen; an unknown node is an error naming it and the nodes there are,
+/// and no figure is written.
+#[test]
+fn cli_plot_the_nodes_chosen() {
+    let dir = common::tmpdir("plot-nodes");
+    let csv = dir.join("run.csv");
+    let out = common::bin()
+        .args(["run", "--quiet", "--orbits", "1", "--no-log", "--csv"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let svg = dir.join("two.svg");
+    let out = common::bin()
+        .arg("plot")
+        .arg(&csv)
+        .args(["--nodes", "gear2.r2,housing", "--out"])
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    let at = |s: &str| text.find(s).unwrap_or_else(|| panic!("{s} drawn"));
+    assert!(
+        at("gear2.r2") < at("housing"),
+        "the legend keeps the order given"
+    );
+    assert!(!text.contains("motor"), "a node not chosen is not drawn");
+    assert!(text.contains("(2 of 10 nodes:") && text.contains("chosen by --nodes)"));
+
+    let bad = dir.join("bad.svg");
+    let out = common::bin()
+        .arg("plot")
+        .arg(&csv)
+        .args(["--nodes", "housing,gear9", "--out"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no node `gear9`") && err.contains("housing, motor"),
+        "{err}"
+    );
+    assert!(!bad.exists(), "no figure for a bad --nodes");
+}

@@ -26,6 +26,10 @@ pub struct PlotArgs {
     /// The figure's title (default: the scenario's name, or the input's file name).
     #[arg(long)]
     title: Option<String>,
+    /// The nodes whose temperatures to draw, comma-separated, in this order (default:
+    /// all, or on a run with many the ones that swing most).
+    #[arg(long, value_name = "NODE,…", value_delimiter = ',')]
+    nodes: Vec<String>,
 }
 
 /// What `--out` asks for.
@@ -201,14 +205,21 @@ pub fn plot(a: PlotArgs) -> Result<()> {
             o
         }
     };
-    draw(&a.input, &out, a.title.as_deref(), None)?;
+    draw(&a.input, &out, a.title.as_deref(), None, &a.nodes)?;
     print_out(&format!("figure: {}\n", out.display()))
 }
 
 /// The figure of the run in `input` (a log or a CSV) written to `out`. The verdict,
 /// smallest backlash and eclipses come from the log's end record, else from `end` (the
 /// run drawing its own figure), else from the rows.
-pub fn draw(input: &Path, out: &Path, title: Option<&str>, end: Option<&RunEnd>) -> Result<()> {
+/// `nodes`: the temperatures to draw (empty: the default choice).
+pub fn draw(
+    input: &Path,
+    out: &Path,
+    title: Option<&str>,
+    end: Option<&RunEnd>,
+    nodes: &[String],
+) -> Result<()> {
     format_of(out, "--out")?;
     // The output's place is checked before the input is read.
     Outputs::new(OutputPolicy::reading(&[input])).file("--out", out)?;
@@ -249,6 +260,11 @@ pub fn draw(input: &Path, out: &Path, title: Option<&str>, end: Option<&RunEnd>)
     let mut series = RunSeries::from_table(&title, &headers, &rows)
         .with_context(|| format!("cannot plot {}", input.display()))?;
     series.end = end;
+    if !nodes.is_empty() {
+        series
+            .keep_nodes(nodes)
+            .with_context(|| format!("cannot plot {}", input.display()))?;
+    }
     let fig = figure(&series)?;
     write_figure(&fig, out, &[input])
 }

@@ -343,7 +343,7 @@ fn figure_and_log(
         let source = log_path
             .or(a.csv.as_deref())
             .expect("checked in plan_outputs");
-        super::plot::draw(source, f, None, Some(run_end))
+        super::plot::draw(source, f, None, Some(run_end), &[])
             .map_err(|e| anyhow!("--plot {}: {}", f.display(), error_chain(&e)))?;
         outln!(o, "plot: {}", f.display());
     }

@@ -52,6 +52,9 @@ pub struct RunSeries {
     /// and the eclipse windows. Without it they are taken from the rows, which may
     /// have missed the run's smallest value.
     pub end: Option<RunEnd>,
+    /// Set by [`RunSeries::keep_nodes`]: how many nodes the table had before the user
+    /// chose some (they are then all drawn, in the order given).
+    pub chosen_of: Option<usize>,
 }
 
 impl RunSeries {
@@ -79,6 +82,7 @@ impl RunSeries {
             sunlit: None,
             orbit: None,
             end: None,
+            chosen_of: None,
         };
         let mut margins: Vec<(String, Vec<f64>)> = Vec::new();
         for (i, h) in headers.iter().enumerate().skip(1) {
@@ -291,8 +295,8 @@ fn range_of<'a>(v: impl Iterator<Item = &'a f64>) -> (f64, f64) {
 /// eclipses, each pair's smallest backlash and where the panels go.
 struct RunLayout<'s> {
     s: &'s RunSeries,
-    /// The temperature series shown, °C: all, or the [`MAX_TEMPS`] (on a long run
-    /// [`MAX_ENVELOPE_TEMPS`]) that swing most.
+    /// The temperature series shown, °C: all, those chosen (`--nodes`), or the
+    /// [`MAX_TEMPS`] (on a long run [`MAX_ENVELOPE_TEMPS`]) that swing most.
     temps_c: Vec<(String, Vec<f64>)>,
     /// The run's nodes, shown or not.
     n_nodes: usize,
@@ -386,17 +390,44 @@ impl<'s> RunLayout<'s> {
     }
 }
 
-/// The temperature series shown, °C, and the number of nodes: all, or the ones that
-/// swing most.
+impl RunSeries {
+    /// Keeps the temperatures of the nodes `names`, in that order (a name given twice
+    /// once); an unknown name is an error that lists the nodes there are.
+    pub fn keep_nodes(&mut self, names: &[String]) -> Result<(), PlotError> {
+        let total = self.temps_k.len();
+        let mut kept: Vec<(String, Vec<f64>)> = Vec::new();
+        for n in names {
+            if kept.iter().any(|(k, _)| k == n) {
+                continue;
+            }
+            match self.temps_k.iter().find(|(k, _)| k == n) {
+                Some(t) => kept.push(t.clone()),
+                None => {
+                    let there: Vec<&str> = self.temps_k.iter().map(|(k, _)| k.as_str()).collect();
+                    return Err(PlotError::Data(format!(
+                        "--nodes: no node `{n}` in the table (its nodes: {})",
+                        there.join(", ")
+                    )));
+                }
+            }
+        }
+        self.temps_k = kept;
+        self.chosen_of = Some(total);
+        Ok(())
+    }
+}
+
+/// The temperature series shown, °C, and the number of nodes: all, the ones chosen
+/// (`--nodes`), or the ones that swing most.
 fn shown_temps_c(s: &RunSeries, long: bool) -> (Vec<(String, Vec<f64>)>, usize) {
     let mut temps: Vec<(String, Vec<f64>)> = s
         .temps_k
         .iter()
         .map(|(n, v)| (n.clone(), v.iter().map(|k| k - ZERO_CELSIUS_K).collect()))
         .collect();
-    let n_nodes = temps.len();
+    let n_nodes = s.chosen_of.unwrap_or(temps.len());
     let max_temps = if long { MAX_ENVELOPE_TEMPS } else { MAX_TEMPS };
-    if temps.len() > max_temps {
+    if s.chosen_of.is_none() && temps.len() > max_temps {
         let swing = |v: &Vec<f64>| {
             let (a, b) = range_of(v.iter());
             b - a
@@ -729,7 +760,11 @@ fn draw_panel_legend(
     let shown = layout.temps_c.len();
     if layout.temps_panel(pi) && layout.n_nodes > shown {
         lines.push(format!("({shown} of {} nodes:", layout.n_nodes));
-        lines.push(" the largest swings)".to_string());
+        lines.push(if layout.s.chosen_of.is_some() {
+            " chosen by --nodes)".to_string()
+        } else {
+            " the largest swings)".to_string()
+        });
     }
     if pi == 0 && !layout.eclipses_s.is_empty() {
         lines.push("eclipse".to_string());
