@@ -351,7 +351,8 @@ fn figure_and_log(
         outln!(
             o,
             "log: {}  (Foxglove: import viewer/foxglove-layout.json; Rerun with its plots: \
-             `python3 viewer/rerun_export.py {}` then `rerun` the .rrd)",
+             `pip install -r viewer/requirements.txt` once, then \
+             `python3 viewer/rerun_export.py {}` and `rerun` the .rrd)",
             p.display(),
             p.display()
         );
