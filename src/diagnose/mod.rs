@@ -908,11 +908,6 @@ fn findings(
     rivals: &Rivals,
     heldout_rmse: &ChannelMap,
 ) -> Vec<Finding> {
-    let cov = h.fit.covariance.as_ref().map(|c| {
-        (0..c.nrows())
-            .map(|i| (0..c.ncols()).map(|j| c[(i, j)]).collect::<Vec<f64>>())
-            .collect::<Vec<_>>()
-    });
     let corr = h.fit.correlation();
     let mut out = Vec::new();
     // the calibration's parameters come first
@@ -921,12 +916,8 @@ fn findings(
         let c = &cands[ci];
         let k = c.params.len();
         let theta = &h.theta[off..off + k];
-        let sub_cov: Option<Vec<Vec<f64>>> = cov.as_ref().map(|cv| {
-            (off..off + k)
-                .map(|i| cv[i][off..off + k].to_vec())
-                .collect()
-        });
-        let params = c.report_params(theta, sub_cov.as_deref());
+        let params = member_params(c, h, off);
+        let (parameters, std_errors) = values_and_errors(&params);
         let (delta_bic, hdrop) = match &without[m] {
             None => (
                 -problem.bic_gain(h, base.train_chi2, k),
@@ -941,11 +932,8 @@ fn findings(
             effect: c.effect,
             kind: c.effect.kind(),
             target: c.target.clone(),
-            parameters: params.iter().map(|(n, v, _)| (n.clone(), *v)).collect(),
-            std_errors: params
-                .iter()
-                .map(|(n, _, s)| (n.clone(), finite(*s)))
-                .collect(),
+            parameters,
+            std_errors,
             correlation: (off..off + k)
                 .map(|i| (off..off + k).map(|j| finite(corr[i][j])).collect())
                 .collect(),
@@ -1307,31 +1295,48 @@ fn calibration_step(
     }
 }
 
+/// Candidate `c`'s parameters in `h` (its own from `off`) as reported: (name, value,
+/// standard error from its block of `h`'s covariance).
+fn member_params(c: &Candidate, h: &Hypothesis, off: usize) -> Vec<(String, f64, f64)> {
+    let k = c.params.len();
+    let block: Option<Vec<Vec<f64>>> = h.fit.covariance.as_ref().map(|cv| {
+        (off..off + k)
+            .map(|i| (off..off + k).map(|j| cv[(i, j)]).collect())
+            .collect()
+    });
+    c.report_params(&h.theta[off..off + k], block.as_deref())
+}
+
+/// Reported parameters as the JSON keeps them: values, and standard errors (None
+/// where not finite), by name.
+fn values_and_errors(
+    params: &[(String, f64, f64)],
+) -> (BTreeMap<String, f64>, BTreeMap<String, Option<f64>>) {
+    (
+        params.iter().map(|(n, v, _)| (n.clone(), *v)).collect(),
+        params
+            .iter()
+            .map(|(n, _, s)| (n.clone(), finite(*s)))
+            .collect(),
+    )
+}
+
 /// The calibration's numbers in hypothesis `h` (its first parameters): values with
 /// their standard errors (from `h`'s covariance), the nominal values, the key paths
 /// written.
 fn calibrated_numbers(problem: &Problem<'_>, h: &Hypothesis) -> Vec<Calibrated> {
-    let cov = h.fit.covariance.as_ref();
     let mut out = Vec::new();
     let mut off = 0;
     for c in &problem.calibration {
         let k = c.params.len();
         let theta = &h.theta[off..off + k];
-        let sub: Option<Vec<Vec<f64>>> = cov.map(|cv| {
-            (off..off + k)
-                .map(|i| (off..off + k).map(|j| cv[(i, j)]).collect())
-                .collect()
-        });
-        let params = c.report_params(theta, sub.as_deref());
+        let (parameters, std_errors) = values_and_errors(&member_params(c, h, off));
         let nominal = c.null.clone().unwrap_or_else(|| theta.to_vec());
         out.push(Calibrated {
             effect: c.effect,
             target: c.target.clone(),
-            parameters: params.iter().map(|(n, v, _)| (n.clone(), *v)).collect(),
-            std_errors: params
-                .iter()
-                .map(|(n, _, s)| (n.clone(), finite(*s)))
-                .collect(),
+            parameters,
+            std_errors,
             nominal: c
                 .params
                 .iter()

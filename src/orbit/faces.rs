@@ -250,6 +250,33 @@ pub fn plate_to_sphere_view_factor(cos_omega: f64, h: f64) -> f64 {
     (0.5 - first / PI + (c * second - x * root) / (PI * h * h)).max(0.0)
 }
 
+/// One ring of the Earth's disc seen from radius `r` (midpoint of its nadir angle η):
+/// sin η, cos η, the distance along its directions to the ground, and the solid angle
+/// of one of its [`ALBEDO_SECTORS`] cells.
+struct Ring {
+    se: f64,
+    ce: f64,
+    d: f64,
+    cell: f64,
+}
+
+/// The [`ALBEDO_RINGS`] rings of the Earth's disc seen from radius `r`, outward.
+fn rings(r: f64, earth_r: f64) -> impl Iterator<Item = Ring> {
+    let eta_max = (earth_r / r).min(1.0).asin();
+    let d_eta = eta_max / ALBEDO_RINGS as f64;
+    let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
+    (0..ALBEDO_RINGS).map(move |i| {
+        let eta = (i as f64 + 0.5) * d_eta;
+        let (se, ce) = eta.sin_cos();
+        Ring {
+            se,
+            ce,
+            d: r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt(),
+            cell: se * d_eta * d_phi,
+        }
+    })
+}
+
 /// ∫ L(u) w(u) dΩ over the Earth's disc seen from radius `r` (LVLH: the Earth's centre
 /// along +z), by the midpoint rule on [`ALBEDO_RINGS`] rings of nadir angle and
 /// [`ALBEDO_SECTORS`] sectors: `radiance(point normal)` and `weight(direction)`.
@@ -259,16 +286,9 @@ pub fn over_earth_disc(
     radiance: &dyn Fn([f64; 3]) -> f64,
     weight: &dyn Fn([f64; 3]) -> f64,
 ) -> f64 {
-    let eta_max = (earth_r / r).min(1.0).asin();
-    let d_eta = eta_max / ALBEDO_RINGS as f64;
     let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
     let mut sum = 0.0;
-    for i in 0..ALBEDO_RINGS {
-        let eta = (i as f64 + 0.5) * d_eta;
-        let (se, ce) = eta.sin_cos();
-        // distance along u to the ground, and the ground point's unit normal
-        let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
-        let cell = se * d_eta * d_phi;
+    for Ring { se, ce, d, cell } in rings(r, earth_r) {
         for j in 0..ALBEDO_SECTORS {
             let phi = (j as f64 + 0.5) * d_phi;
             let (sp, cp) = phi.sin_cos();
@@ -294,23 +314,9 @@ pub fn over_earth_disc(
 /// for the last environment asked for.
 fn albedo_cells(e: &FaceEnvironment, out: &mut Vec<([f64; 3], f64)>) {
     out.clear();
-    each_albedo_cell(e, |u, l| out.push((u, l)));
-}
-
-/// Calls `f(direction, radiance × solid angle)` for every cell of the Earth's disc seen
-/// in environment `e` that has sunlit ground, rings outward, sectors in order
-/// ([`albedo_total`] is the same sum, reorganised for a tumbling face).
-fn each_albedo_cell(e: &FaceEnvironment, mut f: impl FnMut([f64; 3], f64)) {
     let (r, earth_r, sun) = (e.radius_m, e.earth_radius_m, e.sun_lvlh);
     let scale = e.albedo * e.solar_on_earth_w_per_m2 / PI;
-    let eta_max = (earth_r / r).min(1.0).asin();
-    let d_eta = eta_max / ALBEDO_RINGS as f64;
-    let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
-    for i in 0..ALBEDO_RINGS {
-        let eta = (i as f64 + 0.5) * d_eta;
-        let (se, ce) = eta.sin_cos();
-        let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
-        let cell = se * d_eta * d_phi;
+    for Ring { se, ce, d, cell } in rings(r, earth_r) {
         for &(sp, cp) in sectors() {
             let u = [se * cp, se * sp, ce];
             let p = [
@@ -320,7 +326,7 @@ fn each_albedo_cell(e: &FaceEnvironment, mut f: impl FnMut([f64; 3], f64)) {
             ];
             let cos_zenith = dot(p, sun);
             if cos_zenith > 0.0 {
-                f(u, scale * cos_zenith * cell);
+                out.push((u, scale * cos_zenith * cell));
             }
         }
     }
@@ -365,19 +371,12 @@ fn albedo_total(e: &FaceEnvironment) -> f64 {
     }
     let (r, earth_r, sun) = (e.radius_m, e.earth_radius_m, e.sun_lvlh);
     let scale = e.albedo * e.solar_on_earth_w_per_m2 / PI;
-    let eta_max = (earth_r / r).min(1.0).asin();
-    let d_eta = eta_max / ALBEDO_RINGS as f64;
-    let d_phi = 2.0 * PI / ALBEDO_SECTORS as f64;
     let mut horizontal = [0.0; ALBEDO_SECTORS];
     for (h, &(sp, cp)) in horizontal.iter_mut().zip(sectors()) {
         *h = cp * sun[0] + sp * sun[1];
     }
     let mut total = 0.0;
-    for i in 0..ALBEDO_RINGS {
-        let eta = (i as f64 + 0.5) * d_eta;
-        let (se, ce) = eta.sin_cos();
-        let d = r * ce - (earth_r * earth_r - r * r * se * se).max(0.0).sqrt();
-        let cell = se * d_eta * d_phi;
+    for Ring { se, ce, d, cell } in rings(r, earth_r) {
         // the ground point d·u − r ẑ over the Earth's radius, against the Sun
         let a = d * se / earth_r;
         let b = (d * ce - r) / earth_r * sun[2];
