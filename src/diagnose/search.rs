@@ -529,7 +529,6 @@ pub(super) fn fit_leading(
                     .collect::<Vec<_>>()
             });
             let starts: Vec<Vec<f64>> = starts.collect();
-            let tg = t0.elapsed().as_secs_f64();
             let best = if starts.len() > 1 && problem.calibration_len() > 0 {
                 // Several starts: each fitted with the calibration held (its own
                 // parameters only, the cheap part), the best then fitted jointly.
@@ -539,18 +538,7 @@ pub(super) fn fit_leading(
                     .collect();
                 let held = held.into_iter().min_by(|a, b| a.0.total_cmp(&b.0));
                 let from = held.map_or_else(|| starts[0].clone(), |h| h.1);
-                let th = t0.elapsed().as_secs_f64();
-                let r = fit(problem, model, cands, &[i], &from);
-                if std::env::var_os("ORBITLASH_TRACE").is_some() {
-                    eprintln!(
-                        "TRACE fit {}: global {tg:.2} held {:.2} joint {:.2} evals {:?}",
-                        c.label(),
-                        th - tg,
-                        t0.elapsed().as_secs_f64() - th,
-                        r.as_ref().map(|h| (h.fit.evaluations, h.fit.iterations))
-                    );
-                }
-                r
+                fit(problem, model, cands, &[i], &from)
             } else {
                 let mut best: Option<Result<Hypothesis, String>> = None;
                 for start in starts {
