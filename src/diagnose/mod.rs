@@ -304,7 +304,8 @@ pub struct Finding {
     /// them apart.
     pub correlated: Vec<Correlated>,
     /// Candidates that explain about as well (their BIC within 2 of this finding's,
-    /// fitted in its place at the step it entered), best first.
+    /// fitted in its place at the step it entered, on that fit's noise scale: see
+    /// `search::rivals`), best first.
     pub alternatives: Vec<Alternative>,
     /// Set when a parameter moves by more than its 95 % interval between the fit
     /// without another finding and the final one (an effect allowed more): its size
@@ -330,7 +331,8 @@ pub struct Correlated {
 pub struct Alternative {
     /// `effect on target`.
     pub candidate: String,
-    /// Its BIC minus the finding's (≥ 0: worse).
+    /// Its BIC minus the finding's (≥ 0: worse), on the finding's noise scale (χ²
+    /// divided by the fit's s² and AR(1) factor: 1 on white noise of the stated level).
     pub delta_bic: f64,
 }
 

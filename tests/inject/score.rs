@@ -215,7 +215,7 @@ fn judge(expected: &Value, report: &Value, untouched: &[Named]) -> (String, Stri
             .filter(|f| f.effect == effect)
             .map(|f| f.target.clone())
             .collect();
-        let result = if elsewhere.is_empty() {
+        let mut result = if elsewhere.is_empty() {
             "MISS".to_string()
         } else {
             format!(
@@ -223,6 +223,11 @@ fn judge(expected: &Value, report: &Value, untouched: &[Named]) -> (String, Stri
                 elsewhere.join("; ")
             )
         };
+        if let Some(d) = listed_as_alternative(expected, report) {
+            result.push_str(&format!(
+                "; the truth is among a finding's alternatives (ΔBIC {d:.2})"
+            ));
+        }
         return (result, candidate_status(expected, report));
     };
     let mut all_ok = true;
@@ -243,6 +248,26 @@ fn judge(expected: &Value, report: &Value, untouched: &[Named]) -> (String, Stri
         "HIT (parameters off)"
     };
     (result.into(), errs.join("; "))
+}
+
+/// The ΔBIC at which a finding lists the expected effect on the expected target among
+/// its alternatives (those that explain about as well), if one does.
+fn listed_as_alternative(expected: &Value, report: &Value) -> Option<f64> {
+    let effect = expected["effect"].as_str()?;
+    let name = TARGET_KEYS
+        .iter()
+        .find_map(|k| expected.get(*k).and_then(Value::as_str))?;
+    let label = format!("{effect} on {name}");
+    report["findings"]
+        .as_array()?
+        .iter()
+        .flat_map(|f| f["alternatives"].as_array().into_iter().flatten())
+        .find(|a| {
+            a["candidate"]
+                .as_str()
+                .is_some_and(|c| c == label || c.starts_with(&format!("{label} (")))
+        })
+        .and_then(|a| a["delta_bic"].as_f64())
 }
 
 /// What became of the expected effect on the expected target among the candidates
