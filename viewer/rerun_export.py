@@ -22,6 +22,13 @@ views grouped as an engineer reads them:
 - heat flows, W; the orbit (sunlit, β, solar flux); face fluxes of a dated scenario;
 - events (eclipse entries and exits, heater switches) as a text log.
 
+Every line keeps its extremes when a pixel covers many samples (aggregation MinMax:
+Rerun's default averages them, and a 90-day run's temperatures would show a third of
+their range). A log of more than 30 orbits also gets a first tab, "per orbit: min and
+max": each temperature, backlash and heat flow as its range over each orbit (two
+points per orbit, sent before the samples), and the sunlit share of each orbit, so
+the whole mission is on screen at once while the samples load behind it.
+
 It reads `run` logs, `margins --replay` logs and `diagnose --out`'s diagnose.mcap (the
 recorded, baseline and corrected series side by side per channel). The application id
 is "orbitlash"; the recording id is the log's scenario hash and seed, so re-exporting
@@ -56,6 +63,16 @@ DIAGNOSE_COLORS = {
     "residual_before": [230, 140, 40],
     "residual_after": [60, 140, 230],
 }
+# Distinct colours for the lines of one view (Tableau 10), so that no two of a view's
+# nodes look alike; a node keeps its colour in every tab.
+PALETTE = [
+    [31, 119, 180], [255, 127, 14], [44, 160, 44], [214, 39, 40], [148, 103, 189],
+    [140, 86, 75], [227, 119, 194], [127, 127, 127], [188, 189, 34], [23, 190, 207],
+]
+# The smallest allowed backlash: red in every view.
+ALLOWED_RED = [220, 40, 40]
+# A log of more than this many orbits gets the per-orbit tab.
+ENVELOPE_ORBITS = 30
 GEAR_NODE = re.compile(r"^(gear\w*?)_r(\d+)_k$")
 BACKLASH_FIELDS = ("backlash_exact_um", "backlash_closed_form_um", "backlash_paper_um")
 LEVELS = {1: "DEBUG", 2: "INFO", 3: "WARN", 4: "ERROR", 5: "CRITICAL"}
@@ -209,7 +226,7 @@ class Recording:
         style = (
             rr.SeriesPoints(names=label, colors=color, marker_sizes=1.5)
             if points
-            else rr.SeriesLines(names=label, colors=color, widths=width)
+            else rr.SeriesLines(names=label, colors=color, widths=width, aggregation_policy="MinMax")
         )
         self.rec.log(entity, style, static=True)
         self.rec.send_columns(entity, indexes=self.times(t_ns), columns=rr.Scalars.columns(scalars=np.asarray(values)))
@@ -237,7 +254,8 @@ def send_gear(out, topic, field, t, v, series, pairs, groups):
     backlash = f"backlash, gear pair {pair} (µm)"
     if field in BACKLASH_FIELDS:
         entity = f"backlash/{pair}/{field[:-3]}"
-        out.series(entity, t, v, f"{pair} {field[:-3].replace('_', ' ')} (µm)")
+        colour = PALETTE[BACKLASH_FIELDS.index(field)]
+        out.series(entity, t, v, f"{pair} {field[:-3].replace('_', ' ')} (µm)", colour)
         groups[backlash].append(entity)
     elif field == "margin_um" and (topic, "backlash_exact_um") in series:
         bt, bv = series[(topic, "backlash_exact_um")]
@@ -250,7 +268,7 @@ def send_gear(out, topic, field, t, v, series, pairs, groups):
         if low.t_ns is None and low.verdict:  # no point to carry the verdict
             label += f" ({VERDICTS.get(low.verdict, str(low.verdict).upper())})"
         entity = f"backlash/{pair}/minimum_allowed"
-        out.series(entity, bt, allowed, label)
+        out.series(entity, bt, allowed, label, ALLOWED_RED)
         groups[backlash].append(entity)
         if low.t_ns is not None:
             out.point(f"backlash/{pair}/smallest", low.t_ns, low.value_um, smallest_label(pair, low))
@@ -259,6 +277,89 @@ def send_gear(out, topic, field, t, v, series, pairs, groups):
         entity = f"gears/{pair}/{field}"
         out.series(entity, t, v, field)
         groups[f"mesh geometry, gear pair {pair}"].append(entity)
+
+
+def orbit_starts(series):
+    """Log time (ns) at which each orbit starts (the log's orbit_number changes), when
+    the log spans more than ENVELOPE_ORBITS orbits; else None."""
+    import numpy as np
+
+    key = ("/orbit/state", "orbit_number")
+    if key not in series:
+        return None
+    t, n = (np.asarray(x) for x in series[key])
+    starts = np.flatnonzero(np.r_[True, np.diff(n) != 0])
+    return t[starts] if len(starts) > ENVELOPE_ORBITS else None
+
+
+def per_orbit(t_ns, values, starts_ns):
+    """A series' range and time-weighted mean over each orbit: (mid time ns, min, max,
+    mean) arrays, one entry per orbit that has samples; NaN samples are skipped."""
+    import numpy as np
+
+    t = np.asarray(t_ns, dtype=np.int64)
+    v = np.asarray(values, dtype=float)
+    orbit = np.searchsorted(starts_ns, t, side="right") - 1
+    seg = np.flatnonzero(np.r_[True, np.diff(orbit) != 0])
+    last = np.r_[seg[1:], len(t)] - 1
+    dt = np.r_[np.diff(t), 0].astype(float)
+    ok = np.isfinite(v)
+    w = np.where(ok, dt, 0.0)
+    weight = np.add.reduceat(w, seg)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.add.reduceat(np.where(ok, v, 0.0) * w, seg) / weight
+    mean = np.where(weight > 0, mean, np.fmin.reduceat(v, seg))
+    mid = (t[seg] + t[last]) // 2
+    return mid, np.fmin.reduceat(v, seg), np.fmax.reduceat(v, seg), mean
+
+
+def send_envelopes(out, series, channels, pairs, starts):
+    """The per-orbit tab's series (each temperature's and backlash's range over each
+    orbit as two lines of one colour, with the smallest allowed backlash and the run's
+    smallest; the orbit-average heat flows; the sunlit share of each orbit); returns
+    its views (title -> entities)."""
+    views = defaultdict(list)
+    colour = defaultdict(int)  # view title -> lines coloured so far
+
+    def both(title, entity, label, t, v, scale=1.0, offset=0.0):
+        mid, lo, hi, _ = per_orbit(t, v, starts)
+        c = PALETTE[colour[title] % len(PALETTE)]
+        colour[title] += 1
+        for part, y in (("min", lo), ("max", hi)):
+            out.series(f"per_orbit/{entity}/{part}", mid, y * scale + offset, f"{label} {part}", c)
+            views[title].append(f"per_orbit/{entity}/{part}")
+
+    for (topic, field), (t, v) in sorted(series.items()):
+        if topic == "/thermal/temperature":
+            node = channels[topic][1].get(f"node:{field}", field[:-2] if field.endswith("_k") else field)
+            m = GEAR_NODE.match(field)
+            title = (f"{m.group(1)} per orbit: min and max (°C)" if m
+                     else "node temperatures per orbit: min and max (°C)")
+            both(title, f"temperature/{node}", f"{node} (°C)", t, v, offset=-273.15)
+        elif topic.startswith("/gears/") and field == "backlash_exact_um":
+            pair = topic[len("/gears/"):].replace("/", "_")
+            title = f"backlash per orbit, gear pair {pair} (µm)"
+            both(title, f"backlash/{pair}", f"{pair} exact (µm)", t, v)
+            low = smallest_point(topic, series, pairs, out.origin_ns)
+            if low.allowed_um is not None:  # the smallest allowed: a line from start to end
+                out.series(f"per_orbit/backlash/{pair}/minimum_allowed", [t[0], t[-1]], [low.allowed_um] * 2,
+                           f"{pair} smallest allowed (µm)", ALLOWED_RED)
+                views[title].append(f"per_orbit/backlash/{pair}/minimum_allowed")
+            if low.t_ns is not None:  # the run's smallest, sent with the samples
+                views[title].append(f"backlash/{pair}/smallest")
+        elif topic == "/thermal/heat":
+            mid, _, _, mean = per_orbit(t, v, starts)
+            title = "heat flows, orbit average (W)"
+            entity = f"per_orbit/heat/{field}"
+            name = field[:-2] if field.endswith("_w") else field
+            out.series(entity, mid, mean, f"{name} (W)", PALETTE[colour[title] % len(PALETTE)])
+            colour[title] += 1
+            views[title].append(entity)
+        elif (topic, field) == ("/orbit/state", "sunlit"):
+            mid, _, _, mean = per_orbit(t, v, starts)
+            out.series("per_orbit/sunlit_share", mid, 100.0 * mean, "sunlit share of the orbit (%)", PALETTE[1])
+            views["sunlit share of each orbit (%)"].append("per_orbit/sunlit_share")
+    return views
 
 
 def send_series(out, series, channels, pairs):
@@ -271,13 +372,15 @@ def send_series(out, series, channels, pairs):
             node = channels[topic][1].get(f"node:{field}", field[:-2] if field.endswith("_k") else field)
             m = GEAR_NODE.match(field)
             entity = f"temperature/{m.group(1)}/r{m.group(2)}" if m else f"temperature/body/{node}"
-            out.series(entity, t, [x - 273.15 for x in v], f"{node} (°C)")
+            k = int(m.group(2)) if m else len(body)
+            out.series(entity, t, [x - 273.15 for x in v], f"{node} (°C)", PALETTE[k % len(PALETTE)])
             (gears[m.group(1)] if m else body).append(entity)
         elif topic.startswith("/gears/"):
             send_gear(out, topic, field, t, v, series, pairs, groups)
         elif topic == "/thermal/heat":
             entity = f"heat/{field}"
-            out.series(entity, t, v, f"{field[:-2] if field.endswith('_w') else field} (W)")
+            k = len(groups["heat flows (W)"])
+            out.series(entity, t, v, f"{field[:-2] if field.endswith('_w') else field} (W)", PALETTE[k % len(PALETTE)])
             groups["heat flows (W)"].append(entity)
         elif topic.startswith("/diagnose/"):
             # diagnose.mcap: one topic per channel, fields recorded/baseline/corrected/residuals
@@ -297,7 +400,42 @@ def send_series(out, series, channels, pairs):
     return groups, body, gears
 
 
-def make_blueprint(name, groups, body, gears, has_events, span_s):
+def backlash_top(series):
+    """The top of the backlash views' axis: 10 % above the largest backlash logged (None
+    without one)."""
+    tops = [max((x for x in v if math.isfinite(x)), default=-math.inf)
+            for (topic, field), (_, v) in series.items()
+            if topic.startswith("/gears/") and field in BACKLASH_FIELDS]
+    top = max(tops, default=-math.inf)
+    return 1.1 * top if math.isfinite(top) and top > 0 else None
+
+
+def diagnose_title(key):
+    """A diagnose view's title with its unit: `housing_c: series` → `housing_c:
+    recorded, baseline, corrected (°C)`; `…: residuals` → `…: residual before, after
+    (K)` (a temperature difference is in kelvin)."""
+    ch, kind = key.rsplit(": ", 1)
+    unit = {"_c": ("°C", "K"), "_um": ("µm", "µm"), "_k": ("K", "K")}
+    level, diff = next((u for sfx, u in unit.items() if ch.endswith(sfx)), ("", ""))
+    if kind == "series":
+        return f"{ch}: recorded, baseline, corrected" + (f" ({level})" if level else "")
+    return f"{ch}: residual before, after" + (f" ({diff})" if diff else "")
+
+
+def late_smallest(series, pairs, origin_ns, span_s):
+    """The titles of the backlash views whose pair has its smallest backlash in the
+    second half of the run (their legend goes left)."""
+    late = set()
+    for topic in {topic for topic, _ in series if topic.startswith("/gears/")}:
+        low = smallest_point(topic, series, pairs, origin_ns)
+        if low.t_ns is not None and (low.t_ns - origin_ns) * 1e-9 > 0.5 * span_s:
+            pair = topic[len("/gears/"):].replace("/", "_")
+            late |= {f"backlash, gear pair {pair} (µm)", f"backlash per orbit, gear pair {pair} (µm)"}
+    return late
+
+
+def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None, backlash_top=None,
+                   late_smallest=()):
     """The views: temperatures beside backlash, heat flows and the eclipse flag on the
     first tab; diagnose.mcap's fits; everything else (mesh geometry, orbit, faces,
     events) on the last. Every plot shows the whole run (0 … span_s), not a window
@@ -311,11 +449,17 @@ def make_blueprint(name, groups, body, gears, has_events, span_s):
     )
 
     def view(title, entities):
+        # backlash: the legend at the top (the minima are at the bottom), on the side
+        # away from the run's smallest, and the axis from 0 so that the smallest allowed
+        # line is not the bottom edge
+        backlash = title.startswith(("backlash,", "backlash per orbit"))
         return rrb.TimeSeriesView(
             name=title,
             origin="/",
             contents=[f"/{e}" for e in entities],
             axis_x=rrb.archetypes.TimeAxis(view_range=whole, link="Independent"),
+            axis_y=rrb.ScalarAxis(range=(0.0, backlash_top)) if backlash and backlash_top else None,
+            plot_legend=rrb.PlotLegend("LeftTop" if title in late_smallest else "RightTop") if backlash else None,
         )
 
     temps = []
@@ -328,13 +472,21 @@ def make_blueprint(name, groups, body, gears, has_events, span_s):
     sunlit = [e for e in groups.get("orbit/state", []) if e.endswith("/sunlit")]
     if sunlit:
         main.append(view("sunlit (1) or eclipse (0)", sunlit))
-    fitted = [view(k, v) for k, v in groups.items() if k.endswith(": series")]
-    residuals = [view(k, v) for k, v in groups.items() if k.endswith(": residuals")]
+    fitted = [view(diagnose_title(k), v) for k, v in groups.items() if k.endswith(": series")]
+    residuals = [view(diagnose_title(k), v) for k, v in groups.items() if k.endswith(": residuals")]
     rest = [view(k, v) for k, v in groups.items() if not k.startswith(("backlash", "heat")) and not k.endswith(diag)]
     if has_events:
         rest.append(rrb.TextLogView(name="events", origin="/events"))
     panes = [rrb.Vertical(*x) for x in (temps, main) if x]
-    tabs = [rrb.Horizontal(*panes, name=name)] if panes else []
+    tabs = []
+    if envelopes:  # a long run: the whole mission per orbit first, quick to load
+        # the body's nodes first, then each gear's
+        hot = sorted((k for k in envelopes if "°C" in k), key=lambda k: (not k.startswith("node"), k))
+        left = [view(k, envelopes[k]) for k in hot]
+        right = [view(k, v) for k, v in envelopes.items() if "°C" not in k]
+        tabs.append(rrb.Horizontal(*(rrb.Vertical(*x) for x in (left, right) if x),
+                                   name=f"{name}: per orbit, min and max"))
+    tabs += [rrb.Horizontal(*panes, name=name)] if panes else []
     # diagnose.mcap: recorded, baseline and corrected per channel; then the residuals
     if fitted:
         tabs.append(rrb.Grid(*fitted, name="recorded, baseline, corrected"))
@@ -363,11 +515,16 @@ def export(log, out, partial):
     rec.save(partial)
     try:
         recording = Recording(rec, origin_ns)
+        starts = orbit_starts(series)
+        # the per-orbit series first: the viewer draws them while the samples load
+        envelopes = send_envelopes(recording, series, channels, pairs, starts) if starts is not None else None
         groups, body, gears = send_series(recording, series, channels, pairs)
         recording.events(texts)
         end_ns = recording.t_end_ns
         span_s = (end_ns - origin_ns) * 1e-9 if end_ns is not None else 1.0
-        rec.send_blueprint(make_blueprint(name, groups, body, gears, bool(texts), span_s))
+        top = backlash_top(series)
+        late = late_smallest(series, pairs, origin_ns, span_s)
+        rec.send_blueprint(make_blueprint(name, groups, body, gears, bool(texts), span_s, envelopes, top, late))
         rec.flush()
     finally:
         rec.disconnect()

@@ -64,7 +64,9 @@ def main():
     if os.path.exists(a.shot):
         os.remove(a.shot)
     env = dict(os.environ, XDG_RUNTIME_DIR=os.environ.get("XDG_RUNTIME_DIR", "/tmp"))
-    cmd = [xvfb, "-a", "-s", "-screen 0 1600x1000x24", rerun, rrd,
+    # The X pointer rests at the screen's centre: a screen far larger than the window
+    # keeps it off the window, so no hover tooltip is in the screenshot.
+    cmd = [xvfb, "-a", "-s", "-screen 0 6400x4000x24", rerun, rrd,
            "--screenshot-to", a.shot, "--window-size", "1500x900"]
     try:
         v = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
