@@ -288,8 +288,19 @@ def orbit_starts(series):
     if key not in series:
         return None
     t, n = (np.asarray(x) for x in series[key])
-    starts = np.flatnonzero(np.r_[True, np.diff(n) != 0])
-    return t[starts] if len(starts) > ENVELOPE_ORBITS else None
+    first = np.flatnonzero(np.r_[True, np.diff(n) != 0])
+    if len(first) <= ENVELOPE_ORBITS:
+        return None
+    # The first sample of an orbit is up to a step (300 s) after its true start: a
+    # straight line through them (constant period) puts every boundary where it is,
+    # unless the orbits are not of one period.
+    k = np.arange(len(first) - 1, dtype=float)
+    observed = t[first[1:]].astype(float)
+    period, t0 = np.polyfit(k, observed, 1)
+    fitted = t0 + k * period
+    if np.max(np.abs(fitted - observed)) < 0.1 * period:
+        return np.r_[t[0], fitted.astype(np.int64)]
+    return t[first]
 
 
 def per_orbit(t_ns, values, starts_ns):
@@ -302,7 +313,8 @@ def per_orbit(t_ns, values, starts_ns):
     orbit = np.searchsorted(starts_ns, t, side="right") - 1
     seg = np.flatnonzero(np.r_[True, np.diff(orbit) != 0])
     last = np.r_[seg[1:], len(t)] - 1
-    dt = np.r_[np.diff(t), 0].astype(float)
+    # a logged sample stands for the step that ends at it
+    dt = np.r_[0, np.diff(t)].astype(float)
     ok = np.isfinite(v)
     w = np.where(ok, dt, 0.0)
     weight = np.add.reduceat(w, seg)
@@ -313,7 +325,7 @@ def per_orbit(t_ns, values, starts_ns):
     return mid, np.fmin.reduceat(v, seg), np.fmax.reduceat(v, seg), mean
 
 
-def send_envelopes(out, series, channels, pairs, starts):
+def send_envelopes(out, series, channels, pairs, starts, eclipses=None):
     """The per-orbit tab's series (each temperature's and backlash's range over each
     orbit as two lines of one colour, with the smallest allowed backlash and the run's
     smallest; the orbit-average heat flows; the sunlit share of each orbit); returns
@@ -356,10 +368,35 @@ def send_envelopes(out, series, channels, pairs, starts):
             colour[title] += 1
             views[title].append(entity)
         elif (topic, field) == ("/orbit/state", "sunlit"):
-            mid, _, _, mean = per_orbit(t, v, starts)
-            out.series("per_orbit/sunlit_share", mid, 100.0 * mean, "sunlit share of the orbit (%)", PALETTE[1])
+            mid, share = sunlit_share(t, v, starts, eclipses, out.origin_ns)
+            out.series("per_orbit/sunlit_share", mid, 100.0 * share, "sunlit share of the orbit (%)", PALETTE[1])
             views["sunlit share of each orbit (%)"].append("per_orbit/sunlit_share")
     return views
+
+
+def sunlit_share(t_ns, sunlit, starts_ns, eclipses, origin_ns):
+    """Each whole orbit's sunlit share (mid time ns, share): from the run's eclipse
+    windows (run_end's eclipses_json, s since t = 0) when the log has them, exact;
+    else from the sunlit flag's samples. A last orbit cut short by the run's end is
+    left out."""
+    import numpy as np
+
+    end = int(t_ns[-1])
+    bounds = np.r_[np.asarray(starts_ns, dtype=np.int64), end]
+    length = np.diff(bounds).astype(float)
+    whole = length >= 0.98 * np.median(length)
+    mid = (bounds[:-1] + bounds[1:]) // 2
+    if eclipses:
+        w = np.asarray(eclipses, dtype=float) * 1e9 + origin_ns  # (entry, exit), ns
+        edges = w.ravel()
+        dark = np.r_[0.0, np.cumsum(w[:, 1] - w[:, 0])]  # eclipse time before each window
+        cum = np.ravel(np.column_stack([dark[:-1], dark[1:]]))  # at each entry, exit
+        before = np.interp(bounds.astype(float), edges, cum, left=0.0, right=dark[-1])
+        share = 1.0 - np.diff(before) / length
+    else:
+        _, _, _, share = per_orbit(t_ns, sunlit, starts_ns)
+        share = share[: len(length)]
+    return mid[whole], share[whole]
 
 
 def send_series(out, series, channels, pairs):
@@ -458,7 +495,8 @@ def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None
             origin="/",
             contents=[f"/{e}" for e in entities],
             axis_x=rrb.archetypes.TimeAxis(view_range=whole, link="Independent"),
-            axis_y=rrb.ScalarAxis(range=(0.0, backlash_top)) if backlash and backlash_top else None,
+            axis_y=(rrb.ScalarAxis(range=(0.0, backlash_top)) if backlash and backlash_top
+                    else rrb.ScalarAxis(range=(0.0, 100.0)) if title.startswith("sunlit share") else None),
             plot_legend=rrb.PlotLegend("LeftTop" if title in late_smallest else "RightTop") if backlash else None,
         )
 
@@ -517,7 +555,9 @@ def export(log, out, partial):
         recording = Recording(rec, origin_ns)
         starts = orbit_starts(series)
         # the per-orbit series first: the viewer draws them while the samples load
-        envelopes = send_envelopes(recording, series, channels, pairs, starts) if starts is not None else None
+        eclipses = json.loads(meta.get("orbitlash.run_end", {}).get("eclipses_json", "null") or "null")
+        envelopes = (send_envelopes(recording, series, channels, pairs, starts, eclipses)
+                     if starts is not None else None)
         groups, body, gears = send_series(recording, series, channels, pairs)
         recording.events(texts)
         end_ns = recording.t_end_ns

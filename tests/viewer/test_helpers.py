@@ -544,6 +544,55 @@ def test_smallest_not_finite():
     expect(low.t_ns is None and low.allowed_um == 5.0 and low.verdict == "no_valid_mesh", f"got {low}")
 
 
+# ---- D: the per-orbit tab of a long run ----------------------------------------------
+
+def test_per_orbit_closed_form():
+    """A sine of period P sampled unevenly over 40 orbits of P, with orbit_number
+    changing at the first sample of each orbit (late by up to a step): each whole
+    orbit's range is the sine's (±1 within the sampling), its time-weighted mean 0,
+    and the orbit starts are put back on k·P by the straight-line fit."""
+    import numpy as np
+
+    module = load_export_module()
+    period_ns = 5_000 * 10**9
+    rng = np.random.default_rng(7)
+    t = np.cumsum(rng.uniform(20, 120, 20_000) * 1e9).astype(np.int64)
+    t = t[t < 40 * period_ns]
+    n = 1 + t // period_ns
+    series = {("/orbit/state", "orbit_number"): (list(t), list(n.astype(float)))}
+    starts = module.orbit_starts(series)
+    expect(starts is not None and len(starts) == 40, f"{None if starts is None else len(starts)} orbits, not 40")
+    expect(np.max(np.abs(starts[1:] - np.arange(1, 40) * period_ns)) < 60e9,
+           f"orbit starts off k·P by up to {np.max(np.abs(starts[1:] - np.arange(1, 40) * period_ns)) / 1e9:.0f} s")
+    v = np.sin(2 * np.pi * t / period_ns)
+    mid, lo, hi, mean = module.per_orbit(t, v, starts)
+    inner = slice(1, -1)  # whole orbits
+    expect(np.all(lo[inner] < -0.99) and np.all(hi[inner] > 0.99), f"ranges {lo[inner].max()} … {hi[inner].min()}")
+    expect(np.max(np.abs(mean[inner])) < 0.02, f"orbit means up to {np.max(np.abs(mean[inner]))}, not 0")
+    few = {("/orbit/state", "orbit_number"): (list(t[t < 10 * period_ns]), list(n[t < 10 * period_ns]))}
+    expect(module.orbit_starts(few) is None, "10 orbits got the per-orbit tab (it is for more than 30)")
+
+
+def test_sunlit_share_from_eclipses():
+    """Eclipses of 0.3 P in each orbit of P (and a last orbit cut at 0.5 P): every
+    whole orbit's sunlit share is 0.7 exactly, from the windows; from the samples of
+    the flag it is within a sample's share; the cut orbit is left out."""
+    import numpy as np
+
+    module = load_export_module()
+    p = 6000.0
+    eclipses = [[k * p + 0.5 * p, k * p + 0.8 * p] for k in range(50)]
+    t = np.arange(0, 49.5 * p, 10.0)
+    sunlit = np.array([0.0 if (x % p) > 0.5 * p and (x % p) <= 0.8 * p else 1.0 for x in t])
+    t_ns = (t * 1e9).astype(np.int64)
+    starts = (np.arange(50) * p * 1e9).astype(np.int64)
+    mid, share = module.sunlit_share(t_ns, sunlit, starts, eclipses, 0)
+    expect(len(share) == 49, f"{len(share)} orbits, not 49 whole ones")
+    expect(np.max(np.abs(share - 0.7)) < 1e-12, f"shares {share.min()} … {share.max()}, not 0.7")
+    mid, share = module.sunlit_share(t_ns, sunlit, starts, None, 0)
+    expect(np.max(np.abs(share - 0.7)) < 10.0 / p + 1e-9, f"from samples {share.min()} … {share.max()}")
+
+
 # ---- main ------------------------------------------------------------------------------
 
 def main():
@@ -593,6 +642,8 @@ def main():
         else:
             print("SKIP C: the binary's own log: it writes no pairs_json yet")
         check("C: a pair with no finite smallest: no point, verdict kept", test_smallest_not_finite)
+        check("D: per-orbit range and mean of a sine, orbit starts on k·P", test_per_orbit_closed_form)
+        check("D: the sunlit share of each whole orbit from the eclipse windows", test_sunlit_share_from_eclipses)
     print(f"{results['passed']} passed, {results['failed']} failed")
     return 1 if results["failed"] else 0
 
