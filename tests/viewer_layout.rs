@@ -1,8 +1,10 @@
-//! viewer/foxglove-layout.json, the Foxglove layout shipped for the reference scenario's
-//! run log, against a log the binary writes: every panel is placed, every message path
-//! is a channel of the log and resolves in its protobuf schema, every plotted path gives
-//! a finite number in every message, and the backlash plot's reference line is the
-//! smallest allowed backlash the log implies (`backlash_exact_um - margin_um`).
+//! Foxglove layouts against the logs they are for. `orbitlash layout LOG` makes one from
+//! a log's own channels; `viewer/foxglove-layout.json` is that layout for the reference
+//! scenario's log with the 3-D view. For it and for the layout of every shipped
+//! scenario's log: every panel is placed, every message path is a channel of the log
+//! and resolves in its protobuf schema, every plotted path gives a finite number in
+//! every message, and each backlash plot's reference line is that pair's smallest
+//! allowed backlash (`backlash_exact_um - margin_um`).
 
 mod common;
 
@@ -179,11 +181,11 @@ fn number_at(msg: &DynamicMessage, path: &MessagePath) -> f64 {
     }
 }
 
-#[test]
-fn cli_foxglove_layout_paths_exist_in_a_reference_log() {
-    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/viewer/foxglove-layout.json");
-    let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{file}: {e}"));
-    let layout: Json = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{file}: {e}"));
+/// Every panel of `layout` is placed; every message path of it is a channel of the log
+/// at `log` and resolves in its protobuf schema; every plotted path gives a finite
+/// number in every message; each reference line is beside a pair's exact backlash and
+/// equals that pair's smallest allowed (`backlash_exact_um - margin_um`).
+fn check_layout_against_log(layout: &Json, log: &std::path::Path) {
     let panels = layout["configById"]
         .as_object()
         .expect("a `configById` object");
@@ -194,44 +196,8 @@ fn cli_foxglove_layout_paths_exist_in_a_reference_log() {
         shown, configured,
         "the panels the layout places and those it configures"
     );
-
-    // The four plot groups, in panels of their own; every node of the reference scenario.
     let refs = layout_refs(panels);
-    let mut group_of = BTreeMap::new();
-    for p in [
-        "/thermal/temperature.housing_k",
-        "/thermal/temperature.gear1_r0_k",
-        "/gears/mesh.backlash_exact_um",
-        "/thermal/heat.to_space_w",
-    ] {
-        let panel = refs.plotted.iter().find(|(_, path)| path.text == p);
-        let (id, _) = panel.unwrap_or_else(|| panic!("the layout plots no `{p}`"));
-        assert!(
-            group_of.insert(id, p).is_none(),
-            "{id} holds {p} and {group_of:?}"
-        );
-    }
-    let nodes = [
-        "housing", "motor", "shaft1", "shaft2", "gear1_r0", "gear1_r1", "gear1_r2",
-    ];
-    for node in nodes
-        .into_iter()
-        .chain(["gear2_r0", "gear2_r1", "gear2_r2"])
-    {
-        let p = format!("/thermal/temperature.{node}_k");
-        assert!(
-            refs.plotted.iter().any(|(_, path)| path.text == p),
-            "no plot of `{p}`"
-        );
-    }
-
-    // The reference run's log with the 3-D view, and the message type of each channel.
-    let log = common::tmpdir("foxglove-layout").join("ref.mcap");
-    let args = ["run", "--orbits", "1", "--scene", "--quiet", "--out"];
-    let out = common::bin().args(args).arg(&log).output().unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "orbitlash run: {stderr}");
-    let bytes = std::fs::read(&log).unwrap();
+    let bytes = std::fs::read(log).unwrap();
     let summary = mcap::Summary::read(&bytes)
         .expect("a readable log")
         .expect("a summary");
@@ -272,9 +238,7 @@ fn cli_foxglove_layout_paths_exist_in_a_reference_log() {
 
     // Every message of a plotted topic decodes and gives a finite number for each path;
     // the mesh messages give the smallest allowed backlash.
-    let exact = parse_path("/gears/mesh.backlash_exact_um");
-    let margin = parse_path("/gears/mesh.margin_um");
-    let (mut seen, mut allowed) = (BTreeSet::new(), Vec::new());
+    let (mut seen, mut allowed) = (BTreeSet::new(), BTreeMap::<String, Vec<f64>>::new());
     for message in mcap::MessageStream::new(&bytes).expect("the log's messages") {
         let message = message.unwrap_or_else(|e| panic!("{}: {e}", log.display()));
         let topic = message.channel.topic.as_str();
@@ -298,8 +262,11 @@ fn cli_foxglove_layout_paths_exist_in_a_reference_log() {
                 message.log_time
             );
         }
-        if topic == exact.topic {
-            allowed.push(number_at(&msg, &exact) - number_at(&msg, &margin));
+        if topic.starts_with("/gears/") && !topic.ends_with("/scene") {
+            let exact = parse_path(&format!("{topic}.backlash_exact_um"));
+            let margin = parse_path(&format!("{topic}.margin_um"));
+            let a = number_at(&msg, &exact) - number_at(&msg, &margin);
+            allowed.entry(topic.to_string()).or_default().push(a);
         }
     }
     for (id, path) in &refs.plotted {
@@ -309,25 +276,156 @@ fn cli_foxglove_layout_paths_exist_in_a_reference_log() {
             path.topic
         );
     }
+    let pairs = allowed.len();
     assert!(
-        !refs.lines.is_empty(),
-        "no line at the smallest allowed backlash"
+        pairs == 0 || refs.lines.len() == pairs,
+        "{} reference lines for {pairs} gear pairs",
+        refs.lines.len()
     );
     for (id, line) in &refs.lines {
-        let beside = refs
+        let pair = refs
             .plotted
             .iter()
-            .any(|(pid, p)| pid == id && p.text == exact.text);
+            .find(|(pid, p)| {
+                pid == id && p.topic.starts_with("/gears/") && p.fields[0].0 == "backlash_exact_um"
+            })
+            .map(|(_, p)| p.topic.clone());
+        let pair = pair
+            .unwrap_or_else(|| panic!("{id}: a reference line ({line}) outside a backlash plot"));
+        let a = &allowed[&pair];
         assert!(
-            beside,
-            "{id}: a reference line ({line}) outside the backlash plot"
-        );
-        let at_minimum = !allowed.is_empty() && allowed.iter().all(|a| (a - line).abs() < 1e-9);
-        let first = allowed.first();
-        assert!(
-            at_minimum,
-            "{id}: line at {line} µm, smallest allowed backlash {first:?} µm"
+            a.iter().all(|a| (a - line).abs() < 1e-9),
+            "{id}: line at {line} µm, {pair}'s smallest allowed backlash {:?} µm",
+            a.first()
         );
     }
-    let _ = std::fs::remove_dir_all(log.parent().unwrap());
+}
+
+/// The layout `orbitlash layout` writes for the log at `log` (into `dir`).
+fn generated_layout(log: &std::path::Path, dir: &std::path::Path) -> Json {
+    let out = dir.join("layout.json");
+    let o = common::bin()
+        .arg("layout")
+        .arg(log)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "orbitlash layout: {stderr}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", out.display()))
+}
+
+/// A log of `args` (a short run) in `dir`.
+fn run_log(dir: &std::path::Path, name: &str, args: &[&str]) -> std::path::PathBuf {
+    let log = dir.join(format!("{name}.mcap"));
+    let out = common::bin()
+        .arg("run")
+        .args(args)
+        .args(["--quiet", "--out"])
+        .arg(&log)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.code().is_some_and(|c| c < 2),
+        "orbitlash run {args:?}: {stderr}"
+    );
+    log
+}
+
+/// The shipped layout (viewer/foxglove-layout.json, the reference scenario) is the one
+/// `orbitlash layout` makes for the reference run's log with the 3-D view, and it
+/// holds against that log: the four plot groups in panels of their own, every node in
+/// °C.
+#[test]
+fn cli_foxglove_layout_paths_exist_in_a_reference_log() {
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/viewer/foxglove-layout.json");
+    let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{file}: {e}"));
+    let layout: Json = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{file}: {e}"));
+    let panels = layout["configById"]
+        .as_object()
+        .expect("a `configById` object");
+    let refs = layout_refs(panels);
+    let mut group_of = BTreeMap::new();
+    for p in [
+        "/thermal/temperature_c.housing_c",
+        "/thermal/temperature_c.gear1_r0_c",
+        "/gears/mesh.backlash_exact_um",
+        "/thermal/heat.to_space_w",
+    ] {
+        let panel = refs.plotted.iter().find(|(_, path)| path.text == p);
+        let (id, _) = panel.unwrap_or_else(|| panic!("the layout plots no `{p}`"));
+        assert!(
+            group_of.insert(id, p).is_none(),
+            "{id} holds {p} and {group_of:?}"
+        );
+    }
+    let nodes = [
+        "housing", "motor", "shaft1", "shaft2", "gear1_r0", "gear1_r1", "gear1_r2", "gear2_r0",
+        "gear2_r1", "gear2_r2",
+    ];
+    for node in nodes {
+        let p = format!("/thermal/temperature_c.{node}_c");
+        assert!(
+            refs.plotted.iter().any(|(_, path)| path.text == p),
+            "no plot of `{p}`"
+        );
+    }
+    let dir = common::tmpdir("foxglove-layout");
+    let log = run_log(&dir, "ref", &["--orbits", "1", "--scene"]);
+    check_layout_against_log(&layout, &log);
+    assert_eq!(
+        generated_layout(&log, &dir),
+        layout,
+        "viewer/foxglove-layout.json is not what `orbitlash layout` makes for the reference log: regenerate it"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every shipped scenario's log (two orbits of each) gets a layout from `orbitlash
+/// layout` whose every path resolves to a finite number in every message, with every
+/// node's temperature plotted.
+#[test]
+fn cli_foxglove_layout_generated_for_every_shipped_scenario() {
+    let dir = common::tmpdir("foxglove-layout-every");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut names: Vec<_> = std::fs::read_dir(&root)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 5, "shipped scenarios: {names:?}");
+    for scenario in names {
+        let stem = scenario.file_stem().unwrap().to_string_lossy().into_owned();
+        let s = scenario.to_string_lossy().into_owned();
+        let log = run_log(&dir, &stem, &[&s, "--orbits", "2"]);
+        let layout = generated_layout(&log, &dir);
+        check_layout_against_log(&layout, &log);
+        let refs = layout_refs(layout["configById"].as_object().unwrap());
+        let bytes = std::fs::read(&log).unwrap();
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        let celsius = summary
+            .channels
+            .values()
+            .find(|c| c.topic == "/thermal/temperature_c")
+            .unwrap_or_else(|| panic!("{stem}: no /thermal/temperature_c"));
+        let nodes = celsius
+            .metadata
+            .keys()
+            .filter(|k| k.starts_with("node:"))
+            .count();
+        let plotted = refs
+            .plotted
+            .iter()
+            .filter(|(_, p)| p.topic == "/thermal/temperature_c")
+            .count();
+        assert_eq!(
+            plotted, nodes,
+            "{stem}: {plotted} of {nodes} node temperatures plotted"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -412,6 +412,8 @@ def send_series(out, series, channels, pairs):
             k = int(m.group(2)) if m else len(body)
             out.series(entity, t, [x - 273.15 for x in v], f"{node} (°C)", PALETTE[k % len(PALETTE)])
             (gears[m.group(1)] if m else body).append(entity)
+        elif topic == "/thermal/temperature_c":
+            continue  # the same temperatures in °C, which /thermal/temperature gives here
         elif topic.startswith("/gears/"):
             send_gear(out, topic, field, t, v, series, pairs, groups)
         elif topic == "/thermal/heat":

@@ -15,6 +15,7 @@ mod diagnose;
 mod environment;
 mod estimate;
 mod export;
+mod layout;
 mod margins;
 mod params;
 mod plot;
@@ -91,6 +92,9 @@ enum Command {
     /// backlash marked; a long run as per-orbit envelopes), from its log or CSV, as PNG
     /// or SVG.
     Plot(plot::PlotArgs),
+    /// A Foxglove layout made from a run log's own channels (every panel plots what the
+    /// log has, temperatures in °C): written to logs/<log name>.foxglove.json.
+    Layout(layout::LayoutArgs),
     /// Make a killed run's log (`<name>.<pid>.partial`) or a truncated copy into a valid MCAP
     /// file holding everything up to its last whole message.
     Recover(recover::RecoverArgs),
@@ -131,6 +135,7 @@ pub fn dispatch(cli: Cli) -> Result<Outcome> {
         Command::Environment(a) => done(environment::environment(a)),
         Command::ExportCsv(a) => done(export::export(a)),
         Command::Plot(a) => done(plot::plot(a)),
+        Command::Layout(a) => done(layout::layout(a)),
         Command::Recover(a) => done(recover::recover(a)),
     }
 }

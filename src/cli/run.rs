@@ -350,9 +350,10 @@ fn figure_and_log(
     if let Some(p) = log_path {
         outln!(
             o,
-            "log: {}  (Foxglove: import viewer/foxglove-layout.json; Rerun with its plots: \
-             `pip install -r viewer/requirements.txt` once, then \
+            "log: {}  (Foxglove: `orbitlash layout {}` writes the layout of this log to import; \
+             Rerun with its plots: `pip install -r viewer/requirements.txt` once, then \
              `python3 viewer/rerun_export.py {}` and `rerun` the .rrd)",
+            p.display(),
             p.display(),
             p.display()
         );

@@ -6,6 +6,9 @@
 //! - `/thermal/temperature`: `time_s`, then `<node>_k` for every diffusion node
 //!   (node names lower-cased with `.` → `_`; the channel metadata maps each field back
 //!   to its node name as `node:<field>`);
+//! - `/thermal/temperature_c`: the same temperatures in °C, `<node>_c` (no `time_s`),
+//!   for viewers that plot a field as it is (Foxglove's message paths cannot add an
+//!   offset); the channel metadata maps each field to its node as `node:<field>`;
 //! - `/thermal/heat`: `absorbed_w`, `dissipated_w`, `to_<boundary>_w`, then
 //!   `<load>_w` for every load and `<heater>_w` for every heater;
 //! - `/orbit/state`: `orbit_angle_deg` (from orbit noon), `beta_deg`,
@@ -119,7 +122,8 @@ pub fn estimated_bytes_per_sample(model: &ThermalModel, gears: &[GearPair]) -> f
     let heat = doubles((2 + net.boundaries.len() + net.loads.len() + net.heaters.len()) as u64);
     let orbit = doubles(5);
     let faces = net.face_loads().count() as u64;
-    let mut total = 3 * record + temperature + heat + orbit;
+    let celsius = doubles(net.nodes.len() as u64);
+    let mut total = 4 * record + temperature + celsius + heat + orbit;
     if faces > 0 {
         total += record + doubles(3 * faces);
     }
@@ -151,6 +155,8 @@ pub struct Provenance {
 #[derive(Default)]
 struct Channels {
     temperature: u16,
+    /// `/thermal/temperature_c`.
+    celsius: u16,
     heat: u16,
     orbit: u16,
     /// `/orbit/faces`, when the model has faces.
@@ -376,6 +382,12 @@ impl LogWriter {
             self.enc.double(i as u32 + 2, t);
         }
         self.write_encoded(self.ch.temperature, t_s)?;
+        self.enc.clear();
+        for (i, &t) in temps.iter().enumerate() {
+            self.enc
+                .double(i as u32 + 1, t - crate::constants::ZERO_CELSIUS_K);
+        }
+        self.write_encoded(self.ch.celsius, t_s)?;
         // Heat flows: absorbed, dissipated, each boundary, load and heater, in order.
         self.enc.clear();
         for (f, &q) in flows.iter().enumerate() {
@@ -948,6 +960,11 @@ fn open_log_writer(
     for f in &node_fields {
         temperature = temperature.with(f, Kind::Double);
     }
+    let celsius_fields = field_names(d.nodes.iter().cloned(), "c", &mut Vec::new());
+    let mut celsius = MessageType::new("NodeTemperaturesCelsius");
+    for f in &celsius_fields {
+        celsius = celsius.with(f, Kind::Double);
+    }
     let mut taken = vec!["absorbed_w".to_string(), "dissipated_w".to_string()];
     let mut heat = MessageType::new("HeatFlows")
         .with("absorbed_w", Kind::Double)
@@ -992,6 +1009,17 @@ fn open_log_writer(
         &descriptor_set("NodeTemperatures", &[temperature]),
     )?;
     let temperature = channel(w, s, "/thermal/temperature", &node_map)?;
+    let celsius_map: BTreeMap<String, String> = celsius_fields
+        .iter()
+        .zip(&d.nodes)
+        .map(|(f, n)| (format!("node:{f}"), n.clone()))
+        .collect();
+    let s = schema(
+        w,
+        "orbitlash.NodeTemperaturesCelsius",
+        &descriptor_set("NodeTemperaturesCelsius", &[celsius]),
+    )?;
+    let celsius = channel(w, s, "/thermal/temperature_c", &celsius_map)?;
     let s = schema(
         w,
         "orbitlash.HeatFlows",
@@ -1051,6 +1079,7 @@ fn open_log_writer(
     write_provenance(w, path, provenance, cadence, t_end_s, d.time_origin_ns)?;
     let ch = Channels {
         temperature,
+        celsius,
         heat,
         orbit,
         faces,

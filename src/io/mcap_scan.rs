@@ -185,7 +185,13 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
                 let damaged = header.uncompressed_crc != 0
                     && crc32fast::hash(data) != header.uncompressed_crc;
                 let before = s.messages.len();
-                inner_records(bytes, offset, offset + data.len(), true, &mut s)?;
+                match inner_records(bytes, offset, offset + data.len(), true, &mut s) {
+                    Ok(()) => {}
+                    // a changed byte that broke a record inside the chunk: what came
+                    // before it is kept (marked damaged), and the CRC names the damage
+                    Err(_) if damaged => {}
+                    Err(e) => return Err(e),
+                }
                 if damaged {
                     s.damaged_chunks.push(at);
                     for m in &mut s.messages[before..] {

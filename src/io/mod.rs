@@ -3,6 +3,7 @@
 pub mod atomic;
 pub mod csv_export;
 pub mod diagnose_out;
+pub mod foxglove_layout;
 pub mod log_schema;
 pub mod mcap_lengths;
 pub mod mcap_log;
