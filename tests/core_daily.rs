@@ -127,3 +127,88 @@ fn cli_a_long_run_reports_days_weeks_and_heaters() {
             && !text.contains("per day")
     );
 }
+
+/// `run --json` carries the days and heaters in machine form (issue 30 item 8): one
+/// entry per day covering the run, the days' smallest backlash the run's (to a few
+/// nanometres, as the text), each heater's energy its power times its time on, its
+/// duty that time over the run, and the days' heater shares adding up to it; the
+/// heater's hours and energy are those the text table prints.
+#[test]
+fn cli_run_json_has_days_and_heaters() {
+    let dir = common::tmpdir("daily-json");
+    let json = dir.join("s.json");
+    let out = common::bin()
+        .args(["run", "--no-log", "--json"])
+        .arg(&json)
+        .arg(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("scenarios/hinge-90-day-drift.toml"),
+        )
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let days = s["days"].as_array().expect("days");
+    let span = s["t_end_s"].as_f64().unwrap() - s["t_start_s"].as_f64().unwrap();
+    assert_eq!(
+        days.len() as f64,
+        (span / DAY_S).ceil(),
+        "one entry per day"
+    );
+    let covered: f64 = days.iter().map(|d| d["covered_s"].as_f64().unwrap()).sum();
+    assert!(
+        (covered - span).abs() < 1e-6 * span,
+        "the days cover {covered} of {span} s"
+    );
+    for (k, d) in days.iter().enumerate() {
+        assert_eq!(d["day"].as_u64(), Some(k as u64 + 1));
+        assert!(d["coldest_k"].as_f64().unwrap() <= d["hottest_k"].as_f64().unwrap());
+    }
+    let smallest = days
+        .iter()
+        .filter_map(|d| d["gear_pairs"][0]["min_backlash_um"].as_f64())
+        .fold(f64::INFINITY, f64::min);
+    let run_min = s["gear_pairs"][0]["min_backlash_um"].as_f64().unwrap();
+    assert!(
+        (smallest - run_min).abs() < 0.01,
+        "days' smallest {smallest} µm, the run's {run_min} µm"
+    );
+    let h = &s["heaters"][0];
+    let (p, on, e) = (
+        h["power_w"].as_f64().unwrap(),
+        h["on_s"].as_f64().unwrap(),
+        h["energy_j"].as_f64().unwrap(),
+    );
+    assert!(
+        on > 0.0 && (e - p * on).abs() < 1e-6 * e,
+        "energy {e} J, power × time {} J",
+        p * on
+    );
+    assert!((h["duty_fraction"].as_f64().unwrap() - on / span).abs() < 1e-12);
+    let shared: f64 = days
+        .iter()
+        .map(|d| d["heaters_on_fraction"].as_f64().unwrap() * d["covered_s"].as_f64().unwrap())
+        .sum();
+    assert!(
+        (shared - on).abs() < 1e-6 * on,
+        "days' heater time {shared} s, the heater's {on} s"
+    );
+    let name = h["name"].as_str().unwrap();
+    let row: Vec<&str> = text
+        .lines()
+        .find(|l| l.trim_start().starts_with(name))
+        .unwrap_or_else(|| panic!("no row of {name} in\n{text}"))
+        .split_whitespace()
+        .collect();
+    let want = [
+        format!("{p:.2}"),
+        format!("{:.2}", on / 3600.0),
+        format!("{:.1}", 100.0 * on / span),
+        format!("{:.1}", e / 1e3),
+        format!("{:.2}", e / 3600.0),
+    ];
+    assert_eq!(row[1..], want, "the text's heater row and the JSON");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -300,7 +300,7 @@ fn report_run(
         o.push_str(&format_solver(stats, wall_s, t_end_s / period_s));
     }
     if let Some(p) = &a.json {
-        let summary = RunSummary::new(sc, stats, window, mesh, wall_s);
+        let summary = RunSummary::new(sc, stats, window, mesh, daily, wall_s);
         let text = serde_json::to_string_pretty(&summary)? + "\n";
         outs.write_all(&[(p.as_path(), text.as_bytes())])?;
         outln!(o, "json: {}", p.display());
@@ -705,16 +705,14 @@ heaters over the run:"
                 Align::Right,
             ],
         );
-        for (k, (name, p)) in daily.heaters.iter().enumerate() {
-            let on: f64 = daily.days.iter().map(|d| d.heater_on_s[k]).sum();
-            let j: f64 = daily.days.iter().map(|d| d.heater_j[k]).sum();
+        for h in daily.heater_summaries(span) {
             t.add_row(vec![
-                name.clone(),
-                format!("{p:.2}"),
-                format!("{:.2}", on / 3600.0),
-                format!("{:.1}", 100.0 * on / span.max(1e-9)),
-                format!("{:.1}", j / 1e3),
-                format!("{:.2}", j / 3600.0),
+                h.name,
+                format!("{:.2}", h.power_w),
+                format!("{:.2}", h.on_s / 3600.0),
+                format!("{:.1}", 100.0 * h.duty_fraction),
+                format!("{:.1}", h.energy_j / 1e3),
+                format!("{:.2}", h.energy_j / 3600.0),
             ]);
         }
         o += &table::render(&t, "  ");

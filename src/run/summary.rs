@@ -532,7 +532,46 @@ pub struct RunSummary {
     pub gear_pairs: Vec<PairSummary>,
     pub events: EventCounts,
     pub energy: EnergySummary,
+    /// Each heater over the run: power, time on, duty and energy.
+    pub heaters: Vec<HeaterSummary>,
+    /// Each day of simulated time (day 1 starts at t = 0): each pair's backlash range,
+    /// the coldest and hottest node, the heaters' share of the day on.
+    pub days: Vec<DaySummary>,
     pub solver: SolverSummary,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct HeaterSummary {
+    pub name: String,
+    pub power_w: f64,
+    pub on_s: f64,
+    /// Time on over the run's span.
+    pub duty_fraction: f64,
+    pub energy_j: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct DaySummary {
+    /// From 1.
+    pub day: u64,
+    pub start_s: f64,
+    /// Seconds of the day the run covered (less than a day for a last, cut day).
+    pub covered_s: f64,
+    pub gear_pairs: Vec<PairDay>,
+    pub coldest_node: String,
+    pub coldest_k: f64,
+    pub hottest_node: String,
+    pub hottest_k: f64,
+    /// The heaters' time on over (their number × the covered time); null without one.
+    pub heaters_on_fraction: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PairDay {
+    pub name: String,
+    /// Null when the pair had no valid mesh that day.
+    pub min_backlash_um: Option<f64>,
+    pub max_backlash_um: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -609,6 +648,7 @@ impl RunSummary {
         stats: &crate::run::sim::RunStats,
         window: &WindowStats,
         mesh: &MeshStats,
+        daily: &DailyStats,
         wall_time_s: f64,
     ) -> RunSummary {
         let um = |m: f64| m * 1e6;
@@ -679,6 +719,8 @@ impl RunSummary {
                 error_j: e.error_j(),
                 relative_error: e.relative_error(),
             },
+            heaters: daily.heater_summaries(stats.t_end_s - stats.t_start_s),
+            days: daily.day_summaries(&scenario.gears),
             solver: SolverSummary {
                 method: "tr-bdf2",
                 linear_solver: stats.linear_solver,
@@ -702,6 +744,67 @@ pub struct DailyStats {
     pub nodes: Vec<String>,
     pub heaters: Vec<(String, f64)>,
     pub days: Vec<Day>,
+}
+
+impl DailyStats {
+    /// Each heater's power, time on, duty over `span_s` and energy.
+    pub fn heater_summaries(&self, span_s: f64) -> Vec<HeaterSummary> {
+        self.heaters
+            .iter()
+            .enumerate()
+            .map(|(k, (name, p))| {
+                let on_s: f64 = self.days.iter().map(|d| d.heater_on_s[k]).sum();
+                HeaterSummary {
+                    name: name.clone(),
+                    power_w: *p,
+                    on_s,
+                    duty_fraction: on_s / span_s.max(1e-9),
+                    energy_j: self.days.iter().map(|d| d.heater_j[k]).sum(),
+                }
+            })
+            .collect()
+    }
+
+    /// Each day as the JSON summary gives it.
+    pub fn day_summaries(&self, gears: &[crate::gear::GearPair]) -> Vec<DaySummary> {
+        let finite = |v: f64| v.is_finite().then_some(v * 1e6);
+        self.days
+            .iter()
+            .map(|d| {
+                let (mut cold, mut hot) = ((f64::INFINITY, 0), (f64::NEG_INFINITY, 0));
+                for (i, &(a, b)) in d.node_k.iter().enumerate() {
+                    if a < cold.0 {
+                        cold = (a, i);
+                    }
+                    if b > hot.0 {
+                        hot = (b, i);
+                    }
+                }
+                let name = |i: usize| self.nodes.get(i).cloned().unwrap_or_default();
+                let on: f64 = d.heater_on_s.iter().sum();
+                DaySummary {
+                    day: d.day + 1,
+                    start_s: d.day as f64 * DAY_S,
+                    covered_s: d.covered_s,
+                    gear_pairs: gears
+                        .iter()
+                        .zip(&d.backlash_m)
+                        .map(|(g, &(lo, hi))| PairDay {
+                            name: g.name.clone(),
+                            min_backlash_um: finite(lo),
+                            max_backlash_um: finite(hi),
+                        })
+                        .collect(),
+                    coldest_node: name(cold.1),
+                    coldest_k: cold.0,
+                    hottest_node: name(hot.1),
+                    hottest_k: hot.0,
+                    heaters_on_fraction: (!self.heaters.is_empty())
+                        .then(|| on / (d.covered_s * self.heaters.len() as f64).max(1e-9)),
+                }
+            })
+            .collect()
+    }
 }
 
 /// One day of [`DailyStats`].
