@@ -363,23 +363,52 @@ fn cli_margins_plots_are_svg_with_the_limit_and_the_bound() {
     let tornado = std::fs::read_to_string(dir.join("plots/mesh-sensitivity.svg")).unwrap();
     assert!(tornado.contains("whiskers: 95 % interval (60 samples)"));
     assert!(tornado.contains("gear_pair.mesh.pinion.tooth_thinning_um (+"));
-    // a missing folder is an error, nothing written
-    let out = bin()
-        .args([
-            "margins",
-            "m.toml",
-            "--samples",
-            "60",
-            "--seed",
-            "2",
-            "--orbits",
-            "1",
-        ])
-        .args(["--quiet", "--plots", "nowhere"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
+    // a missing folder is created (its parent must exist), and the figures can be PNG
+    // at twice their size, the same figures as the SVGs
+    let margins = |plots: &str, format: &str| {
+        bin()
+            .args([
+                "margins",
+                "m.toml",
+                "--samples",
+                "60",
+                "--seed",
+                "2",
+                "--orbits",
+                "1",
+            ])
+            .args(["--quiet", "--plots", plots, "--plots-format", format])
+            .current_dir(&dir)
+            .output()
+            .unwrap()
+    };
+    let out = margins("slides", "png");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = std::fs::read(dir.join("slides/mesh-min-backlash.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let (w, h) = (
+        u32::from_be_bytes(png[16..20].try_into().unwrap()),
+        u32::from_be_bytes(png[20..24].try_into().unwrap()),
+    );
+    let size = |svg: &str, key: &str| -> u32 {
+        let at = svg.find(&format!("{key}=\"")).unwrap() + key.len() + 2;
+        svg[at..].split('"').next().unwrap().parse().unwrap()
+    };
+    assert_eq!(
+        (w, h),
+        (2 * size(&hist, "width"), 2 * size(&hist, "height"))
+    );
+    assert!(dir.join("slides/mesh-sensitivity.png").is_file());
+    assert!(!dir.join("slides/mesh-min-backlash.svg").exists());
+    // a folder whose parent is missing is an error, nothing written
+    let out = margins("nowhere/deeper", "svg");
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no such directory"));
+    assert!(!dir.join("nowhere").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -6,6 +6,14 @@ mod common;
 
 use orbitlash::plot::run::{RunSeries, envelope, figure};
 
+/// The labels as the SVG draws them (measured at the font size written into it): found,
+/// apart from each other, on the page, and with no drawn line (a curve, a reference
+/// line, an axis) through any of them.
+fn assert_drawn_right(fig: &orbitlash::plot::Figure) {
+    let problems = fig.drawn_problems();
+    assert!(problems.is_empty(), "{problems:#?}");
+}
+
 fn png_size(bytes: &[u8]) -> (u32, u32) {
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
     let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
@@ -234,22 +242,24 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     );
 }
 
-/// A failing run (the smallest allowed backlash set above what the run reaches): FAIL on
-/// the figure, the labels of the allowed line and of the smallest point placed apart.
+/// A failing run (the smallest allowed backlash set at 30 µm, inside the band the
+/// backlash swings through): FAIL on the figure, the labels of the allowed line and of
+/// the smallest point placed apart and off the curves and the line.
 #[test]
 fn cli_plot_a_failing_run_says_so_and_no_labels_overlap() {
     let dir = common::tmpdir("plot-fail");
-    let log = run_log(&dir, "fail", &["gear_pair.mesh.min_backlash_um=26"]);
+    let log = run_log(&dir, "fail", &["gear_pair.mesh.min_backlash_um=30"]);
     let table = orbitlash::io::mcap_read::read_log(&log).unwrap();
     let (h, r) = orbitlash::io::mcap_read::run_table(&table, true).unwrap();
     let s = RunSeries::from_table("failing", &h, &r).unwrap();
     assert_eq!(s.allowed_um.len(), 1);
     assert!(
-        (s.allowed_um[0].1 - 26.0).abs() < 1e-6,
+        (s.allowed_um[0].1 - 30.0).abs() < 1e-6,
         "{:?}",
         s.allowed_um
     );
     let fig = figure(&s).unwrap();
+    assert_drawn_right(&fig);
     assert!(
         fig.svg.contains("FAIL"),
         "no FAIL on a failing run's figure"
@@ -267,7 +277,7 @@ fn cli_plot_a_failing_run_says_so_and_no_labels_overlap() {
     assert!(
         fig.labels
             .iter()
-            .any(|l| l.text.starts_with("smallest allowed 26.000"))
+            .any(|l| l.text.starts_with("smallest allowed 30.000"))
     );
     assert!(fig.labels.iter().any(|l| l.text.starts_with("smallest 2")));
     // and the PNG renders with the embedded font
@@ -310,6 +320,7 @@ fn val_closed_form_long_run_is_drawn_as_per_orbit_envelopes() {
         .collect();
     let s = RunSeries::from_table("synthetic 40 days", &headers, &rows).unwrap();
     let fig = figure(&s).unwrap();
+    assert_drawn_right(&fig);
     assert!(fig.svg.contains("simulated time (days)"));
     assert!(fig.svg.contains("smallest and largest per orbit"));
     assert!(
@@ -408,6 +419,7 @@ fn cli_margins_figures_of_a_failing_run_with_long_key_paths_keep_labels_apart() 
         interfering: 3,
     })
     .unwrap();
+    assert_drawn_right(&fig);
     assert!(
         fig.overlapping_labels().is_empty(),
         "{:?}",
@@ -439,6 +451,24 @@ fn cli_margins_figures_of_a_failing_run_with_long_key_paths_keep_labels_apart() 
         ("environment.albedo".to_string(), f64::NAN),
     ];
     let fig = tornado("sensitivity of the smallest backlash", &rows, 400).unwrap();
+    assert_drawn_right(&fig);
+    // the key paths, right-aligned, end together next to the axis's left end (−1),
+    // as drawn (measured at the written font size, not the size asked of plotters)
+    let (texts, _) = orbitlash::plot::drawn::read(&fig.svg);
+    let ends: Vec<f64> = texts
+        .iter()
+        .filter(|t| rows.iter().any(|r| t.text.starts_with(r.0.as_str())))
+        .map(|t| t.rect.x1)
+        .collect();
+    assert_eq!(ends.len(), rows.len());
+    let minus_one = texts.iter().find(|t| t.text == "−1").expect("the −1 tick");
+    let axis_x = (minus_one.rect.x0 + minus_one.rect.x1) / 2.0;
+    for e in &ends {
+        assert!(
+            (e - ends[0]).abs() < 1.5 && (axis_x - e) > 4.0 && (axis_x - e) < 20.0,
+            "key paths end at {ends:?}, the axis at {axis_x}"
+        );
+    }
     assert!(
         fig.overlapping_labels().is_empty(),
         "{:?}",
@@ -494,6 +524,7 @@ fn cli_plot_the_90_day_run() {
     let (h, r) = orbitlash::io::mcap_read::run_table(&table, true).unwrap();
     let s = RunSeries::from_table("hinge-90-day-drift", &h, &r).unwrap();
     let fig = figure(&s).unwrap();
+    assert_drawn_right(&fig);
     assert!(
         fig.svg.contains("simulated time (days)")
             && fig.svg.contains("smallest and largest per orbit")
@@ -545,6 +576,7 @@ fn cli_plot_no_valid_mesh_and_pair_names_that_are_not_identifiers() {
     let s = RunSeries::from_table("no mesh", &headers, &nan_rows).unwrap();
     let t0 = std::time::Instant::now();
     let fig = figure(&s).unwrap();
+    assert_drawn_right(&fig);
     assert!(t0.elapsed().as_secs_f64() < 5.0);
     assert!(!fig.labels.iter().any(|l| l.text.starts_with("smallest ")));
     let rows: Vec<Vec<f64>> = (0..50)
@@ -557,6 +589,7 @@ fn cli_plot_no_valid_mesh_and_pair_names_that_are_not_identifiers() {
     assert_eq!(s.allowed_um.len(), 1);
     assert!((s.allowed_um[0].1 - 9.5).abs() < 1e-9);
     let fig = figure(&s).unwrap();
+    assert_drawn_right(&fig);
     assert!(fig.svg.contains("FAIL"), "9.5 allowed, 9.0 reached");
 }
 

@@ -122,6 +122,15 @@ fn val_funcube_flight_diagnose_improves_every_held_out_channel() {
         assert!(after < before, "{ch}: {before} → {after}");
     }
     assert_eq!(d.heldout_rmse.0.len(), 8);
+    // The figures of `diagnose --out` on real data (gaps, fill): their labels, as the
+    // SVG draws them, apart, on the page and off every drawn line.
+    let overview = orbitlash::plot::overview::overview(&d.series, "funcube-1").unwrap();
+    let mut problems = overview.drawn_problems();
+    for c in 0..d.series.channels.len() {
+        let fig = orbitlash::plot::diagnose::channel(&d.series, c).unwrap();
+        problems.extend(fig.drawn_problems());
+    }
+    assert!(problems.is_empty(), "{problems:#?}");
     // The calibration is fitted first and reported as calibration: the global sunlight
     // and infrared scales and the two largest thermal masses (chassis, stack), which
     // remove most of the baseline's held-out residual on this day; none of them is a

@@ -65,11 +65,15 @@ pub struct MarginsArgs {
     /// Also write every sample (index, dispersed values, results) as CSV.
     #[arg(long, value_name = "FILE.csv")]
     csv: Option<PathBuf>,
-    /// Also write plots into this folder (it must exist): per gear pair
-    /// `<pair>-min-backlash.svg` (histogram and CDF with the limit and the 95/95 bound)
-    /// and `<pair>-sensitivity.svg` (tornado chart).
+    /// Also write plots into this folder (created if missing; its parent must exist):
+    /// per gear pair `<pair>-min-backlash.svg` (histogram and CDF with the limit and the
+    /// 95/95 bound) and `<pair>-sensitivity.svg` (tornado chart); `.png` with
+    /// `--plots-format png`.
     #[arg(long, value_name = "DIR", conflicts_with = "shard")]
     plots: Option<PathBuf>,
+    /// The format of the --plots figures: SVG, or PNG at twice their size (for slides).
+    #[arg(long, value_enum, default_value = "svg", requires = "plots")]
+    plots_format: PlotsFormat,
     /// Run only shard i of n (0-based, e.g. `3/16`): a deterministic slice of the
     /// samples, written with --json as a shard file for `orbitlash merge`.
     #[arg(long, value_name = "I/N", value_parser = shard_arg, requires = "json")]
@@ -126,6 +130,7 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         json: a.json.as_deref(),
         csv: a.csv.as_deref(),
         plots: a.plots.as_deref(),
+        format: a.plots_format,
     };
     files.plan(&mut outs, sc.gears.iter().map(|g| g.name.as_str()))?;
     let spec = loaded.model.spec();
@@ -214,12 +219,37 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
     finish(&outs, &id, &outcomes, files)
 }
 
+/// The format of the margins figures.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum PlotsFormat {
+    Svg,
+    Png,
+}
+
+impl PlotsFormat {
+    fn ext(self) -> &'static str {
+        match self {
+            PlotsFormat::Svg => "svg",
+            PlotsFormat::Png => "png",
+        }
+    }
+
+    /// The figure's bytes in this format (PNG at twice its size).
+    fn bytes(self, fig: orbitlash::plot::Figure) -> Result<Vec<u8>, orbitlash::plot::PlotError> {
+        match self {
+            PlotsFormat::Svg => Ok(fig.svg.into_bytes()),
+            PlotsFormat::Png => fig.png(2.0),
+        }
+    }
+}
+
 /// Where `margins` or `merge` write the report, the samples and the plots.
 #[derive(Clone, Copy)]
 struct ReportFiles<'a> {
     json: Option<&'a Path>,
     csv: Option<&'a Path>,
     plots: Option<&'a Path>,
+    format: PlotsFormat,
 }
 
 impl ReportFiles<'_> {
@@ -233,9 +263,9 @@ impl ReportFiles<'_> {
             outs.file("--csv", p)?;
         }
         if let Some(dir) = self.plots {
-            outs.folder("--plots", dir, false)?;
+            outs.folder("--plots", dir, true)?;
             for pair in pairs {
-                for name in plot_names(pair) {
+                for name in plot_names(pair, self.format) {
                     outs.file(&format!("--plots ({name})"), &dir.join(name))?;
                 }
             }
@@ -244,10 +274,11 @@ impl ReportFiles<'_> {
     }
 }
 
-fn plot_names(pair: &str) -> [String; 2] {
+fn plot_names(pair: &str, format: PlotsFormat) -> [String; 2] {
+    let ext = format.ext();
     [
-        format!("{pair}-min-backlash.svg"),
-        format!("{pair}-sensitivity.svg"),
+        format!("{pair}-min-backlash.{ext}"),
+        format!("{pair}-sensitivity.{ext}"),
     ]
 }
 
@@ -258,7 +289,12 @@ fn finish(
     outcomes: &[SampleOutcome],
     files_to: ReportFiles<'_>,
 ) -> Result<Outcome> {
-    let ReportFiles { json, csv, plots } = files_to;
+    let ReportFiles {
+        json,
+        csv,
+        plots,
+        format,
+    } = files_to;
     let Some(rep) = report(id, outcomes) else {
         let first = outcomes
             .iter()
@@ -282,7 +318,7 @@ fn finish(
         files.push((p.to_path_buf(), samples_csv(id, outcomes).into_bytes()));
     }
     if let Some(dir) = plots {
-        files.extend(plots_of(dir, &rep, outcomes)?);
+        files.extend(plots_of(dir, &rep, outcomes, format)?);
     }
     let refs: Vec<(&Path, &[u8])> = files
         .iter()
@@ -360,11 +396,12 @@ fn run_with_progress(
     result
 }
 
-/// The plots of `rep` for `dir`: (path, SVG text) per gear pair.
+/// The plots of `rep` for `dir`: (path, bytes in `format`) per gear pair.
 fn plots_of(
     dir: &Path,
     rep: &Report,
     outcomes: &[SampleOutcome],
+    format: PlotsFormat,
 ) -> Result<Vec<(PathBuf, Vec<u8>)>, orbitlash::plot::PlotError> {
     let mut files = Vec::new();
     for (k, p) in rep.pairs.iter().enumerate() {
@@ -373,7 +410,7 @@ fn plots_of(
             .filter(|o| o.invalid.is_none())
             .map(|o| o.pairs[k].min_backlash_um)
             .collect();
-        let [dist_name, tornado_name] = plot_names(&p.name);
+        let [dist_name, tornado_name] = plot_names(&p.name, format);
         let fig =
             orbitlash::plot::margins::distribution(&orbitlash::plot::margins::DistributionInput {
                 title: format!(
@@ -388,7 +425,7 @@ fn plots_of(
                 below: p.violations.count,
                 interfering: p.interference.count,
             })?;
-        files.push((dir.join(dist_name), fig.svg.into_bytes()));
+        files.push((dir.join(dist_name), format.bytes(fig)?));
         let rows: Vec<(String, f64)> = p
             .sensitivities
             .iter()
@@ -402,7 +439,7 @@ fn plots_of(
             &rows,
             rep.valid_samples as usize,
         )?;
-        files.push((dir.join(tornado_name), fig.svg.into_bytes()));
+        files.push((dir.join(tornado_name), format.bytes(fig)?));
     }
     Ok(files)
 }
@@ -642,9 +679,12 @@ pub struct MergeArgs {
     /// Also write every sample as CSV (the same as the unsharded run's).
     #[arg(long, value_name = "FILE.csv")]
     csv: Option<PathBuf>,
-    /// Also write the plots into this folder (it must exist), as `margins --plots`.
+    /// Also write the plots into this folder (created if missing), as `margins --plots`.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+    /// The format of the --plots figures, as `margins --plots-format`.
+    #[arg(long, value_enum, default_value = "svg", requires = "plots")]
+    plots_format: PlotsFormat,
 }
 
 /// The largest shard file read (a shard of 10⁷ samples with a few dispersions and pairs
@@ -675,6 +715,7 @@ pub fn merge_shards(a: MergeArgs) -> Result<Outcome> {
         json: a.json.as_deref(),
         csv: a.csv.as_deref(),
         plots: a.plots.as_deref(),
+        format: a.plots_format,
     };
     files.plan(&mut outs, id.pairs.iter().map(|(n, _)| n.as_str()))?;
     finish(&outs, &id, &outcomes, files)

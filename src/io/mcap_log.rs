@@ -850,6 +850,34 @@ fn field_names(
         .collect()
 }
 
+/// The `/thermal/temperature_c` channel: `<node>_c` per node, each mapped to its node
+/// as `node:<field>`.
+fn celsius_channel(
+    w: &mut mcap::Writer<AtomicFile>,
+    path: &Path,
+    nodes: &[String],
+) -> Result<u16, OutputError> {
+    let fields = field_names(nodes.iter().cloned(), "c", &mut Vec::new());
+    let mut message = MessageType::new("NodeTemperaturesCelsius");
+    for f in &fields {
+        message = message.with(f, Kind::Double);
+    }
+    let meta: BTreeMap<String, String> = fields
+        .iter()
+        .zip(nodes)
+        .map(|(f, n)| (format!("node:{f}"), n.clone()))
+        .collect();
+    let s = w
+        .add_schema(
+            "orbitlash.NodeTemperaturesCelsius",
+            "protobuf",
+            &descriptor_set("NodeTemperaturesCelsius", &[message]),
+        )
+        .map_err(|e| out_err(path, e))?;
+    w.add_channel(s, "/thermal/temperature_c", "protobuf", &meta)
+        .map_err(|e| out_err(path, e))
+}
+
 /// Adds the schema of a Foxglove well-known message type as the official crate gives it.
 fn foxglove_schema<M: foxglove::Encode>(
     w: &mut mcap::Writer<AtomicFile>,
@@ -960,11 +988,6 @@ fn open_log_writer(
     for f in &node_fields {
         temperature = temperature.with(f, Kind::Double);
     }
-    let celsius_fields = field_names(d.nodes.iter().cloned(), "c", &mut Vec::new());
-    let mut celsius = MessageType::new("NodeTemperaturesCelsius");
-    for f in &celsius_fields {
-        celsius = celsius.with(f, Kind::Double);
-    }
     let mut taken = vec!["absorbed_w".to_string(), "dissipated_w".to_string()];
     let mut heat = MessageType::new("HeatFlows")
         .with("absorbed_w", Kind::Double)
@@ -1009,17 +1032,7 @@ fn open_log_writer(
         &descriptor_set("NodeTemperatures", &[temperature]),
     )?;
     let temperature = channel(w, s, "/thermal/temperature", &node_map)?;
-    let celsius_map: BTreeMap<String, String> = celsius_fields
-        .iter()
-        .zip(&d.nodes)
-        .map(|(f, n)| (format!("node:{f}"), n.clone()))
-        .collect();
-    let s = schema(
-        w,
-        "orbitlash.NodeTemperaturesCelsius",
-        &descriptor_set("NodeTemperaturesCelsius", &[celsius]),
-    )?;
-    let celsius = channel(w, s, "/thermal/temperature_c", &celsius_map)?;
+    let celsius = celsius_channel(w, path, &d.nodes)?;
     let s = schema(
         w,
         "orbitlash.HeatFlows",

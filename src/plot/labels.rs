@@ -1,10 +1,11 @@
 //! Label placement: each label goes to the first of its candidate places that stays
 //! inside its area and overlaps neither a label placed before nor a region to avoid
-//! (a bar, a plotted point); failing all, it slides down (or up) in steps of its own
+//! (a bar, a plotted point) nor a drawn line (a curve, a reference line); failing all,
+//! it slides down (or up) in steps of its own
 //! height until it fits. Only a figure with no room left at all keeps an overlap, and
 //! [`super::Figure::overlapping_labels`] reports it.
 
-use super::text_width;
+use super::{drawn_px, text_width};
 
 /// A box in pixels, y down.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,6 +60,8 @@ pub enum Side {
 pub struct Placer {
     placed: Vec<Rect>,
     avoid: Vec<Rect>,
+    /// Segments of drawn lines (curves, reference lines) no label may cross.
+    lines: Vec<((f64, f64), (f64, f64))>,
 }
 
 /// Padding around a label's text, px.
@@ -74,10 +77,27 @@ impl Placer {
         self.avoid.push(r);
     }
 
+    /// A drawn line (px, in drawing order) no label may cross.
+    pub fn avoid_path(&mut self, points: &[(f64, f64)]) {
+        self.lines.extend(points.windows(2).map(|w| (w[0], w[1])));
+    }
+
+    fn crosses_a_line(&self, r: &Rect) -> bool {
+        self.lines.iter().any(|&(a, b)| {
+            // a cheap test of the segment's bounds first
+            a.0.max(b.0) > r.x0
+                && a.0.min(b.0) < r.x1
+                && a.1.max(b.1) > r.y0
+                && a.1.min(b.1) < r.y1
+                && super::drawn::segment_crosses(a, b, r)
+        })
+    }
+
     fn free(&self, r: &Rect, area: &Rect) -> bool {
         area.contains(r)
             && !self.placed.iter().any(|p| p.intersects(r))
             && !self.avoid.iter().any(|p| p.intersects(r))
+            && !self.crosses_a_line(r)
     }
 
     /// The box of `text` at `size_px` (its top-left corner at `x`, `y`), padded.
@@ -86,7 +106,7 @@ impl Placer {
             x - PAD,
             y - PAD,
             x + text_width(text, size_px) + PAD,
-            y + 1.2 * size_px + PAD,
+            y + 1.2 * drawn_px(size_px) + PAD,
         )
     }
 
@@ -101,7 +121,7 @@ impl Placer {
         area: &Rect,
     ) -> ((f64, f64), Rect) {
         let w = text_width(text, size_px);
-        let h = 1.2 * size_px;
+        let h = 1.2 * drawn_px(size_px);
         let gap = 6.0;
         let corner = |s: Side| -> (f64, f64) {
             let (ax, ay) = anchor;

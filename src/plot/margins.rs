@@ -305,6 +305,14 @@ fn draw_marks(
             )))
             .map_err(draw_err)?;
     }
+    // every mark's line is off limits to every label (boxed labels would hide it)
+    for (x, _, _) in &marks {
+        let (px, top) = chart.backend_coord(&(*x, ytop));
+        let (_, bottom) = chart.backend_coord(&(*x, 0.0));
+        notes
+            .placer
+            .avoid_path(&[(px as f64, top as f64), (px as f64, bottom as f64)]);
+    }
     for (x, color, text) in &marks {
         let (px, py) = chart.backend_coord(&(*x, ytop));
         let (pos, r) = notes.placer.place(

@@ -9,6 +9,7 @@
 //! Pure: the figures are strings and bytes; the CLI writes them.
 
 pub mod diagnose;
+pub mod drawn;
 pub mod faces;
 pub mod labels;
 pub mod margins;
@@ -96,6 +97,59 @@ impl Figure {
         out
     }
 
+    /// What is wrong with the labels as the SVG draws them (their boxes measured at the
+    /// font size written into the file): a label not found among the drawn texts, two
+    /// labels that overlap, a label off the page, a drawn line (a curve, a reference
+    /// line, an axis) through a label. Empty on a figure drawn right.
+    pub fn drawn_problems(&self) -> Vec<String> {
+        let (texts, lines) = drawn::read(&self.svg);
+        let mut used = vec![false; texts.len()];
+        let mut boxes: Vec<(&str, Rect)> = Vec::new();
+        let mut out = Vec::new();
+        let mut kept: Vec<(&str, Rect)> = Vec::new();
+        for l in &self.labels {
+            match texts
+                .iter()
+                .enumerate()
+                .find(|(i, t)| !used[*i] && t.text == l.text)
+            {
+                Some((i, t)) => {
+                    used[i] = true;
+                    boxes.push((&l.text, t.rect));
+                    kept.push((&l.text, l.rect));
+                }
+                None => out.push(format!("{:?} is not drawn as one text", l.text)),
+            }
+        }
+        let page = Rect::new(0.0, 0.0, self.width as f64, self.height as f64);
+        for (i, (a, ra)) in boxes.iter().enumerate() {
+            if !page.contains(ra) {
+                out.push(format!("{a:?} leaves the page"));
+            }
+            for (b, rb) in &boxes[i + 1..] {
+                if ra.intersects(rb) {
+                    out.push(format!("{a:?} overlaps {b:?}"));
+                }
+            }
+            // the text as drawn, and the box the label was given (a boxed label's
+            // white background is drawn there)
+            let given = kept[i].1;
+            for (what, r) in [("", ra), (" (its box)", &given)] {
+                let crossing = lines
+                    .iter()
+                    .find(|p| p.windows(2).any(|w| drawn::segment_crosses(w[0], w[1], r)));
+                if let Some(p) = crossing {
+                    out.push(format!(
+                        "a line through {a:?}{what} (from {:?} to {:?})",
+                        p[0],
+                        p[p.len() - 1]
+                    ));
+                }
+            }
+        }
+        out
+    }
+
     /// Labels that leave the figure.
     pub fn labels_outside(&self) -> Vec<String> {
         let page = Rect::new(0.0, 0.0, self.width as f64, self.height as f64);
@@ -112,8 +166,31 @@ fn face() -> &'static ttf_parser::Face<'static> {
     FACE.get_or_init(|| ttf_parser::Face::parse(FONT, 0).expect("the embedded font parses"))
 }
 
-/// The advance width of `text` at `size_px` in the embedded font, px.
+/// plotters writes a font size asked of it divided by this into the SVG (14 → 11.29
+/// px): what is drawn, and so what is measured, is that size.
+pub const PLOTTERS_FONT_SCALE: f64 = 1.24;
+
+/// The size, px, of text drawn at `size_px` through plotters.
+pub fn drawn_px(size_px: f64) -> f64 {
+    size_px / PLOTTERS_FONT_SCALE
+}
+
+/// The width of `text` drawn through plotters at `size_px` (the size asked of it; the
+/// text is [`drawn_px`] of that), px.
 pub fn text_width(text: &str, size_px: f64) -> f64 {
+    advance_width(text, drawn_px(size_px))
+}
+
+/// The font's ascent and descent, em.
+pub fn font_extent() -> (f64, f64) {
+    let f = face();
+    let units = f.units_per_em() as f64;
+    (f.ascender() as f64 / units, -(f.descender() as f64) / units)
+}
+
+/// The advance width of `text` at a font size of `px` as written in the SVG, px.
+pub fn advance_width(text: &str, px: f64) -> f64 {
+    let size_px = px;
     let f = face();
     let units = f.units_per_em() as f64;
     let mut w = 0.0;

@@ -516,8 +516,10 @@ fn draw_panel(
     } else {
         draw_lines(&mut chart, layout, &series, temps_panel)?
     };
-    // The smallest allowed backlash and the run's smallest.
+    // The smallest allowed backlash and the run's smallest, their labels off the
+    // curves and the allowed lines.
     if !temps_panel {
+        avoid_curves(&chart, layout, &series, notes);
         draw_allowed(root, &mut chart, layout, &plot_px, notes)?;
         draw_smallest(root, &chart, layout, &plot_px, notes)?;
     }
@@ -640,6 +642,50 @@ fn draw_lines(
         legend.push(name.clone());
     }
     Ok(legend)
+}
+
+/// Tells the placer where the panel's curves (or a long run's envelope edges) and the
+/// allowed lines run, in px.
+fn avoid_curves(
+    chart: &Chart<'_, '_>,
+    layout: &RunLayout<'_>,
+    series: &[(String, &Vec<f64>)],
+    notes: &mut Annotations,
+) {
+    let px = |x: f64, y: f64| {
+        let (a, b) = chart.backend_coord(&(x, y));
+        (a as f64, b as f64)
+    };
+    let axis = &layout.axis;
+    if layout.long {
+        let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
+        let env = envelope(layout.s, &refs);
+        for edge in env.hi.iter().chain(&env.lo) {
+            let pts: Vec<(f64, f64)> = env
+                .t
+                .iter()
+                .zip(edge)
+                .map(|(t, v)| px(axis.x(*t), *v))
+                .collect();
+            notes.placer.avoid_path(&pts);
+        }
+    } else {
+        // as draw_lines draws them: one line through the finite samples
+        for (_, v) in series {
+            let pts: Vec<(f64, f64)> = layout
+                .s
+                .time_s
+                .iter()
+                .zip(v.iter())
+                .filter(|(_, y)| y.is_finite())
+                .map(|(t, y)| px(axis.x(*t), *y))
+                .collect();
+            notes.placer.avoid_path(&pts);
+        }
+    }
+    for (_, a) in &layout.s.allowed_um {
+        notes.placer.avoid_path(&[px(axis.x0, *a), px(axis.x1, *a)]);
+    }
 }
 
 /// Draws each pair's smallest allowed backlash as a dashed red line, labelled at its
