@@ -68,7 +68,9 @@ fn cli_diagnose_heater_report_json_and_out_folder() {
         .stdout(predicate::str::contains(
             "heater_thermostat (physics) on node housing",
         ))
-        .stdout(predicate::str::contains("on_c = "));
+        .stdout(predicate::str::contains("on_c = "))
+        // times in the figures' unit (hours for a recording of hours)
+        .stdout(predicate::str::is_match(r"first at t = \d+\.\d{3} … \d+\.\d{3} h;").unwrap());
     // The contract's keys.
     let r: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(r["verdict"], "explained");

@@ -101,7 +101,7 @@ fn cli_a_failing_run_is_drawn_failing_whatever_the_log_keeps() {
         assert!(svg.contains("FAIL"), "{every}: the figure says PASS");
         assert!(!svg.contains("PASS"), "{every}");
         assert!(
-            svg.contains("smallest 24.398 µm at 8.39 h"),
+            svg.contains("smallest 24.398 µm at 8.385 h"),
             "{every}: the smallest is not the run's"
         );
         // the log's end record and its samples
@@ -127,7 +127,7 @@ fn cli_a_failing_run_is_drawn_failing_whatever_the_log_keeps() {
         let p = run_in(&dir, &["plot", "le.mcap", "--out", "again.svg"]);
         assert_eq!(p.status.code(), Some(0), "{}", stderr(&p));
         let again = std::fs::read_to_string(dir.join("again.svg")).unwrap();
-        assert!(again.contains("FAIL") && again.contains("smallest 24.398 µm at 8.39 h"));
+        assert!(again.contains("FAIL") && again.contains("smallest 24.398 µm at 8.385 h"));
     }
     // a figure from the CSV alone (no log) takes the run's end too
     let out = run_in(
@@ -148,7 +148,7 @@ fn cli_a_failing_run_is_drawn_failing_whatever_the_log_keeps() {
     );
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     let svg = std::fs::read_to_string(dir.join("csv.svg")).unwrap();
-    assert!(svg.contains("FAIL") && svg.contains("smallest 24.398 µm at 8.39 h"));
+    assert!(svg.contains("FAIL") && svg.contains("smallest 24.398 µm at 8.385 h"));
 }
 
 // 12. A damaged length field is "damaged file", exit 2, from every reader, under an

@@ -126,6 +126,12 @@ fn cli_a_long_run_reports_days_weeks_and_heaters() {
             && !text.contains(" d (")
             && !text.contains("per day")
     );
+    // in hours, the unit of its figure, with the seconds after them
+    assert!(
+        text.lines()
+            .any(|l| l.starts_with("PASS") && l.contains(" h (") && l.contains(" s), orbit")),
+        "{text}"
+    );
 }
 
 /// `run --json` carries the days and heaters in machine form (issue 30 item 8): one

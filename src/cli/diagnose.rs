@@ -182,7 +182,8 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     for n in &d.warnings {
         eprintln!("warning: {n}");
     }
-    let mut o = format_report(&d, &loaded.file, &rec.file);
+    let start_utc = loaded.scenario().thermal.environment.start_utc();
+    let mut o = format_report(&d, &loaded.file, &rec.file, start_utc);
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if let Some(p) = &a.json {
         files.push((
@@ -408,13 +409,19 @@ fn lines_shown(lines: &[u64]) -> String {
 /// The human report: its sections in order (verdict and split, the channel table,
 /// where the baseline residual sits, the findings, the residual that remains, the
 /// candidates), each formatted by its own function.
-pub fn format_report(d: &Diagnosis, scenario: &str, recording: &str) -> String {
+pub fn format_report(
+    d: &Diagnosis,
+    scenario: &str,
+    recording: &str,
+    start_utc: Option<sgp4::chrono::NaiveDateTime>,
+) -> String {
+    let clock = Clock::new(d.split.holdout_end_s, start_utc);
     let mut o = String::new();
     report_head(&mut o, d, scenario, recording);
     report_channels(&mut o, d);
-    report_where(&mut o, d);
+    report_where(&mut o, d, &clock);
     report_calibration(&mut o, d);
-    report_findings(&mut o, d);
+    report_findings(&mut o, d, &clock);
     report_remaining(&mut o, d);
     report_candidates(&mut o, d);
     o
@@ -501,8 +508,55 @@ fn report_channels(o: &mut String, d: &Diagnosis) {
     outln!(o, "");
 }
 
+/// Times of the report in the unit of the figures (`plot::time_unit` of the
+/// recording's span: hours up to three days), with the UTC date and time when the
+/// scenario is dated.
+struct Clock {
+    unit_s: f64,
+    unit: &'static str,
+    start_utc: Option<sgp4::chrono::NaiveDateTime>,
+}
+
+impl Clock {
+    fn new(span_s: f64, start_utc: Option<sgp4::chrono::NaiveDateTime>) -> Clock {
+        let (unit_s, unit) = orbitlash::plot::time_unit(span_s);
+        Clock {
+            unit_s,
+            unit,
+            start_utc,
+        }
+    }
+
+    /// `12.510 h` (`, 2016-02-04 12:30:37 UTC` when dated).
+    fn at(&self, t_s: f64) -> String {
+        let utc = self.start_utc.and_then(|u| {
+            let ms = (t_s * 1e3).round();
+            (ms.abs() < 1e15).then(|| u + sgp4::chrono::Duration::milliseconds(ms as i64))
+        });
+        match utc {
+            Some(u) => format!(
+                "{:.3} {}, {} UTC",
+                t_s / self.unit_s,
+                self.unit,
+                u.format("%Y-%m-%d %H:%M:%S")
+            ),
+            None => format!("{:.3} {}", t_s / self.unit_s, self.unit),
+        }
+    }
+
+    /// `1.400 … 1.433 h`.
+    fn span(&self, a_s: f64, b_s: f64) -> String {
+        format!(
+            "{:.3} … {:.3} {}",
+            a_s / self.unit_s,
+            b_s / self.unit_s,
+            self.unit
+        )
+    }
+}
+
 /// Where the baseline residual sits, largest first.
-fn report_where(o: &mut String, d: &Diagnosis) {
+fn report_where(o: &mut String, d: &Diagnosis, clock: &Clock) {
     if d.mismatches.is_empty() {
         outln!(o, "where: no channel's baseline residual exceeds its noise");
     } else {
@@ -511,7 +565,7 @@ fn report_where(o: &mut String, d: &Diagnosis) {
             outln!(
                 o,
                 "  {:<13} {:<13} rms {:.3} {} ({:.1}× noise, mean {:+.3}), {:.0} % of the channel's residual; \
-                 first at t = {:.0} … {:.0} s; {:.0} … {:.0} s after orbit noon in {} orbit(s)",
+                 first at t = {}; {:.0} … {:.0} s after orbit noon in {} orbit(s)",
                 m.channel,
                 m.phase,
                 m.rms,
@@ -519,8 +573,7 @@ fn report_where(o: &mut String, d: &Diagnosis) {
                 m.rms_over_noise,
                 m.mean,
                 100.0 * m.share,
-                m.t_start_s,
-                m.t_end_s,
+                clock.span(m.t_start_s, m.t_end_s),
                 m.orbit_t_start_s,
                 m.orbit_t_end_s,
                 m.orbits.len()
@@ -572,7 +625,7 @@ fn report_calibration(o: &mut String, d: &Diagnosis) {
     outln!(o, "");
 }
 
-fn report_findings(o: &mut String, d: &Diagnosis) {
+fn report_findings(o: &mut String, d: &Diagnosis, clock: &Clock) {
     if !d.findings.is_empty() {
         outln!(o, "what the model left out:");
         for f in &d.findings {
@@ -589,6 +642,10 @@ fn report_findings(o: &mut String, d: &Diagnosis) {
                         sig(hi)
                     ),
                     _ => outln!(o, "      {k} = {} (its interval is not defined)", sig(*v)),
+                }
+                // a time of the recording (a switch-on): also in the figures' unit
+                if k.ends_with("on_s") {
+                    outln!(o, "      ({k} is t = {})", clock.at(*v));
                 }
             }
             if f.correlation.len() > 1 {

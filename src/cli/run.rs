@@ -645,9 +645,10 @@ fn orbit_phase(sc: &Scenario, t: f64) -> String {
     )
 }
 
-/// A time of the run for reports: seconds in a run of up to three days; past that,
-/// days (day 1 is t = 0 … 86 400 s) with the seconds after them; and the UTC date and
-/// time when the scenario is dated.
+/// A time of the run for reports, in the unit of the run's figure (`plot::time_unit`):
+/// hours in a run of up to three days, past that days (day 1 is t = 0 … 86 400 s),
+/// each with the seconds after them; and the UTC date and time when the scenario is
+/// dated.
 fn when(sc: &Scenario, t: f64) -> String {
     let env = &sc.thermal.environment;
     let utc = env.start_utc().and_then(|u| {
@@ -662,7 +663,8 @@ fn when(sc: &Scenario, t: f64) -> String {
             (t / orbitlash::run::summary::DAY_S).floor() as u64 + 1
         )
     } else {
-        format!("t = {t:.1} s")
+        // hours, as the figure's time axis; the seconds after them
+        format!("t = {:.3} h ({t:.1} s)", t / 3600.0)
     };
     match utc {
         Some(u) => format!("{base}, {} UTC", u.format("%Y-%m-%d %H:%M:%S")),

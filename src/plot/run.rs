@@ -759,7 +759,7 @@ fn draw_smallest(
             py as f64 + 7.0,
         ));
         let text = format!(
-            "smallest{} {m:.3} µm at {:.2} {}",
+            "smallest{} {m:.3} µm at {:.3} {}",
             if pair.is_empty() {
                 String::new()
             } else {
