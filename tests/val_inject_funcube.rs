@@ -596,6 +596,19 @@ fn val_inject_funcube_workflow_names_what_changed() {
     let day_dir = dir.join("day");
     let (day, _) =
         inject::score::run_diagnose(&shipped, &flight, &dir.join("day.json"), Some(&day_dir));
+    // diagnose.mcap of a dated scenario is on UTC log time (viewers show dates): its
+    // first message at the recording's start, 2016-02-04T00:00:00Z or after
+    let bytes = std::fs::read(day_dir.join("diagnose.mcap")).unwrap();
+    let first = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap();
+    assert!(
+        first.log_time >= 1_454_544_000_000_000_000 && first.log_time < 1_454_630_400_000_000_000,
+        "diagnose.mcap's first log time {} ns is not on 2016-02-04 UTC",
+        first.log_time
+    );
     let corrected = day_dir.join("corrected.toml");
     let text = std::fs::read_to_string(&corrected).expect("diagnose --out wrote corrected.toml");
     assert!(

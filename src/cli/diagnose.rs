@@ -319,7 +319,14 @@ fn out_files(
     };
     let text = orbitlash::io::scenario_toml::edited(&loaded.toml, from, &to, &header, &comment)?;
     files.push((dir.join("corrected.toml"), text.into_bytes()));
-    let mcap = orbitlash::io::diagnose_out::mcap_bytes(d).map_err(|e| {
+    let sc = loaded.scenario();
+    let origin_ns = sc
+        .thermal
+        .environment
+        .start_utc()
+        .and_then(|u| u.and_utc().timestamp_nanos_opt())
+        .map_or(0, |n| n.max(0) as u64);
+    let mcap = orbitlash::io::diagnose_out::mcap_bytes(d, &sc.name, origin_ns).map_err(|e| {
         anyhow::anyhow!("cannot write {}: {e}", dir.join("diagnose.mcap").display())
     })?;
     files.push((dir.join("diagnose.mcap"), mcap));

@@ -14,8 +14,15 @@ use super::log_schema::{Kind, MessageType, descriptor_set, identifier};
 use super::protobuf::Encoder;
 
 /// The side-by-side file's bytes (the caller writes them with the command's other
-/// outputs, all or none).
-pub fn mcap_bytes(d: &Diagnosis) -> Result<Vec<u8>, mcap::McapError> {
+/// outputs, all or none). Log time is the recording's time since its t = 0, offset by
+/// `time_origin_ns` (ns since the Unix epoch of t = 0 for a dated scenario, else 0),
+/// which the metadata record `orbitlash.provenance` names as the run logs do, so that
+/// viewers show UTC; `scenario_name` names the recording in them.
+pub fn mcap_bytes(
+    d: &Diagnosis,
+    scenario_name: &str,
+    time_origin_ns: u64,
+) -> Result<Vec<u8>, mcap::McapError> {
     let err = |e: mcap::McapError| e;
     let file = std::io::Cursor::new(Vec::new());
     let mut w = mcap::WriteOptions::new()
@@ -58,6 +65,21 @@ pub fn mcap_bytes(d: &Diagnosis) -> Result<Vec<u8>, mcap::McapError> {
         metadata: meta,
     })
     .map_err(err)?;
+    let provenance: BTreeMap<String, String> = [
+        ("tool".to_string(), "orbitlash".to_string()),
+        ("scenario_name".to_string(), scenario_name.to_string()),
+        (
+            super::mcap_log::TIME_ORIGIN_KEY.to_string(),
+            time_origin_ns.to_string(),
+        ),
+    ]
+    .into_iter()
+    .collect();
+    w.write_metadata(&mcap::records::Metadata {
+        name: "orbitlash.provenance".into(),
+        metadata: provenance,
+    })
+    .map_err(err)?;
     let mut enc = Encoder::default();
     let mut seq = 0u32;
     for (c, name) in s.channels.iter().enumerate() {
@@ -85,8 +107,8 @@ pub fn mcap_bytes(d: &Diagnosis) -> Result<Vec<u8>, mcap::McapError> {
             let header = |channel_id| mcap::records::MessageHeader {
                 channel_id,
                 sequence: seq,
-                log_time: ns(t),
-                publish_time: ns(t),
+                log_time: time_origin_ns + ns(t),
+                publish_time: time_origin_ns + ns(t),
             };
             enc.clear();
             enc.double(1, b);
