@@ -276,7 +276,7 @@ def send_gear(out, topic, field, t, v, series, pairs, groups):
     else:
         entity = f"gears/{pair}/{field}"
         out.series(entity, t, v, field)
-        groups[f"mesh geometry, gear pair {pair}"].append(entity)
+        groups[f"mesh geometry, gear pair {pair}: {unit_group(field)}"].append(entity)
 
 
 def orbit_starts(series):
@@ -435,8 +435,19 @@ def send_series(out, series, channels, pairs):
         else:
             entity = f"{topic.strip('/')}/{field}"
             out.series(entity, t, v, field)
-            groups[topic.strip("/")].append(entity)
+            groups[f"{topic.strip('/')}: {unit_group(field)}"].append(entity)
     return groups, body, gears
+
+
+# A field's unit from its name's suffix, for one axis per unit.
+UNITS = [("_w_per_m2", "W/m²"), ("_deg", "deg"), ("_mm", "mm"), ("_um", "µm"), ("_k", "K"), ("_w", "W")]
+
+
+def unit_group(field):
+    """The view a field of the second tab goes to: its unit (`solar_flux_w_per_m2` →
+    `W/m²`), or the field itself when its name carries none (`sunlit`,
+    `contact_ratio`), so that one axis never mixes units."""
+    return next((u for sfx, u in UNITS if field.endswith(sfx)), field.replace("_", " "))
 
 
 def backlash_top(series):
@@ -509,7 +520,7 @@ def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None
         temps.append(view(f"{g}: radial nodes, bore r0 … rim (°C)", ents))
     diag = (": series", ": residuals")
     main = [view(k, v) for k, v in groups.items() if k.startswith(("backlash", "heat")) and not k.endswith(diag)]
-    sunlit = [e for e in groups.get("orbit/state", []) if e.endswith("/sunlit")]
+    sunlit = [e for e in groups.get("orbit/state: sunlit", []) if e.endswith("/sunlit")]
     if sunlit:
         main.append(view("sunlit (1) or eclipse (0)", sunlit))
     fitted = [view(diagnose_title(k), v) for k, v in groups.items() if k.endswith(": series")]
