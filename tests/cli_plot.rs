@@ -625,6 +625,29 @@ fn cli_environment_plot_draws_the_face_fluxes() {
     ] {
         assert!(svg.contains(needle), "no {needle:?}");
     }
+    assert!(
+        !svg.contains("the same fluxes"),
+        "cubesat-1u's faces point their own ways"
+    );
+    // a tumble-averaged attitude gives every face the same fluxes: one line, and the
+    // legend says which faces it stands for
+    let funcube = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml");
+    let tumble = dir.join("tumble.svg");
+    let out = common::bin()
+        .arg("environment")
+        .arg(&funcube)
+        .arg("--plot")
+        .arg(&tumble)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let svg = std::fs::read_to_string(&tumble).unwrap();
+    assert!(svg.contains("(the same fluxes: one line)") && svg.contains("= panel_mz.mz"));
+    let (texts, _) = orbitlash::plot::drawn::read(&svg);
+    assert!(
+        texts.iter().all(|t| t.rect.x1 <= 1100.0),
+        "a legend line leaves the page"
+    );
     let reference =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml");
     let out = common::bin()

@@ -55,6 +55,18 @@ pub fn face_fluxes(
     if let Some(a) = open {
         eclipses.push((a, time_s[time_s.len() - 1]));
     }
+    // Faces whose fluxes are the same (a tumble-averaged attitude gives every face the
+    // orientation average) are one line and one legend entry: drawn apart, the last
+    // would hide the others.
+    let mut groups: Vec<(usize, Vec<&str>)> = Vec::new();
+    for (i, f) in faces.iter().enumerate() {
+        let same =
+            |g: &FaceSeries| g.solar == f.solar && g.albedo == f.albedo && g.earth_ir == f.earth_ir;
+        match groups.iter_mut().find(|(j, _)| same(&faces[*j])) {
+            Some((_, names)) => names.push(&f.name),
+            None => groups.push((i, vec![&f.name])),
+        }
+    }
     let mut svg = String::new();
     let mut labels = Vec::new();
     let mut placer = Placer::new();
@@ -126,7 +138,8 @@ pub fn face_fluxes(
                     }),
                 )
                 .map_err(draw_err)?;
-            for (i, f) in faces.iter().enumerate() {
+            for (i, (j, _)) in groups.iter().enumerate() {
+                let f = &faces[*j];
                 chart
                     .draw_series(LineSeries::new(
                         time_s
@@ -140,11 +153,16 @@ pub fn face_fluxes(
             }
             if k == 0 {
                 let (_, yr) = chart.plotting_area().get_pixel_range();
-                let mut entries: Vec<(String, Swatch)> = faces
-                    .iter()
-                    .enumerate()
-                    .map(|(i, f)| (f.name.clone(), Swatch::Line(palette(i), 3)))
-                    .collect();
+                let mut entries: Vec<(String, Swatch)> = Vec::new();
+                for (i, (_, names)) in groups.iter().enumerate() {
+                    entries.push((names[0].to_string(), Swatch::Line(palette(i), 3)));
+                    for n in &names[1..] {
+                        entries.push((format!("= {n}"), Swatch::None));
+                    }
+                    if names.len() > 1 {
+                        entries.push(("(the same fluxes: one line)".into(), Swatch::None));
+                    }
+                }
                 if !eclipses.is_empty() {
                     entries.push(("eclipse".into(), Swatch::Patch(ECLIPSE)));
                 }

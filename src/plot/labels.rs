@@ -111,7 +111,9 @@ impl Placer {
     }
 
     /// Places `text` near `anchor` inside `area`, trying `sides` in order; returns the
-    /// top-left corner of the text and its (padded) box. The box is recorded.
+    /// top-left corner of the text and its (padded) box. The box is recorded. With no
+    /// free place, it goes to the first side's place anyway (and overlaps): a caller
+    /// with somewhere else to put the text uses [`Placer::try_place`].
     pub fn place(
         &mut self,
         text: &str,
@@ -120,38 +122,63 @@ impl Placer {
         sides: &[Side],
         area: &Rect,
     ) -> ((f64, f64), Rect) {
+        self.try_place(text, size_px, anchor, sides, area, 60)
+            .unwrap_or_else(|| {
+                let (pos, r) = self.candidate(text, size_px, anchor, sides[0], 0.0);
+                self.placed.push(r);
+                (pos, r)
+            })
+    }
+
+    /// The place of `text` on `side` of `anchor`, moved down by `dy`.
+    fn candidate(
+        &self,
+        text: &str,
+        size_px: f64,
+        anchor: (f64, f64),
+        side: Side,
+        dy: f64,
+    ) -> ((f64, f64), Rect) {
         let w = text_width(text, size_px);
         let h = 1.2 * drawn_px(size_px);
         let gap = 6.0;
-        let corner = |s: Side| -> (f64, f64) {
-            let (ax, ay) = anchor;
-            match s {
-                Side::AboveRight => (ax + gap, ay - gap - h),
-                Side::AboveLeft => (ax - gap - w, ay - gap - h),
-                Side::BelowRight => (ax + gap, ay + gap),
-                Side::BelowLeft => (ax - gap - w, ay + gap),
-                Side::Right => (ax + gap, ay - h / 2.0),
-                Side::Left => (ax - gap - w, ay - h / 2.0),
-            }
+        let (ax, ay) = anchor;
+        let (x, y) = match side {
+            Side::AboveRight => (ax + gap, ay - gap - h),
+            Side::AboveLeft => (ax - gap - w, ay - gap - h),
+            Side::BelowRight => (ax + gap, ay + gap),
+            Side::BelowLeft => (ax - gap - w, ay + gap),
+            Side::Right => (ax + gap, ay - h / 2.0),
+            Side::Left => (ax - gap - w, ay - h / 2.0),
         };
-        let first = corner(sides[0]);
-        let mut best = None;
-        'search: for k in 0..60 {
+        ((x, y + dy), Placer::text_box(text, size_px, x, y + dy))
+    }
+
+    /// As [`Placer::place`], sliding at most `slides` steps of its height away from the
+    /// anchor (a label far from what it names reads wrong), but `None` (nothing
+    /// recorded) when no place is free.
+    pub fn try_place(
+        &mut self,
+        text: &str,
+        size_px: f64,
+        anchor: (f64, f64),
+        sides: &[Side],
+        area: &Rect,
+        slides: usize,
+    ) -> Option<((f64, f64), Rect)> {
+        let h = 1.2 * drawn_px(size_px);
+        for k in 0..=slides {
             for &s in sides {
-                let (x, y) = corner(s);
                 for dy in [k as f64 * (h + 2.0), -(k as f64) * (h + 2.0)] {
-                    let r = Placer::text_box(text, size_px, x, y + dy);
+                    let (pos, r) = self.candidate(text, size_px, anchor, s, dy);
                     if self.free(&r, area) {
-                        best = Some(((x, y + dy), r));
-                        break 'search;
+                        self.placed.push(r);
+                        return Some((pos, r));
                     }
                 }
             }
         }
-        let (pos, r) =
-            best.unwrap_or_else(|| (first, Placer::text_box(text, size_px, first.0, first.1)));
-        self.placed.push(r);
-        (pos, r)
+        None
     }
 
     /// Places a column of lines (a legend) starting at `top_left`, each under the one

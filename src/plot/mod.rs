@@ -387,6 +387,8 @@ pub(crate) enum Swatch {
     Line(plotters::style::RGBColor, u32),
     /// A point (a recording's samples).
     Dot(plotters::style::RGBColor),
+    /// A ring (a marked point, such as the run's smallest backlash).
+    Ring(plotters::style::RGBColor),
     /// A shaded area.
     Patch(plotters::style::RGBColor),
     /// Nothing (a note under the entries).
@@ -421,6 +423,9 @@ pub(crate) fn legend(
                 .map_err(draw_err)?,
             Swatch::Dot(c) => root
                 .draw(&Circle::new((x + 16, ym), 4, c.filled()))
+                .map_err(draw_err)?,
+            Swatch::Ring(c) => root
+                .draw(&Circle::new((x + 16, ym), 6, c.stroke_width(2)))
                 .map_err(draw_err)?,
             Swatch::Patch(c) => root
                 .draw(&Rectangle::new(

@@ -517,13 +517,29 @@ fn draw_panel(
         draw_lines(&mut chart, layout, &series, temps_panel)?
     };
     // The smallest allowed backlash and the run's smallest, their labels off the
-    // curves and the allowed lines.
+    // curves and the allowed lines (in the legend when the plot has no such room).
+    let mut overflow = Vec::new();
     if !temps_panel {
         avoid_curves(&chart, layout, &series, notes);
-        draw_allowed(root, &mut chart, layout, &plot_px, notes)?;
-        draw_smallest(root, &chart, layout, &plot_px, notes)?;
+        // labels 2 px inside the axes, off their tick marks
+        let inside = Rect::new(
+            plot_px.x0 + 2.0,
+            plot_px.y0 + 2.0,
+            plot_px.x1 - 2.0,
+            plot_px.y1 - 2.0,
+        );
+        draw_allowed(root, &mut chart, layout, &inside, notes, &mut overflow)?;
+        draw_smallest(root, &chart, layout, &inside, notes, &mut overflow)?;
     }
-    draw_panel_legend(root, layout, pi, &legend, legend_top.max(plot_px.y0), notes)
+    draw_panel_legend(
+        root,
+        layout,
+        pi,
+        &legend,
+        &overflow,
+        legend_top.max(plot_px.y0),
+        notes,
+    )
 }
 
 /// Draws a panel's axes and grid over the run's time and `y` (°C or µm); the time
@@ -644,6 +660,10 @@ fn draw_lines(
     Ok(legend)
 }
 
+/// How far (in steps of its height) a label of the backlash panel may slide from what
+/// it names before it goes to the legend instead.
+const NEAR: usize = 2;
+
 /// Tells the placer where the panel's curves (or a long run's envelope edges) and the
 /// allowed lines run, in px.
 fn avoid_curves(
@@ -696,6 +716,7 @@ fn draw_allowed(
     layout: &RunLayout<'_>,
     plot_px: &Rect,
     notes: &mut Annotations,
+    overflow: &mut Vec<(String, Swatch)>,
 ) -> Result<(), PlotError> {
     let (x0, x1) = (layout.axis.x0, layout.axis.x1);
     for (pair, a) in &layout.s.allowed_um {
@@ -716,13 +737,18 @@ fn draw_allowed(
                 format!(" ({pair})")
             }
         );
-        let (pos, r) = notes.placer.place(
+        let Some((pos, r)) = notes.placer.try_place(
             &text,
             14.0,
             (ax as f64 - 4.0, ay as f64),
             &[Side::AboveLeft, Side::BelowLeft],
             plot_px,
-        );
+            NEAR,
+        ) else {
+            // no room off the curves: the legend says it
+            overflow.push((text, Swatch::Line(RED, 2)));
+            continue;
+        };
         root.draw(&Text::new(
             text.clone(),
             (pos.0 as i32, pos.1 as i32),
@@ -742,6 +768,7 @@ fn draw_smallest(
     layout: &RunLayout<'_>,
     plot_px: &Rect,
     notes: &mut Annotations,
+    overflow: &mut Vec<(String, Swatch)>,
 ) -> Result<(), PlotError> {
     let axis = &layout.axis;
     for (pair, t, m) in &layout.smallest {
@@ -768,7 +795,7 @@ fn draw_smallest(
             axis.x(t),
             axis.unit
         );
-        let (pos, r) = notes.placer.place(
+        let Some((pos, r)) = notes.placer.try_place(
             &text,
             14.0,
             (px as f64, py as f64),
@@ -779,7 +806,12 @@ fn draw_smallest(
                 Side::AboveLeft,
             ],
             plot_px,
-        );
+            NEAR,
+        ) else {
+            // no room off the curves: the legend says it beside a circle like the mark
+            overflow.push((text, Swatch::Ring(BLACK)));
+            continue;
+        };
         root.draw(&Text::new(
             text.clone(),
             (pos.0 as i32, pos.1 as i32),
@@ -799,6 +831,7 @@ fn draw_panel_legend(
     layout: &RunLayout<'_>,
     pi: usize,
     legend: &[String],
+    extra: &[(String, Swatch)],
     top: f64,
     notes: &mut Annotations,
 ) -> Result<f64, PlotError> {
@@ -815,7 +848,7 @@ fn draw_panel_legend(
     if pi == 0 && !layout.eclipses_s.is_empty() {
         lines.push("eclipse".to_string());
     }
-    let entries: Vec<(String, Swatch)> = lines
+    let mut entries: Vec<(String, Swatch)> = lines
         .iter()
         .enumerate()
         .map(|(k, t)| {
@@ -829,6 +862,7 @@ fn draw_panel_legend(
             (t.clone(), swatch)
         })
         .collect();
+    entries.extend(extra.iter().cloned());
     let placed = super::legend(
         root,
         &mut notes.placer,
