@@ -713,3 +713,45 @@ fn cli_plot_the_nodes_chosen() {
     );
     assert!(!bad.exists(), "no figure for a bad --nodes");
 }
+
+/// Two gear pairs with long names whose labels find no room off the curves: they go to
+/// the legend, wrapped to its column, and stay on the page.
+#[test]
+fn cli_plot_labels_moved_to_the_legend_stay_on_the_page() {
+    let headers: Vec<String> = [
+        "time_s",
+        "housing_k",
+        "stage_one_input_pair.backlash_um",
+        "/gears/stage_one_input_pair.margin_um",
+        "stage_two_output_pair.backlash_um",
+        "/gears/stage_two_output_pair.margin_um",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let rows: Vec<Vec<f64>> = (0..200)
+        .map(|i| {
+            let a = 10.0 + (i as f64 * 0.4).sin();
+            let b = 10.5 + (i as f64 * 0.4 + 1.0).cos();
+            vec![i as f64 * 60.0, 290.0, a, a - 9.5, b, b - 9.8]
+        })
+        .collect();
+    let s = RunSeries::from_table("two pairs", &headers, &rows).unwrap();
+    let fig = figure(&s).unwrap();
+    assert_drawn_right(&fig);
+    let texts: Vec<&str> = fig.labels.iter().map(|l| l.text.as_str()).collect();
+    assert!(
+        texts
+            .iter()
+            .any(|t| t.starts_with("smallest (stage_two_output_pair)")),
+        "{texts:?}"
+    );
+    // at least one of them is in the legend column, in more than one line
+    let in_legend: Vec<&str> = fig
+        .labels
+        .iter()
+        .filter(|l| l.rect.x0 > 930.0 && (l.text.contains("smallest") || l.text.contains("µm")))
+        .map(|l| l.text.as_str())
+        .collect();
+    assert!(in_legend.len() >= 2, "{in_legend:?} of {texts:?}");
+}

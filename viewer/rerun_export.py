@@ -74,6 +74,17 @@ ALLOWED_RED = [220, 40, 40]
 # A log of more than this many orbits gets the per-orbit tab.
 ENVELOPE_ORBITS = 30
 GEAR_NODE = re.compile(r"^(gear\w*?)_r(\d+)_k$")
+# A gear's radial node by its name (`gear1.r2`, `pinion.r0`), as `orbitlash layout`
+# groups them.
+RADIAL_NODE = re.compile(r"^(.+)\.r(\d+)$")
+
+
+def radial(node, field):
+    """(gear, radial index) of a temperature field's node, or None for a node that is
+    not a gear's: by the node's name (channel metadata), else, in a log without it, by
+    the field's (`gear1_r2_k`)."""
+    m = RADIAL_NODE.match(node) or GEAR_NODE.match(field)
+    return (re.sub(r"\W", "_", m.group(1)), int(m.group(2))) if m else None
 BACKLASH_FIELDS = ("backlash_exact_um", "backlash_closed_form_um", "backlash_paper_um")
 LEVELS = {1: "DEBUG", 2: "INFO", 3: "WARN", 4: "ERROR", 5: "CRITICAL"}
 # The modules this script imports and the Python packages (pip names) that provide
@@ -133,6 +144,8 @@ def read_log(path):
                 continue
             if schema.name.startswith("foxglove."):
                 continue  # the 3-D scene: Rerun's importer shows it as it is
+            if channel.topic == "/thermal/temperature_c":
+                continue  # the °C copy of /thermal/temperature, converted here anyway
             # Every scalar field of the schema, not ListFields(): proto3 leaves a field at
             # zero out of the message (the eclipse flag, a heater off).
             for fd in proto.DESCRIPTOR.fields:
@@ -291,15 +304,17 @@ def orbit_starts(series):
     first = np.flatnonzero(np.r_[True, np.diff(n) != 0])
     if len(first) <= ENVELOPE_ORBITS:
         return None
-    # The first sample of an orbit is up to a step (300 s) after its true start: a
-    # straight line through them (constant period) puts every boundary where it is,
-    # unless the orbits are not of one period.
-    k = np.arange(len(first) - 1, dtype=float)
+    # The first sample of an orbit is up to a step (300 s) after its true start, half a
+    # step on average: a straight line through them against the orbit number (constant
+    # period; an orbit without a sample leaves no gap in the count), less half the
+    # median step, puts every boundary where it is, unless the orbits are not of one
+    # period.
+    number = n[first[1:]].astype(float)
     observed = t[first[1:]].astype(float)
-    period, t0 = np.polyfit(k, observed, 1)
-    fitted = t0 + k * period
+    period, t0 = np.polyfit(number, observed, 1)
+    fitted = t0 + number * period - 0.5 * float(np.median(np.diff(t)))
     if np.max(np.abs(fitted - observed)) < 0.1 * period:
-        return np.r_[t[0], fitted.astype(np.int64)]
+        return np.r_[t[0], np.maximum(fitted, t[0] + 1).astype(np.int64)]
     return t[first]
 
 
@@ -333,9 +348,9 @@ def send_envelopes(out, series, channels, pairs, starts, eclipses=None):
     views = defaultdict(list)
     colour = defaultdict(int)  # view title -> lines coloured so far
 
-    def both(title, entity, label, t, v, scale=1.0, offset=0.0):
+    def both(title, entity, label, t, v, scale=1.0, offset=0.0, k=None):
         mid, lo, hi, _ = per_orbit(t, v, starts)
-        c = PALETTE[colour[title] % len(PALETTE)]
+        c = PALETTE[(colour[title] if k is None else k) % len(PALETTE)]
         colour[title] += 1
         for part, y in (("min", lo), ("max", hi)):
             out.series(f"per_orbit/{entity}/{part}", mid, y * scale + offset, f"{label} {part}", c)
@@ -344,10 +359,11 @@ def send_envelopes(out, series, channels, pairs, starts, eclipses=None):
     for (topic, field), (t, v) in sorted(series.items()):
         if topic == "/thermal/temperature":
             node = channels[topic][1].get(f"node:{field}", field[:-2] if field.endswith("_k") else field)
-            m = GEAR_NODE.match(field)
-            title = (f"{m.group(1)} per orbit: min and max (°C)" if m
+            g = radial(node, field)
+            title = (f"{g[0]} per orbit: min and max (°C)" if g
                      else "node temperatures per orbit: min and max (°C)")
-            both(title, f"temperature/{node}", f"{node} (°C)", t, v, offset=-273.15)
+            # a gear's node keeps the colour of its radial index, as in the samples tab
+            both(title, f"temperature/{node}", f"{node} (°C)", t, v, offset=-273.15, k=g[1] if g else None)
         elif topic.startswith("/gears/") and field == "backlash_exact_um":
             pair = topic[len("/gears/"):].replace("/", "_")
             title = f"backlash per orbit, gear pair {pair} (µm)"
@@ -384,7 +400,8 @@ def sunlit_share(t_ns, sunlit, starts_ns, eclipses, origin_ns):
     end = int(t_ns[-1])
     bounds = np.r_[np.asarray(starts_ns, dtype=np.int64), end]
     length = np.diff(bounds).astype(float)
-    whole = length >= 0.98 * np.median(length)
+    # an orbit cut by the run's end, or two orbits between starts (one had no sample)
+    whole = np.abs(length - np.median(length)) <= 0.02 * np.median(length)
     mid = (bounds[:-1] + bounds[1:]) // 2
     if eclipses:
         w = np.asarray(eclipses, dtype=float) * 1e9 + origin_ns  # (entry, exit), ns
@@ -407,13 +424,11 @@ def send_series(out, series, channels, pairs):
     for (topic, field), (t, v) in sorted(series.items()):
         if topic == "/thermal/temperature":
             node = channels[topic][1].get(f"node:{field}", field[:-2] if field.endswith("_k") else field)
-            m = GEAR_NODE.match(field)
-            entity = f"temperature/{m.group(1)}/r{m.group(2)}" if m else f"temperature/body/{node}"
-            k = int(m.group(2)) if m else len(body)
+            g = radial(node, field)
+            entity = f"temperature/{g[0]}/r{g[1]}" if g else f"temperature/body/{node}"
+            k = g[1] if g else len(body)
             out.series(entity, t, [x - 273.15 for x in v], f"{node} (°C)", PALETTE[k % len(PALETTE)])
-            (gears[m.group(1)] if m else body).append(entity)
-        elif topic == "/thermal/temperature_c":
-            continue  # the same temperatures in °C, which /thermal/temperature gives here
+            (gears[g[0]] if g else body).append(entity)
         elif topic.startswith("/gears/"):
             send_gear(out, topic, field, t, v, series, pairs, groups)
         elif topic == "/thermal/heat":
@@ -450,14 +465,15 @@ def unit_group(field):
     return next((u for sfx, u in UNITS if field.endswith(sfx)), field.replace("_", " "))
 
 
-def backlash_top(series):
-    """The top of the backlash views' axis: 10 % above the largest backlash logged (None
-    without one)."""
-    tops = [max((x for x in v if math.isfinite(x)), default=-math.inf)
-            for (topic, field), (_, v) in series.items()
-            if topic.startswith("/gears/") and field in BACKLASH_FIELDS]
-    top = max(tops, default=-math.inf)
-    return 1.1 * top if math.isfinite(top) and top > 0 else None
+def backlash_range(series):
+    """The backlash views' axis: from 0 (or 10 % below the smallest backlash logged,
+    when it is negative: interference must stay in view) to 10 % above the largest;
+    None without a positive backlash."""
+    values = [x for (topic, field), (_, v) in series.items()
+              if topic.startswith("/gears/") and field in BACKLASH_FIELDS for x in v if math.isfinite(x)]
+    if not values or max(values) <= 0:
+        return None
+    return (min(0.0, 1.1 * min(values)), 1.1 * max(values))
 
 
 def diagnose_title(key):
@@ -484,7 +500,7 @@ def late_smallest(series, pairs, origin_ns, span_s):
     return late
 
 
-def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None, backlash_top=None,
+def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None, backlash_axis=None,
                    late_smallest=()):
     """The views: temperatures beside backlash, heat flows and the eclipse flag on the
     first tab; diagnose.mcap's fits; everything else (mesh geometry, orbit, faces,
@@ -500,15 +516,15 @@ def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None
 
     def view(title, entities):
         # backlash: the legend at the top (the minima are at the bottom), on the side
-        # away from the run's smallest, and the axis from 0 so that the smallest allowed
-        # line is not the bottom edge
+        # away from the run's smallest, and the axis from 0 (or below, for
+        # interference) so that the smallest allowed line is not the bottom edge
         backlash = title.startswith(("backlash,", "backlash per orbit"))
         return rrb.TimeSeriesView(
             name=title,
             origin="/",
             contents=[f"/{e}" for e in entities],
             axis_x=rrb.archetypes.TimeAxis(view_range=whole, link="Independent"),
-            axis_y=(rrb.ScalarAxis(range=(0.0, backlash_top)) if backlash and backlash_top
+            axis_y=(rrb.ScalarAxis(range=backlash_axis) if backlash and backlash_axis
                     else rrb.ScalarAxis(range=(0.0, 100.0)) if title.startswith("sunlit share") else None),
             plot_legend=rrb.PlotLegend("LeftTop" if title in late_smallest else "RightTop") if backlash else None,
         )
@@ -575,7 +591,7 @@ def export(log, out, partial):
         recording.events(texts)
         end_ns = recording.t_end_ns
         span_s = (end_ns - origin_ns) * 1e-9 if end_ns is not None else 1.0
-        top = backlash_top(series)
+        top = backlash_range(series)
         late = late_smallest(series, pairs, origin_ns, span_s)
         rec.send_blueprint(make_blueprint(name, groups, body, gears, bool(texts), span_s, envelopes, top, late))
         rec.flush()

@@ -182,8 +182,12 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     for n in &d.warnings {
         eprintln!("warning: {n}");
     }
-    let start_utc = loaded.scenario().thermal.environment.start_utc();
-    let mut o = format_report(&d, &loaded.file, &rec.file, start_utc);
+    let mut o = format_report(
+        &d,
+        &loaded.file,
+        &rec.file,
+        &loaded.scenario().thermal.environment,
+    );
     let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     if let Some(p) = &a.json {
         files.push((
@@ -320,12 +324,7 @@ fn out_files(
     let text = orbitlash::io::scenario_toml::edited(&loaded.toml, from, &to, &header, &comment)?;
     files.push((dir.join("corrected.toml"), text.into_bytes()));
     let sc = loaded.scenario();
-    let origin_ns = sc
-        .thermal
-        .environment
-        .start_utc()
-        .and_then(|u| u.and_utc().timestamp_nanos_opt())
-        .map_or(0, |n| n.max(0) as u64);
+    let origin_ns = sc.thermal.environment.start_unix_ns();
     let mcap = orbitlash::io::diagnose_out::mcap_bytes(d, &sc.name, origin_ns).map_err(|e| {
         anyhow::anyhow!("cannot write {}: {e}", dir.join("diagnose.mcap").display())
     })?;
@@ -420,9 +419,16 @@ pub fn format_report(
     d: &Diagnosis,
     scenario: &str,
     recording: &str,
-    start_utc: Option<sgp4::chrono::NaiveDateTime>,
+    env: &orbitlash::orbit::Environment,
 ) -> String {
-    let clock = Clock::new(d.split.holdout_end_s, start_utc);
+    // the unit of the figures, chosen by the series' last time as they do
+    let span = d
+        .series
+        .time_s
+        .last()
+        .copied()
+        .unwrap_or(d.split.holdout_end_s);
+    let clock = Clock::new(span, env);
     let mut o = String::new();
     report_head(&mut o, d, scenario, recording);
     report_channels(&mut o, d);
@@ -518,29 +524,21 @@ fn report_channels(o: &mut String, d: &Diagnosis) {
 /// Times of the report in the unit of the figures (`plot::time_unit` of the
 /// recording's span: hours up to three days), with the UTC date and time when the
 /// scenario is dated.
-struct Clock {
+struct Clock<'a> {
     unit_s: f64,
     unit: &'static str,
-    start_utc: Option<sgp4::chrono::NaiveDateTime>,
+    env: &'a orbitlash::orbit::Environment,
 }
 
-impl Clock {
-    fn new(span_s: f64, start_utc: Option<sgp4::chrono::NaiveDateTime>) -> Clock {
+impl Clock<'_> {
+    fn new(span_s: f64, env: &orbitlash::orbit::Environment) -> Clock<'_> {
         let (unit_s, unit) = orbitlash::plot::time_unit(span_s);
-        Clock {
-            unit_s,
-            unit,
-            start_utc,
-        }
+        Clock { unit_s, unit, env }
     }
 
     /// `12.510 h` (`, 2016-02-04 12:30:37 UTC` when dated).
     fn at(&self, t_s: f64) -> String {
-        let utc = self.start_utc.and_then(|u| {
-            let ms = (t_s * 1e3).round();
-            (ms.abs() < 1e15).then(|| u + sgp4::chrono::Duration::milliseconds(ms as i64))
-        });
-        match utc {
+        match self.env.utc_at(t_s) {
             Some(u) => format!(
                 "{:.3} {}, {} UTC",
                 t_s / self.unit_s,
@@ -563,7 +561,7 @@ impl Clock {
 }
 
 /// Where the baseline residual sits, largest first.
-fn report_where(o: &mut String, d: &Diagnosis, clock: &Clock) {
+fn report_where(o: &mut String, d: &Diagnosis, clock: &Clock<'_>) {
     if d.mismatches.is_empty() {
         outln!(o, "where: no channel's baseline residual exceeds its noise");
     } else {
@@ -632,7 +630,7 @@ fn report_calibration(o: &mut String, d: &Diagnosis) {
     outln!(o, "");
 }
 
-fn report_findings(o: &mut String, d: &Diagnosis, clock: &Clock) {
+fn report_findings(o: &mut String, d: &Diagnosis, clock: &Clock<'_>) {
     if !d.findings.is_empty() {
         outln!(o, "what the model left out:");
         for f in &d.findings {
@@ -651,7 +649,7 @@ fn report_findings(o: &mut String, d: &Diagnosis, clock: &Clock) {
                     _ => outln!(o, "      {k} = {} (its interval is not defined)", sig(*v)),
                 }
                 // a time of the recording (a switch-on): also in the figures' unit
-                if k.ends_with("on_s") {
+                if k == "on_s" {
                     outln!(o, "      ({k} is t = {})", clock.at(*v));
                 }
             }

@@ -650,11 +650,7 @@ fn orbit_phase(sc: &Scenario, t: f64) -> String {
 /// each with the seconds after them; and the UTC date and time when the scenario is
 /// dated.
 fn when(sc: &Scenario, t: f64) -> String {
-    let env = &sc.thermal.environment;
-    let utc = env.start_utc().and_then(|u| {
-        let ms = (t * 1e3).round();
-        (ms.abs() < 1e15).then(|| u + sgp4::chrono::Duration::milliseconds(ms as i64))
-    });
+    let utc = sc.thermal.environment.utc_at(t);
     let long = sc.run.duration_s > 3.0 * orbitlash::run::summary::DAY_S;
     let base = if long {
         format!(

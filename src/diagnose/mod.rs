@@ -332,8 +332,11 @@ pub struct Alternative {
     /// `effect on target`.
     pub candidate: String,
     /// Its BIC minus the finding's (≥ 0: worse), on the finding's noise scale (χ²
-    /// divided by the fit's s² and AR(1) factor: 1 on white noise of the stated level).
+    /// divided by `noise_scale`): unlike a finding's or a candidate's `delta_bic`
+    /// (plain χ²), the same number only on white noise of the stated level.
     pub delta_bic: f64,
+    /// The scale: the fit's s² times its AR(1) factor, at least 1.
+    pub noise_scale: f64,
 }
 
 /// What the search fitted on its way to the best hypothesis: the accepted single
@@ -346,8 +349,8 @@ struct Steps<'a> {
 }
 
 /// Per step of forward selection, the member it accepted and its rivals (candidate,
-/// ΔBIC).
-type Rivals = Vec<(usize, Vec<(usize, f64)>)>;
+/// ΔBIC, the noise scale it is on).
+type Rivals = Vec<(usize, Vec<(usize, f64, f64)>)>;
 
 /// A calibrated number set: its effect and what it acts on, the fitted values (in the
 /// final joint fit with the findings), their standard errors and the nominal values.
@@ -955,9 +958,10 @@ fn findings(
                 .find(|r| r.0 == ci)
                 .map(|r| {
                     r.1.iter()
-                        .map(|&(j, d)| Alternative {
+                        .map(|&(j, d, scale)| Alternative {
                             candidate: cands[j].label(),
                             delta_bic: d,
+                            noise_scale: scale,
                         })
                         .collect()
                 })

@@ -741,7 +741,8 @@ pub(super) fn best_extension(
 
 /// The rivals of `accepted` among `others` (hypotheses of the same step: the same
 /// members but the last): each other last member whose BIC is within
-/// [`RIVAL_DELTA_BIC`] of the accepted one's, with that difference (≥ 0 is worse).
+/// [`RIVAL_DELTA_BIC`] of the accepted one's, with that difference (≥ 0 is worse) and
+/// the noise scale it was taken on.
 ///
 /// The BIC is taken on the accepted fit's own noise scale (a quasi-likelihood BIC:
 /// χ² / [`Hypothesis::noise_scale`] + k ln n_eff, n_eff = n / AR(1) factor), the
@@ -755,7 +756,7 @@ pub(super) fn rivals(
     problem: &Problem<'_>,
     accepted: &Hypothesis,
     others: &[&Hypothesis],
-) -> Vec<(usize, f64)> {
+) -> Vec<(usize, f64, f64)> {
     let bic = |h: &Hypothesis| {
         quasi_bic(
             h.train_chi2,
@@ -766,11 +767,17 @@ pub(super) fn rivals(
         )
     };
     let last = *accepted.members.last().expect("a member");
-    let mut out: Vec<(usize, f64)> = others
+    let mut out: Vec<(usize, f64, f64)> = others
         .iter()
         .filter(|o| o.members.last() != Some(&last))
-        .map(|o| (*o.members.last().expect("a member"), bic(o) - bic(accepted)))
-        .filter(|(_, d)| *d <= RIVAL_DELTA_BIC)
+        .map(|o| {
+            (
+                *o.members.last().expect("a member"),
+                bic(o) - bic(accepted),
+                accepted.noise_scale,
+            )
+        })
+        .filter(|(_, d, _)| *d <= RIVAL_DELTA_BIC)
         .collect();
     out.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
     out

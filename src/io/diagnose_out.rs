@@ -107,8 +107,8 @@ pub fn mcap_bytes(
             let header = |channel_id| mcap::records::MessageHeader {
                 channel_id,
                 sequence: seq,
-                log_time: time_origin_ns + ns(t),
-                publish_time: time_origin_ns + ns(t),
+                log_time: time_origin_ns.saturating_add(ns(t)),
+                publish_time: time_origin_ns.saturating_add(ns(t)),
             };
             enc.clear();
             enc.double(1, b);

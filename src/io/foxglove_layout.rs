@@ -122,7 +122,7 @@ fn plot(
         "paths": paths, "showXAxisLabels": true, "showYAxisLabels": true, "showLegend": true,
         "legendDisplay": "top", "showPlotValuesInLegend": false, "isSynced": true,
         "xAxisVal": "timestamp", "sidebarDimension": 240,
-        "xAxisLabel": if dated { "UTC" } else { "simulated time since t = 0 (s)" },
+        "xAxisLabel": if dated { "time since the log's start (s); log time is UTC" } else { "simulated time since t = 0 (s)" },
         "yAxisLabel": y_label, "foxglovePanelTitle": title,
     })
 }

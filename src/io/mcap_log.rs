@@ -1150,12 +1150,7 @@ impl Observer for McapLog {
             } else {
                 vec![]
             },
-            time_origin_ns: r
-                .model
-                .environment
-                .start_utc()
-                .and_then(|u| u.and_utc().timestamp_nanos_opt())
-                .map_or(0, |n| n.max(0) as u64),
+            time_origin_ns: r.model.environment.start_unix_ns(),
         };
         let (path, provenance, cadence, t_end_s, scene_interval_s) = (
             self.path.clone(),

@@ -422,7 +422,11 @@ pub fn run_table(table: &LogTable, all: bool) -> Result<(Vec<String>, Vec<Vec<f6
     if all {
         let used: Vec<usize> = cols.iter().map(|c| c.1).collect();
         for (i, c) in table.columns.iter().enumerate() {
-            if !used.contains(&i) && !c.ends_with(".time_s") {
+            // the °C copy of the temperatures (for viewers) adds nothing to the K columns
+            if !used.contains(&i)
+                && !c.ends_with(".time_s")
+                && !c.starts_with("/thermal/temperature_c.")
+            {
                 cols.push((c.clone(), i));
             }
         }

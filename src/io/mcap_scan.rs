@@ -428,3 +428,56 @@ pub fn recover(
         original_status,
     })
 }
+
+#[cfg(test)]
+mod damaged_chunk_tests {
+    use super::*;
+
+    /// A small log: one channel `/thermal/x` and a few messages in one chunk, with or
+    /// without the chunk's CRC.
+    fn small_log(crc: bool) -> Vec<u8> {
+        let mut w = mcap::WriteOptions::new()
+            .compression(None)
+            .calculate_chunk_crcs(crc)
+            .create(std::io::Cursor::new(Vec::new()))
+            .unwrap();
+        let schema = w.add_schema("x", "jsonschema", b"{}").unwrap();
+        let ch = w
+            .add_channel(schema, "/thermal/x", "json", &BTreeMap::new())
+            .unwrap();
+        for k in 0..5u32 {
+            let header = mcap::records::MessageHeader {
+                channel_id: ch,
+                sequence: k,
+                log_time: u64::from(k),
+                publish_time: u64::from(k),
+            };
+            w.write_to_known_channel(&header, b"{}").unwrap();
+        }
+        w.finish().unwrap();
+        w.into_inner().into_inner()
+    }
+
+    /// The channel record's topic length inside the chunk made huge.
+    fn broken_topic_length(mut bytes: Vec<u8>) -> Vec<u8> {
+        let at = bytes
+            .windows(10)
+            .position(|w| w == b"/thermal/x")
+            .expect("the topic in the chunk");
+        bytes[at - 4..at].copy_from_slice(&0x7fff_ffffu32.to_le_bytes());
+        bytes
+    }
+
+    /// A changed byte that breaks a record inside a chunk with a CRC is the chunk's
+    /// damage (readers then name the CRC and `recover`); without a CRC it stays a
+    /// malformed record, the only thing known about it.
+    #[test]
+    fn core_a_broken_record_in_a_chunk_with_a_crc_is_its_damage() {
+        let bytes = broken_topic_length(small_log(true));
+        let s = scan(&bytes).expect("a damaged chunk is not a scan error");
+        assert_eq!(s.damaged_chunks.len(), 1);
+        let bytes = broken_topic_length(small_log(false));
+        let e = scan(&bytes).expect_err("no CRC: a malformed record");
+        assert!(e.to_string().contains("topic"), "{e}");
+    }
+}

@@ -267,6 +267,23 @@ impl Environment {
         }
     }
 
+    /// t = 0 as ns since the Unix epoch for an environment on real dates (the log time
+    /// of t = 0 in the MCAP files), 0 otherwise.
+    pub fn start_unix_ns(&self) -> u64 {
+        self.start_utc()
+            .and_then(|u| u.and_utc().timestamp_nanos_opt())
+            .map_or(0, |n| n.max(0) as u64)
+    }
+
+    /// The UTC date and time `t_s` seconds after t = 0, for an environment on real
+    /// dates (None otherwise, or past the representable dates).
+    pub fn utc_at(&self, t_s: f64) -> Option<sgp4::chrono::NaiveDateTime> {
+        let ms = (t_s * 1e3).round();
+        self.start_utc().and_then(|u| {
+            (ms.abs() < 1e15).then(|| u + sgp4::chrono::Duration::milliseconds(ms as i64))
+        })
+    }
+
     /// The Earth's albedo coefficient, its infrared flux (W/m²) and the deep-space sink
     /// (K), whatever the orbit.
     pub fn earth_and_space_mut(&mut self) -> (&mut f64, &mut f64, &mut f64) {

@@ -55,18 +55,7 @@ pub fn face_fluxes(
     if let Some(a) = open {
         eclipses.push((a, time_s[time_s.len() - 1]));
     }
-    // Faces whose fluxes are the same (a tumble-averaged attitude gives every face the
-    // orientation average) are one line and one legend entry: drawn apart, the last
-    // would hide the others.
-    let mut groups: Vec<(usize, Vec<&str>)> = Vec::new();
-    for (i, f) in faces.iter().enumerate() {
-        let same =
-            |g: &FaceSeries| g.solar == f.solar && g.albedo == f.albedo && g.earth_ir == f.earth_ir;
-        match groups.iter_mut().find(|(j, _)| same(&faces[*j])) {
-            Some((_, names)) => names.push(&f.name),
-            None => groups.push((i, vec![&f.name])),
-        }
-    }
+    let groups = same_flux_groups(faces);
     let mut svg = String::new();
     let mut labels = Vec::new();
     let mut placer = Placer::new();
@@ -153,16 +142,7 @@ pub fn face_fluxes(
             }
             if k == 0 {
                 let (_, yr) = chart.plotting_area().get_pixel_range();
-                let mut entries: Vec<(String, Swatch)> = Vec::new();
-                for (i, (_, names)) in groups.iter().enumerate() {
-                    entries.push((names[0].to_string(), Swatch::Line(palette(i), 3)));
-                    for n in &names[1..] {
-                        entries.push((format!("= {n}"), Swatch::None));
-                    }
-                    if names.len() > 1 {
-                        entries.push(("(the same fluxes: one line)".into(), Swatch::None));
-                    }
-                }
+                let mut entries = legend_entries(&groups);
                 if !eclipses.is_empty() {
                     entries.push(("eclipse".into(), Swatch::Patch(ECLIPSE)));
                 }
@@ -184,4 +164,36 @@ pub fn face_fluxes(
         height: H,
         labels,
     })
+}
+
+/// The faces grouped by equal fluxes (a tumble-averaged attitude gives every face the
+/// orientation average): per group its first face's index and every face's name. One
+/// line per group is drawn: drawn apart, the last would hide the others.
+fn same_flux_groups(faces: &[FaceSeries]) -> Vec<(usize, Vec<&str>)> {
+    let mut groups: Vec<(usize, Vec<&str>)> = Vec::new();
+    for (i, f) in faces.iter().enumerate() {
+        let same =
+            |g: &FaceSeries| g.solar == f.solar && g.albedo == f.albedo && g.earth_ir == f.earth_ir;
+        match groups.iter_mut().find(|(j, _)| same(&faces[*j])) {
+            Some((_, names)) => names.push(&f.name),
+            None => groups.push((i, vec![&f.name])),
+        }
+    }
+    groups
+}
+
+/// The legend's entries: per group its first face beside the line's colour, the
+/// others under it (`= name`) and a note that they share the line.
+fn legend_entries(groups: &[(usize, Vec<&str>)]) -> Vec<(String, Swatch)> {
+    let mut entries = Vec::new();
+    for (i, (_, names)) in groups.iter().enumerate() {
+        entries.push((names[0].to_string(), Swatch::Line(palette(i), 3)));
+        for n in &names[1..] {
+            entries.push((format!("= {n}"), Swatch::None));
+        }
+        if names.len() > 1 {
+            entries.push(("(the same fluxes: one line)".into(), Swatch::None));
+        }
+    }
+    entries
 }

@@ -660,6 +660,22 @@ fn draw_lines(
     Ok(legend)
 }
 
+/// `text` in lines no wider than `width` px at `size_px`, broken at spaces (a word
+/// longer than the width stays whole on its line).
+fn wrap(text: &str, width: f64, size_px: f64) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for word in text.split(' ') {
+        match lines.last_mut() {
+            Some(l) if text_width(&format!("{l} {word}"), size_px) <= width => {
+                l.push(' ');
+                l.push_str(word);
+            }
+            _ => lines.push(word.to_string()),
+        }
+    }
+    lines
+}
+
 /// How far (in steps of its height) a label of the backlash panel may slide from what
 /// it names before it goes to the legend instead.
 const NEAR: usize = 2;
@@ -680,14 +696,26 @@ fn avoid_curves(
     if layout.long {
         let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
         let env = envelope(layout.s, &refs);
-        for edge in env.hi.iter().chain(&env.lo) {
-            let pts: Vec<(f64, f64)> = env
-                .t
-                .iter()
-                .zip(edge)
-                .map(|(t, v)| px(axis.x(*t), *v))
-                .collect();
-            notes.placer.avoid_path(&pts);
+        for (edge_hi, edge_lo) in env.hi.iter().zip(&env.lo) {
+            for edge in [edge_hi, edge_lo] {
+                let pts: Vec<(f64, f64)> = env
+                    .t
+                    .iter()
+                    .zip(edge)
+                    .map(|(t, v)| px(axis.x(*t), *v))
+                    .collect();
+                notes.placer.avoid_path(&pts);
+            }
+            // the filled band between the edges: no label inside it either
+            for k in 0..env.t.len().saturating_sub(1) {
+                let (x0, x1) = (axis.x(env.t[k]), axis.x(env.t[k + 1]));
+                let hi = edge_hi[k].max(edge_hi[k + 1]);
+                let lo = edge_lo[k].min(edge_lo[k + 1]);
+                if hi.is_finite() && lo.is_finite() {
+                    let (a, b) = (px(x0, hi), px(x1, lo));
+                    notes.placer.avoid(Rect::new(a.0, a.1, b.0, b.1));
+                }
+            }
         }
     } else {
         // as draw_lines draws them: one line through the finite samples
@@ -862,7 +890,14 @@ fn draw_panel_legend(
             (t.clone(), swatch)
         })
         .collect();
-    entries.extend(extra.iter().cloned());
+    // a label moved here from the plot may be longer than the column: wrapped at
+    // spaces, its first line beside its swatch
+    let room = f64::from(W) - f64::from(LEGEND_X) - 34.0 - 8.0;
+    for (text, swatch) in extra {
+        for (k, line) in wrap(text, room, 14.0).into_iter().enumerate() {
+            entries.push((line, if k == 0 { *swatch } else { Swatch::None }));
+        }
+    }
     let placed = super::legend(
         root,
         &mut notes.placer,

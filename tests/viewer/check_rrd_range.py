@@ -8,10 +8,13 @@ the log's temperatures read with Foxglove's MCAP reader:
 
 - every line the viewer draws is aggregated MinMax (or not at all), so that a pixel
   covering many samples keeps their extremes (Rerun's default, the average of min and
-  max, drew a 90-day run's −10 … 83 °C as 30 … 50 °C);
-- the temperatures of the first tab (a log of more than 30 orbits: the per-orbit
-  range) and of the samples tab each span at least 90 % of the run's true range
-  (lowest to highest temperature of any node over the log);
+  max, drew a 90-day run's −10 … 83 °C as 30 … 50 °C): what the viewer then draws
+  spans the data the .rrd holds;
+- the data behind the first tab (a log of more than 30 orbits: the per-orbit range)
+  and behind the samples tab each span at least 90 % of the run's true range (lowest
+  to highest temperature of any node over the log): nothing was lost or decimated on
+  the way. (The data check alone cannot fail for want of MinMax; the policy check is
+  what guards the drawing.)
 - a long log has the per-orbit tab, with one min and one max line per node.
 
 Exit 0 = all hold, 1 = one does not (each failure printed), 2 = the check could not run.
