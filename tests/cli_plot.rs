@@ -657,8 +657,31 @@ fn cli_environment_plot_draws_the_face_fluxes() {
         .arg(dir.join("r.svg"))
         .output()
         .unwrap();
-    common::assert_error("no faces", &out, &["--plot", "no [[face]]"]);
-    assert!(!dir.join("r.svg").exists());
+    // a scenario without faces: β, the solar flux and each eclipse's length
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(dir.join("r.svg")).unwrap();
+    for needle in [
+        "β, Sun above the orbit plane (deg)",
+        "solar flux (W/m²)",
+        "eclipse length (min)",
+        "eclipse length, at entry",
+    ] {
+        assert!(svg.contains(needle), "no {needle:?}");
+    }
+    // one eclipse in the reference's orbit (2098.2 s, the environment's report): one
+    // point
+    assert_eq!(svg.matches("<circle").count(), 1);
+    let (texts, _) = orbitlash::plot::drawn::read(&svg);
+    assert!(
+        texts
+            .iter()
+            .all(|t| t.rect.x1 <= 1100.0 && t.rect.x0 >= 0.0)
+    );
 }
 
 /// `plot --nodes` draws the nodes named, in that order, and says in the legend that
@@ -754,4 +777,35 @@ fn cli_plot_labels_moved_to_the_legend_stay_on_the_page() {
         .map(|l| l.text.as_str())
         .collect();
     assert!(in_legend.len() >= 2, "{in_legend:?} of {texts:?}");
+}
+
+/// The orbit figure of a scenario without faces, on a synthetic orbit: one point per
+/// eclipse, its labels drawn right (apart, on the page, off every line).
+#[test]
+fn cli_orbit_environment_figure_draws_every_eclipse() {
+    use orbitlash::plot::orbit::{OrbitSeries, orbit_environment};
+    let t: Vec<f64> = (0..=600).map(|k| k as f64 * 60.0).collect();
+    let beta: Vec<f64> = t.iter().map(|x| 20.0 + x / 36_000.0).collect();
+    let flux = vec![1361.0; t.len()];
+    let eclipses: Vec<(f64, f64)> = (0..6)
+        .map(|k| {
+            (
+                k as f64 * 5700.0 + 1800.0,
+                k as f64 * 5700.0 + 1800.0 + 2000.0 + 10.0 * k as f64,
+            )
+        })
+        .collect();
+    let fig = orbit_environment(
+        "synthetic",
+        &OrbitSeries {
+            time_s: &t,
+            beta_deg: &beta,
+            solar_flux_w_per_m2: &flux,
+            eclipses_s: &eclipses,
+        },
+    )
+    .unwrap();
+    assert_drawn_right(&fig);
+    assert_eq!(fig.svg.matches("<circle").count(), eclipses.len());
+    assert!(fig.svg.contains("time (h)"));
 }

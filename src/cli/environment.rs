@@ -183,14 +183,17 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         f.commit()?;
     }
     if let Some(p) = &a.plot {
-        if faces.is_empty() {
-            bail!(
-                "--plot {}: the scenario has no [[face]] to draw",
-                p.display()
-            );
-        }
         let text = series(env, &faces, horizon, step, &|_| None);
-        let fig = face_figure(&text, &format!("{}: incident flux per face", sc.name))?;
+        // a scenario with faces: each face's fluxes; without: β, flux and eclipses
+        let fig = if faces.is_empty() {
+            orbit_figure(
+                &text,
+                &eclipses,
+                &format!("{}: the orbit's environment", sc.name),
+            )?
+        } else {
+            face_figure(&text, &format!("{}: incident flux per face", sc.name))?
+        };
         let inputs: Vec<&std::path::Path> = input_paths.iter().map(PathBuf::as_path).collect();
         super::plot::write_figure(&fig, p, &inputs)?;
         outln!(o, "plot: {}", p.display());
@@ -198,11 +201,10 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     print_out(&o)
 }
 
-/// The figure of the `--csv` series `text` (without its utc column).
-fn face_figure(text: &str, title: &str) -> Result<orbitlash::plot::Figure> {
-    use orbitlash::plot::faces::{FaceSeries, face_fluxes};
+/// The columns of the `--csv` series `text` (made without its utc cells; the header
+/// still names the column): the header and the rows.
+fn table_of(text: &str) -> (Vec<&str>, Vec<Vec<f64>>) {
     let mut lines = text.lines();
-    // (the series is made without its utc cells; the header still names the column)
     let header: Vec<&str> = lines
         .next()
         .unwrap_or("")
@@ -216,6 +218,46 @@ fn face_figure(text: &str, title: &str) -> Result<orbitlash::plot::Figure> {
                 .collect()
         })
         .collect();
+    (header, rows)
+}
+
+/// The figure of a scenario without faces: β, the unshadowed solar flux and each
+/// eclipse's length, from the `--csv` series `text` and the eclipses.
+fn orbit_figure(
+    text: &str,
+    eclipses: &[(f64, f64)],
+    title: &str,
+) -> Result<orbitlash::plot::Figure> {
+    use orbitlash::plot::orbit::{OrbitSeries, orbit_environment};
+    let (header, rows) = table_of(text);
+    let column = |name: &str| -> Result<Vec<f64>> {
+        let i = header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| anyhow::anyhow!("the environment series lacks {name}"))?;
+        Ok(rows
+            .iter()
+            .map(|r| r.get(i).copied().unwrap_or(f64::NAN))
+            .collect())
+    };
+    let (t, beta, flux) = (
+        column("time_s")?,
+        column("beta_deg")?,
+        column("solar_flux_w_per_m2")?,
+    );
+    let s = OrbitSeries {
+        time_s: &t,
+        beta_deg: &beta,
+        solar_flux_w_per_m2: &flux,
+        eclipses_s: eclipses,
+    };
+    Ok(orbit_environment(title, &s)?)
+}
+
+/// The figure of the `--csv` series `text` (without its utc column).
+fn face_figure(text: &str, title: &str) -> Result<orbitlash::plot::Figure> {
+    use orbitlash::plot::faces::{FaceSeries, face_fluxes};
+    let (header, rows) = table_of(text);
     let col = |name: &str| header.iter().position(|h| *h == name);
     let values = |i: usize| {
         rows.iter()

@@ -13,6 +13,7 @@ pub mod drawn;
 pub mod faces;
 pub mod labels;
 pub mod margins;
+pub mod orbit;
 pub mod overview;
 pub mod run;
 

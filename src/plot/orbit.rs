@@ -1,0 +1,167 @@
+//! The figure of `environment --plot` for a scenario without faces: the orbit's β, the
+//! solar flux at the spacecraft (before any shadow) and each eclipse's length, against
+//! time, eclipses shaded.
+
+use plotters::prelude::*;
+
+use super::labels::Placer;
+use super::{
+    ECLIPSE, FAMILY, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, nice_step,
+    palette, time_unit,
+};
+
+/// What the figure draws, at `time_s` (ascending) unless said.
+#[derive(Debug, Clone)]
+pub struct OrbitSeries<'a> {
+    pub time_s: &'a [f64],
+    pub beta_deg: &'a [f64],
+    /// At the spacecraft, before any shadow.
+    pub solar_flux_w_per_m2: &'a [f64],
+    /// Each eclipse (umbra entry, exit), s.
+    pub eclipses_s: &'a [(f64, f64)],
+}
+
+/// One panel: its axis description and its series (time, value) with their names.
+struct Panel {
+    desc: &'static str,
+    lines: Vec<(String, Vec<(f64, f64)>)>,
+    points: bool,
+}
+
+/// β, solar flux and eclipse lengths in three panels, the legend beside them.
+pub fn orbit_environment(title: &str, s: &OrbitSeries<'_>) -> Result<Figure, PlotError> {
+    const W: u32 = 1100;
+    const H: u32 = 820;
+    const LEGEND_X: i32 = 880;
+    let n = s.time_s.len();
+    if n < 2 {
+        return Err(PlotError::Data("fewer than two times to plot".into()));
+    }
+    let (t0, t1) = (s.time_s[0], s.time_s[n - 1]);
+    let (unit_s, unit) = time_unit((t1 - t0).max(1.0));
+    let tx = |t: f64| t / unit_s;
+    let along = |v: &[f64]| -> Vec<(f64, f64)> {
+        s.time_s.iter().zip(v).map(|(t, y)| (tx(*t), *y)).collect()
+    };
+    let lengths: Vec<(f64, f64)> = s
+        .eclipses_s
+        .iter()
+        .map(|(a, b)| (tx(*a), (b - a) / 60.0))
+        .collect();
+    let panels = [
+        Panel {
+            desc: "β, Sun above the orbit plane (deg)",
+            lines: vec![("β".into(), along(s.beta_deg))],
+            points: false,
+        },
+        Panel {
+            desc: "solar flux (W/m²)",
+            lines: vec![(
+                "solar flux, unshadowed".into(),
+                along(s.solar_flux_w_per_m2),
+            )],
+            points: false,
+        },
+        Panel {
+            desc: "eclipse length (min)",
+            lines: vec![("eclipse length, at entry".into(), lengths)],
+            points: true,
+        },
+    ];
+    let mut svg = String::new();
+    let mut labels = Vec::new();
+    let mut placer = Placer::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
+        root.fill(&WHITE).map_err(draw_err)?;
+        root.draw(&Text::new(
+            title.to_string(),
+            (20, 12),
+            (FAMILY, 19).into_font().color(&BLACK),
+        ))
+        .map_err(draw_err)?;
+        let r = Placer::text_box(title, 19.0, 20.0, 12.0);
+        placer.avoid(r);
+        labels.push(Label {
+            text: title.to_string(),
+            rect: r,
+        });
+        let mut entries: Vec<(String, Swatch)> = Vec::new();
+        let panel_h = 250;
+        for (k, p) in panels.iter().enumerate() {
+            let last = k + 1 == panels.len();
+            let area = root.clone().shrink(
+                (0, 46 + k as i32 * panel_h),
+                (LEGEND_X as u32, panel_h as u32 - 6),
+            );
+            let (lo, hi) = p
+                .lines
+                .iter()
+                .flat_map(|l| l.1.iter().map(|q| q.1))
+                .filter(|v| v.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v), b.max(v))
+                });
+            let (ylo, yhi) = nice_range(lo.min(0.0), hi.max(lo + 1.0));
+            let (x0, x1) = (tx(t0), tx(t1));
+            let mut chart = ChartBuilder::on(&area)
+                .margin_left(10)
+                .margin_right(10)
+                .x_label_area_size(if last { 50 } else { 26 })
+                .y_label_area_size(70)
+                .build_cartesian_2d(x0..x1, ylo..yhi)
+                .map_err(draw_err)?;
+            let (ystep, xstep) = (nice_step(yhi - ylo, 5.0), nice_step(x1 - x0, 10.0));
+            let (ydec, xdec) = (decimals(ystep), decimals(xstep));
+            let yfmt = move |v: &f64| format!("{v:.ydec$}");
+            let xfmt = move |v: &f64| format!("{v:.xdec$}");
+            let mut mesh = chart.configure_mesh();
+            mesh.y_desc(p.desc)
+                .y_labels(((yhi - ylo) / ystep).round() as usize + 1)
+                .x_labels(((x1 - x0) / xstep).round() as usize + 1)
+                .y_label_formatter(&yfmt)
+                .x_label_formatter(&xfmt)
+                .light_line_style(TRANSPARENT)
+                .bold_line_style(RGBColor(230, 230, 230))
+                .label_style((FAMILY, 13))
+                .axis_desc_style((FAMILY, 14));
+            if last {
+                mesh.x_desc(format!("time ({unit})"));
+            }
+            mesh.draw().map_err(draw_err)?;
+            chart
+                .draw_series(
+                    s.eclipses_s.iter().map(|&(a, b)| {
+                        Rectangle::new([(tx(a), ylo), (tx(b), yhi)], ECLIPSE.filled())
+                    }),
+                )
+                .map_err(draw_err)?;
+            for (name, pts) in &p.lines {
+                let c = palette(k);
+                chart
+                    .draw_series(LineSeries::new(
+                        pts.iter().copied().filter(|q| q.1.is_finite()),
+                        c.stroke_width(2),
+                    ))
+                    .map_err(draw_err)?;
+                if p.points {
+                    chart
+                        .draw_series(pts.iter().map(|&q| Circle::new(q, 3, c.filled())))
+                        .map_err(draw_err)?;
+                }
+                entries.push((name.clone(), Swatch::Line(c, 3)));
+            }
+        }
+        if !s.eclipses_s.is_empty() {
+            entries.push(("eclipse".into(), Swatch::Patch(ECLIPSE)));
+        }
+        super::legend(&root, &mut placer, &mut labels, LEGEND_X, 56.0, &entries)?;
+        root.present().map_err(draw_err)?;
+    }
+    Ok(Figure {
+        svg,
+        width: W,
+        height: H,
+        labels,
+    })
+}
