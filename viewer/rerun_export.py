@@ -219,6 +219,7 @@ class Recording:
         self.rec = rec
         self.origin_ns = origin_ns
         self.t_end_ns = None  # the latest time sent
+        self.shape = {}  # entity -> (times ns, values), at most 2000 of each: where it runs
 
     def times(self, t_ns):
         import numpy as np
@@ -243,6 +244,8 @@ class Recording:
         )
         self.rec.log(entity, style, static=True)
         self.rec.send_columns(entity, indexes=self.times(t_ns), columns=rr.Scalars.columns(scalars=np.asarray(values)))
+        every = max(1, len(values) // 2000)
+        self.shape[entity] = (np.asarray(t_ns, dtype=float)[::every], np.asarray(values, dtype=float)[::every])
 
     def point(self, entity, t_ns, value, label):
         import rerun as rr
@@ -500,12 +503,58 @@ def late_smallest(series, pairs, origin_ns, span_s):
     return late
 
 
+CORNERS = ("RightTop", "LeftTop", "RightBottom", "LeftBottom")
+
+
+def legend_corner(entities, shape, origin_ns, span_s):
+    """The corner of a view where its legend hides the fewest of its points: each corner
+    box about a third of the width and a tenth of the height per entry (at most
+    two thirds), over the view's data range; ties go in the order of CORNERS."""
+    import numpy as np
+
+    pts = [shape[e] for e in entities if e in shape]
+    if not pts:
+        return "RightTop"
+    # each line where it runs, on an even grid of its time (a long straight segment
+    # counts as much as a wiggle); a single point (a marker) as itself
+    grid = np.linspace(0.0, 1.0, 400)
+    ts, vs = [], []
+    for tp, vp in pts:
+        x = (tp - origin_ns) * 1e-9 / max(span_s, 1e-9)
+        keep = np.isfinite(x) & np.isfinite(vp)
+        x, y = x[keep], vp[keep]
+        if len(x) > 1:
+            g = grid[(grid >= x[0]) & (grid <= x[-1])]
+            ts.append(g)
+            vs.append(np.interp(g, x, y))
+        else:
+            ts.append(x)
+            vs.append(y)
+    t = np.concatenate(ts) if ts else np.array([])
+    v = np.concatenate(vs) if vs else np.array([])
+    ok = np.isfinite(t) & np.isfinite(v)
+    t, v = t[ok], v[ok]
+    if len(v) == 0:
+        return "RightTop"
+    lo, hi = v.min(), v.max()
+    y = (v - lo) / (hi - lo) if hi > lo else np.full_like(v, 0.5)
+    w, h = 0.35, min(0.67, 0.05 + 0.1 * len(entities))
+    inside = {
+        "RightTop": (t > 1 - w) & (y > 1 - h),
+        "LeftTop": (t < w) & (y > 1 - h),
+        "RightBottom": (t > 1 - w) & (y < h),
+        "LeftBottom": (t < w) & (y < h),
+    }
+    return min(CORNERS, key=lambda c: (int(inside[c].sum()), CORNERS.index(c)))
+
+
 def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None, backlash_axis=None,
-                   late_smallest=()):
+                   late_smallest=(), corner=None):
     """The views: temperatures beside backlash, heat flows and the eclipse flag on the
     first tab; diagnose.mcap's fits; everything else (mesh geometry, orbit, faces,
     events) on the last. Every plot shows the whole run (0 … span_s), not a window
-    around the time cursor."""
+    around the time cursor; its legend in the corner `corner(entities)` says (where
+    it hides the fewest points; backlash: at the top, away from the run's smallest)."""
     import rerun as rr
     import rerun.blueprint as rrb
 
@@ -526,7 +575,9 @@ def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None
             axis_x=rrb.archetypes.TimeAxis(view_range=whole, link="Independent"),
             axis_y=(rrb.ScalarAxis(range=backlash_axis) if backlash and backlash_axis
                     else rrb.ScalarAxis(range=(0.0, 100.0)) if title.startswith("sunlit share") else None),
-            plot_legend=rrb.PlotLegend("LeftTop" if title in late_smallest else "RightTop") if backlash else None,
+            plot_legend=rrb.PlotLegend(
+                ("LeftTop" if title in late_smallest else "RightTop") if backlash
+                else corner(entities) if corner else "RightTop"),
         )
 
     temps = []
@@ -593,7 +644,9 @@ def export(log, out, partial):
         span_s = (end_ns - origin_ns) * 1e-9 if end_ns is not None else 1.0
         top = backlash_range(series)
         late = late_smallest(series, pairs, origin_ns, span_s)
-        rec.send_blueprint(make_blueprint(name, groups, body, gears, bool(texts), span_s, envelopes, top, late))
+        corner = lambda ents: legend_corner(ents, recording.shape, origin_ns, span_s)  # noqa: E731
+        rec.send_blueprint(make_blueprint(name, groups, body, gears, bool(texts), span_s, envelopes, top, late,
+                                          corner))
         rec.flush()
     finally:
         rec.disconnect()

@@ -593,6 +593,23 @@ def test_sunlit_share_from_eclipses():
     expect(np.max(np.abs(share - 0.7)) < 10.0 / p + 1e-9, f"from samples {share.min()} … {share.max()}")
 
 
+def test_legend_corner_avoids_the_data():
+    """A view whose line runs along the top goes to a bottom corner; lines through
+    every corner but the left bottom one (one along the top, one along the bottom of
+    the second half) put the legend there; no data keeps the default."""
+    import numpy as np
+
+    module = load_export_module()
+    t = np.arange(0, 1001, dtype=float) * 1e9
+    top = {"a": (t, np.r_[np.zeros(1), np.full(1000, 10.0)])}
+    expect(module.legend_corner(["a"], top, 0, 1000.0).endswith("Bottom"),
+           module.legend_corner(["a"], top, 0, 1000.0))
+    shape = {"b": (t, np.full(len(t), 10.0)), "c": (t[500:], np.zeros(len(t) - 500))}
+    expect(module.legend_corner(["b", "c"], shape, 0, 1000.0) == "LeftBottom",
+           module.legend_corner(["b", "c"], shape, 0, 1000.0))
+    expect(module.legend_corner(["none"], {}, 0, 1.0) == "RightTop", "no data: the default corner")
+
+
 # ---- main ------------------------------------------------------------------------------
 
 def main():
@@ -644,6 +661,7 @@ def main():
         check("C: a pair with no finite smallest: no point, verdict kept", test_smallest_not_finite)
         check("D: per-orbit range and mean of a sine, orbit starts on k·P", test_per_orbit_closed_form)
         check("D: the sunlit share of each whole orbit from the eclipse windows", test_sunlit_share_from_eclipses)
+        check("D: a view's legend goes to the corner its lines leave free", test_legend_corner_avoids_the_data)
     print(f"{results['passed']} passed, {results['failed']} failed")
     return 1 if results["failed"] else 0
 
