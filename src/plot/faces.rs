@@ -5,10 +5,8 @@
 use plotters::prelude::*;
 
 use super::labels::Placer;
-use super::{
-    ECLIPSE, FAMILY, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, nice_step,
-    palette, time_unit,
-};
+use super::panels::{self, H, LEGEND_X, W};
+use super::{ECLIPSE, Figure, PlotError, Swatch, draw_err, nice_range, palette, time_unit};
 
 /// One face's fluxes, W/m² (incident, before absorptivity), at the figure's times.
 #[derive(Debug, Clone)]
@@ -29,9 +27,6 @@ pub fn face_fluxes(
     sunlit: &[f64],
     faces: &[FaceSeries],
 ) -> Result<Figure, PlotError> {
-    const W: u32 = 1100;
-    const H: u32 = 820;
-    const LEGEND_X: i32 = 880;
     if time_s.len() < 2 {
         return Err(PlotError::Data("fewer than two times to plot".into()));
     }
@@ -62,30 +57,16 @@ pub fn face_fluxes(
     {
         let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        root.draw(&Text::new(
-            title.to_string(),
-            (20, 12),
-            (FAMILY, 19).into_font().color(&BLACK),
-        ))
-        .map_err(draw_err)?;
-        let r = Placer::text_box(title, 19.0, 20.0, 12.0);
-        placer.avoid(r);
-        labels.push(Label {
-            text: title.to_string(),
-            rect: r,
-        });
+        panels::title(&root, title, &mut placer, &mut labels)?;
         let kinds: [(&str, Flux); 3] = [
             ("direct Sun (W/m²)", |f| &f.solar),
             ("Earth albedo (W/m²)", |f| &f.albedo),
             ("Earth infrared (W/m²)", |f| &f.earth_ir),
         ];
-        let panel_h = 250;
+        let shade: Vec<(f64, f64)> = eclipses.iter().map(|&(a, b)| (tx(a), tx(b))).collect();
         for (k, (desc, get)) in kinds.iter().enumerate() {
-            let y_top = 46 + k as i32 * panel_h;
             let last = k + 1 == kinds.len();
-            let area = root
-                .clone()
-                .shrink((0, y_top), (LEGEND_X as u32, panel_h as u32 - 6));
+            let area = panels::area(&root, k);
             let (lo, hi) = faces
                 .iter()
                 .flat_map(|f| get(f).iter())
@@ -93,40 +74,14 @@ pub fn face_fluxes(
                 .fold((0.0f64, f64::NEG_INFINITY), |(a, b), v| {
                     (a.min(*v), b.max(*v))
                 });
-            let (ylo, yhi) = nice_range(lo, hi.max(lo + 1.0));
-            let mut chart = ChartBuilder::on(&area)
-                .margin_left(10)
-                .margin_right(10)
-                .x_label_area_size(if last { 50 } else { 26 })
-                .y_label_area_size(70)
-                .build_cartesian_2d(x0..x1, ylo..yhi)
-                .map_err(draw_err)?;
-            let ystep = nice_step(yhi - ylo, 5.0);
-            let xstep = nice_step(x1 - x0, 10.0);
-            let xdec = decimals(xstep);
-            let yfmt = |v: &f64| format!("{v:.0}");
-            let xfmt = move |v: &f64| format!("{v:.xdec$}");
-            let mut mesh = chart.configure_mesh();
-            mesh.y_desc(*desc)
-                .y_labels(((yhi - ylo) / ystep).round() as usize + 1)
-                .x_labels(((x1 - x0) / xstep).round() as usize + 1)
-                .y_label_formatter(&yfmt)
-                .x_label_formatter(&xfmt)
-                .light_line_style(TRANSPARENT)
-                .bold_line_style(RGBColor(230, 230, 230))
-                .label_style((FAMILY, 13))
-                .axis_desc_style((FAMILY, 14));
-            if last {
-                mesh.x_desc(format!("time ({unit})"));
-            }
-            mesh.draw().map_err(draw_err)?;
-            chart
-                .draw_series(
-                    eclipses.iter().map(|&(a, b)| {
-                        Rectangle::new([(tx(a), ylo), (tx(b), yhi)], ECLIPSE.filled())
-                    }),
-                )
-                .map_err(draw_err)?;
+            let axes = panels::Axes {
+                x: (x0, x1),
+                y: nice_range(lo, hi.max(lo + 1.0)),
+                desc,
+                y_decimals: Some(0),
+                time_desc: last.then(|| format!("time ({unit})")),
+            };
+            let mut chart = panels::chart(&area, &axes, &shade)?;
             for (i, (j, _)) in groups.iter().enumerate() {
                 let f = &faces[*j];
                 chart

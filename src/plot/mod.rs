@@ -15,6 +15,7 @@ pub mod labels;
 pub mod margins;
 pub mod orbit;
 pub mod overview;
+mod panels;
 pub mod run;
 
 use std::sync::OnceLock;

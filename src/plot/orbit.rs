@@ -5,10 +5,8 @@
 use plotters::prelude::*;
 
 use super::labels::Placer;
-use super::{
-    ECLIPSE, FAMILY, Figure, Label, PlotError, Swatch, decimals, draw_err, nice_range, nice_step,
-    palette, time_unit,
-};
+use super::panels::{self, H, LEGEND_X, W};
+use super::{ECLIPSE, Figure, PlotError, Swatch, draw_err, nice_range, palette, time_unit};
 
 /// What the figure draws, at `time_s` (ascending) unless said.
 #[derive(Debug, Clone)]
@@ -30,9 +28,6 @@ struct Panel {
 
 /// β, solar flux and eclipse lengths in three panels, the legend beside them.
 pub fn orbit_environment(title: &str, s: &OrbitSeries<'_>) -> Result<Figure, PlotError> {
-    const W: u32 = 1100;
-    const H: u32 = 820;
-    const LEGEND_X: i32 = 880;
     let n = s.time_s.len();
     if n < 2 {
         return Err(PlotError::Data("fewer than two times to plot".into()));
@@ -48,7 +43,7 @@ pub fn orbit_environment(title: &str, s: &OrbitSeries<'_>) -> Result<Figure, Plo
         .iter()
         .map(|(a, b)| (tx(*a), (b - a) / 60.0))
         .collect();
-    let panels = [
+    let rows = [
         Panel {
             desc: "β, Sun above the orbit plane (deg)",
             lines: vec![("β".into(), along(s.beta_deg))],
@@ -74,26 +69,12 @@ pub fn orbit_environment(title: &str, s: &OrbitSeries<'_>) -> Result<Figure, Plo
     {
         let root = SVGBackend::with_string(&mut svg, (W, H)).into_drawing_area();
         root.fill(&WHITE).map_err(draw_err)?;
-        root.draw(&Text::new(
-            title.to_string(),
-            (20, 12),
-            (FAMILY, 19).into_font().color(&BLACK),
-        ))
-        .map_err(draw_err)?;
-        let r = Placer::text_box(title, 19.0, 20.0, 12.0);
-        placer.avoid(r);
-        labels.push(Label {
-            text: title.to_string(),
-            rect: r,
-        });
+        panels::title(&root, title, &mut placer, &mut labels)?;
         let mut entries: Vec<(String, Swatch)> = Vec::new();
-        let panel_h = 250;
-        for (k, p) in panels.iter().enumerate() {
-            let last = k + 1 == panels.len();
-            let area = root.clone().shrink(
-                (0, 46 + k as i32 * panel_h),
-                (LEGEND_X as u32, panel_h as u32 - 6),
-            );
+        let shade: Vec<(f64, f64)> = s.eclipses_s.iter().map(|&(a, b)| (tx(a), tx(b))).collect();
+        for (k, p) in rows.iter().enumerate() {
+            let last = k + 1 == rows.len();
+            let area = panels::area(&root, k);
             let (lo, hi) = p
                 .lines
                 .iter()
@@ -102,40 +83,14 @@ pub fn orbit_environment(title: &str, s: &OrbitSeries<'_>) -> Result<Figure, Plo
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
                     (a.min(v), b.max(v))
                 });
-            let (ylo, yhi) = nice_range(lo.min(0.0), hi.max(lo + 1.0));
-            let (x0, x1) = (tx(t0), tx(t1));
-            let mut chart = ChartBuilder::on(&area)
-                .margin_left(10)
-                .margin_right(10)
-                .x_label_area_size(if last { 50 } else { 26 })
-                .y_label_area_size(70)
-                .build_cartesian_2d(x0..x1, ylo..yhi)
-                .map_err(draw_err)?;
-            let (ystep, xstep) = (nice_step(yhi - ylo, 5.0), nice_step(x1 - x0, 10.0));
-            let (ydec, xdec) = (decimals(ystep), decimals(xstep));
-            let yfmt = move |v: &f64| format!("{v:.ydec$}");
-            let xfmt = move |v: &f64| format!("{v:.xdec$}");
-            let mut mesh = chart.configure_mesh();
-            mesh.y_desc(p.desc)
-                .y_labels(((yhi - ylo) / ystep).round() as usize + 1)
-                .x_labels(((x1 - x0) / xstep).round() as usize + 1)
-                .y_label_formatter(&yfmt)
-                .x_label_formatter(&xfmt)
-                .light_line_style(TRANSPARENT)
-                .bold_line_style(RGBColor(230, 230, 230))
-                .label_style((FAMILY, 13))
-                .axis_desc_style((FAMILY, 14));
-            if last {
-                mesh.x_desc(format!("time ({unit})"));
-            }
-            mesh.draw().map_err(draw_err)?;
-            chart
-                .draw_series(
-                    s.eclipses_s.iter().map(|&(a, b)| {
-                        Rectangle::new([(tx(a), ylo), (tx(b), yhi)], ECLIPSE.filled())
-                    }),
-                )
-                .map_err(draw_err)?;
+            let axes = panels::Axes {
+                x: (tx(t0), tx(t1)),
+                y: nice_range(lo.min(0.0), hi.max(lo + 1.0)),
+                desc: p.desc,
+                y_decimals: None,
+                time_desc: last.then(|| format!("time ({unit})")),
+            };
+            let mut chart = panels::chart(&area, &axes, &shade)?;
             for (name, pts) in &p.lines {
                 let c = palette(k);
                 chart

@@ -511,16 +511,20 @@ fn draw_panel(
         .map_err(draw_err)?;
     let plot_px = plot_rect(&chart);
     let series = layout.series(temps_panel);
-    let legend = if layout.long {
-        draw_envelopes(&mut chart, layout, &series, temps_panel)?
-    } else {
-        draw_lines(&mut chart, layout, &series, temps_panel)?
+    // a long run's per-bin envelopes, once: drawn, and kept clear of the labels
+    let env = layout.long.then(|| {
+        let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
+        envelope(layout.s, &refs)
+    });
+    let legend = match &env {
+        Some(env) => draw_envelopes(&mut chart, layout, &series, env, temps_panel)?,
+        None => draw_lines(&mut chart, layout, &series, temps_panel)?,
     };
     // The smallest allowed backlash and the run's smallest, their labels off the
     // curves and the allowed lines (in the legend when the plot has no such room).
     let mut overflow = Vec::new();
     if !temps_panel {
-        avoid_curves(&chart, layout, &series, notes);
+        avoid_curves(&chart, layout, &series, env.as_ref(), notes);
         // labels 2 px inside the axes, off their tick marks
         let inside = Rect::new(
             plot_px.x0 + 2.0,
@@ -587,18 +591,17 @@ fn panel_chart<'a, 'b>(
     Ok(chart)
 }
 
-/// Draws a long run's series as per-bin envelopes: temperatures as their two edges
+/// Draws a long run's series as their per-bin envelopes `env`: temperatures as their two edges
 /// (bands of several nodes would hide each other), the backlash as a filled band;
 /// returns the legend's names.
 fn draw_envelopes(
     chart: &mut Chart<'_, '_>,
     layout: &RunLayout<'_>,
     series: &[(String, &Vec<f64>)],
+    env: &Envelope,
     temps_panel: bool,
 ) -> Result<Vec<String>, PlotError> {
     let tx = |t: f64| layout.axis.x(t);
-    let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
-    let env = envelope(layout.s, &refs);
     let mut legend = Vec::new();
     for (k, (name, _)) in series.iter().enumerate() {
         let c = palette(k);
@@ -680,12 +683,13 @@ fn wrap(text: &str, width: f64, size_px: f64) -> Vec<String> {
 /// it names before it goes to the legend instead.
 const NEAR: usize = 2;
 
-/// Tells the placer where the panel's curves (or a long run's envelope edges) and the
-/// allowed lines run, in px.
+/// Tells the placer where the panel's curves (or a long run's envelope `env`: its
+/// edges and the band between them) and the allowed lines run, in px.
 fn avoid_curves(
     chart: &Chart<'_, '_>,
     layout: &RunLayout<'_>,
     series: &[(String, &Vec<f64>)],
+    env: Option<&Envelope>,
     notes: &mut Annotations,
 ) {
     let px = |x: f64, y: f64| {
@@ -693,9 +697,7 @@ fn avoid_curves(
         (a as f64, b as f64)
     };
     let axis = &layout.axis;
-    if layout.long {
-        let refs: Vec<&Vec<f64>> = series.iter().map(|x| x.1).collect();
-        let env = envelope(layout.s, &refs);
+    if let Some(env) = env {
         for (edge_hi, edge_lo) in env.hi.iter().zip(&env.lo) {
             for edge in [edge_hi, edge_lo] {
                 let pts: Vec<(f64, f64)> = env
