@@ -77,8 +77,26 @@ fn cli_plot_a_log_as_png_and_svg_with_eclipses_verdict_and_smallest_backlash() {
         "housing",
         "gear1.r2",
     ] {
-        assert!(svg.contains(needle), "the figure lacks {needle:?}");
+        assert!(
+            svg.split("aria-label=\"").skip(1).any(|t| t
+                .split('"')
+                .next()
+                .unwrap()
+                .contains(needle)),
+            "the figure lacks {needle:?}"
+        );
     }
+    // the file names no font: its text is outlines, its curves at sub-pixel positions
+    assert!(!svg.contains("<text") && !svg.contains("font-family"));
+    assert!(svg.contains("<use xlink:href=\"#g"));
+    let fractional = svg
+        .split("points=\"")
+        .skip(1)
+        .filter_map(|p| p.split('"').next())
+        .flat_map(|p| p.split([' ', ',']))
+        .filter(|v| v.contains('.'))
+        .count();
+    assert!(fractional > 1000, "{fractional} sub-pixel coordinates");
 }
 
 #[test]

@@ -342,11 +342,14 @@ fn out_files(
     );
     let fig = orbitlash::plot::overview::overview(&d.series, &title)
         .map_err(|e| anyhow::anyhow!("cannot draw overview.svg: {e}"))?;
-    files.push((dir.join("overview.svg"), fig.svg.into_bytes()));
+    files.push((dir.join("overview.svg"), fig.svg_file().into_bytes()));
     for (c, name) in d.series.channels.iter().enumerate() {
         let fig = orbitlash::plot::diagnose::channel(&d.series, c)
             .map_err(|e| anyhow::anyhow!("cannot draw {}: {e}", residual_plot_name(name)))?;
-        files.push((dir.join(residual_plot_name(name)), fig.svg.into_bytes()));
+        files.push((
+            dir.join(residual_plot_name(name)),
+            fig.svg_file().into_bytes(),
+        ));
     }
     Ok(files)
 }

@@ -237,7 +237,7 @@ impl PlotsFormat {
     /// The figure's bytes in this format (PNG at twice its size).
     fn bytes(self, fig: orbitlash::plot::Figure) -> Result<Vec<u8>, orbitlash::plot::PlotError> {
         match self {
-            PlotsFormat::Svg => Ok(fig.svg.into_bytes()),
+            PlotsFormat::Svg => Ok(fig.svg_file().into_bytes()),
             PlotsFormat::Png => fig.png(2.0),
         }
     }

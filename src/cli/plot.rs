@@ -59,7 +59,7 @@ pub fn format_of(p: &Path, option: &str) -> Result<Format> {
 pub fn write_figure(fig: &orbitlash::plot::Figure, out: &Path, inputs: &[&Path]) -> Result<()> {
     let bytes = match format_of(out, "--out")? {
         Format::Png => fig.png(2.0)?,
-        Format::Svg => fig.svg.clone().into_bytes(),
+        Format::Svg => fig.svg_file().into_bytes(),
     };
     let mut f = AtomicFile::create(out, &OutputPolicy::reading(inputs))?;
     f.write_all(&bytes)

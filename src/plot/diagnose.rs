@@ -140,12 +140,7 @@ pub fn channel(s: &Series, c: usize) -> Result<Figure, PlotError> {
         }
         root.present().map_err(draw_err)?;
     }
-    Ok(Figure {
-        svg,
-        width: W,
-        height: H,
-        labels: notes.labels,
-    })
+    Ok(Figure::new(svg, W, H, notes.labels))
 }
 
 /// Draws the figure's title, naming the channel.
@@ -285,12 +280,12 @@ fn draw_values(chart: &mut Chart<'_, '_>, view: &ChannelView<'_>) -> Result<(), 
     let (s, c, readings) = (view.s, view.c, &view.readings);
     for (series, color) in [(&s.baseline[c], BEFORE), (&s.corrected[c], AFTER)] {
         for seg in super::line_segments(&s.time_s, series) {
-            chart
-                .draw_series(LineSeries::new(
-                    seg.into_iter().map(|(t, v)| (view.axis.x(t), v)),
-                    color.stroke_width(2),
-                ))
-                .map_err(draw_err)?;
+            super::fine::line(
+                chart,
+                seg.into_iter().map(|(t, v)| (view.axis.x(t), v)),
+                color,
+                2.0,
+            )?;
         }
     }
     chart

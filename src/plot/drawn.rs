@@ -47,7 +47,7 @@ pub fn read(svg: &str) -> (Vec<DrawnText>, Vec<Vec<(f64, f64)>>) {
 }
 
 /// The value of attribute `name` in a tag's attribute text.
-fn attr<'a>(attrs: &'a str, name: &str) -> Option<&'a str> {
+pub(crate) fn attr<'a>(attrs: &'a str, name: &str) -> Option<&'a str> {
     let key = format!(" {name}=\"");
     let padded_at = format!(" {attrs}").find(&key)?;
     let start = padded_at + key.len() - 1;
@@ -55,7 +55,7 @@ fn attr<'a>(attrs: &'a str, name: &str) -> Option<&'a str> {
     Some(&v[..v.find('"')?])
 }
 
-fn unescape(s: &str) -> String {
+pub(crate) fn unescape(s: &str) -> String {
     s.replace("&lt;", "<")
         .replace("&gt;", ">")
         .replace("&quot;", "\"")

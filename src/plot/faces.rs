@@ -81,19 +81,19 @@ pub fn face_fluxes(
                 y_decimals: Some(0),
                 time_desc: last.then(|| format!("time ({unit})")),
             };
-            let mut chart = panels::chart(&area, &axes, &shade)?;
+            let chart = panels::chart(&area, &axes, &shade)?;
             for (i, (j, _)) in groups.iter().enumerate() {
                 let f = &faces[*j];
-                chart
-                    .draw_series(LineSeries::new(
-                        time_s
-                            .iter()
-                            .zip(get(f).iter())
-                            .filter(|(_, v)| v.is_finite())
-                            .map(|(t, v)| (tx(*t), *v)),
-                        palette(i).stroke_width(2),
-                    ))
-                    .map_err(draw_err)?;
+                super::fine::line(
+                    &chart,
+                    time_s
+                        .iter()
+                        .zip(get(f).iter())
+                        .filter(|(_, v)| v.is_finite())
+                        .map(|(t, v)| (tx(*t), *v)),
+                    palette(i),
+                    2.0,
+                )?;
             }
             if k == 0 {
                 let (_, yr) = chart.plotting_area().get_pixel_range();
@@ -113,12 +113,7 @@ pub fn face_fluxes(
         }
         root.present().map_err(draw_err)?;
     }
-    Ok(Figure {
-        svg,
-        width: W,
-        height: H,
-        labels,
-    })
+    Ok(Figure::new(svg, W, H, labels))
 }
 
 /// The faces grouped by equal fluxes (a tumble-averaged attitude gives every face the

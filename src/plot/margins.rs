@@ -135,12 +135,7 @@ pub fn distribution(d: &DistributionInput<'_>) -> Result<Figure, PlotError> {
         }
         root.present().map_err(draw_err)?;
     }
-    Ok(Figure {
-        svg,
-        width: W,
-        height: H,
-        labels: notes.labels,
-    })
+    Ok(Figure::new(svg, W, H, notes.labels))
 }
 
 /// Draws the title, then the verdict and the counts (of `n_valid` samples) on a line
@@ -478,10 +473,5 @@ pub fn tornado(title: &str, rows: &[(String, f64)], samples: usize) -> Result<Fi
         }
         root.present().map_err(draw_err)?;
     }
-    Ok(Figure {
-        svg,
-        width,
-        height,
-        labels,
-    })
+    Ok(Figure::new(svg, width, height, labels))
 }

@@ -11,9 +11,11 @@
 pub mod diagnose;
 pub mod drawn;
 pub mod faces;
+mod fine;
 pub mod labels;
 pub mod margins;
 pub mod orbit;
+pub mod outline;
 pub mod overview;
 mod panels;
 pub mod run;
@@ -51,6 +53,8 @@ pub struct Label {
 /// A drawn figure: its SVG and the labels it placed.
 #[derive(Debug, Clone)]
 pub struct Figure {
+    /// The figure with its labels as `<text>` (what the tests read the labels back
+    /// from); the file written is [`Figure::svg_file`].
     pub svg: String,
     pub width: u32,
     pub height: u32,
@@ -58,6 +62,23 @@ pub struct Figure {
 }
 
 impl Figure {
+    /// The figure drawn: `svg` as plotters wrote it (its curves still placeholders,
+    /// spliced in here), `width` × `height` px, and the labels placed on it.
+    pub(crate) fn new(svg: String, width: u32, height: u32, labels: Vec<Label>) -> Figure {
+        Figure {
+            svg: fine::splice(svg),
+            width,
+            height,
+            labels,
+        }
+    }
+
+    /// The SVG to write: the figure with its text as outlines of the embedded font,
+    /// so it looks the same everywhere ([`outline::outline_text`]).
+    pub fn svg_file(&self) -> String {
+        outline::outline_text(&self.svg)
+    }
+
     /// The figure as PNG at `scale` × its size (2 for a sharp figure on a screen).
     pub fn png(&self, scale: f32) -> Result<Vec<u8>, PlotError> {
         use resvg::{tiny_skia, usvg};
@@ -67,8 +88,8 @@ impl Figure {
             db.load_font_data(FONT.to_vec());
             db.set_sans_serif_family("DejaVu Sans");
         }
-        let tree =
-            usvg::Tree::from_str(&self.svg, &opt).map_err(|e| PlotError::Png(e.to_string()))?;
+        let tree = usvg::Tree::from_str(&self.svg_file(), &opt)
+            .map_err(|e| PlotError::Png(e.to_string()))?;
         let (w, h) = (
             (self.width as f32 * scale).ceil() as u32,
             (self.height as f32 * scale).ceil() as u32,
@@ -149,6 +170,7 @@ impl Figure {
                 }
             }
         }
+        out.extend(outline::misplaced_glyphs(&self.svg, &self.svg_file()));
         out
     }
 
@@ -163,7 +185,7 @@ impl Figure {
     }
 }
 
-fn face() -> &'static ttf_parser::Face<'static> {
+pub(crate) fn face() -> &'static ttf_parser::Face<'static> {
     static FACE: OnceLock<ttf_parser::Face<'static>> = OnceLock::new();
     FACE.get_or_init(|| ttf_parser::Face::parse(FONT, 0).expect("the embedded font parses"))
 }

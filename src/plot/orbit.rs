@@ -93,12 +93,12 @@ pub fn orbit_environment(title: &str, s: &OrbitSeries<'_>) -> Result<Figure, Plo
             let mut chart = panels::chart(&area, &axes, &shade)?;
             for (name, pts) in &p.lines {
                 let c = palette(k);
-                chart
-                    .draw_series(LineSeries::new(
-                        pts.iter().copied().filter(|q| q.1.is_finite()),
-                        c.stroke_width(2),
-                    ))
-                    .map_err(draw_err)?;
+                super::fine::line(
+                    &chart,
+                    pts.iter().copied().filter(|q| q.1.is_finite()),
+                    c,
+                    2.0,
+                )?;
                 if p.points {
                     chart
                         .draw_series(pts.iter().map(|&q| Circle::new(q, 3, c.filled())))
@@ -113,10 +113,5 @@ pub fn orbit_environment(title: &str, s: &OrbitSeries<'_>) -> Result<Figure, Plo
         super::legend(&root, &mut placer, &mut labels, LEGEND_X, 56.0, &entries)?;
         root.present().map_err(draw_err)?;
     }
-    Ok(Figure {
-        svg,
-        width: W,
-        height: H,
-        labels,
-    })
+    Ok(Figure::new(svg, W, H, labels))
 }

@@ -89,12 +89,7 @@ pub fn overview(s: &Series, title: &str) -> Result<Figure, PlotError> {
         draw_time_caption(&root, &grid, &axis, &mut notes)?;
         root.present().map_err(draw_err)?;
     }
-    Ok(Figure {
-        svg,
-        width: grid.w,
-        height: grid.h,
-        labels: notes.labels,
-    })
+    Ok(Figure::new(svg, grid.w, grid.h, notes.labels))
 }
 
 /// Draws the figure's title at its top left.
@@ -203,12 +198,12 @@ fn draw_channel(
     shade_held_out_and_eclipses(&mut chart, s, axis, (ylo, yhi))?;
     for (series, color) in [(&s.baseline[c], BEFORE), (&s.corrected[c], AFTER)] {
         for seg in super::line_segments(&s.time_s, series) {
-            chart
-                .draw_series(LineSeries::new(
-                    seg.into_iter().map(|(t, v)| (axis.x(t), v)),
-                    color.stroke_width(2),
-                ))
-                .map_err(draw_err)?;
+            super::fine::line(
+                &chart,
+                seg.into_iter().map(|(t, v)| (axis.x(t), v)),
+                color,
+                2.0,
+            )?;
         }
     }
     chart

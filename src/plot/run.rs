@@ -455,12 +455,7 @@ pub fn figure(s: &RunSeries) -> Result<Figure, PlotError> {
     }
     let labels = notes.labels;
     debug_assert!(labels.iter().all(|l| text_width(&l.text, 14.0) > 0.0));
-    Ok(Figure {
-        svg,
-        width: W,
-        height: H,
-        labels,
-    })
+    Ok(Figure::new(svg, W, H, labels))
 }
 
 /// Draws the title with the verdict, when the run's end or the log's margins give it.
@@ -619,17 +614,15 @@ fn draw_envelopes(
             )
             .collect();
         if !temps_panel {
-            chart
-                .draw_series(std::iter::once(Polygon::new(band, c.mix(0.25).filled())))
-                .map_err(draw_err)?;
+            super::fine::area(chart, band, c, 0.25)?;
         }
         for edge in [&env.hi[k], &env.lo[k]] {
-            chart
-                .draw_series(LineSeries::new(
-                    env.t.iter().zip(edge).map(|(t, v)| (tx(*t), *v)),
-                    c.stroke_width(if temps_panel { 2 } else { 1 }),
-                ))
-                .map_err(draw_err)?;
+            super::fine::line(
+                chart,
+                env.t.iter().zip(edge).map(|(t, v)| (tx(*t), *v)),
+                c,
+                if temps_panel { 2.0 } else { 1.0 },
+            )?;
         }
         legend.push(name.clone());
     }
@@ -646,18 +639,18 @@ fn draw_lines(
     let mut legend = Vec::new();
     for (k, (name, v)) in series.iter().enumerate() {
         let c = palette(k);
-        chart
-            .draw_series(LineSeries::new(
-                layout
-                    .s
-                    .time_s
-                    .iter()
-                    .zip(v.iter())
-                    .filter(|(_, y)| y.is_finite())
-                    .map(|(t, y)| (layout.axis.x(*t), *y)),
-                c.stroke_width(if temps_panel { 1 } else { 2 }),
-            ))
-            .map_err(draw_err)?;
+        super::fine::line(
+            chart,
+            layout
+                .s
+                .time_s
+                .iter()
+                .zip(v.iter())
+                .filter(|(_, y)| y.is_finite())
+                .map(|(t, y)| (layout.axis.x(*t), *y)),
+            c,
+            if temps_panel { 1.0 } else { 2.0 },
+        )?;
         legend.push(name.clone());
     }
     Ok(legend)
