@@ -827,3 +827,81 @@ fn cli_orbit_environment_figure_draws_every_eclipse() {
     assert_eq!(fig.svg.matches("<circle").count(), eclipses.len());
     assert!(fig.svg.contains("time (h)"));
 }
+
+/// A periodic run's orbits reach minima equal to millionths of a micrometre; the run,
+/// its log's figure and its plain CSV's figure all name the same one. The CSV holds a
+/// row at the run's smallest (the run's time to the millisecond, its value to the
+/// table's precision) and no row below it.
+#[test]
+fn regress_plot_of_a_csv_and_of_its_log_mark_the_run_s_own_smallest() {
+    let dir = common::tmpdir("plot-same-min");
+    let (log, csv, json) = (dir.join("r.mcap"), dir.join("r.csv"), dir.join("r.json"));
+    let out = common::bin()
+        .args(["run", "--quiet", "--out"])
+        .arg(&log)
+        .arg("--csv")
+        .arg(&csv)
+        .arg("--json")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let pair = &summary["gear_pairs"][0];
+    let (t_min, b_min) = (
+        pair["t_min_backlash_s"].as_f64().unwrap(),
+        pair["min_backlash_um"].as_f64().unwrap(),
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = head.iter().position(|h| *h == "backlash_um").unwrap();
+    let rows: Vec<(f64, f64)> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|c| c.parse().unwrap()).collect();
+            (v[0], v[col])
+        })
+        .collect();
+    assert!(
+        rows.windows(2).all(|w| w[0].0 < w[1].0),
+        "rows in time order"
+    );
+    let at_min = rows
+        .iter()
+        .find(|r| (r.0 - t_min).abs() < 6e-4)
+        .unwrap_or_else(|| panic!("no row at the run's smallest, t = {t_min} s"));
+    assert!(
+        (at_min.1 - b_min).abs() < 1e-6,
+        "{at_min:?} against {b_min}"
+    );
+    assert!(
+        rows.iter().all(|r| r.1 >= at_min.1),
+        "a row below the smallest"
+    );
+    // the two figures' labels
+    let label = |input: &std::path::Path, name: &str| -> String {
+        let svg = dir.join(name);
+        let out = common::bin()
+            .arg("plot")
+            .arg(input)
+            .arg("--out")
+            .arg(&svg)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{out:?}");
+        let svg = std::fs::read_to_string(&svg).unwrap();
+        svg.split("aria-label=\"")
+            .skip(1)
+            .map(|t| t.split('"').next().unwrap().to_string())
+            .find(|t| t.starts_with("smallest ") && t.contains(" at "))
+            .expect("a smallest label")
+    };
+    let (from_log, from_csv) = (label(&log, "log.svg"), label(&csv, "csv.svg"));
+    assert_eq!(from_log, from_csv);
+    assert_eq!(
+        from_log,
+        format!("smallest {b_min:.3} µm at {:.3} h", t_min / 3600.0)
+    );
+}

@@ -111,11 +111,11 @@ fn cli_a_failing_run_is_drawn_failing_whatever_the_log_keeps() {
         assert_eq!(end.verdict, "fail");
         assert_eq!(end.pairs[0].verdict, "margin_violated");
         assert!((end.pairs[0].min_backlash_um.unwrap() - 24.3978).abs() < 1e-3);
-        assert!((end.pairs[0].t_min_s.unwrap() - 30186.9).abs() < 0.1);
+        assert!((end.pairs[0].t_min_s.unwrap() - 30187.16).abs() < 0.1);
         assert_eq!(end.eclipses_s.len(), 6, "the six eclipses");
         let times: Vec<f64> = t.rows.iter().map(|(ns, _)| *ns as f64 * 1e-9).collect();
         assert!(
-            times.iter().any(|x| (x - 30186.87).abs() < 0.01),
+            times.iter().any(|x| (x - 30187.164).abs() < 0.01),
             "{every}: no sample at the smallest"
         );
         assert!(

@@ -90,10 +90,31 @@ fn cli_csv_has_a_column_per_node_and_runs_are_reproducible() {
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();
     let period = 5676.978;
-    assert_eq!(rows.len(), (period / 30.0f64).floor() as usize + 1);
-    for (k, r) in rows.iter().enumerate() {
-        assert_eq!(r.len(), header.len());
+    // the grid, and between its rows those at each new smallest backlash (one per
+    // descent: the start of the run falls, then each orbit's minimum)
+    let on_grid = |t: f64| (t / 30.0 - (t / 30.0).round()).abs() < 1e-9;
+    let grid: Vec<&Vec<f64>> = rows.iter().filter(|r| on_grid(r[0])).collect();
+    assert_eq!(grid.len(), (period / 30.0f64).floor() as usize + 1);
+    for (k, r) in grid.iter().enumerate() {
         assert!((r[0] - 30.0 * k as f64).abs() < 1e-9);
+    }
+    let extra: Vec<&Vec<f64>> = rows.iter().filter(|r| !on_grid(r[0])).collect();
+    assert!(
+        (1..=3).contains(&extra.len()),
+        "{} rows off the grid",
+        extra.len()
+    );
+    assert!(
+        rows.windows(2).all(|w| w[0][0] < w[1][0]),
+        "rows in time order"
+    );
+    let smallest = rows.iter().map(|r| r[11]).fold(f64::INFINITY, f64::min);
+    assert!(
+        extra.iter().any(|r| r[11] == smallest),
+        "the smallest is off the grid"
+    );
+    for r in &rows {
+        assert_eq!(r.len(), header.len());
         assert!(
             r[1..11]
                 .iter()

@@ -2,7 +2,10 @@
 //! gear pair `backlash_um` (exact worst case over the mesh cycle),
 //! `backlash_closed_form_um`, `backlash_paper_um`, `pressure_angle_deg` and
 //! `center_distance_mm` (prefixed `<pair>.` when there are several pairs). One row
-//! per output interval, values from the solver's cubic interpolant; written atomically.
+//! per output interval, values from the solver's cubic interpolant, and, in time
+//! order among them, a row at each pair's smallest backlash so far (one per descent,
+//! as the log holds it: the table's smallest is the run's own, at its time); written
+//! atomically.
 
 use std::io::Write;
 use std::path::Path;
@@ -11,10 +14,15 @@ use super::atomic::{AtomicFile, OutputError, OutputPolicy};
 use crate::gear::GearPair;
 use crate::run::sample::{Cadence, Sample, Sampler, Want};
 use crate::run::sim::{Observer, ObserverResult, RunStart, RunStats, StepView};
+use crate::run::summary::{MeshStats, SmallestSamples};
 
 pub struct CsvExport {
     file: Option<AtomicFile>,
     sampler: Sampler,
+    smallest: SmallestSamples,
+    /// Rows not yet written, in time order: those after the earliest held smallest
+    /// wait for it.
+    queue: Vec<Sample>,
 }
 
 /// Gear columns, per pair.
@@ -61,7 +69,31 @@ impl CsvExport {
         Ok(CsvExport {
             file: Some(AtomicFile::create(path, policy)?),
             sampler: Sampler::new(Cadence::Interval(interval_s), Want::MESH),
+            smallest: SmallestSamples::new(MeshStats::last(f64::INFINITY)),
+            queue: Vec::new(),
         })
+    }
+}
+
+/// Puts `s` among the rows in time order (a row already at its time, to the
+/// millisecond the table writes, stands for it).
+fn queue_row(queue: &mut Vec<Sample>, s: &Sample) {
+    let at = queue.partition_point(|q| q.t_s <= s.t_s);
+    let same = |q: &Sample| (q.t_s - s.t_s).abs() < 5e-4;
+    if at > 0 && same(&queue[at - 1]) || queue.get(at).is_some_and(same) {
+        return;
+    }
+    queue.insert(at, s.clone());
+}
+
+impl CsvExport {
+    /// Writes the queued rows before `t_s`.
+    fn flush_before(&mut self, t_s: f64) -> ObserverResult {
+        let n = self.queue.partition_point(|q| q.t_s < t_s);
+        for s in self.queue.drain(..n) {
+            write_row(&mut self.file, &s)?;
+        }
+        Ok(())
     }
 }
 
@@ -101,6 +133,8 @@ impl Observer for CsvExport {
             writeln!(w)
         })()
         .map_err(|e| OutputError::io(&path, e))?;
+        self.smallest.on_start(r)?;
+        self.queue.clear();
         if let Some(s) = self.sampler.start(r) {
             write_row(&mut self.file, s)?;
         }
@@ -108,12 +142,19 @@ impl Observer for CsvExport {
     }
 
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
-        let file = &mut self.file;
-        self.sampler.each(step, |s| write_row(file, s))?;
-        Ok(())
+        let queue = &mut self.queue;
+        self.smallest.on_step(step, |s| queue_row(queue, s))?;
+        self.sampler.each(step, |s| -> ObserverResult {
+            queue_row(queue, s);
+            Ok(())
+        })?;
+        self.flush_before(self.smallest.earliest_held_s())
     }
 
     fn on_finish(&mut self, _stats: &RunStats) -> ObserverResult {
+        let queue = &mut self.queue;
+        self.smallest.release_all(|s| queue_row(queue, s));
+        self.flush_before(f64::INFINITY)?;
         if let Some(f) = self.file.take() {
             f.commit()?;
         }

@@ -45,7 +45,7 @@ use super::scene;
 use crate::gear::{GearPair, MeshState};
 use crate::run::sample::{Cadence, Sample, Sampler, Want};
 use crate::run::sim::{Event, EventKind, Observer, ObserverResult, RunStart, RunStats, StepView};
-use crate::run::summary::{EclipseWindows, MeshStats, RunEnd};
+use crate::run::summary::{EclipseWindows, MeshStats, RunEnd, SmallestSamples};
 use crate::thermal::ThermalModel;
 
 /// How often the log records the state.
@@ -295,19 +295,15 @@ pub struct McapLog {
     /// End of the last step the log saw: a failure with no time of its own is dated here.
     last_t_s: f64,
     /// The run's own statistics of each pair (every step probed inside, not only at
-    /// samples): the end record's verdict and smallest backlash come from them.
-    mesh: MeshStats,
+    /// samples): the end record's verdict and smallest backlash come from them. Per
+    /// pair, the sample at a new smallest backlash is held until a step no longer
+    /// lowers it, then goes into the log in time order.
+    smallest: SmallestSamples,
     eclipses: EclipseWindows,
     /// Each pair's smallest allowed backlash, m.
     min_allowed_m: Vec<f64>,
     /// Time of the last sample pushed, s.
     last_logged_s: f64,
-    /// Per pair, the sample at a new smallest backlash found since it was last logged,
-    /// held until a step no longer lowers it (then it goes into the log, in time order):
-    /// one extra sample per descent, not per step.
-    held: Vec<Option<Sample>>,
-    /// Each pair's `t_min_s` before the step (scratch).
-    t_min_before: Vec<f64>,
     /// The last step's end values, and the model and gears they are completed with
     /// when the run ends (completed, interrupted or failed) and the log has no sample
     /// there yet.
@@ -498,12 +494,10 @@ impl McapLog {
             names: Names::default(),
             scene_interval_s: None,
             last_t_s: 0.0,
-            mesh: MeshStats::last(f64::INFINITY),
+            smallest: SmallestSamples::new(MeshStats::last(f64::INFINITY)),
             eclipses: EclipseWindows::default(),
             min_allowed_m: Vec::new(),
             last_logged_s: f64::NEG_INFINITY,
-            held: Vec::new(),
-            t_min_before: Vec::new(),
             last_end: Sample::default(),
             end_model: None,
         })
@@ -519,19 +513,19 @@ impl McapLog {
     /// The pair statistics the log keeps (`mesh`: the window its `last` orbit covers,
     /// and the whole run); `run` reports from these instead of keeping a second copy.
     pub fn with_mesh_stats(mut self, mesh: MeshStats) -> McapLog {
-        self.mesh = mesh;
+        self.smallest.mesh = mesh;
         self
     }
 
     /// The run's pair statistics, as the log saw them.
     pub fn mesh_stats(&self) -> &MeshStats {
-        &self.mesh
+        &self.smallest.mesh
     }
 
     /// The end of the run as the `run_end` record says it (so far, before the end).
     pub fn run_end(&self, t_end_s: f64, complete: bool) -> RunEnd {
         RunEnd::new(
-            &self.mesh.run_pairs,
+            &self.smallest.mesh.run_pairs,
             &self.min_allowed_m,
             self.eclipses.closed_at(t_end_s),
             complete,
@@ -565,12 +559,11 @@ impl McapLog {
 
     /// Puts the held samples into the batch at their times.
     fn release_held(&mut self) {
-        for k in 0..self.held.len() {
-            if let Some(s) = self.held[k].take() {
-                self.last_logged_s = self.last_logged_s.max(s.t_s);
-                insert_sample(&mut self.batch, &s);
-            }
-        }
+        let (batch, last) = (&mut self.batch, &mut self.last_logged_s);
+        self.smallest.release_all(|s| {
+            *last = last.max(s.t_s);
+            insert_sample(batch, s);
+        });
     }
 
     /// Closes the log after a failed run: the data so far, an error event and a
@@ -1175,12 +1168,11 @@ impl Observer for McapLog {
         // The initial state goes out with the first batch; the writer thread writes the
         // schemas, provenance and attachment while the run starts.
         self.last_t_s = r.t_start_s;
-        self.mesh.on_start(r)?;
+        self.smallest.on_start(r)?;
         self.eclipses.on_start(r)?;
         self.min_allowed_m = r.gears.iter().map(|g| g.min_backlash_m).collect();
         self.end_model = Some(Box::new((r.model.clone(), r.gears.to_vec())));
         self.last_end = Sample::default();
-        self.held = vec![None; r.gears.len()];
         self.sampler = Sampler::new(self.cadence.cadence(), Want::ALL);
         if let Some(s) = self.sampler.start(r) {
             push_sample(&mut self.batch, s);
@@ -1208,24 +1200,8 @@ impl Observer for McapLog {
     fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
         let t1 = step.t1_s();
         self.last_t_s = t1;
-        self.t_min_before.clear();
-        self.t_min_before
-            .extend(self.mesh.run_pairs.iter().map(|p| p.t_min_s));
-        self.mesh.on_step(step)?;
-        for k in 0..self.held.len() {
-            let t_min = self.mesh.run_pairs[k].t_min_s;
-            if t_min.to_bits() != self.t_min_before[k].to_bits() {
-                // a new smallest within this step: its sample replaces the held one
-                let s = self.held[k].get_or_insert_with(Sample::default);
-                if t_min == t1 {
-                    step.sample_end(Want::ALL, s);
-                } else {
-                    step.sample_at(t_min, Want::ALL, s);
-                }
-            } else if let Some(s) = self.held[k].take() {
-                insert_sample(&mut self.batch, &s);
-            }
-        }
+        let batch = &mut self.batch;
+        self.smallest.on_step(step, |s| insert_sample(batch, s))?;
         let (batch, last) = (&mut self.batch, &mut self.last_logged_s);
         self.sampler.each(step, |s| -> ObserverResult {
             push_sample(batch, s);
@@ -1234,7 +1210,9 @@ impl Observer for McapLog {
         })?;
         step.end_state_into(&mut self.last_end);
         let n = self.batch.items.len();
-        if n >= BATCH_SAMPLES && (self.held.iter().all(Option::is_none) || n >= MAX_HELD_BATCH) {
+        if n >= BATCH_SAMPLES
+            && (self.smallest.earliest_held_s().is_infinite() || n >= MAX_HELD_BATCH)
+        {
             self.release_held();
             self.send_batch()?;
         }
@@ -1253,7 +1231,7 @@ impl Observer for McapLog {
     }
 
     fn on_finish(&mut self, stats: &RunStats) -> ObserverResult {
-        self.mesh.on_finish(stats)?;
+        self.smallest.mesh.on_finish(stats)?;
         self.release_end();
         let (status, detail) = if stats.interrupted {
             self.batch.items.push(Item::Event {

@@ -3,7 +3,7 @@
 //! extremes between steps are not missed.
 
 use crate::gear::MeshState;
-use crate::run::sample::{Cadence, Sampler, Want};
+use crate::run::sample::{Cadence, Sample, Sampler, Want};
 use crate::run::sim::{Event, EventKind, Observer, ObserverResult, RunStart, StepView};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -366,6 +366,79 @@ impl MeshStats {
     }
 }
 
+/// Each pair's sample at the run's smallest backlash so far, held while steps keep
+/// lowering it and let go (once) when a step no longer does: what a log or table adds
+/// to its cadence so that it holds the run's own minimum, one extra row per descent,
+/// not per step.
+#[derive(Debug, Clone, Default)]
+pub struct SmallestSamples {
+    /// The pair statistics the smallest values come from.
+    pub mesh: MeshStats,
+    held: Vec<Option<Sample>>,
+    /// Each pair's `t_min_s` before the step (scratch).
+    t_min_before: Vec<f64>,
+}
+
+impl SmallestSamples {
+    pub fn new(mesh: MeshStats) -> SmallestSamples {
+        SmallestSamples {
+            mesh,
+            ..Default::default()
+        }
+    }
+
+    pub fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
+        self.mesh.on_start(r)?;
+        self.held = vec![None; r.gears.len()];
+        Ok(())
+    }
+
+    /// Sees `step`: a pair's new smallest within it is sampled and held (replacing
+    /// the one held), a held sample the step did not lower is handed to `release`.
+    pub fn on_step(
+        &mut self,
+        step: &StepView<'_>,
+        mut release: impl FnMut(&Sample),
+    ) -> ObserverResult {
+        self.t_min_before.clear();
+        self.t_min_before
+            .extend(self.mesh.run_pairs.iter().map(|p| p.t_min_s));
+        self.mesh.on_step(step)?;
+        for k in 0..self.held.len() {
+            let t_min = self.mesh.run_pairs[k].t_min_s;
+            if t_min.to_bits() != self.t_min_before[k].to_bits() {
+                let s = self.held[k].get_or_insert_with(Sample::default);
+                if t_min == step.t1_s() {
+                    step.sample_end(Want::ALL, s);
+                } else {
+                    step.sample_at(t_min, Want::ALL, s);
+                }
+            } else if let Some(s) = self.held[k].take() {
+                release(&s);
+            }
+        }
+        Ok(())
+    }
+
+    /// Hands every held sample to `release`.
+    pub fn release_all(&mut self, mut release: impl FnMut(&Sample)) {
+        for h in &mut self.held {
+            if let Some(s) = h.take() {
+                release(&s);
+            }
+        }
+    }
+
+    /// The earliest time a sample is held at, s (infinite when none is).
+    pub fn earliest_held_s(&self) -> f64 {
+        self.held
+            .iter()
+            .flatten()
+            .map(|s| s.t_s)
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
 impl Observer for MeshStats {
     fn on_start(&mut self, r: &RunStart<'_>) -> ObserverResult {
         self.start_s = (r.t_end_s - self.window_s).max(r.t_start_s);
@@ -453,20 +526,24 @@ impl Observer for MeshStats {
             let i = (1..4)
                 .min_by(|&x, &y| values[x].total_cmp(&values[y]))
                 .unwrap_or(2);
-            if values[i] < values[0] && values[i] < values[4] {
-                let (mut lo, mut hi) = (ts[i - 1], if i + 1 < 4 { ts[i + 1] } else { t1 });
-                let g = 0.618_033_988_749_895;
-                for _ in 0..12 {
-                    let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
-                    let (m1, m2) = (at(x1), at(x2));
-                    self.see(k, x1, &m1);
-                    self.see(k, x2, &m2);
-                    if m1.backlash_exact_m < m2.backlash_exact_m {
-                        hi = x2;
-                    } else {
-                        lo = x1;
-                    }
-                }
+            // Around an interior minimum: the smallest quarter point, or an end that
+            // is smallest while the path leaves it downwards (a dip within the first
+            // or last quarter).
+            let bracket = if values[i] < values[0] && values[i] < values[4] {
+                Some((ts[i - 1], if i + 1 < 4 { ts[i + 1] } else { t1 }))
+            } else if values[0] <= values[4] && slope0[0] < 0.0 {
+                Some((t0, ts[1]))
+            } else if values[4] < values[0] && slope1[0] > 0.0 {
+                Some((ts[3], t1))
+            } else {
+                None
+            };
+            if let Some((lo, hi)) = bracket {
+                golden_minimum(lo, hi, &mut |t| {
+                    let m = at(t);
+                    self.see(k, t, &m);
+                    m.backlash_exact_m
+                });
             }
         }
         self.start_rates_k_per_s = scratch;
@@ -489,6 +566,37 @@ impl Observer for MeshStats {
         Ok(())
     }
 }
+
+/// Golden-section search for the minimum of `f` on `[lo, hi]` (one evaluation per
+/// iteration), down to [`MIN_TIME_TOLERANCE_S`] or 60 iterations: a step's interior
+/// minimum found to the millisecond, so that no sample of the path between the
+/// step's ends lies below the run's smallest (on a periodic run, successive orbits'
+/// minima differ by micrometres' millionths, and which is the smallest must not
+/// depend on how the search was cut).
+fn golden_minimum(mut lo: f64, mut hi: f64, f: &mut impl FnMut(f64) -> f64) {
+    const G: f64 = 0.618_033_988_749_895;
+    let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    for _ in 0..60 {
+        if hi - lo <= MIN_TIME_TOLERANCE_S {
+            break;
+        }
+        if f1 < f2 {
+            hi = x2;
+            (x2, f2) = (x1, f1);
+            x1 = hi - G * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            (x1, f1) = (x2, f2);
+            x2 = lo + G * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+}
+
+/// How closely a step's interior smallest backlash is located in time, s.
+const MIN_TIME_TOLERANCE_S: f64 = 1e-3;
 
 /// The backlash values whose extremes are kept: exact, closed form, paper.
 fn tracked(m: &MeshState) -> [f64; 3] {
