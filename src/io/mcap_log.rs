@@ -269,7 +269,7 @@ struct WriterThread {
 }
 
 /// Samples handed to the writer thread at a time.
-const BATCH_SAMPLES: usize = 32;
+const BATCH_SAMPLES: usize = 256;
 /// A batch waits for a held sample (a smallest backlash still falling) up to this many
 /// items; past it the held sample goes out as it is.
 const MAX_HELD_BATCH: usize = 4096;
