@@ -148,7 +148,9 @@ def main():
             text = text[:text.index(START)] + block + text[text.index(END) + len(END):]
         else:
             text = text.rstrip("\n") + "\n\n### Measured by `benches/speed.py`\n\n" + block + "\n"
-        doc.write_text(text)
+        tmp_doc = doc.with_suffix(".md.partial")
+        tmp_doc.write_text(text)
+        os.replace(tmp_doc, doc)
 
 
 if __name__ == "__main__":

@@ -382,11 +382,29 @@ fn cli_export_csv_every_resamples_onto_the_run_grid_and_logs_never_grow() {
             .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
             .collect()
     };
-    // the run's CSV without its rows at the run's smallest (off the grid)
+    // the grid rows of both; off it, the run's CSV holds a row at each new smallest
+    // and the export the log's row at the run's smallest, which is the CSV's smallest
     let on_grid = |r: &Vec<f64>| (r[0] / 30.0 - (r[0] / 30.0).round()).abs() < 1e-9;
-    let (a, b) = (
-        rows(&grid).into_iter().filter(on_grid).collect::<Vec<_>>(),
-        rows(&back),
+    let (all_a, all_b) = (rows(&grid), rows(&back));
+    let bi = grid
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|h| h == "backlash_um")
+        .unwrap();
+    let off_b: Vec<&Vec<f64>> = all_b.iter().filter(|r| !on_grid(r)).collect();
+    assert_eq!(off_b.len(), 1, "the export's row at the smallest");
+    let min_a = all_a.iter().min_by(|x, y| x[bi].total_cmp(&y[bi])).unwrap();
+    assert_eq!(off_b[0][0], min_a[0], "at the CSV's smallest");
+    assert!((off_b[0][bi] - min_a[bi]).abs() < 2e-6);
+    assert!(
+        all_b.windows(2).all(|w| w[0][0] < w[1][0]),
+        "rows in time order"
+    );
+    let (a, b): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (
+        all_a.into_iter().filter(on_grid).collect(),
+        all_b.into_iter().filter(on_grid).collect(),
     );
     assert_eq!(grid.lines().next(), back.lines().next());
     assert_eq!(a.len(), b.len());

@@ -21,9 +21,11 @@ pub struct ExportArgs {
     #[arg(long)]
     all: bool,
     /// Resample onto a grid of this interval (e.g. 30s): t = 0, 30, 60 … s up to the
-    /// log's end, each column linear between the logged rows around it. Without it,
-    /// the rows are the log's own (every solver step, or `run --log-every`), unevenly
-    /// spaced. `run --csv` writes the same grid from the solver's own interpolant.
+    /// log's end, each column linear between the logged rows around it, and, in time
+    /// order among them, the log's own row at each pair's smallest backlash (its end
+    /// record says when), so the table's smallest is the run's. Without it, the rows
+    /// are the log's own (every solver step, or `run --log-every`), unevenly spaced.
+    /// `run --csv` writes the same grid from the solver's own interpolant.
     #[arg(long, value_name = "SECONDSs", value_parser = every_arg)]
     every: Option<f64>,
 }
@@ -124,20 +126,32 @@ fn write_row(w: &mut impl Write, row: &[f64]) -> std::io::Result<()> {
     w.write_all(b"\n")
 }
 
-/// Writes the header and every row, streamed.
+/// Writes the header and every row, streamed; with `every`, the grid and, in time
+/// order among its rows, the rows `extra` (a grid row at the same millisecond stands
+/// for one).
 fn write_table(
     w: &mut impl Write,
     headers: &[String],
     rows: &[Vec<f64>],
     every: Option<f64>,
+    extra: &[&Vec<f64>],
 ) -> std::io::Result<()> {
     writeln!(w, "{}", headers.join(","))?;
+    let ms = |t: f64| (t * 1e3).round();
     match every {
         Some(dt) => {
             let mut grid = Resampled::new(rows, dt);
             let mut row = Vec::new();
+            let mut extra = extra.iter().peekable();
             while grid.next_into(&mut row) {
+                while let Some(x) = extra.next_if(|x| ms(x[0]) < ms(row[0])) {
+                    write_row(w, x)?;
+                }
+                extra.next_if(|x| ms(x[0]) == ms(row[0]));
                 write_row(w, &row)?;
+            }
+            for x in extra {
+                write_row(w, x)?;
             }
         }
         None => {
@@ -168,6 +182,22 @@ pub fn export(a: ExportArgs) -> Result<()> {
     }
     let (headers, rows) =
         run_table(&table, a.all).map_err(|m| anyhow::anyhow!("{}: {m}", a.log.display()))?;
+    // The log's rows at each pair's smallest backlash, by the end record's times.
+    let t_min: Vec<f64> = table
+        .metadata
+        .get("orbitlash.run_end")
+        .and_then(orbitlash::run::summary::RunEnd::from_metadata)
+        .map(|e| e.pairs.iter().filter_map(|p| p.t_min_s).collect())
+        .unwrap_or_default();
+    let mut extra: Vec<&Vec<f64>> = rows
+        .iter()
+        .filter(|r| {
+            t_min
+                .iter()
+                .any(|&t| (r[0] - t).abs() <= 1e-9 * t.abs().max(1.0))
+        })
+        .collect();
+    extra.dedup_by(|a, b| a[0] == b[0]);
     if let Some(dt) = a.every {
         let t_end = rows.last().map_or(0.0, |r| r[0]);
         if t_end / dt > MAX_EVERY_ROWS {
@@ -201,14 +231,14 @@ choose a longer --every or export fewer columns (without --all)",
     match out.take() {
         None => {
             let mut w = std::io::BufWriter::new(std::io::stdout().lock());
-            match write_table(&mut w, &headers, &rows, a.every).and_then(|()| w.flush()) {
+            match write_table(&mut w, &headers, &rows, a.every, &extra).and_then(|()| w.flush()) {
                 Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
                 r => Ok(r?),
             }
         }
         Some(mut f) => {
             let p = f.path().to_path_buf();
-            write_table(&mut f, &headers, &rows, a.every)
+            write_table(&mut f, &headers, &rows, a.every, &extra)
                 .map_err(|e| orbitlash::io::output::OutputError::io(&p, e))?;
             f.commit()?;
             Ok(())

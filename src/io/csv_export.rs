@@ -75,11 +75,12 @@ impl CsvExport {
     }
 }
 
-/// Puts `s` among the rows in time order (a row already at its time, to the
-/// millisecond the table writes, stands for it).
+/// Puts `s` among the rows in time order (a row already at its time, as the table
+/// writes it to the millisecond, stands for it).
 fn queue_row(queue: &mut Vec<Sample>, s: &Sample) {
     let at = queue.partition_point(|q| q.t_s <= s.t_s);
-    let same = |q: &Sample| (q.t_s - s.t_s).abs() < 5e-4;
+    let ms = |t: f64| (t * 1e3).round();
+    let same = |q: &Sample| ms(q.t_s) == ms(s.t_s);
     if at > 0 && same(&queue[at - 1]) || queue.get(at).is_some_and(same) {
         return;
     }

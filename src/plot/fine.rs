@@ -3,15 +3,34 @@
 //! zoomed SVG. A curve drawn here is mapped onto the chart's pixels exactly (to 0.01
 //! px) and written as an SVG element into a placeholder text, drawn through plotters
 //! at the curve's place in the drawing order; [`splice`] swaps each placeholder for
-//! its element when the figure is finished. Axes, ticks and reference lines, which
+//! its element when the figure is finished. A placeholder starts with a private-use
+//! character and this process's random key, so no label (a title, a column name)
+//! can pass for one: only the tool's own elements are ever written as markup. Axes, ticks and reference lines, which
 //! are straight and meant to sit on the pixel grid, stay with plotters.
 
 use plotters::prelude::*;
 
 use super::{Chart, PlotError, draw_err};
 
-/// The first character of a placeholder's text (Unicode private use: never in a label).
+/// The first character of a placeholder's text (Unicode private use).
 const MARK: char = '\u{E000}';
+
+/// What starts a placeholder: [`MARK`] and a key drawn once per process (from the
+/// clock and an address), which no text given to the tool can know.
+fn placeholder_key() -> &'static str {
+    static KEY: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    KEY.get_or_init(|| {
+        use std::hash::{BuildHasher, Hasher};
+        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+        h.write_u128(
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos()),
+        );
+        h.write_usize(&KEY as *const _ as usize);
+        format!("{MARK}{:016x}:", h.finish())
+    })
+}
 
 /// The exact pixel position of the data point `(x, y)` on `chart`: plotters' own
 /// mapping (the plotting area's first to last pixel, y up) without its rounding down.
@@ -48,12 +67,12 @@ fn colour(c: RGBColor) -> String {
     format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
 }
 
-/// Draws a line through `points` (data coordinates) on `chart`, `width` px wide.
+/// Draws a line through `points` (data coordinates) on `chart`, `width_px` wide.
 pub(crate) fn line(
     chart: &Chart<'_, '_>,
     points: impl IntoIterator<Item = (f64, f64)>,
     color: RGBColor,
-    width: f64,
+    width_px: f64,
 ) -> Result<(), PlotError> {
     let pts = pixel_pairs(chart, points);
     if pts.len() < 2 {
@@ -62,7 +81,7 @@ pub(crate) fn line(
     place(
         chart,
         format!(
-            "<polyline fill=\"none\" opacity=\"1\" stroke=\"{}\" stroke-width=\"{width}\" \
+            "<polyline fill=\"none\" opacity=\"1\" stroke=\"{}\" stroke-width=\"{width_px}\" \
              stroke-linejoin=\"round\" points=\"{}\"/>",
             colour(color),
             pts.join(" ")
@@ -97,27 +116,33 @@ fn place(chart: &Chart<'_, '_>, element: String) -> Result<(), PlotError> {
         .plotting_area()
         .strip_coord_spec()
         .draw(&Text::new(
-            format!("{MARK}{element}"),
+            format!("{}{element}", placeholder_key()),
             (0, 0),
             ("sans-serif", 1.0).into_font(),
         ))
         .map_err(draw_err)
 }
 
-/// `svg` with every placeholder replaced by the element it carries.
+/// `svg` with every placeholder (a `<text>` whose body starts with the key) replaced by
+/// the element it carries.
 pub(crate) fn splice(svg: String) -> String {
-    if !svg.contains(MARK) {
+    let key = placeholder_key();
+    if !svg.contains(key) {
         return svg;
     }
     let mut out = String::with_capacity(svg.len());
     let mut rest = svg.as_str();
-    while let Some(m) = rest.find(MARK) {
-        let open = rest[..m].rfind("<text").unwrap_or(m);
-        let close = rest[m..].find("</text>").map_or(rest.len(), |c| m + c);
+    while let Some(m) = rest.find(key) {
+        let (Some(open), Some(close)) = (
+            rest[..m].rfind("<text"),
+            rest[m..].find("</text>").map(|c| m + c),
+        ) else {
+            break;
+        };
         out.push_str(&rest[..open]);
-        let body = rest[m + MARK.len_utf8()..close].trim_end_matches('\n');
+        let body = rest[m + key.len()..close].trim_end_matches('\n');
         out.push_str(&super::drawn::unescape(body));
-        rest = rest.get(close + "</text>".len()..).unwrap_or("");
+        rest = &rest[close + "</text>".len()..];
         rest = rest.strip_prefix('\n').unwrap_or(rest);
         out.push('\n');
     }
@@ -165,6 +190,10 @@ mod tests {
         }
         let svg = splice(svg);
         assert!(!svg.contains(MARK) && !svg.contains("&lt;polyline"));
+        // a label that starts like a placeholder stays text
+        let forged =
+            format!("<svg><text x=\"0\" y=\"0\">{MARK}&lt;script&gt;x&lt;/script&gt;</text></svg>");
+        assert_eq!(splice(forged.clone()), forged);
         let (_, lines) = crate::plot::drawn::read(&svg);
         let curve = lines.iter().find(|l| l.len() == 200).expect("the curve");
         assert!(curve.iter().any(|p| p.1.fract().abs() > 0.05));

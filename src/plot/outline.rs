@@ -15,18 +15,21 @@ use std::fmt::Write as _;
 use super::drawn::{attr, unescape};
 
 /// `svg` with its texts drawn as outlines (texts in bold or italic, which the embedded
-/// regular face cannot draw, are left as text).
+/// regular face cannot draw, and texts with a character it lacks are left as text).
 pub fn outline_text(svg: &str) -> String {
     let face = super::face();
     let mut used = BTreeSet::new();
     let mut body = String::with_capacity(svg.len());
     let mut rest = svg;
     while let Some(at) = rest.find("<text ") {
-        body.push_str(&rest[..at]);
         let tail = &rest[at..];
         let (Some(open_end), Some(close)) = (tail.find('>'), tail.find("</text>")) else {
             break;
         };
+        if close < open_end {
+            break;
+        }
+        body.push_str(&rest[..at]);
         let attrs = &tail["<text ".len()..open_end];
         let text = unescape(tail[open_end + 1..close].trim_matches('\n'));
         match outlined(face, attrs, &text, &mut used) {
@@ -76,7 +79,14 @@ fn outlined(
     text: &str,
     used: &mut BTreeSet<u16>,
 ) -> Option<String> {
-    if attr(attrs, "font-weight").is_some() || attr(attrs, "font-style").is_some() {
+    // bold or italic, or a character the font has no glyph for: left to the reader's
+    // fonts (a browser falls back to one that has it)
+    if attr(attrs, "font-weight").is_some()
+        || attr(attrs, "font-style").is_some()
+        || text
+            .chars()
+            .any(|c| !c.is_whitespace() && face.glyph_index(c).is_none())
+    {
         return None;
     }
     let x: f64 = attr(attrs, "x")?.parse().ok()?;
@@ -264,6 +274,13 @@ mod tests {
         assert!(out.contains("aria-label=\"Backlash µm &amp; °C\""));
         assert!(out.contains("transform=\"rotate(270, 10, 90)\""));
         assert_eq!(misplaced_glyphs(SVG, &out), Vec::<String>::new());
+        // a character the font lacks: that text stays text; a cut-off text is kept
+        let cjk = SVG.replace(">axis<", ">轴 axis<");
+        let out_cjk = outline_text(&cjk);
+        assert_eq!(out_cjk.matches("<text").count(), 1);
+        assert!(out_cjk.contains("轴 axis"));
+        let cut = "<svg><text x=\"1\" y=\"2\" font-size=\"9\">no end";
+        assert_eq!(outline_text(cut), cut);
         // a glyph moved down by 6 px (beyond the descent) is caught
         let moved = out.replacen(" 32.16)", " 38.16)", 1);
         assert!(out.contains(" 32.16)\""), "{out}");
