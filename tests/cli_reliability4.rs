@@ -652,9 +652,15 @@ fn cli_export_csv_streams_its_rows() {
         .map(|x| x.parse().unwrap())
         .collect();
     assert_eq!(counts.len(), 2, "{}", stderr(&out));
-    // a row per 0.01 s over half an orbit, and the header
+    // a row per 0.01 s over half an orbit, the header, and the log's row at the
+    // smallest backlash (none when it falls on a grid row's millisecond)
     let rows = (0.5 * 5676.978f64 / 0.01).floor() as u64 + 2;
-    assert_eq!(counts[0], rows, "{}", stderr(&out));
+    assert!(
+        counts[0] == rows || counts[0] == rows + 1,
+        "{} rows: {}",
+        counts[0],
+        stderr(&out)
+    );
     assert!(counts[1] > 100_000_000, "{} bytes", counts[1]);
 }
 
