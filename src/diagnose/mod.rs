@@ -481,7 +481,8 @@ impl RecordingRows {
     }
 }
 
-/// Recorded, baseline and corrected values per channel at the recording's times.
+/// Recorded, baseline and corrected values per channel at the recording's times, and
+/// the two models on their own even grid.
 #[derive(Debug, Clone, Default)]
 pub struct Series {
     pub time_s: Vec<f64>,
@@ -498,6 +499,51 @@ pub struct Series {
     pub noise: Vec<f64>,
     /// The model's eclipse windows (entry, exit), s, within the recording.
     pub eclipses: Vec<(f64, f64)>,
+    /// The models on their own time grid (even, [`MODEL_GRID_POINTS`] points over the
+    /// recording, gaps included), s: what the figures draw the models along.
+    pub model_time_s: Vec<f64>,
+    /// Per channel, the baseline and the corrected model at `model_time_s`.
+    pub baseline_grid: Vec<Vec<f64>>,
+    pub corrected_grid: Vec<Vec<f64>>,
+}
+
+/// Points of the models' own time grid in a diagnosis's series (a figure is at most
+/// about this many pixels wide).
+pub const MODEL_GRID_POINTS: usize = 2000;
+
+impl Series {
+    /// Fills the models' own grid: the baseline `model` and the `corrected` one (the
+    /// baseline when there is none) simulated at even times over the recording, so a
+    /// figure draws them through the recording's gaps as they are, not as straight
+    /// lines between readings.
+    fn fill_model_grid(
+        &mut self,
+        obs: &Observations,
+        model: &Model,
+        corrected: Option<&Model>,
+    ) -> Result<(), DiagnoseError> {
+        let last = self.time_s.last().copied().unwrap_or(0.0);
+        if last <= 0.0 {
+            return Ok(());
+        }
+        let n = MODEL_GRID_POINTS;
+        let grid: Arc<[f64]> = (0..n).map(|k| last * k as f64 / (n - 1) as f64).collect();
+        let per_channel = |p: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+            obs.channels.iter().map(|c| p[c.sensor].clone()).collect()
+        };
+        let (b, _) = predict(model, &grid, &[], u64::MAX).map_err(DiagnoseError::Baseline)?;
+        self.baseline_grid = per_channel(b);
+        self.corrected_grid = match corrected {
+            Some(m) => per_channel(
+                predict(m, &grid, &[], u64::MAX)
+                    .map_err(DiagnoseError::Corrected)?
+                    .0,
+            ),
+            None => self.baseline_grid.clone(),
+        };
+        self.model_time_s = grid.to_vec();
+        Ok(())
+    }
 }
 
 /// Simulated sensor values at `times` (ascending, from ≥ 0), per sensor (the
@@ -768,6 +814,7 @@ fn baseline_report(
             .map(|&(a, b)| (a.max(0.0), b.min(last_s)))
             .filter(|(a, b)| b > a)
             .collect(),
+        ..Series::default()
     };
     let report = Diagnosis {
         verdict: if at_noise {
@@ -1151,6 +1198,7 @@ pub fn diagnose(
     };
     progress("baseline", 1, 1);
     if !validate {
+        series.fill_model_grid(&obs, model, None)?;
         report.series = series;
         report.time_s = started.elapsed().as_secs_f64();
         return Ok(report);
@@ -1258,6 +1306,7 @@ pub fn diagnose(
     }
     settle_candidates(&mut reports, &cands, best.as_ref());
     report.candidates = reports;
+    series.fill_model_grid(&obs, model, report.corrected.as_ref())?;
     report.series = series;
     report.time_per_candidate_s =
         search_started.elapsed().as_secs_f64() / cands.len().max(1) as f64;

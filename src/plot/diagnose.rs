@@ -96,15 +96,10 @@ impl<'s> ChannelView<'s> {
                 rhi = rhi.max(r);
             }
         }
-        // the models are drawn between readings too (fill rows)
-        for v in self.s.baseline[self.c]
-            .iter()
-            .chain(&self.s.corrected[self.c])
-        {
-            if v.is_finite() {
-                vlo = vlo.min(*v);
-                vhi = vhi.max(*v);
-            }
+        // the models are drawn between readings too (their own grid, fill rows)
+        for v in super::model_values(self.s, self.c) {
+            vlo = vlo.min(v);
+            vhi = vhi.max(v);
         }
         if self.sigma.is_finite() {
             rlo = rlo.min(-3.0 * self.sigma);
@@ -274,12 +269,12 @@ pub(super) fn shade_held_out_and_eclipses(
 }
 
 /// Draws the models as lines over every time they were computed (as the overview
-/// does: through fill rows, broken at gaps), then the recording's readings over them
-/// as dots.
+/// does: on their own grid, through the recording's gaps), then the recording's
+/// readings over them as dots.
 fn draw_values(chart: &mut Chart<'_, '_>, view: &ChannelView<'_>) -> Result<(), PlotError> {
     let (s, c, readings) = (view.s, view.c, &view.readings);
-    for (series, color) in [(&s.baseline[c], BEFORE), (&s.corrected[c], AFTER)] {
-        for seg in super::line_segments(&s.time_s, series) {
+    for (segs, color) in super::model_lines(s, c) {
+        for seg in segs {
             super::fine::line(
                 chart,
                 seg.into_iter().map(|(t, v)| (view.axis.x(t), v)),

@@ -398,6 +398,54 @@ pub(crate) fn line_segments(time_s: &[f64], values: &[f64]) -> Vec<Vec<(f64, f64
     out
 }
 
+/// A diagnosis's two models as the lines to draw, baseline then corrected, (t s, value):
+/// along the models' own even grid when the series has it (through the recording's
+/// gaps, as the models are there), else through the recording's times, broken at its
+/// gaps ([`line_segments`]).
+pub(crate) fn model_lines(
+    s: &crate::diagnose::Series,
+    c: usize,
+) -> [(Vec<Vec<(f64, f64)>>, plotters::style::RGBColor); 2] {
+    let lines = |grid: &[Vec<f64>], at_readings: &[Vec<f64>]| {
+        if s.model_time_s.len() >= 2 && grid.len() > c {
+            let mut segs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+            for (&t, &v) in s.model_time_s.iter().zip(&grid[c]) {
+                if v.is_finite() {
+                    segs.last_mut().expect("a segment").push((t, v));
+                } else if !segs.last().expect("a segment").is_empty() {
+                    segs.push(Vec::new());
+                }
+            }
+            segs.retain(|g| !g.is_empty());
+            segs
+        } else {
+            line_segments(&s.time_s, &at_readings[c])
+        }
+    };
+    [
+        (lines(&s.baseline_grid, &s.baseline), BEFORE),
+        (lines(&s.corrected_grid, &s.corrected), AFTER),
+    ]
+}
+
+/// Every value either model takes where a figure draws it (at the readings and on the
+/// models' grid), for the value axis's range.
+pub(crate) fn model_values(
+    s: &crate::diagnose::Series,
+    c: usize,
+) -> impl Iterator<Item = f64> + '_ {
+    fn grid(g: &[Vec<f64>], c: usize) -> &[f64] {
+        g.get(c).map_or(&[], |v| v.as_slice())
+    }
+    s.baseline[c]
+        .iter()
+        .chain(&s.corrected[c])
+        .chain(grid(&s.baseline_grid, c))
+        .chain(grid(&s.corrected_grid, c))
+        .copied()
+        .filter(|v| v.is_finite())
+}
+
 pub(crate) const ECLIPSE: plotters::style::RGBColor = plotters::style::RGBColor(222, 226, 236);
 pub(crate) const HELD_OUT: plotters::style::RGBColor = plotters::style::RGBColor(254, 243, 216);
 /// The model before a diagnosis (orange) and after it (blue).

@@ -174,11 +174,7 @@ fn draw_channel(
         .zip(&s.recorded[c])
         .filter_map(|(t, v)| v.filter(|v| v.is_finite()).map(|v| (axis.x(*t), v)))
         .collect();
-    let vals = rec
-        .iter()
-        .map(|p| p.1)
-        .chain(s.baseline[c].iter().copied())
-        .chain(s.corrected[c].iter().copied());
+    let vals = rec.iter().map(|p| p.1).chain(super::model_values(s, c));
     let (lo, hi) = vals
         .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
@@ -196,8 +192,8 @@ fn draw_channel(
     );
     let mut chart = panel_chart(panel, axis, (ylo, yhi))?;
     shade_held_out_and_eclipses(&mut chart, s, axis, (ylo, yhi))?;
-    for (series, color) in [(&s.baseline[c], BEFORE), (&s.corrected[c], AFTER)] {
-        for seg in super::line_segments(&s.time_s, series) {
+    for (segs, color) in super::model_lines(s, c) {
+        for seg in segs {
             super::fine::line(
                 &chart,
                 seg.into_iter().map(|(t, v)| (axis.x(t), v)),
