@@ -398,6 +398,9 @@ pub(crate) fn line_segments(time_s: &[f64], values: &[f64]) -> Vec<Vec<(f64, f64
     out
 }
 
+/// Lines to draw, each a run of (t s, value) points.
+pub(crate) type Segments = Vec<Vec<(f64, f64)>>;
+
 /// A diagnosis's two models as the lines to draw, baseline then corrected, (t s, value):
 /// along the models' own even grid when the series has it (through the recording's
 /// gaps, as the models are there), else through the recording's times, broken at its
@@ -405,7 +408,7 @@ pub(crate) fn line_segments(time_s: &[f64], values: &[f64]) -> Vec<Vec<(f64, f64
 pub(crate) fn model_lines(
     s: &crate::diagnose::Series,
     c: usize,
-) -> [(Vec<Vec<(f64, f64)>>, plotters::style::RGBColor); 2] {
+) -> [(Segments, plotters::style::RGBColor); 2] {
     let lines = |grid: &[Vec<f64>], at_readings: &[Vec<f64>]| {
         if s.model_time_s.len() >= 2 && grid.len() > c {
             let mut segs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
