@@ -165,27 +165,7 @@ fn bisect(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, falling: bool) -> f64 {
 /// interval (a shadow function's minimum need not be exact: the roots on either side
 /// are bisected to the float).
 fn golden_minimum(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut a, mut b) = (a, b);
-    let tol = 1e-3 * (b - a).abs();
-    let mut c = b - r * (b - a);
-    let mut d = a + r * (b - a);
-    let (mut fc, mut fd) = (f(c), f(d));
-    while (b - a).abs() > tol {
-        if fc < fd {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - r * (b - a);
-            fc = f(c);
-        } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + r * (b - a);
-            fd = f(d);
-        }
-    }
+    let (a, b) = crate::numeric::golden_section(a, b, 1e-3 * (b - a).abs(), &mut |t| f(t));
     let m = 0.5 * (a + b);
     // the ends themselves when lower (a start past the minimum)
     [a, m, b]

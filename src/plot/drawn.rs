@@ -63,43 +63,62 @@ pub(crate) fn unescape(s: &str) -> String {
         .replace("&amp;", "&")
 }
 
-/// The box of one `<text>`: x, y, dy (em or ex of its size), its anchor, its size.
-fn text_box(attrs: &str, body: &str) -> Option<DrawnText> {
-    if attr(attrs, "transform").is_some() || body.is_empty() {
-        return None;
-    }
+/// Where a `<text>` with attributes `attrs` and words `body` is drawn, px: from its
+/// x, y, dy (em, or ex: the font's x-height, of its size), anchor and font size.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Placement {
+    pub size: f64,
+    /// Where its first glyph's advance starts.
+    pub x0: f64,
+    pub baseline: f64,
+    /// The advance widths, added.
+    pub width: f64,
+}
+
+pub(crate) fn placement(attrs: &str, body: &str) -> Option<Placement> {
     let x: f64 = attr(attrs, "x")?.parse().ok()?;
     let y: f64 = attr(attrs, "y")?.parse().ok()?;
     let size: f64 = attr(attrs, "font-size")?.parse().ok()?;
     let dy = match attr(attrs, "dy") {
         Some(d) if d.ends_with("em") => d.trim_end_matches("em").parse::<f64>().ok()? * size,
         Some(d) if d.ends_with("ex") => {
-            d.trim_end_matches("ex").parse::<f64>().ok()? * size * X_HEIGHT
+            d.trim_end_matches("ex").parse::<f64>().ok()? * size * super::font_x_height()
         }
         Some(d) => d.parse().ok()?,
         None => 0.0,
     };
-    let w = super::advance_width(body, size);
+    let width = super::advance_width(body, size);
     let x0 = match attr(attrs, "text-anchor") {
-        Some("middle") => x - w / 2.0,
-        Some("end") => x - w,
+        Some("middle") => x - width / 2.0,
+        Some("end") => x - width,
         _ => x,
     };
-    let (ascent, descent) = super::font_extent();
-    let baseline = y + dy;
-    Some(DrawnText {
-        text: body.to_string(),
-        rect: Rect::new(
-            x0,
-            baseline - ascent * size,
-            x0 + w,
-            baseline + descent * size,
-        ),
+    Some(Placement {
+        size,
+        x0,
+        baseline: y + dy,
+        width,
     })
 }
 
-/// The x-height of the font, em (what `dy="0.5ex"` is measured in).
-const X_HEIGHT: f64 = 0.545;
+/// The box of one `<text>` (not rotated): its [`placement`], the font's ascent to
+/// descent.
+fn text_box(attrs: &str, body: &str) -> Option<DrawnText> {
+    if attr(attrs, "transform").is_some() || body.is_empty() {
+        return None;
+    }
+    let p = placement(attrs, body)?;
+    let (ascent, descent) = super::font_extent();
+    Some(DrawnText {
+        text: body.to_string(),
+        rect: Rect::new(
+            p.x0,
+            p.baseline - ascent * p.size,
+            p.x0 + p.width,
+            p.baseline + descent * p.size,
+        ),
+    })
+}
 
 /// Whether the segment from `a` to `b` passes through the inside of `r`.
 pub fn segment_crosses(a: (f64, f64), b: (f64, f64), r: &Rect) -> bool {

@@ -74,19 +74,12 @@ pub(crate) fn line(
     color: RGBColor,
     width_px: f64,
 ) -> Result<(), PlotError> {
-    let pts = pixel_pairs(chart, points);
-    if pts.len() < 2 {
-        return Ok(());
-    }
-    place(
-        chart,
-        format!(
-            "<polyline fill=\"none\" opacity=\"1\" stroke=\"{}\" stroke-width=\"{width_px}\" \
-             stroke-linejoin=\"round\" points=\"{}\"/>",
-            colour(color),
-            pts.join(" ")
-        ),
-    )
+    let head = format!(
+        "polyline fill=\"none\" opacity=\"1\" stroke=\"{}\" stroke-width=\"{width_px}\" \
+         stroke-linejoin=\"round\"",
+        colour(color)
+    );
+    shape(chart, points, 2, &head)
 }
 
 /// Fills the polygon through `points` (data coordinates) on `chart`.
@@ -96,18 +89,26 @@ pub(crate) fn area(
     color: RGBColor,
     opacity: f64,
 ) -> Result<(), PlotError> {
+    let head = format!(
+        "polygon opacity=\"{opacity}\" fill=\"{}\" stroke=\"none\"",
+        colour(color)
+    );
+    shape(chart, points, 3, &head)
+}
+
+/// The element `<{head} points="…"/>` through `points` (data coordinates), drawn
+/// when it has at least `min_points` finite ones.
+fn shape(
+    chart: &Chart<'_, '_>,
+    points: impl IntoIterator<Item = (f64, f64)>,
+    min_points: usize,
+    head: &str,
+) -> Result<(), PlotError> {
     let pts = pixel_pairs(chart, points);
-    if pts.len() < 3 {
+    if pts.len() < min_points {
         return Ok(());
     }
-    place(
-        chart,
-        format!(
-            "<polygon opacity=\"{opacity}\" fill=\"{}\" stroke=\"none\" points=\"{}\"/>",
-            colour(color),
-            pts.join(" ")
-        ),
-    )
+    place(chart, format!("<{head} points=\"{}\"/>", pts.join(" ")))
 }
 
 /// Draws the placeholder that [`splice`] replaces with `element`.

@@ -205,6 +205,13 @@ pub fn text_width(text: &str, size_px: f64) -> f64 {
     advance_width(text, drawn_px(size_px))
 }
 
+/// The font's x-height, em (what `dy="0.5ex"` is measured in).
+pub fn font_x_height() -> f64 {
+    let f = face();
+    f.x_height()
+        .map_or(0.5, |h| h as f64 / f.units_per_em() as f64)
+}
+
 /// The font's ascent and descent, em.
 pub fn font_extent() -> (f64, f64) {
     let f = face();
@@ -409,21 +416,10 @@ pub(crate) fn model_lines(
     s: &crate::diagnose::Series,
     c: usize,
 ) -> [(Segments, plotters::style::RGBColor); 2] {
-    let lines = |grid: &[Vec<f64>], at_readings: &[Vec<f64>]| {
-        if s.model_time_s.len() >= 2 && grid.len() > c {
-            let mut segs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
-            for (&t, &v) in s.model_time_s.iter().zip(&grid[c]) {
-                if v.is_finite() {
-                    segs.last_mut().expect("a segment").push((t, v));
-                } else if !segs.last().expect("a segment").is_empty() {
-                    segs.push(Vec::new());
-                }
-            }
-            segs.retain(|g| !g.is_empty());
-            segs
-        } else {
-            line_segments(&s.time_s, &at_readings[c])
-        }
+    // an even grid has no gap, so only its non-finite values break its lines
+    let lines = |grid: &[Vec<f64>], at_readings: &[Vec<f64>]| match grid.get(c) {
+        Some(g) if s.model_time_s.len() >= 2 => line_segments(&s.model_time_s, g),
+        _ => line_segments(&s.time_s, &at_readings[c]),
     };
     [
         (lines(&s.baseline_grid, &s.baseline), BEFORE),

@@ -12,7 +12,7 @@
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 
-use super::drawn::{attr, unescape};
+use super::drawn::{Placement, attr, placement, unescape};
 
 /// `svg` with its texts drawn as outlines (texts in bold or italic, which the embedded
 /// regular face cannot draw, and texts with a character it lacks are left as text).
@@ -89,27 +89,13 @@ fn outlined(
     {
         return None;
     }
-    let x: f64 = attr(attrs, "x")?.parse().ok()?;
-    let y: f64 = attr(attrs, "y")?.parse().ok()?;
-    let size: f64 = attr(attrs, "font-size")?.parse().ok()?;
-    let units = face.units_per_em() as f64;
-    let x_height = face.x_height().map_or(0.5, |h| h as f64 / units);
-    let dy = match attr(attrs, "dy") {
-        Some(d) if d.ends_with("em") => d.trim_end_matches("em").parse::<f64>().ok()? * size,
-        Some(d) if d.ends_with("ex") => {
-            d.trim_end_matches("ex").parse::<f64>().ok()? * size * x_height
-        }
-        Some(d) => d.parse().ok()?,
-        None => 0.0,
-    };
-    let width = super::advance_width(text, size);
-    let pen = match attr(attrs, "text-anchor") {
-        Some("middle") => x - width / 2.0,
-        Some("end") => x - width,
-        _ => x,
-    };
-    let baseline = y + dy;
-    let scale = size / units;
+    let Placement {
+        size,
+        x0: pen,
+        baseline,
+        ..
+    } = placement(attrs, text)?;
+    let scale = size / face.units_per_em() as f64;
     let mut g = format!(
         "<g aria-label=\"{}\" fill=\"{}\" opacity=\"{}\"",
         escape(text),
@@ -187,8 +173,9 @@ impl ttf_parser::OutlineBuilder for PathData {
 type Ink = (f64, f64, f64, f64);
 
 /// What is wrong with the outlines of `outlined` against the texts of `svg` as
-/// [`super::drawn::read`] measures them (its own reading of each `<text>`'s
-/// attributes): a text (not rotated) with no group of glyphs, or a glyph whose ink
+/// [`super::drawn::read`] measures them (read back from the outlined file: each
+/// group's transform, each glyph's offset and its outline's box): a text (not
+/// rotated) with no group of glyphs, or a glyph whose ink
 /// leaves its text's box by more than half a pixel. Empty on a figure drawn right.
 pub fn misplaced_glyphs(svg: &str, outlined: &str) -> Vec<String> {
     let face = super::face();

@@ -539,7 +539,7 @@ impl Observer for MeshStats {
                 None
             };
             if let Some((lo, hi)) = bracket {
-                golden_minimum(lo, hi, &mut |t| {
+                crate::numeric::golden_section(lo, hi, MIN_TIME_TOLERANCE_S, &mut |t| {
                     let m = at(t);
                     self.see(k, t, &m);
                     m.backlash_exact_m
@@ -567,35 +567,11 @@ impl Observer for MeshStats {
     }
 }
 
-/// Golden-section search for the minimum of `f` on `[lo, hi]` (one evaluation per
-/// iteration), down to [`MIN_TIME_TOLERANCE_S`] or 60 iterations: a step's interior
-/// minimum found to the millisecond, so that no sample of the path between the
-/// step's ends lies below the run's smallest (on a periodic run, successive orbits'
-/// minima differ by micrometres' millionths, and which is the smallest must not
-/// depend on how the search was cut).
-fn golden_minimum(mut lo: f64, mut hi: f64, f: &mut impl FnMut(f64) -> f64) {
-    const G: f64 = 0.618_033_988_749_895;
-    let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
-    let (mut f1, mut f2) = (f(x1), f(x2));
-    for _ in 0..60 {
-        if hi - lo <= MIN_TIME_TOLERANCE_S {
-            break;
-        }
-        if f1 < f2 {
-            hi = x2;
-            (x2, f2) = (x1, f1);
-            x1 = hi - G * (hi - lo);
-            f1 = f(x1);
-        } else {
-            lo = x1;
-            (x1, f1) = (x2, f2);
-            x2 = lo + G * (hi - lo);
-            f2 = f(x2);
-        }
-    }
-}
-
-/// How closely a step's interior smallest backlash is located in time, s.
+/// How closely a step's interior smallest backlash is located in time, s: to the
+/// millisecond, so that no sample of the path between the step's ends lies below the
+/// run's smallest (on a periodic run, successive orbits' minima differ by
+/// micrometres' millionths, and which is the smallest must not depend on how the
+/// search was cut).
 const MIN_TIME_TOLERANCE_S: f64 = 1e-3;
 
 /// The backlash values whose extremes are kept: exact, closed form, paper.
