@@ -206,13 +206,21 @@ fn val_funcube_flight_diagnose_improves_every_held_out_channel() {
         100.0 * share
     );
     assert!(share > 0.5, "{share}");
+    // In a model with faces the outside is its faces: no node, faced or inside, is
+    // offered Earth loads (on an inner node they would be more heat by another name).
+    assert!(
+        d.candidates
+            .iter()
+            .all(|c| c.effect.id() != "earth_albedo_ir"),
+        "Earth loads offered in a faced model"
+    );
     for f in &d.findings {
         assert!(
             !matches!(f.effect.id(), "sunlight_scale" | "infrared_scale"),
             "a calibration number reported as a finding: {}",
             f.effect
         );
-        // no stand-in for "more heat": Earth loads are not offered on a faced node
+        // no stand-in for "more heat"
         assert_ne!(f.effect.id(), "earth_albedo_ir", "{:?}", f.target);
         // every finding lowers the held-out χ² in the final joint fit, and carries its
         // intervals around its values

@@ -163,6 +163,10 @@ pub struct ParamDef {
     /// A prior toward a value, (centre, standard deviation): a calibration number stays
     /// near nominal unless the data move it.
     pub prior: Option<(f64, f64)>,
+    /// The lower bound is a resolution limit, not the end of the effect's range: a fit
+    /// that ends on it is not a stand-in (a thermostat's hysteresis of 0.1 K is a
+    /// near-proportional one).
+    pub floor_is_resolution: bool,
 }
 
 /// A number of the model written as a linear function of the parameters:
@@ -241,6 +245,15 @@ impl ParamDef {
             upper,
             step,
             prior: None,
+            floor_is_resolution: false,
+        }
+    }
+
+    /// The same, its lower bound a resolution limit ([`ParamDef::floor_is_resolution`]).
+    pub fn floored(self) -> ParamDef {
+        ParamDef {
+            floor_is_resolution: true,
+            ..self
         }
     }
 }
@@ -641,7 +654,10 @@ impl<'a> Generator<'a> {
         // A node with a face has its Earth loads from the face's geometry: more Earth
         // on it is its attitude or its optics (the calibration's scales, the face's
         // absorptivity), not a load left out; fitted, it stands in for more heat.
-        if spec.face.iter().any(|f| f.node == n) {
+        // In a model with faces, the outside is its faces: a node without one is
+        // inside, sees no Earth, and Earth loads on it would be more heat by another
+        // name.
+        if !spec.face.is_empty() {
             return None;
         }
         let sun_aa: f64 = spec
@@ -772,7 +788,7 @@ impl<'a> Generator<'a> {
             params: vec![
                 ParamDef::new(registry::HEATER_POWER_W.name, 0.01, 1000.0, 0.02),
                 ParamDef::new("on_c", on_c - 30.0, on_c + 30.0, 0.05),
-                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored(),
             ],
             setters: vec![
                 Setter::scaled(pp, 0, 1.0),

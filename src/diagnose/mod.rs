@@ -928,7 +928,7 @@ fn judge_singles(
                                 .map(|(k, v, _)| (k, v))
                                 .collect(),
                         );
-                        match problem.judge(h, base, c.params.len(), opts) {
+                        match problem.judge(h, base, c, opts) {
                             Err(why) => rep.reason = why.reason(opts),
                             Ok(()) => {
                                 rep.status = CandidateStatus::Accepted;
@@ -1612,6 +1612,28 @@ impl Search<'_> {
         loop {
             let fitted: Vec<&Hypothesis> = singles.iter().chain(chain).collect();
             let without = self.without_each(&h, &fitted);
+            // A member the final joint fit pushed onto a bound is a stand-in there.
+            let mut off = self.problem.calibration_len();
+            let mut pinned = None;
+            for (i, &m) in h.members.iter().enumerate() {
+                let c = &self.cands[m];
+                if let Some(name) = search::pinned_at(&h.theta, off, c) {
+                    pinned = Some((i, name));
+                    break;
+                }
+                off += c.params.len();
+            }
+            if let Some((i, name)) = pinned {
+                report.notes.push(format!(
+                    "{} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding",
+                    self.cands[h.members[i]].label()
+                ));
+                match without.into_iter().nth(i).flatten() {
+                    Some(w) => h = w,
+                    None => return None,
+                }
+                continue;
+            }
             let shares: Vec<f64> = without
                 .iter()
                 .map(|w| {

@@ -336,6 +336,10 @@ pub(super) enum Rejection {
     Holdout { gain: f64, drop: f64 },
     /// Significant, but no channel's held-out residual drops by enough.
     Immaterial,
+    /// The fit left parameter `name` on a bound of its range that is not its null:
+    /// the data want a value outside the effect's range, so the effect stands in for
+    /// something else.
+    Pinned { name: &'static str },
 }
 
 impl Rejection {
@@ -350,6 +354,10 @@ impl Rejection {
                 "fits the training orbits (BIC −{gain:.0}) but does not improve \
                  the held-out orbits (χ² drop {drop:.1} ≤ {:.0})",
                 opts.holdout_margin
+            ),
+            Rejection::Pinned { name } => format!(
+                "a stand-in: its {name} ends on a bound of its range (the data want a value \
+                 outside it, so the effect stands in for something else)"
             ),
             Rejection::Immaterial => format!(
                 "significant but immaterial: lowers no channel's held-out mean \
@@ -374,9 +382,10 @@ impl Problem<'_> {
         &self,
         h: &Hypothesis,
         reference: &Reference<'_>,
-        k_extra: usize,
+        c: &Candidate,
         opts: &Options,
     ) -> Result<(), Rejection> {
+        let k_extra = c.params.len();
         let gain = self.bic_gain(h, reference.train_chi2, k_extra);
         let drop = reference.holdout_chi2 - h.holdout_chi2;
         // Each test passes only on a number (NaN fails it).
@@ -386,12 +395,35 @@ impl Problem<'_> {
             Err(Rejection::Bic { gain })
         } else if !improves_holdout {
             Err(Rejection::Holdout { gain, drop })
+        } else if let Some(name) = pinned(h, c) {
+            Err(Rejection::Pinned { name })
         } else if self.material(reference.pred, &h.pred) >= opts.min_effect {
             Ok(())
         } else {
             Err(Rejection::Immaterial)
         }
     }
+}
+
+/// The first of candidate `c`'s parameters (the last of `h`'s) that the fit left on a
+/// bound of its range: [`pinned_at`].
+pub(super) fn pinned(h: &Hypothesis, c: &Candidate) -> Option<&'static str> {
+    pinned_at(&h.theta, h.theta.len().checked_sub(c.params.len())?, c)
+}
+
+/// The first of candidate `c`'s parameters (from `off` in `theta`) on a bound of its
+/// range, within its finite-difference step (a bounded fit creeps up to a bound it
+/// wants to cross), unless that bound is the parameter's null (a load's power of zero
+/// is the effect absent, not a stand-in) or a resolution limit
+/// ([`ParamDef::floor_is_resolution`]).
+pub(super) fn pinned_at(theta: &[f64], off: usize, c: &Candidate) -> Option<&'static str> {
+    c.params.iter().enumerate().find_map(|(i, p)| {
+        let v = *theta.get(off + i)?;
+        let on_floor = v - p.lower <= p.step && !p.floor_is_resolution;
+        let on_ceiling = p.upper - v <= p.step;
+        let at_null = c.null.as_ref().is_some_and(|z| (v - z[i]).abs() <= p.step);
+        ((on_floor || on_ceiling) && !at_null).then_some(p.name)
+    })
 }
 
 /// Every point a candidate's start points give (the starts and, for an effect with a
@@ -729,8 +761,8 @@ pub(super) fn best_extension(
     let fitted: Vec<Hypothesis> = fitted.into_iter().flatten().collect();
     let mut best: Option<Hypothesis> = None;
     for h in &fitted {
-        let k_extra = cands[*h.members.last().unwrap()].params.len();
-        if problem.judge(h, &reference, k_extra, opts).is_ok()
+        let c = &cands[*h.members.last().unwrap()];
+        if problem.judge(h, &reference, c, opts).is_ok()
             && best.as_ref().is_none_or(|b| h.train_chi2 < b.train_chi2)
         {
             best = Some(h.clone());
@@ -960,6 +992,53 @@ pub(super) fn fit(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn candidate(params: Vec<ParamDef>, null: Option<Vec<f64>>) -> Candidate {
+        Candidate {
+            effect: super::super::effects::Effect::CapacitanceScale,
+            target: super::super::effects::Target::Node("stack".into()),
+            params,
+            setters: Vec::new(),
+            starts: Vec::new(),
+            null,
+            edits: Vec::new(),
+            multi_start: 1,
+            grid: Vec::new(),
+        }
+    }
+
+    /// A fit that ends on a bound of a parameter's range (within its step) is a
+    /// stand-in; not when the bound is the parameter's null (the effect absent) or a
+    /// resolution floor (a thermostat's smallest hysteresis). The candidate's
+    /// parameters are found from their offset, after the calibration's.
+    #[test]
+    fn core_a_parameter_on_a_bound_of_its_range_is_a_stand_in() {
+        let scale = candidate(
+            vec![ParamDef::new("scale", 0.2, 5.0, 0.003)],
+            Some(vec![1.0]),
+        );
+        assert_eq!(pinned_at(&[0.2, 0.2], 1, &scale), Some("scale"));
+        assert_eq!(pinned_at(&[0.7, 0.2025], 1, &scale), Some("scale"));
+        assert_eq!(pinned_at(&[0.7, 4.999], 1, &scale), Some("scale"));
+        assert_eq!(pinned_at(&[0.2, 0.25], 1, &scale), None);
+        let heater = candidate(
+            vec![
+                ParamDef::new("power_w", 0.0, 1000.0, 0.02),
+                ParamDef::new("on_c", -30.0, 30.0, 0.05),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored(),
+            ],
+            Some(vec![0.0, 0.0, 5.0]),
+        );
+        // no power is the effect absent; the smallest hysteresis a proportional heater
+        assert_eq!(pinned_at(&[0.0, -6.0, 0.1], 0, &heater), None);
+        assert_eq!(pinned_at(&[2.0, -6.0, 0.1], 0, &heater), None);
+        assert_eq!(pinned_at(&[2.0, -30.0, 3.0], 0, &heater), Some("on_c"));
+        assert_eq!(
+            pinned_at(&[2.0, -6.0, 50.0], 0, &heater),
+            Some("hysteresis_k")
+        );
+        assert_eq!(pinned_at(&[1000.0, -6.0, 3.0], 0, &heater), Some("power_w"));
+    }
 
     /// The quasi-likelihood BIC by which rivals are compared: the plain BIC on white
     /// noise of the stated level, and on a residual with s² = 2.8 and AR(1) factor 3
