@@ -94,11 +94,26 @@ impl PartialEq for TleOrbit {
 }
 
 /// The propagated samples, a chunk (day) at a time: `[x, y, z, vx, vy, vz]` in m and
-/// m/s, or why the propagation failed.
-#[derive(Debug, Default)]
+/// m/s, or why the propagation failed. Blocks of [`BLOCK_DAYS`] chunks, each made on
+/// first use: a chunk once filled is read with one atomic load and no lock or shared
+/// counter written, so threads that read the same orbit (margins samples, diagnose
+/// candidates) do not contend.
+#[derive(Debug)]
 struct Cache {
-    chunks: std::sync::Mutex<Vec<Arc<Chunk>>>,
+    blocks: Box<[OnceLock<Box<[Chunk]>>]>,
 }
+
+impl Default for Cache {
+    fn default() -> Cache {
+        Cache {
+            blocks: (0..BLOCKS).map(|_| OnceLock::new()).collect(),
+        }
+    }
+}
+
+/// Chunks (days) per block of the cache, and blocks: 65 536 days (179 years) in all.
+const BLOCK_DAYS: usize = 64;
+const BLOCKS: usize = 1024;
 
 /// One day of samples, or why they could not be propagated; filled on first use.
 type Chunk = OnceLock<Result<Vec<Sample>, String>>;
@@ -275,8 +290,7 @@ impl TleOrbit {
     pub fn sample(&self, t_s: f64) -> Sample {
         let t = t_s.max(0.0);
         let chunk = (t / CHUNK_S).floor() as usize;
-        let cell = self.chunk(chunk);
-        let Some(Ok(samples)) = cell.get() else {
+        let Some(Ok(samples)) = self.chunk(chunk).and_then(|c| c.get()) else {
             return [f64::NAN; 10];
         };
         let local = t - chunk as f64 * CHUNK_S;
@@ -323,8 +337,14 @@ impl TleOrbit {
     /// diverging orbit), with its time.
     pub fn check_until(&self, t_end_s: f64) -> Result<(), String> {
         let last = (t_end_s.max(0.0) / CHUNK_S).floor() as usize;
+        if last >= BLOCK_DAYS * BLOCKS {
+            return Err(format!(
+                "the run is longer than the orbit's table holds ({} days)",
+                BLOCK_DAYS * BLOCKS
+            ));
+        }
         for c in 0..=last {
-            if let Some(Err(e)) = self.chunk(c).get() {
+            if let Some(Some(Err(e))) = self.chunk(c).map(|c| c.get()) {
                 return Err(e.clone());
             }
         }
@@ -332,15 +352,14 @@ impl TleOrbit {
     }
 
     /// Chunk `c`'s samples (days `c` … `c + 1` after the start, both ends included),
-    /// computed on first use.
-    fn chunk(&self, c: usize) -> Arc<Chunk> {
-        let cell = {
-            let mut chunks = self.cache.chunks.lock().expect("cache lock");
-            if chunks.len() <= c {
-                chunks.resize_with(c + 1, || Arc::new(OnceLock::new()));
-            }
-            chunks[c].clone()
-        };
+    /// computed on first use (None beyond the table's [`BLOCK_DAYS`] × [`BLOCKS`] days).
+    fn chunk(&self, c: usize) -> Option<&Chunk> {
+        let block = self
+            .cache
+            .blocks
+            .get(c / BLOCK_DAYS)?
+            .get_or_init(|| (0..BLOCK_DAYS).map(|_| OnceLock::new()).collect());
+        let cell = &block[c % BLOCK_DAYS];
         cell.get_or_init(|| {
             (0..=CHUNK_NODES)
                 .map(|j| {
@@ -363,7 +382,7 @@ impl TleOrbit {
                 })
                 .collect()
         });
-        cell
+        Some(cell)
     }
 }
 
@@ -496,6 +515,37 @@ mod tests {
             worst = worst.max(d);
         }
         assert!(worst < 1.0, "interpolation error {worst} m");
+    }
+
+    /// The table is filled once, from four threads at once, across a block boundary
+    /// (day 64): every thread reads the same samples, each within a metre of SGP4;
+    /// a run beyond the table's end is refused (before propagating 179 years).
+    #[test]
+    fn core_the_table_is_shared_by_threads_without_a_lock() {
+        let start = parse_utc("2016-02-04T00:00:00Z").unwrap();
+        let times: Vec<f64> = (0..64)
+            .map(|k| (62.0 + 0.06 * k as f64) * 86_400.0 + 7.0)
+            .collect();
+        let shared = TleOrbit::new([L1, L2], start).unwrap();
+        let seen: Vec<Vec<Sample>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..4)
+                .map(|_| s.spawn(|| times.iter().map(|&t| shared.sample(t)).collect::<Vec<_>>()))
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        for got in &seen {
+            assert_eq!(got, &seen[0]);
+        }
+        for (k, &t) in times.iter().enumerate() {
+            let p = shared.propagate(t).unwrap();
+            let d = (0..3)
+                .map(|i| (seen[0][k][i] - p[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            assert!(d < 1.0, "day {:.2}: {d} m from SGP4", t / 86_400.0);
+        }
+        let err = shared.check_until(1.0e10).unwrap_err();
+        assert!(err.contains("longer than the orbit's table"), "{err}");
     }
 
     #[test]
