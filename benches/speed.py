@@ -15,7 +15,9 @@ repeated whole processes:
    cylindrical one, and of the same scenario on a circular orbit of its mean altitude
    and starting β (written to a temporary file);
 3. `margins` of the 90-day mission on 1 thread and on every core (`orbitlash bench
-   --margins --margins-horizon mission`), with the parallel efficiency.
+   --margins --margins-horizon mission`), with the parallel efficiency; and of
+   `hinge-tle-year` (200 orbits, its tooth thinnings dispersed as the mission's), whose
+   threads all read one shared table of the orbit.
 
 `--quick` uses fewer repetitions and samples (for a check that the script runs).
 """
@@ -67,6 +69,17 @@ def circular_twin(tle_toml: pathlib.Path, binary: str) -> pathlib.Path:
                   text, flags=re.S)
     text = text.replace("[environment]\n", f"[environment]\nbeta_deg = {beta}\n", 1)
     out = pathlib.Path(tempfile.mkdtemp()) / "tle-circular.toml"
+    out.write_text(text)
+    return out
+
+
+def with_dispersions(toml: pathlib.Path, source: pathlib.Path) -> pathlib.Path:
+    """`toml` with the tooth-thinning [[dispersion]] entries of `source` appended."""
+    entries = [e for e in source.read_text().split("[[dispersion]]")[1:]
+               if "tooth_thinning_um" in e.split("\n", 2)[1]]
+    text = toml.read_text() + "".join("\n[[dispersion]]" + e.split("\n\n")[0] + "\n"
+                                      for e in entries)
+    out = pathlib.Path(tempfile.mkdtemp()) / "tle-dispersed.toml"
     out.write_text(text)
     return out
 
@@ -135,6 +148,17 @@ def main():
                           "--samples", samples, "--margins-horizon", "mission", "--repeat", "1"],
                          capture_output=True, text=True, check=True, cwd=ROOT).stdout
     rows.append(f"`margins` of the 90-day mission, {samples} samples:")
+    rows.append("")
+    rows += ["    " + l for l in out.strip().splitlines()]
+    rows.append("")
+
+    # 3b. margins on a TLE orbit: every thread reads one shared table of the orbit
+    tle_disp = with_dispersions(tle, ROOT / "scenarios/hinge-90-day-margins.toml")
+    out = subprocess.run([b, "bench", str(tle_disp), "--margins", "--samples", samples,
+                          "--margins-horizon", "200", "--repeat", "1"],
+                         capture_output=True, text=True, check=True, cwd=ROOT).stdout
+    rows.append(f"`margins` of `hinge-tle-year` (200 orbits each, the two tooth thinnings of "
+                f"the 90-day mission dispersed), {samples} samples:")
     rows.append("")
     rows += ["    " + l for l in out.strip().splitlines()]
 
