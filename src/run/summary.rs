@@ -24,6 +24,10 @@ pub struct WindowStats {
     max_k: Vec<f64>,
     integral_ks: Vec<f64>,
     covered_s: f64,
+    /// Every node's temperature where the window meets the step and at the middle of
+    /// what of the step is in the window (scratch, one evaluation of the basis each).
+    at_start_k: Vec<f64>,
+    at_middle_k: Vec<f64>,
 }
 
 impl WindowStats {
@@ -88,11 +92,15 @@ impl Observer for WindowStats {
         let a = t0.max(self.start_s);
         let d = step.data;
         self.covered_s += t1 - a;
-        for i in 0..self.names.len() {
-            let (y1, h) = (d.temps1_k[i], d.h_s);
-            let sa = (a - t0) / h;
-            let p = |s: f64| d.temperature_at_fraction(i, s);
-            self.see(i, p(sa));
+        let n = self.names.len();
+        let sa = (a - t0) / d.h_s;
+        self.at_start_k.resize(n, 0.0);
+        self.at_middle_k.resize(n, 0.0);
+        d.temperatures_at_fraction(sa, &mut self.at_start_k);
+        d.temperatures_at_fraction(0.5 * (sa + 1.0), &mut self.at_middle_k);
+        for i in 0..n {
+            let (ya, mid, y1) = (self.at_start_k[i], self.at_middle_k[i], d.temps1_k[i]);
+            self.see(i, ya);
             self.see(i, y1);
             if sa == 0.0 {
                 for (_, v) in d.interior_extrema(i).into_iter().flatten() {
@@ -100,12 +108,14 @@ impl Observer for WindowStats {
                 }
             } else {
                 for k in 1..32 {
-                    self.see(i, p(sa + (1.0 - sa) * k as f64 / 32.0));
+                    self.see(
+                        i,
+                        d.temperature_at_fraction(i, sa + (1.0 - sa) * k as f64 / 32.0),
+                    );
                 }
             }
             // Simpson's rule is exact for the cubic interpolant.
-            let mid = p(0.5 * (sa + 1.0));
-            self.integral_ks[i] += (t1 - a) / 6.0 * (p(sa) + 4.0 * mid + y1);
+            self.integral_ks[i] += (t1 - a) / 6.0 * (ya + 4.0 * mid + y1);
         }
         Ok(())
     }
