@@ -157,6 +157,7 @@ def main():
     out = subprocess.run([b, "bench", str(tle_disp), "--margins", "--samples", samples,
                           "--margins-horizon", "200", "--repeat", "1"],
                          capture_output=True, text=True, check=True, cwd=ROOT).stdout
+    out = out.replace(str(tle_disp), "hinge-tle-year.toml + the thinnings")
     rows.append(f"`margins` of `hinge-tle-year` (200 orbits each, the two tooth thinnings of "
                 f"the 90-day mission dispersed), {samples} samples:")
     rows.append("")
