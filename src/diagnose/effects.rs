@@ -163,10 +163,11 @@ pub struct ParamDef {
     /// A prior toward a value, (centre, standard deviation): a calibration number stays
     /// near nominal unless the data move it.
     pub prior: Option<(f64, f64)>,
-    /// The lower bound is a resolution limit, not the end of the effect's range: a fit
-    /// that ends on it is not a stand-in (a thermostat's hysteresis of 0.1 K is a
-    /// near-proportional one).
-    pub floor_is_resolution: bool,
+    /// The lower bound is a value the effect really takes, not the end of its range:
+    /// a fit that ends on it is not a stand-in (a thermostat's hysteresis of 0.1 K is
+    /// a near-proportional one; a bore fit of no interference still closes by
+    /// differential expansion; a switched load of no power is the effect absent).
+    pub floor_is_a_value: bool,
 }
 
 /// A number of the model written as a linear function of the parameters:
@@ -245,14 +246,14 @@ impl ParamDef {
             upper,
             step,
             prior: None,
-            floor_is_resolution: false,
+            floor_is_a_value: false,
         }
     }
 
-    /// The same, its lower bound a resolution limit ([`ParamDef::floor_is_resolution`]).
+    /// The same, its lower bound a value the effect takes ([`ParamDef::floor_is_a_value`]).
     pub fn floored(self) -> ParamDef {
         ParamDef {
-            floor_is_resolution: true,
+            floor_is_a_value: true,
             ..self
         }
     }
@@ -654,10 +655,7 @@ impl<'a> Generator<'a> {
         // A node with a face has its Earth loads from the face's geometry: more Earth
         // on it is its attitude or its optics (the calibration's scales, the face's
         // absorptivity), not a load left out; fitted, it stands in for more heat.
-        // In a model with faces, the outside is its faces: a node without one is
-        // inside, sees no Earth, and Earth loads on it would be more heat by another
-        // name.
-        if !spec.face.is_empty() {
+        if spec.face.iter().any(|f| f.node == n) {
             return None;
         }
         let sun_aa: f64 = spec
@@ -678,6 +676,12 @@ impl<'a> Generator<'a> {
                     .unwrap_or(r.emissivity.unwrap_or(0.0) * r.area_m2.unwrap_or(0.0))
             })
             .sum();
+        // In a model with faces, the outside is its faces and whatever else has a Sun
+        // load or a link to space: a node with none of them is inside, sees no Earth,
+        // and Earth loads on it would be more heat by another name.
+        if !spec.face.is_empty() && sun_aa <= 0.0 && space_ea <= 0.0 {
+            return None;
+        }
         let a_ref = if sun_aa > 0.0 { sun_aa } else { 0.01 };
         let e_ref = if space_ea > 0.0 { space_ea } else { 0.01 };
         let env_albedo = spec
@@ -1045,12 +1049,9 @@ impl<'a> Generator<'a> {
                 shaft,
             };
             out.push(Candidate {
-                params: vec![ParamDef::new(
-                    registry::INTERFERENCE_UM.name,
-                    0.0,
-                    500.0,
-                    0.2,
-                )],
+                params: vec![
+                    ParamDef::new(registry::INTERFERENCE_UM.name, 0.0, 500.0, 0.2).floored(),
+                ],
                 setters: vec![Setter::scaled(p, 0, 1.0)],
                 starts: vec![vec![2.0], vec![10.0], vec![40.0]],
                 ..Candidate::new(Effect::BoreFit, target, Some(edit))
@@ -1225,7 +1226,7 @@ impl<'a> Generator<'a> {
         }
         Some(Candidate {
             params: vec![
-                ParamDef::new(field.name, 0.0, 1000.0, 0.02),
+                ParamDef::new(field.name, 0.0, 1000.0, 0.02).floored(),
                 ParamDef::new("on_s", 0.0, end_s, 30.0),
             ],
             setters: vec![Setter::scaled(power, 0, 1.0), Setter::scaled(on, 1, 1.0)],

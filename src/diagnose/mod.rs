@@ -1278,7 +1278,12 @@ pub fn diagnose(
     let (mut reports, singles) = judge_singles(
         &problem, &reference, &cands, &ranked, &to_fit, &fitted, opts,
     );
-    let tried: Vec<&Hypothesis> = fitted.iter().filter_map(|f| f.0.as_ref().ok()).collect();
+    // a stand-in (a parameter on a bound) is no alternative to a finding
+    let tried: Vec<&Hypothesis> = fitted
+        .iter()
+        .filter_map(|f| f.0.as_ref().ok())
+        .filter(|h| search::pinned(h, &cands[h.members[0]]).is_none())
+        .collect();
     let mut rivals: Rivals = singles
         .first()
         .map(|h| (h.members[0], search::rivals(&problem, h, &tried)))
@@ -1624,15 +1629,30 @@ impl Search<'_> {
                 off += c.params.len();
             }
             if let Some((i, name)) = pinned {
-                report.notes.push(format!(
-                    "{} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding",
-                    self.cands[h.members[i]].label()
-                ));
+                let label = self.cands[h.members[i]].label();
                 match without.into_iter().nth(i).flatten() {
-                    Some(w) => h = w,
-                    None => return None,
+                    Some(w) => {
+                        report.notes.push(format!(
+                            "{label} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding"
+                        ));
+                        h = w;
+                        continue;
+                    }
+                    // a single member: nothing is left
+                    None if h.members.len() == 1 => {
+                        report.notes.push(format!(
+                            "{label} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding"
+                        ));
+                        return None;
+                    }
+                    // the others cannot be fitted without it: kept, and said
+                    None => {
+                        report.notes.push(format!(
+                            "{label} ends with its {name} on a bound of its range in the final joint fit (read it as a stand-in); the fit without it failed, so it is kept"
+                        ));
+                        return Some(h);
+                    }
                 }
-                continue;
             }
             let shares: Vec<f64> = without
                 .iter()

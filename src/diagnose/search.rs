@@ -414,12 +414,12 @@ pub(super) fn pinned(h: &Hypothesis, c: &Candidate) -> Option<&'static str> {
 /// The first of candidate `c`'s parameters (from `off` in `theta`) on a bound of its
 /// range, within its finite-difference step (a bounded fit creeps up to a bound it
 /// wants to cross), unless that bound is the parameter's null (a load's power of zero
-/// is the effect absent, not a stand-in) or a resolution limit
-/// ([`ParamDef::floor_is_resolution`]).
+/// is the effect absent, not a stand-in) or a value the effect takes
+/// ([`ParamDef::floor_is_a_value`]).
 pub(super) fn pinned_at(theta: &[f64], off: usize, c: &Candidate) -> Option<&'static str> {
     c.params.iter().enumerate().find_map(|(i, p)| {
         let v = *theta.get(off + i)?;
-        let on_floor = v - p.lower <= p.step && !p.floor_is_resolution;
+        let on_floor = v - p.lower <= p.step && !p.floor_is_a_value;
         let on_ceiling = p.upper - v <= p.step;
         let at_null = c.null.as_ref().is_some_and(|z| (v - z[i]).abs() <= p.step);
         ((on_floor || on_ceiling) && !at_null).then_some(p.name)
@@ -758,7 +758,12 @@ pub(super) fn best_extension(
         holdout_chi2: current.holdout_chi2,
         pred: &current.pred,
     };
-    let fitted: Vec<Hypothesis> = fitted.into_iter().flatten().collect();
+    // a stand-in (a parameter on a bound) is neither accepted nor an alternative
+    let fitted: Vec<Hypothesis> = fitted
+        .into_iter()
+        .flatten()
+        .filter(|h| pinned(h, &cands[*h.members.last().expect("a member")]).is_none())
+        .collect();
     let mut best: Option<Hypothesis> = None;
     for h in &fitted {
         let c = &cands[*h.members.last().unwrap()];
@@ -1009,7 +1014,7 @@ mod tests {
 
     /// A fit that ends on a bound of a parameter's range (within its step) is a
     /// stand-in; not when the bound is the parameter's null (the effect absent) or a
-    /// resolution floor (a thermostat's smallest hysteresis). The candidate's
+    /// floor the effect takes (a thermostat's smallest hysteresis, no interference). The candidate's
     /// parameters are found from their offset, after the calibration's.
     #[test]
     fn core_a_parameter_on_a_bound_of_its_range_is_a_stand_in() {
@@ -1038,6 +1043,13 @@ mod tests {
             Some("hysteresis_k")
         );
         assert_eq!(pinned_at(&[1000.0, -6.0, 3.0], 0, &heater), Some("power_w"));
+        // no null, but a floor the effect takes: a bore fit of no interference
+        let bore = candidate(
+            vec![ParamDef::new("interference_um", 0.0, 500.0, 0.2).floored()],
+            None,
+        );
+        assert_eq!(pinned_at(&[0.0], 0, &bore), None);
+        assert_eq!(pinned_at(&[500.0], 0, &bore), Some("interference_um"));
     }
 
     /// The quasi-likelihood BIC by which rivals are compared: the plain BIC on white

@@ -95,8 +95,8 @@ impl PartialEq for TleOrbit {
 
 /// The propagated samples, a chunk (day) at a time: `[x, y, z, vx, vy, vz]` in m and
 /// m/s, or why the propagation failed. Blocks of [`BLOCK_DAYS`] chunks, each made on
-/// first use: a chunk once filled is read with one atomic load and no lock or shared
-/// counter written, so threads that read the same orbit (margins samples, diagnose
+/// first use: a chunk once filled is read with a few atomic loads and no lock or
+/// shared counter written, so threads that read the same orbit (margins samples, diagnose
 /// candidates) do not contend.
 #[derive(Debug)]
 struct Cache {
