@@ -375,17 +375,33 @@ fn albedo_total(e: &FaceEnvironment) -> f64 {
     for (h, &(sp, cp)) in horizontal.iter_mut().zip(sectors()) {
         *h = cp * sun[0] + sp * sun[1];
     }
-    let mut total = 0.0;
-    for Ring { se, ce, d, cell } in rings(r, earth_r) {
+    let mut all = [(0.0, 0.0, 0.0); ALBEDO_RINGS];
+    for (slot, Ring { se, ce, d, cell }) in all.iter_mut().zip(rings(r, earth_r)) {
         // the ground point d·u − r ẑ over the Earth's radius, against the Sun
-        let a = d * se / earth_r;
-        let b = (d * ce - r) / earth_r * sun[2];
-        let lit: f64 = horizontal.iter().map(|h| (a * h + b).max(0.0)).sum();
-        total += scale * lit * cell;
+        *slot = (d * se / earth_r, (d * ce - r) / earth_r * sun[2], cell);
+    }
+    // Each ring's sum over its sectors is a chain of dependent additions; four rings
+    // are summed side by side, each in its own order (the same numbers as one ring at
+    // a time, from −0 as `Iterator::sum`), so that the processor overlaps the chains.
+    let mut total = 0.0;
+    for group in all.chunks_exact(RINGS_TOGETHER) {
+        let mut lit = [-0.0f64; RINGS_TOGETHER];
+        for h in &horizontal {
+            for (l, &(a, b, _)) in lit.iter_mut().zip(group) {
+                *l += (a * h + b).max(0.0);
+            }
+        }
+        for (l, &(_, _, cell)) in lit.iter().zip(group) {
+            total += scale * l * cell;
+        }
     }
     TOTAL.set(Some((*e, total)));
     total
 }
+
+/// Rings of [`albedo_total`] summed side by side.
+const RINGS_TOGETHER: usize = 4;
+const _: () = assert!(ALBEDO_RINGS % RINGS_TOGETHER == 0);
 
 /// (sin, cos) of the middle of each of the [`ALBEDO_SECTORS`] sectors.
 fn sectors() -> &'static [(f64, f64)] {
