@@ -401,7 +401,7 @@ fn albedo_total(e: &FaceEnvironment) -> f64 {
 
 /// Rings of [`albedo_total`] summed side by side.
 const RINGS_TOGETHER: usize = 4;
-const _: () = assert!(ALBEDO_RINGS % RINGS_TOGETHER == 0);
+const _: () = assert!(ALBEDO_RINGS.is_multiple_of(RINGS_TOGETHER));
 
 /// (sin, cos) of the middle of each of the [`ALBEDO_SECTORS`] sectors.
 fn sectors() -> &'static [(f64, f64)] {
