@@ -1278,15 +1278,10 @@ pub fn diagnose(
     let (mut reports, singles) = judge_singles(
         &problem, &reference, &cands, &ranked, &to_fit, &fitted, opts,
     );
-    // a stand-in (a parameter on a bound) is no alternative to a finding
-    let tried: Vec<&Hypothesis> = fitted
-        .iter()
-        .filter_map(|f| f.0.as_ref().ok())
-        .filter(|h| search::pinned(h, &cands[h.members[0]]).is_none())
-        .collect();
+    let tried: Vec<&Hypothesis> = fitted.iter().filter_map(|f| f.0.as_ref().ok()).collect();
     let mut rivals: Rivals = singles
         .first()
-        .map(|h| (h.members[0], search::rivals(&problem, h, &tried)))
+        .map(|h| (h.members[0], search::rivals(&problem, &cands, h, &tried)))
         .into_iter()
         .collect();
     let (chain, explained) = cx.select(&singles, &ranked, &mut report, &mut rivals, progress);
@@ -1488,7 +1483,7 @@ impl Search<'_> {
                 (Some(h), tried) => {
                     let tried: Vec<&Hypothesis> = tried.iter().collect();
                     let last = *h.members.last().expect("a member");
-                    rivals.push((last, search::rivals(self.problem, &h, &tried)));
+                    rivals.push((last, search::rivals(self.problem, cands, &h, &tried)));
                     explained = explains(self.obs, self.noise, opts, &h);
                     chain.push(h);
                 }

@@ -778,7 +778,8 @@ pub(super) fn best_extension(
 
 /// The rivals of `accepted` among `others` (hypotheses of the same step: the same
 /// members but the last): each other last member whose BIC is within
-/// [`RIVAL_DELTA_BIC`] of the accepted one's, with that difference (≥ 0 is worse) and
+/// [`RIVAL_DELTA_BIC`] of the accepted one's and not `pinned` on a bound (`cands` the
+/// candidates), with that difference (≥ 0 is worse) and
 /// the noise scale it was taken on.
 ///
 /// The BIC is taken on the accepted fit's own noise scale (a quasi-likelihood BIC:
@@ -791,6 +792,7 @@ pub(super) fn best_extension(
 /// chassis, 0.4 % apart in χ²).
 pub(super) fn rivals(
     problem: &Problem<'_>,
+    cands: &[Candidate],
     accepted: &Hypothesis,
     others: &[&Hypothesis],
 ) -> Vec<(usize, f64, f64)> {
@@ -807,6 +809,8 @@ pub(super) fn rivals(
     let mut out: Vec<(usize, f64, f64)> = others
         .iter()
         .filter(|o| o.members.last() != Some(&last))
+        // a stand-in (a parameter on a bound) is no alternative to a finding
+        .filter(|o| pinned(o, &cands[*o.members.last().expect("a member")]).is_none())
         .map(|o| {
             (
                 *o.members.last().expect("a member"),
