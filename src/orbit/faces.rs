@@ -332,25 +332,102 @@ fn albedo_cells(e: &FaceEnvironment, out: &mut Vec<([f64; 3], f64)>) {
     }
 }
 
-/// Σ over the albedo cells of `e` of radiance × cell × weight(direction).
-fn albedo_sum(e: &FaceEnvironment, weight: &dyn Fn([f64; 3]) -> f64) -> f64 {
-    use std::cell::RefCell;
-    type Cells = (Option<FaceEnvironment>, Vec<([f64; 3], f64)>);
-    thread_local! {
-        static CELLS: RefCell<Cells> = const { RefCell::new((None, Vec::new())) };
-    }
+/// An environment and, for it, vectors each with a number: the albedo cells
+/// (direction, radiance × solid angle), or the primed sums (normal, albedo).
+type Cells = (Option<FaceEnvironment>, Vec<([f64; 3], f64)>);
+thread_local! {
+    /// The albedo cells of the last environment asked for on this thread.
+    static CELLS: std::cell::RefCell<Cells> = const { std::cell::RefCell::new((None, Vec::new())) };
+    /// The albedo seen along each normal of the last instant primed on this thread
+    /// ([`prime_albedo`]).
+    static PRIMED: std::cell::RefCell<Cells> = const { std::cell::RefCell::new((None, Vec::new())) };
+}
+
+/// `f` on the albedo cells of `e` (made when `e` is not the last asked for).
+fn with_cells<R>(e: &FaceEnvironment, f: impl FnOnce(&[([f64; 3], f64)]) -> R) -> R {
     CELLS.with(|c| {
         let mut c = c.borrow_mut();
         if c.0.as_ref() != Some(e) {
             albedo_cells(e, &mut c.1);
             c.0 = Some(*e);
         }
+        f(&c.1)
+    })
+}
+
+/// Σ over the albedo cells of `e` of radiance × cell × weight(direction).
+fn albedo_sum(e: &FaceEnvironment, weight: &dyn Fn([f64; 3]) -> f64) -> f64 {
+    with_cells(e, |cells| {
         // a fold from +0: an empty sum is 0, not the −0 of `Iterator::sum`
-        c.1.iter().fold(0.0, |acc, (u, l)| {
+        cells.iter().fold(0.0, |acc, (u, l)| {
             let w = weight(*u);
             if w > 0.0 { acc + l * w } else { acc }
         })
     })
+}
+
+/// The albedo a face of normal `n` (LVLH) sees in `e`: `albedo_sum` with weight
+/// n · u, taken from the sums [`prime_albedo`] made for this instant when `n` is
+/// among them.
+fn albedo_along(e: &FaceEnvironment, n: [f64; 3]) -> f64 {
+    let primed = PRIMED.with(|p| {
+        let p = p.borrow();
+        if p.0.as_ref() == Some(e) {
+            p.1.iter().find(|(m, _)| *m == n).map(|&(_, v)| v)
+        } else {
+            None
+        }
+    });
+    primed.unwrap_or_else(|| albedo_sum(e, &|u| dot(n, u)))
+}
+
+/// Sums the albedo of every face of `faces` that sees one orientation at this instant
+/// (not tumbling, not spin-averaged) in one pass over the cells of `e`, one
+/// accumulator per face, each in the order of [`albedo_sum`]: the same numbers, but
+/// the faces' chains of additions overlap in the processor instead of running one
+/// after the other. [`incident`] then takes them from there.
+pub fn prime_albedo<'f>(e: &FaceEnvironment, faces: impl Iterator<Item = &'f Face>) {
+    if !(e.albedo > 0.0 && e.solar_on_earth_w_per_m2 > 0.0) {
+        return;
+    }
+    let normals: Vec<[f64; 3]> = faces
+        .filter_map(|f| one_phase(f, e).map(|phase| lvlh_normal(f, e, phase)))
+        .collect();
+    if normals.len() < 2 {
+        return;
+    }
+    let sums = with_cells(e, |cells| {
+        let mut acc = vec![0.0; normals.len()];
+        for (u, l) in cells {
+            for (a, n) in acc.iter_mut().zip(&normals) {
+                let w = dot(*n, *u);
+                if w > 0.0 {
+                    *a += l * w;
+                }
+            }
+        }
+        acc
+    });
+    PRIMED.with(|p| {
+        let mut p = p.borrow_mut();
+        p.0 = Some(*e);
+        p.1.clear();
+        p.1.extend(normals.into_iter().zip(sums));
+    });
+}
+
+/// The spin phase at which `face` is seen at this instant, when it is seen at one
+/// (None: tumbling, or averaged over its spin).
+fn one_phase(face: &Face, e: &FaceEnvironment) -> Option<f64> {
+    match face.attitude {
+        Attitude::Tumble => None,
+        Attitude::Spin {
+            rate_rad_per_s,
+            averaged,
+            ..
+        } => (!averaged).then_some(rate_rad_per_s * e.t_s),
+        _ => Some(0.0),
+    }
 }
 
 /// Σ over the albedo cells of `e` of radiance × cell: [`albedo_sum`] with weight 1,
@@ -459,23 +536,25 @@ pub fn incident(face: &Face, e: &FaceEnvironment) -> Incident {
     oriented(face, e, 0.0)
 }
 
+/// `face`'s outward normal in LVLH in environment `e`, its body at spin phase
+/// `spin_rad`.
+fn lvlh_normal(face: &Face, e: &FaceEnvironment, spin_rad: f64) -> [f64; 3] {
+    let axes = body_axes(face.attitude, e.sun_lvlh, &e.lvlh_axes, spin_rad);
+    let nb = face.normal_body;
+    [
+        nb[0] * axes[0][0] + nb[1] * axes[1][0] + nb[2] * axes[2][0],
+        nb[0] * axes[0][1] + nb[1] * axes[1][1] + nb[2] * axes[2][1],
+        nb[0] * axes[0][2] + nb[1] * axes[1][2] + nb[2] * axes[2][2],
+    ]
+}
+
 /// What `face` receives in environment `e` with its body at spin phase `spin_rad`.
 fn oriented(face: &Face, e: &FaceEnvironment, spin_rad: f64) -> Incident {
     let h = e.radius_m / e.earth_radius_m;
     let sun = e.sun_lvlh;
     let lit_earth = e.albedo > 0.0 && e.solar_on_earth_w_per_m2 > 0.0;
-    let axes = body_axes(face.attitude, sun, &e.lvlh_axes, spin_rad);
-    let nb = face.normal_body;
-    let n = [
-        nb[0] * axes[0][0] + nb[1] * axes[1][0] + nb[2] * axes[2][0],
-        nb[0] * axes[0][1] + nb[1] * axes[1][1] + nb[2] * axes[2][1],
-        nb[0] * axes[0][2] + nb[1] * axes[1][2] + nb[2] * axes[2][2],
-    ];
-    let albedo = if lit_earth {
-        albedo_sum(e, &|u| dot(n, u))
-    } else {
-        0.0
-    };
+    let n = lvlh_normal(face, e, spin_rad);
+    let albedo = if lit_earth { albedo_along(e, n) } else { 0.0 };
     Incident {
         solar_w_per_m2: e.solar_w_per_m2 * dot(n, sun).max(0.0),
         albedo_w_per_m2: albedo,
@@ -516,6 +595,68 @@ mod tests {
 
     /// The tumbling total (two flops a cell) against the cell-by-cell sum it replaces,
     /// for Suns all round the sky, above and below the horizon, at three heights.
+    /// The albedo of a model's faces summed in one pass ([`prime_albedo`]) is each
+    /// face's own sum, bit for bit, for faces all round and Suns all round.
+    #[test]
+    fn core_primed_albedo_is_each_face_s_own_sum_bit_for_bit() {
+        let cube: Vec<Face> = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+            [0.6, 0.0, 0.8],
+        ]
+        .into_iter()
+        .map(|normal_body| Face {
+            normal_body,
+            area_m2: 0.01,
+            absorptivity: 0.7,
+            emissivity: 0.8,
+            attitude: Attitude::Nadir { yaw_rad: 0.3 },
+        })
+        .collect();
+        let mut lit = 0;
+        for j in 0..12 {
+            let (th, ph) = (j as f64 * 0.29 + 0.1, j as f64 * 0.83);
+            let e = FaceEnvironment {
+                sun_lvlh: [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()],
+                solar_w_per_m2: 1361.0,
+                solar_on_earth_w_per_m2: 1361.0,
+                radius_m: 6_878e3,
+                earth_radius_m: 6_378e3,
+                albedo: 0.3,
+                earth_ir_w_per_m2: 237.0,
+                lvlh_axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                t_s: 100.0 + j as f64,
+            };
+            // each face alone, before any priming of this instant
+            let alone: Vec<f64> = cube
+                .iter()
+                .map(|f| {
+                    let n = lvlh_normal(f, &e, 0.0);
+                    albedo_sum(&e, &|u| dot(n, u))
+                })
+                .collect();
+            prime_albedo(&e, cube.iter());
+            let primed = PRIMED.with(|p| p.borrow().1.len());
+            assert_eq!(primed, cube.len());
+            for (f, a) in cube.iter().zip(&alone) {
+                let got = incident(f, &e).albedo_w_per_m2;
+                assert_eq!(
+                    got.to_bits(),
+                    a.to_bits(),
+                    "{:?}: {got} vs {a}",
+                    f.normal_body
+                );
+            }
+            lit += alone.iter().filter(|&&a| a > 0.0).count();
+        }
+        // the day side seen too, not only zeros compared
+        assert!(lit > 20, "{lit}");
+    }
+
     #[test]
     fn core_albedo_total_is_the_cell_sum() {
         for (radius, k) in [(6_778e3, 0), (7_178e3, 1), (12_000e3, 2)] {

@@ -299,8 +299,14 @@ impl Compiled {
         self.load_w.iter_mut().for_each(|q| *q = 0.0);
         self.absorbed_w = 0.0;
         self.dissipated_w = 0.0;
-        // what faces see, evaluated once for all the faces of this instant
+        // what faces see, evaluated once for all the faces of this instant, and the
+        // albedo of two or more faces summed in one pass
         let mut faces_env = None;
+        if net.face_loads().nth(1).is_some() {
+            let fe = env.face_environment(s);
+            crate::orbit::faces::prime_albedo(&fe, net.face_loads().map(|(_, f)| f));
+            faces_env = Some(fe);
+        }
         for (k, l) in net.loads.iter().enumerate() {
             let (q, absorbed) = load_w(env, s, &l.kind, sw.modes_active, &mut faces_env);
             self.each_load_w[k] = q;
