@@ -1625,28 +1625,24 @@ impl Search<'_> {
             }
             if let Some((i, name)) = pinned {
                 let label = self.cands[h.members[i]].label();
-                match without.into_iter().nth(i).flatten() {
+                let rest = without.into_iter().nth(i).flatten();
+                // the others that cannot be fitted without it keep it, and say so
+                let kept = rest.is_none() && h.members.len() > 1;
+                report.notes.push(if kept {
+                    format!(
+                        "{label} ends with its {name} on a bound of its range in the final joint fit (read it as a stand-in); the fit without it failed, so it is kept"
+                    )
+                } else {
+                    format!(
+                        "{label} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding"
+                    )
+                });
+                match rest {
                     Some(w) => {
-                        report.notes.push(format!(
-                            "{label} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding"
-                        ));
                         h = w;
                         continue;
                     }
-                    // a single member: nothing is left
-                    None if h.members.len() == 1 => {
-                        report.notes.push(format!(
-                            "{label} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding"
-                        ));
-                        return None;
-                    }
-                    // the others cannot be fitted without it: kept, and said
-                    None => {
-                        report.notes.push(format!(
-                            "{label} ends with its {name} on a bound of its range in the final joint fit (read it as a stand-in); the fit without it failed, so it is kept"
-                        ));
-                        return Some(h);
-                    }
+                    None => return kept.then_some(h),
                 }
             }
             let shares: Vec<f64> = without

@@ -758,12 +758,7 @@ pub(super) fn best_extension(
         holdout_chi2: current.holdout_chi2,
         pred: &current.pred,
     };
-    // a stand-in (a parameter on a bound) is neither accepted nor an alternative
-    let fitted: Vec<Hypothesis> = fitted
-        .into_iter()
-        .flatten()
-        .filter(|h| pinned(h, &cands[*h.members.last().expect("a member")]).is_none())
-        .collect();
+    let fitted: Vec<Hypothesis> = fitted.into_iter().flatten().collect();
     let mut best: Option<Hypothesis> = None;
     for h in &fitted {
         let c = &cands[*h.members.last().unwrap()];
@@ -778,9 +773,9 @@ pub(super) fn best_extension(
 
 /// The rivals of `accepted` among `others` (hypotheses of the same step: the same
 /// members but the last): each other last member whose BIC is within
-/// [`RIVAL_DELTA_BIC`] of the accepted one's and not `pinned` on a bound (`cands` the
-/// candidates), with that difference (≥ 0 is worse) and
-/// the noise scale it was taken on.
+/// [`RIVAL_DELTA_BIC`] of the accepted one's and not [`pinned`] on a bound (`cands`
+/// the candidates), with that difference (≥ 0 is worse) and the noise scale it was
+/// taken on.
 ///
 /// The BIC is taken on the accepted fit's own noise scale (a quasi-likelihood BIC:
 /// χ² / [`Hypothesis::noise_scale`] + k ln n_eff, n_eff = n / AR(1) factor), the
@@ -1018,8 +1013,9 @@ mod tests {
 
     /// A fit that ends on a bound of a parameter's range (within its step) is a
     /// stand-in; not when the bound is the parameter's null (the effect absent) or a
-    /// floor the effect takes (a thermostat's smallest hysteresis, no interference). The candidate's
-    /// parameters are found from their offset, after the calibration's.
+    /// floor the effect takes (a thermostat's smallest hysteresis, no interference).
+    /// The candidate's parameters are found from their offset, after the
+    /// calibration's.
     #[test]
     fn core_a_parameter_on_a_bound_of_its_range_is_a_stand_in() {
         let scale = candidate(

@@ -593,8 +593,6 @@ mod tests {
         }
     }
 
-    /// The tumbling total (two flops a cell) against the cell-by-cell sum it replaces,
-    /// for Suns all round the sky, above and below the horizon, at three heights.
     /// The albedo of a model's faces summed in one pass ([`prime_albedo`]) is each
     /// face's own sum, bit for bit, for faces all round and Suns all round.
     #[test]
@@ -657,6 +655,8 @@ mod tests {
         assert!(lit > 20, "{lit}");
     }
 
+    /// The tumbling total (two flops a cell) against the cell-by-cell sum it replaces,
+    /// for Suns all round the sky, above and below the horizon, at three heights.
     #[test]
     fn core_albedo_total_is_the_cell_sum() {
         for (radius, k) in [(6_778e3, 0), (7_178e3, 1), (12_000e3, 2)] {

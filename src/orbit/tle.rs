@@ -290,7 +290,7 @@ impl TleOrbit {
     pub fn sample(&self, t_s: f64) -> Sample {
         let t = t_s.max(0.0);
         let chunk = (t / CHUNK_S).floor() as usize;
-        let Some(Ok(samples)) = self.chunk(chunk).and_then(|c| c.get()) else {
+        let Some(Ok(samples)) = self.chunk(chunk) else {
             return [f64::NAN; 10];
         };
         let local = t - chunk as f64 * CHUNK_S;
@@ -344,7 +344,7 @@ impl TleOrbit {
             ));
         }
         for c in 0..=last {
-            if let Some(Some(Err(e))) = self.chunk(c).map(|c| c.get()) {
+            if let Some(Err(e)) = self.chunk(c) {
                 return Err(e.clone());
             }
         }
@@ -353,14 +353,13 @@ impl TleOrbit {
 
     /// Chunk `c`'s samples (days `c` … `c + 1` after the start, both ends included),
     /// computed on first use (None beyond the table's [`BLOCK_DAYS`] × [`BLOCKS`] days).
-    fn chunk(&self, c: usize) -> Option<&Chunk> {
+    fn chunk(&self, c: usize) -> Option<&Result<Vec<Sample>, String>> {
         let block = self
             .cache
             .blocks
             .get(c / BLOCK_DAYS)?
             .get_or_init(|| (0..BLOCK_DAYS).map(|_| OnceLock::new()).collect());
-        let cell = &block[c % BLOCK_DAYS];
-        cell.get_or_init(|| {
+        Some(block[c % BLOCK_DAYS].get_or_init(|| {
             (0..=CHUNK_NODES)
                 .map(|j| {
                     let t = c as f64 * CHUNK_S + j as f64 * NODE_SPACING_S;
@@ -381,8 +380,7 @@ impl TleOrbit {
                     ])
                 })
                 .collect()
-        });
-        Some(cell)
+        }))
     }
 }
 
