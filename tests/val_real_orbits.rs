@@ -7,7 +7,7 @@
 
 use std::f64::consts::PI;
 
-use orbitlash::orbit::dated::{SUN_RADIUS_M, Shadow, shadow_at};
+use orbitlash::orbit::dated::{SUN_RADIUS_M, Shadow, conical_sun_fraction, shadow_at};
 use orbitlash::orbit::sun::{AU_M, sun_at};
 use orbitlash::orbit::tle::{TleOrbit, julian_date, parse_utc};
 
@@ -233,5 +233,54 @@ fn val_closed_form_conical_umbra_and_penumbra() {
             last = f;
         }
         assert!(g(penumbra_entry - 1e-4).2 == 1.0 && g(umbra_entry + 1e-4).2 == 0.0);
+    }
+}
+
+/// The visible fraction a sunlit step takes (`conical_sun_fraction`, which decides
+/// "the whole Sun" on cosines first) is `shadow_at`'s, bit for bit: over the whole
+/// orbit, and densely through 1e-7 rad either side of the penumbra's entry (the
+/// shortcut hands over 1e-9 rad before it).
+#[test]
+fn core_the_shortcut_sun_fraction_is_shadow_at_s_bit_for_bit() {
+    let earth: f64 = 6_378_137.0;
+    for (h_km, beta_deg, au) in [
+        (400.0, 0.0, 0.983),
+        (600.0, 30.0, 1.0),
+        (1000.0, 60.0, 1.017),
+    ] {
+        let r = earth + h_km * 1e3;
+        let beta = f64::to_radians(beta_deg);
+        let same = |theta: f64| {
+            let (pos, sun) = circular(r, beta, theta);
+            let want = shadow_at(pos, sun, au, Shadow::Conical, earth).2;
+            let got = conical_sun_fraction(pos, sun, au, earth);
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "h {h_km} km, β {beta_deg}°, θ {theta}: {got} vs {want}"
+            );
+            want
+        };
+        let mut partial = 0;
+        for k in 0..200_000 {
+            let theta = -PI + 2.0 * PI * k as f64 / 200_000.0;
+            partial += usize::from(same(theta) < 1.0 && same(theta) > 0.0);
+        }
+        assert!(partial > 0, "no step of the scan was in the penumbra");
+        let entry = edge(
+            &|t| {
+                let (pos, sun) = circular(r, beta, t);
+                shadow_at(pos, sun, au, Shadow::Conical, earth).1
+            },
+            PI / 2.0,
+        );
+        // the shortcut hands over about 1e-9 rad before the edge: scan 1e-7 rad either
+        // side of it (inside, the lens formula's rounding keeps 1 over the first few
+        // 1e-8 rad, then the fraction falls below 1)
+        let mut dimmed = 0;
+        for k in -20_000..=20_000 {
+            dimmed += usize::from(same(entry + 1e-7 * k as f64 / 20_000.0) < 1.0);
+        }
+        assert!(dimmed > 1_000, "{dimmed} points dimmed inside the edge");
     }
 }

@@ -223,6 +223,35 @@ pub fn shadow_at(
     }
 }
 
+/// The visible fraction of the Sun's disc at `r` with a conical shadow: the third
+/// number of [`shadow_at`], bit for bit, without its two arcsines and its arccosine
+/// where the Sun is clearly whole. c ≥ a + b is first decided on the cosines (cos c
+/// below cos(a + b) by more than 1e-9, an angle of at least 1e-9 rad, far above the
+/// rounding of either side, where [`shadow_at`] also finds c ≥ a + b and returns 1);
+/// near the penumbra's edge and inside it, [`shadow_at`] itself.
+pub fn conical_sun_fraction(
+    r: [f64; 3],
+    sun: [f64; 3],
+    sun_distance_au: f64,
+    earth_radius_m: f64,
+) -> f64 {
+    let rn = norm(r);
+    if dot(r, sun) >= 0.0 {
+        return 1.0;
+    }
+    let d = sun_distance_au * AU_M;
+    let to_sun = [d * sun[0] - r[0], d * sun[1] - r[1], d * sun[2] - r[2]];
+    let ds = norm(to_sun);
+    let (sin_a, sin_b) = (SUN_RADIUS_M / ds, (earth_radius_m / rn).min(1.0));
+    let to_earth = [-r[0] / rn, -r[1] / rn, -r[2] / rn];
+    let cos_c = dot(to_sun, to_earth) / ds;
+    let cos_ab = (1.0 - sin_a * sin_a).sqrt() * (1.0 - sin_b * sin_b).sqrt() - sin_a * sin_b;
+    if cos_c < cos_ab - 1e-9 {
+        return 1.0;
+    }
+    shadow_at(r, sun, sun_distance_au, Shadow::Conical, earth_radius_m).2
+}
+
 impl DatedEnvironment {
     /// (R / a)², a the mean orbit radius: the Earth view factor a nadir face's loads
     /// take by default.
@@ -246,6 +275,21 @@ impl DatedEnvironment {
 
     /// The geometry at `t_s` after the start.
     pub fn geometry(&self, t_s: f64) -> Geometry {
+        let mut g = self.orbit_geometry(t_s);
+        (g.umbra, g.penumbra, g.sun_fraction) = shadow_at(
+            g.r,
+            g.sun,
+            g.sun_distance_au,
+            self.shadow,
+            self.earth_radius_m,
+        );
+        g
+    }
+
+    /// [`Self::geometry`] without the shadow (its `umbra`, `penumbra` and
+    /// `sun_fraction` NaN): the same numbers for the rest, for the callers that need
+    /// only the orbit and the Sun.
+    fn orbit_geometry(&self, t_s: f64) -> Geometry {
         let x = self.orbit.sample(t_s);
         let r = [x[0], x[1], x[2]];
         let v = [x[3], x[4], x[5]];
@@ -263,8 +307,6 @@ impl DatedEnvironment {
         };
         let e2 = cross(n, e1);
         let theta = dot(r, e2).atan2(dot(r, e1));
-        let (umbra, penumbra, sun_fraction) =
-            shadow_at(r, s, sun_distance_au, self.shadow, self.earth_radius_m);
         Geometry {
             r,
             normal: n,
@@ -272,9 +314,9 @@ impl DatedEnvironment {
             sun_distance_au,
             beta_rad: beta,
             theta_rad: theta,
-            sun_fraction,
-            umbra,
-            penumbra,
+            sun_fraction: f64::NAN,
+            umbra: f64::NAN,
+            penumbra: f64::NAN,
         }
     }
 
@@ -464,7 +506,7 @@ impl DatedEnvironment {
 
 impl EnvironmentModel for DatedEnvironment {
     fn state_with(&self, t_s: f64, sunlit: bool) -> EnvState {
-        let g = self.geometry(t_s);
+        let g = self.orbit_geometry(t_s);
         let flux = self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2);
         // A step flagged sunlit sees the Sun from the lit side up to and at its end,
         // which lands on the edge: only the penumbra dims it (falling continuously to 0
@@ -475,7 +517,11 @@ impl EnvironmentModel for DatedEnvironment {
             t_s,
             orbit_angle_rad: g.theta_rad,
             beta_rad: g.beta_rad,
-            solar_flux_w_per_m2: if dimmed { flux * g.sun_fraction } else { flux },
+            solar_flux_w_per_m2: if dimmed {
+                flux * conical_sun_fraction(g.r, g.sun, g.sun_distance_au, self.earth_radius_m)
+            } else {
+                flux
+            },
             sunlit,
             radius_m: norm(g.r),
         }
@@ -505,8 +551,8 @@ impl EnvironmentModel for DatedEnvironment {
         let mut next = f64::INFINITY;
         for k in kinks {
             let f: Box<dyn Fn(f64) -> f64> = match k {
-                LoadKink::Terminator => Box::new(|t| self.geometry(t).theta_rad.cos()),
-                LoadKink::NoonMidnight => Box::new(|t| self.geometry(t).theta_rad.sin()),
+                LoadKink::Terminator => Box::new(|t| self.orbit_geometry(t).theta_rad.cos()),
+                LoadKink::NoonMidnight => Box::new(|t| self.orbit_geometry(t).theta_rad.sin()),
             };
             if let Some((t, _)) = self.next_root(t_s, until, step, None, &*f) {
                 next = next.min(t);
@@ -526,7 +572,10 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     fn orbit_phase_deg(&self, t_s: f64) -> f64 {
-        self.geometry(t_s).theta_rad.to_degrees().rem_euclid(360.0)
+        self.orbit_geometry(t_s)
+            .theta_rad
+            .to_degrees()
+            .rem_euclid(360.0)
     }
 
     fn mean_period_s(&self) -> f64 {
@@ -542,7 +591,7 @@ impl EnvironmentModel for DatedEnvironment {
     fn albedo_w(&self, s: &EnvState, absorptivity_area_m2: f64, view_factor: f64) -> f64 {
         let flux = if s.sunlit {
             // the penumbra dims the Sun seen by the spacecraft, not the Earth below it
-            let g = self.geometry(s.t_s);
+            let g = self.orbit_geometry(s.t_s);
             self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2)
         } else {
             s.solar_flux_w_per_m2
@@ -608,7 +657,7 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     fn face_environment(&self, s: &EnvState) -> super::faces::FaceEnvironment {
-        let g = self.geometry(s.t_s);
+        let g = self.orbit_geometry(s.t_s);
         let flux = self.solar_flux_1au_w_per_m2 / g.sun_distance_au.powi(2);
         super::faces::FaceEnvironment {
             sun_lvlh: super::faces::sun_lvlh(s.orbit_angle_rad, s.beta_rad),

@@ -334,8 +334,11 @@ impl TleOrbit {
     }
 
     /// Propagates every cached day up to `t_end_s`: the first failure (a decayed or
-    /// diverging orbit), with its time.
+    /// diverging orbit), with its time. The days are propagated in parallel (rayon):
+    /// each is a pure function of the elements and its own times, so the table is the
+    /// same for any thread count, and a run's own thread finds it filled.
     pub fn check_until(&self, t_end_s: f64) -> Result<(), String> {
+        use rayon::prelude::*;
         let last = (t_end_s.max(0.0) / CHUNK_S).floor() as usize;
         if last >= BLOCK_DAYS * BLOCKS {
             return Err(format!(
@@ -343,6 +346,9 @@ impl TleOrbit {
                 BLOCK_DAYS * BLOCKS
             ));
         }
+        (0..=last).into_par_iter().for_each(|c| {
+            self.chunk(c);
+        });
         for c in 0..=last {
             if let Some(Err(e)) = self.chunk(c) {
                 return Err(e.clone());

@@ -1013,7 +1013,11 @@ impl<'a> Setup<'a> {
         let view = StepView {
             index: stats.steps,
             data: &stepper.data,
-            env1: model.environment.state_with(t_new, s.sunlit),
+            // the step's last stage was at its end (unless it landed a rounding away)
+            env1: match stepper.env_end {
+                Some(e) if e.t_s.to_bits() == t_new.to_bits() && e.sunlit == s.sunlit => e,
+                _ => model.environment.state_with(t_new, s.sunlit),
+            },
             heaters_on: &s.heaters_on,
             modes_active: &s.modes_active,
             load_w: &stepper.compiled.each_load_w,

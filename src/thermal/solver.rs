@@ -256,6 +256,9 @@ pub struct Stepper {
     linear_choice: LinearSolver,
     initial_linear: crate::thermal::iteration::LinearSolver,
     pub data: StepData,
+    /// The environment of the last step's end (its last stage), for observers of that
+    /// step, so that it is not evaluated again (None before a step).
+    pub env_end: Option<EnvState>,
 }
 
 impl Stepper {
@@ -281,6 +284,7 @@ impl Stepper {
             newton_tol_k: (NEWTON_TOL_FRACTION * tolerance_k).max(1e-9),
             interpolant_tol_k: tolerance_k,
             start_is_last_end: false,
+            env_end: None,
             lu_h: f64::NAN,
             jac_temps_k: vec![0.0; n],
             jac_stale: true,
@@ -365,7 +369,9 @@ impl Stepper {
             .heat_w(&self.yg, &mut self.fg, Some(&mut self.data.flows[1]));
 
         // Stage 2: BDF2 to t0 + h: C y1 − D h f(y1) = C (A yγ − B y0).
-        self.compiled.set_time(model, &env_at(t0_s + h_s), sw);
+        let env_end = env_at(t0_s + h_s);
+        self.compiled.set_time(model, &env_end, sw);
+        self.env_end = Some(env_end);
         for i in 0..n {
             self.data.temps1_k[i] = temps0_k[i] + (self.yg[i] - temps0_k[i]) / GAMMA;
             self.k[i] = self.cap[i] * (A * self.yg[i] - B * temps0_k[i]);
