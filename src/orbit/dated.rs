@@ -164,14 +164,19 @@ fn bisect(f: &dyn Fn(f64) -> f64, lo: f64, hi: f64, falling: bool) -> f64 {
 /// The minimum of a unimodal `f` on [`a`, `b`] by golden section, to 1e-3 of the
 /// interval (a shadow function's minimum need not be exact: the roots on either side
 /// are bisected to the float).
-fn golden_minimum(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> f64 {
+/// Returns the time and `f` there.
+fn golden_minimum(f: &dyn Fn(f64) -> f64, a: f64, b: f64) -> (f64, f64) {
     let (a, b) = crate::numeric::golden_section(a, b, 1e-3 * (b - a).abs(), &mut |t| f(t));
     let m = 0.5 * (a + b);
-    // the ends themselves when lower (a start past the minimum)
-    [a, m, b]
-        .into_iter()
-        .min_by(|x, y| f(*x).total_cmp(&f(*y)))
-        .unwrap()
+    // the ends themselves when lower (a start past the minimum); the first of equals
+    let mut best = (a, f(a));
+    for x in [m, b] {
+        let fx = f(x);
+        if best.1.total_cmp(&fx) == std::cmp::Ordering::Greater {
+            best = (x, fx);
+        }
+    }
+    best
 }
 
 /// The Earth's shadow at position `r` (m, geocentric) with the Sun in direction
@@ -206,13 +211,7 @@ pub fn shadow_at(
         // only the sign there.
         Shadow::Conical if rs >= 0.0 => (rn - earth_radius_m, rn - earth_radius_m, 1.0),
         Shadow::Conical => {
-            let d = sun_distance_au * AU_M;
-            let to_sun = [d * sun[0] - r[0], d * sun[1] - r[1], d * sun[2] - r[2]];
-            let ds = norm(to_sun);
-            let a = (SUN_RADIUS_M / ds).asin();
-            let b = (earth_radius_m / rn).min(1.0).asin();
-            let to_earth = [-r[0] / rn, -r[1] / rn, -r[2] / rn];
-            let c = (dot(to_sun, to_earth) / ds).clamp(-1.0, 1.0).acos();
+            let (a, b, c) = cone_angles(r, rn, sun, sun_distance_au, earth_radius_m);
             let visible = if c >= a + b {
                 1.0
             } else {
@@ -250,6 +249,44 @@ pub fn conical_sun_fraction(
         return 1.0;
     }
     shadow_at(r, sun, sun_distance_au, Shadow::Conical, earth_radius_m).2
+}
+
+/// Behind the Earth: the apparent radii of the Sun and the Earth and the angle between
+/// their centres seen from `r` (`rn` its length), rad.
+#[inline]
+fn cone_angles(
+    r: [f64; 3],
+    rn: f64,
+    sun: [f64; 3],
+    sun_distance_au: f64,
+    earth_radius_m: f64,
+) -> (f64, f64, f64) {
+    let d = sun_distance_au * AU_M;
+    let to_sun = [d * sun[0] - r[0], d * sun[1] - r[1], d * sun[2] - r[2]];
+    let ds = norm(to_sun);
+    let a = (SUN_RADIUS_M / ds).asin();
+    let b = (earth_radius_m / rn).min(1.0).asin();
+    let to_earth = [-r[0] / rn, -r[1] / rn, -r[2] / rn];
+    let c = (dot(to_sun, to_earth) / ds).clamp(-1.0, 1.0).acos();
+    (a, b, c)
+}
+
+/// The umbra and penumbra functions of [`shadow_at`], the same numbers, without the
+/// visible fraction (the edge searches need only these).
+fn shadow_functions_at(
+    r: [f64; 3],
+    sun: [f64; 3],
+    sun_distance_au: f64,
+    shadow: Shadow,
+    earth_radius_m: f64,
+) -> (f64, f64) {
+    let rn = norm(r);
+    if shadow == Shadow::Conical && dot(r, sun) < 0.0 {
+        let (a, b, c) = cone_angles(r, rn, sun, sun_distance_au, earth_radius_m);
+        return (c - (b - a), c - (a + b));
+    }
+    let (umbra, penumbra, _) = shadow_at(r, sun, sun_distance_au, shadow, earth_radius_m);
+    (umbra, penumbra)
 }
 
 impl DatedEnvironment {
@@ -332,14 +369,13 @@ impl DatedEnvironment {
     /// [`Self::geometry`]'s, without the orbit normal, β and θ.
     fn shadow_functions(&self, t_s: f64) -> (f64, f64) {
         let x = self.orbit.sample(t_s);
-        let (umbra, penumbra, _) = shadow_at(
+        shadow_functions_at(
             [x[0], x[1], x[2]],
             [x[6], x[7], x[8]],
             x[9],
             self.shadow,
             self.earth_radius_m,
-        );
-        (umbra, penumbra)
+        )
     }
 
     /// The first root of `f` strictly after `t_s` and before `until_s`, with the sign
@@ -415,9 +451,9 @@ impl DatedEnvironment {
             }
             let night_end = self.next_terminator(t, until_s, false).unwrap_or(until_s);
             let f_t = f(t);
-            let t_min = golden_minimum(f, t, night_end);
+            let (t_min, f_min) = golden_minimum(f, t, night_end);
             if f_t >= 0.0 {
-                if f(t_min) < 0.0 {
+                if f_min < 0.0 {
                     let hi = bisect(f, t, t_min, true);
                     if hi > t_s {
                         return Some((hi, true));
