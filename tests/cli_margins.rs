@@ -19,7 +19,7 @@ min = 0.6
 max = 0.8
 "#;
 
-fn setup(name: &str, min_backlash: &str) -> std::path::PathBuf {
+fn setup(name: &str, min_backlash: &str) -> common::TestDir {
     let dir = tmpdir(name);
     let text = reference_text().replacen("min_backlash_um = 5.0", min_backlash, 1) + DISPERSIONS;
     std::fs::write(dir.join("m.toml"), text).unwrap();

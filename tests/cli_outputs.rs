@@ -12,7 +12,7 @@ fn run_in(dir: &Path, args: &[&str]) -> Output {
 }
 
 /// A folder with the reference scenario as `s.toml` and a finished log `l.mcap`.
-fn setup(name: &str) -> std::path::PathBuf {
+fn setup(name: &str) -> common::TestDir {
     let dir = tmpdir(name);
     std::fs::write(dir.join("s.toml"), reference_text()).unwrap();
     let out = run_in(

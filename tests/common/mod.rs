@@ -58,12 +58,46 @@ pub fn bin() -> assert_cmd::Command {
     assert_cmd::cargo::cargo_bin_cmd!("orbitlash")
 }
 
-/// A fresh, empty temporary folder for one test.
-pub fn tmpdir(name: &str) -> std::path::PathBuf {
+/// A fresh, empty temporary folder for one test, removed when the test ends well and
+/// kept (its path in the failure's output) when the test panics, to be looked at.
+pub fn tmpdir(name: &str) -> TestDir {
     let d = std::env::temp_dir().join(format!("orbitlash-test-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
-    d
+    TestDir(d)
+}
+
+/// A test's temporary folder (see [`tmpdir`]): a path that removes its folder when
+/// dropped, unless the thread is panicking.
+pub struct TestDir(std::path::PathBuf);
+
+impl std::ops::Deref for TestDir {
+    type Target = std::path::PathBuf;
+    fn deref(&self) -> &std::path::PathBuf {
+        &self.0
+    }
+}
+
+impl AsRef<std::path::Path> for TestDir {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for TestDir {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for TestDir {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("kept for inspection: {}", self.0.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// The reference scenario's text (scenarios/reference-hinge.toml).
