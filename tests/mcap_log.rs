@@ -233,12 +233,27 @@ fn cli_log_cadence_by_steps_and_by_interval() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The long run's log and CSV cadence, s: once a day, so that its outputs (a few MB
+/// for 170 000 orbits) are not refused up front on a file system with little free
+/// space, while it computes for tens of seconds.
+const LONG_RUN_EVERY_S: f64 = 86_400.0;
+
 /// Starts a long run and returns it once its temporary log exists.
 fn start_long_run(dir: &Path) -> (std::process::Child, std::path::PathBuf, std::path::PathBuf) {
     let (log, csv) = (dir.join("long.mcap"), dir.join("long.csv"));
+    let every = format!("{LONG_RUN_EVERY_S}s");
+    let csv_every = format!("run.output_interval_s={LONG_RUN_EVERY_S}");
     // std's Command: this run is signalled while it runs, which assert_cmd does not do
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_orbitlash"))
-        .args(["run", "--quiet", "--orbits", "50000", "--log-every", "60s"])
+        .args([
+            "run",
+            "--quiet",
+            "--orbits",
+            "170000",
+            "--log-every",
+            &every,
+        ])
+        .args(["--set", &csv_every])
         .args([
             "--out",
             log.to_str().unwrap(),
@@ -281,9 +296,9 @@ fn cli_ctrl_c_closes_the_log_and_says_so() {
     let end = &t.metadata["orbitlash.run_end"];
     assert_eq!(end["status"], "interrupted");
     let t_end: f64 = end["t_end_s"].parse().unwrap();
-    assert!(t_end > 0.0 && t_end < 50000.0 * 5676.978);
+    assert!(t_end > 0.0 && t_end < 170_000.0 * 5676.978);
     let last = t.rows.last().unwrap().0 as f64 * 1e-9;
-    assert!(last <= t_end + 1e-6 && t_end - last <= 60.0 + 1e-6);
+    assert!(last <= t_end + 1e-6 && t_end - last <= LONG_RUN_EVERY_S + 1e-6);
     // The CSV is complete up to the same time.
     let text = std::fs::read_to_string(&csv).unwrap();
     let last_csv: f64 = text
@@ -295,7 +310,7 @@ fn cli_ctrl_c_closes_the_log_and_says_so() {
         .unwrap()
         .parse()
         .unwrap();
-    assert!(last_csv <= t_end && t_end - last_csv <= 30.0 + 1e-6);
+    assert!(last_csv <= t_end && t_end - last_csv <= LONG_RUN_EVERY_S + 1e-6);
     assert!(!dir.join("long.mcap.partial").exists() && !dir.join("long.csv.partial").exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -334,11 +334,10 @@ impl TleOrbit {
     }
 
     /// Propagates every cached day up to `t_end_s`: the first failure (a decayed or
-    /// diverging orbit), with its time. The days are propagated in parallel (rayon):
-    /// each is a pure function of the elements and its own times, so the table is the
-    /// same for any thread count, and a run's own thread finds it filled.
+    /// diverging orbit), with its time. The days are propagated in parallel
+    /// ([`Self::fill_days`]): each is a pure function of the elements and its own
+    /// times, so the table is the same for any thread count.
     pub fn check_until(&self, t_end_s: f64) -> Result<(), String> {
-        use rayon::prelude::*;
         let last = (t_end_s.max(0.0) / CHUNK_S).floor() as usize;
         if last >= BLOCK_DAYS * BLOCKS {
             return Err(format!(
@@ -346,15 +345,47 @@ impl TleOrbit {
                 BLOCK_DAYS * BLOCKS
             ));
         }
-        (0..=last).into_par_iter().for_each(|c| {
-            self.chunk(c);
-        });
+        self.fill_days(last);
         for c in 0..=last {
             if let Some(Err(e)) = self.chunk(c) {
                 return Err(e.clone());
             }
         }
         Ok(())
+    }
+
+    /// Computes days 0 … `last` of the table in parallel: on the worker pool when called
+    /// from one of its threads (margins, diagnose), else on scoped threads, one per
+    /// core, taking the days in turn. It never starts rayon's global pool itself (the
+    /// commands that want one build it with their checks), and a thread that cannot be
+    /// started (a memory or process limit) leaves its days to the others.
+    fn fill_days(&self, last: usize) {
+        use rayon::prelude::*;
+        if rayon::current_thread_index().is_some() {
+            (0..=last).into_par_iter().for_each(|c| {
+                self.chunk(c);
+            });
+            return;
+        }
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(last + 1);
+        let next = std::sync::atomic::AtomicUsize::new(0);
+        let work = || {
+            loop {
+                let c = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if c > last {
+                    break;
+                }
+                self.chunk(c);
+            }
+        };
+        std::thread::scope(|s| {
+            for _ in 1..threads {
+                let _ = std::thread::Builder::new().spawn_scoped(s, work);
+            }
+            work();
+        });
     }
 
     /// Chunk `c`'s samples (days `c` … `c + 1` after the start, both ends included),

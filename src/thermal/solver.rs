@@ -257,7 +257,8 @@ pub struct Stepper {
     initial_linear: crate::thermal::iteration::LinearSolver,
     pub data: StepData,
     /// The environment of the last step's end (its last stage), for observers of that
-    /// step, so that it is not evaluated again (None before a step).
+    /// step, so that it is not evaluated again: set by every step that reaches its last
+    /// stage, failed or not, so a reader checks its time and sunlit flag.
     pub env_end: Option<EnvState>,
 }
 
