@@ -90,6 +90,12 @@ fn check_span(env: &crate::orbit::Environment, t_s: f64, t_end_s: f64) -> Result
     }
 }
 
+/// The days a run from t = 0 to `t_end_s` touches (a real orbit's table is propagated
+/// a day at a time).
+fn days_spanned(t_end_s: f64) -> f64 {
+    (t_end_s.max(0.0) / 86_400.0).floor() + 1.0
+}
+
 /// The pair's state, or a state with NaN backlash when there is no valid mesh.
 pub fn mesh_or_nan(pair: &GearPair, temps_k: &[f64]) -> MeshState {
     pair.evaluate(temps_k).unwrap_or(MeshState {
@@ -1442,11 +1448,16 @@ pub fn estimate_run<O: Observer>(
         stop: &'a AtomicBool,
         /// End time of every pilot step (at most 20 000).
         times: Vec<f64>,
+        /// When the first step and the last were seen: the wall time per step is
+        /// taken between them, without the setup before the first.
+        first_last: Option<(std::time::Instant, std::time::Instant)>,
     }
     impl Observer for Budget<'_> {
         fn on_step(&mut self, step: &StepView<'_>) -> ObserverResult {
             self.steps += 1;
             self.times.push(step.t1_s());
+            let now = std::time::Instant::now();
+            self.first_last = Some((self.first_last.map_or(now, |f| f.0), now));
             if self.steps >= 20_000 || self.start.elapsed().as_secs_f64() > 0.25 {
                 self.stop.store(true, Ordering::Relaxed);
             }
@@ -1454,14 +1465,28 @@ pub fn estimate_run<O: Observer>(
         }
     }
     let lower = t_end_s / settings.max_step_s;
+    let pilot_end = pilot_end_s.min(t_end_s);
+    // A real orbit's table for the pilot, timed apart from the steps: its cost grows
+    // with the run's days, not with its steps (counted per day below, the days shared
+    // by the cores as `TleOrbit::check_until` shares them). An error is the pilot's to
+    // report.
+    let table_start = std::time::Instant::now();
+    let _ = check_span(&model.environment, 0.0, pilot_end);
+    let table_per_day_s = match &model.environment {
+        crate::orbit::Environment::Dated(_) => {
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            table_start.elapsed().as_secs_f64() / days_spanned(pilot_end) / cores as f64
+        }
+        _ => 0.0,
+    };
     let stop = AtomicBool::new(false);
     let mut budget = Budget {
         start: std::time::Instant::now(),
         steps: 0,
         stop: &stop,
         times: Vec::with_capacity(20_000),
+        first_last: None,
     };
-    let pilot_end = pilot_end_s.min(t_end_s);
     match simulate(
         model,
         gears,
@@ -1471,7 +1496,14 @@ pub fn estimate_run<O: Observer>(
         Some(&stop),
     ) {
         Ok(stats) if stats.t_end_s > 0.0 && stats.steps > 0 => {
-            let wall = budget.start.elapsed().as_secs_f64();
+            // per step between the first step and the last (with one step, from the
+            // start: setup included, erring high)
+            let per_step_s = match budget.first_last {
+                Some((f, l)) if stats.steps > 1 => {
+                    l.duration_since(f).as_secs_f64() / (stats.steps - 1) as f64
+                }
+                _ => budget.start.elapsed().as_secs_f64() / stats.steps as f64,
+            };
             let n = budget.times.len();
             let steps = if stats.t_end_s < pilot_end && n >= 8 {
                 // Stopped early (the step or time budget): the rest goes at the pace of
@@ -1488,7 +1520,7 @@ pub fn estimate_run<O: Observer>(
             .max(lower);
             RunEstimate {
                 steps,
-                wall_s: wall / stats.steps as f64 * steps,
+                wall_s: per_step_s * steps + table_per_day_s * days_spanned(t_end_s),
                 pilot_s: stats.t_end_s,
                 pilot_steps: stats.steps,
             }
