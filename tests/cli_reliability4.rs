@@ -82,8 +82,6 @@ fn cli_a_killed_run_keeps_the_previous_log() {
     );
     assert_eq!(again.status.code(), Some(0), "{}", stderr(&again));
     assert!(std::fs::read(dir.join("d.mcap")).unwrap() != before);
-    // the killed run's .partial is kept for `orbitlash recover`; the test's folder goes
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 // 3. A FAIL run is drawn as FAIL with the run's own smallest backlash and time, from

@@ -211,13 +211,8 @@ pub fn shadow_at(
         // only the sign there.
         Shadow::Conical if rs >= 0.0 => (rn - earth_radius_m, rn - earth_radius_m, 1.0),
         Shadow::Conical => {
-            let (a, b, c) = cone_angles(r, rn, sun, sun_distance_au, earth_radius_m);
-            let visible = if c >= a + b {
-                1.0
-            } else {
-                1.0 - disc_overlap(a, b, c) / (PI * a * a)
-            };
-            (c - (b - a), c - (a + b), visible.clamp(0.0, 1.0))
+            let (a, b, c) = cone_angles(cone_sines(r, rn, sun, sun_distance_au, earth_radius_m));
+            (c - (b - a), c - (a + b), visible_fraction(a, b, c))
         }
     }
 }
@@ -227,7 +222,7 @@ pub fn shadow_at(
 /// where the Sun is clearly whole. c ≥ a + b is first decided on the cosines (cos c
 /// below cos(a + b) by more than 1e-9, an angle of at least 1e-9 rad, far above the
 /// rounding of either side, where [`shadow_at`] also finds c ≥ a + b and returns 1);
-/// near the penumbra's edge and inside it, [`shadow_at`] itself.
+/// near the penumbra's edge and inside it, from the angles as [`shadow_at`] does.
 pub fn conical_sun_fraction(
     r: [f64; 3],
     sun: [f64; 3],
@@ -238,23 +233,20 @@ pub fn conical_sun_fraction(
     if dot(r, sun) >= 0.0 {
         return 1.0;
     }
-    let d = sun_distance_au * AU_M;
-    let to_sun = [d * sun[0] - r[0], d * sun[1] - r[1], d * sun[2] - r[2]];
-    let ds = norm(to_sun);
-    let (sin_a, sin_b) = (SUN_RADIUS_M / ds, (earth_radius_m / rn).min(1.0));
-    let to_earth = [-r[0] / rn, -r[1] / rn, -r[2] / rn];
-    let cos_c = dot(to_sun, to_earth) / ds;
+    let sines = cone_sines(r, rn, sun, sun_distance_au, earth_radius_m);
+    let (sin_a, sin_b, cos_c) = sines;
     let cos_ab = (1.0 - sin_a * sin_a).sqrt() * (1.0 - sin_b * sin_b).sqrt() - sin_a * sin_b;
     if cos_c < cos_ab - 1e-9 {
         return 1.0;
     }
-    shadow_at(r, sun, sun_distance_au, Shadow::Conical, earth_radius_m).2
+    let (a, b, c) = cone_angles(sines);
+    visible_fraction(a, b, c)
 }
 
-/// Behind the Earth: the apparent radii of the Sun and the Earth and the angle between
-/// their centres seen from `r` (`rn` its length), rad.
+/// Behind the Earth, seen from `r` (`rn` its length): the sines of the apparent radii
+/// of the Sun and the Earth and the cosine of the angle between their centres.
 #[inline]
-fn cone_angles(
+fn cone_sines(
     r: [f64; 3],
     rn: f64,
     sun: [f64; 3],
@@ -264,11 +256,29 @@ fn cone_angles(
     let d = sun_distance_au * AU_M;
     let to_sun = [d * sun[0] - r[0], d * sun[1] - r[1], d * sun[2] - r[2]];
     let ds = norm(to_sun);
-    let a = (SUN_RADIUS_M / ds).asin();
-    let b = (earth_radius_m / rn).min(1.0).asin();
     let to_earth = [-r[0] / rn, -r[1] / rn, -r[2] / rn];
-    let c = (dot(to_sun, to_earth) / ds).clamp(-1.0, 1.0).acos();
-    (a, b, c)
+    (
+        SUN_RADIUS_M / ds,
+        (earth_radius_m / rn).min(1.0),
+        dot(to_sun, to_earth) / ds,
+    )
+}
+
+/// The angles of [`cone_sines`]: the apparent radii a and b and the angle c, rad.
+#[inline]
+fn cone_angles((sin_a, sin_b, cos_c): (f64, f64, f64)) -> (f64, f64, f64) {
+    (sin_a.asin(), sin_b.asin(), cos_c.clamp(-1.0, 1.0).acos())
+}
+
+/// The visible fraction of the Sun's disc, apparent radius `a`, behind the Earth's,
+/// apparent radius `b`, their centres `c` apart.
+fn visible_fraction(a: f64, b: f64, c: f64) -> f64 {
+    let visible = if c >= a + b {
+        1.0
+    } else {
+        1.0 - disc_overlap(a, b, c) / (PI * a * a)
+    };
+    visible.clamp(0.0, 1.0)
 }
 
 /// The umbra and penumbra functions of [`shadow_at`], the same numbers, without the
@@ -282,7 +292,7 @@ fn shadow_functions_at(
 ) -> (f64, f64) {
     let rn = norm(r);
     if shadow == Shadow::Conical && dot(r, sun) < 0.0 {
-        let (a, b, c) = cone_angles(r, rn, sun, sun_distance_au, earth_radius_m);
+        let (a, b, c) = cone_angles(cone_sines(r, rn, sun, sun_distance_au, earth_radius_m));
         return (c - (b - a), c - (a + b));
     }
     let (umbra, penumbra, _) = shadow_at(r, sun, sun_distance_au, shadow, earth_radius_m);

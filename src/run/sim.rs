@@ -1458,7 +1458,7 @@ pub fn estimate_run<O: Observer>(
             self.times.push(step.t1_s());
             let now = std::time::Instant::now();
             self.first_last = Some((self.first_last.map_or(now, |f| f.0), now));
-            if self.steps >= 20_000 || self.start.elapsed().as_secs_f64() > 0.25 {
+            if self.steps >= 20_000 || now.duration_since(self.start).as_secs_f64() > 0.25 {
                 self.stop.store(true, Ordering::Relaxed);
             }
             Ok(())
