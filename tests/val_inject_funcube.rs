@@ -303,13 +303,15 @@ fn val_inject_funcube_heater_cycles() {
     let Effect::Heater { on_c, off_c, .. } = effect else {
         unreachable!()
     };
-    // at each switch, the node sits at the set point it crossed (located to 1 ms)
+    // at each switch, the thermostat reads the set point it crossed (located to 1 ms):
+    // the chassis' flight temperature plus the heater's own signature
     let chassis = g.craft.net.index("chassis");
+    let flight_minus_model = g.flight_minus_model("chassis");
     let times: Vec<f64> = sim.run.switches.iter().map(|s| s.0).collect();
     let at = g.simulate(&effect, &times);
     for ((t, _, on), y) in sim.run.switches.iter().zip(&at.run.states) {
         let want = if *on { on_c } else { off_c };
-        let got = y[chassis] - inject::ZERO_C_K;
+        let got = y[chassis] + flight_minus_model.at(*t) - inject::ZERO_C_K;
         assert!((got - want).abs() < 2e-3, "switch at {t}: {got} vs {want}");
     }
 }

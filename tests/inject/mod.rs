@@ -16,7 +16,12 @@
 //!   eclipse entries and exits and switch-on times, the sunlit flag held over a step;
 //!   not adaptive TR-BDF2 (tolerance 0.01 K, steps up to 120 s).
 //! - Thermostats: checked at the end of each step, the crossing located by bisection of
-//!   the step length (1 ms), integration restarted there.
+//!   the step length (1 ms), integration restarted there. A concealed thermostat reads
+//!   its node's *flight* temperature plus its heater's own signature (this model's
+//!   node with the heater minus without, the flight the mean of the node's sensors
+//!   between measured rows), so its set points are those of the real spacecraft's
+//!   node; this model's node is several kelvin from the flight, and a thermostat
+//!   reading it would switch where the recording is elsewhere.
 //! - Sensor lag: an extra state integrated by the same RK4 (orbitlash integrates the
 //!   lag exactly over each of its steps).
 //! - Eclipses: from the telemetry itself, not SGP4: the photo-current's transitions
@@ -50,8 +55,9 @@ use std::path::{Path, PathBuf};
 use environment::Environment;
 use scenario::Spacecraft;
 use serde_json::{Value, json};
+use std::sync::Arc;
 use telemetry::{Telemetry, unix_s};
-use thermal::{Additions, Lag, Run, Solver, Switched, Thermostat};
+use thermal::{Additions, Lag, Run, Solver, Switched, Table, Thermostat};
 
 /// Orbits integrated before 00:00 UTC to settle the orbit cycle (the slowest time
 /// constant of the network is about half an orbit).
@@ -246,6 +252,7 @@ impl Generator {
                     power_w,
                     on_k: on_c + ZERO_C_K,
                     off_k: off_c + ZERO_C_K,
+                    reads_offset: Some(Arc::new(self.flight_minus_model(node))),
                 });
             }
             Effect::SwitchedDissipation {
@@ -475,7 +482,7 @@ impl Generator {
                 let [on_c, off_c] = self.flight_at_switches(&sim, node);
                 map.insert(
                     "set_points_note".into(),
-                    json!("on_c/off_c are the generator model's node temperatures; the flight sensors on that node read flight_at_switch_on_c/off_c at the same instants"),
+                    json!("the thermostat reads the node's flight temperature (the mean of its sensors, interpolated between measured rows) plus the heater's own signature; the flight sensors on that node, without the heater, read flight_at_switch_on_c/off_c at the switches"),
                 );
                 map.insert("flight_at_switch_on_c".into(), json!(round4(on_c)));
                 map.insert("flight_at_switch_off_c".into(), json!(round4(off_c)));
@@ -500,6 +507,36 @@ impl Generator {
     /// The flight's reading of `node` (the mean of the sensors on it) at the measured
     /// row nearest each thermostat switch of `sim` (within 60 s), averaged over the
     /// switches on and over the switches off, °C.
+    /// The flight temperature of `node` (the mean of its sensors) minus this model's
+    /// own temperature of it without effects, at the measured rows where every sensor
+    /// of the node reads, K. A concealed thermostat reads its node through this, so it
+    /// switches where the real spacecraft's node, warmed by its heater, crosses the set
+    /// point: the flight temperature plus the heater's own signature.
+    pub fn flight_minus_model(&self, node: &str) -> Table {
+        let k = self.craft.net.index(node);
+        let columns: Vec<Vec<Option<f64>>> = self
+            .craft
+            .sensors
+            .iter()
+            .filter(|s| s.node == k)
+            .map(|s| self.telemetry.values(self.telemetry.column(&s.column)))
+            .collect();
+        assert!(!columns.is_empty(), "no sensor on node {node}");
+        let model = self.simulate_rows(&Effect::None);
+        let (mut times_s, mut values) = (Vec::new(), Vec::new());
+        for (j, t) in self.telemetry.times_s.iter().enumerate() {
+            let v: Option<Vec<f64>> = columns.iter().map(|c| c[j]).collect();
+            if let Some(v) = v {
+                let flight_k = v.iter().sum::<f64>() / v.len() as f64 + ZERO_C_K;
+                if times_s.last().is_none_or(|&last| *t > last) {
+                    times_s.push(*t);
+                    values.push(flight_k - model.run.states[j][k]);
+                }
+            }
+        }
+        Table { times_s, values }
+    }
+
     pub fn flight_at_switches(&self, sim: &Simulation, node: &str) -> [f64; 2] {
         let node = Some(self.craft.net.index(node));
         let columns: Vec<Vec<Option<f64>>> = self

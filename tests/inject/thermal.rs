@@ -7,6 +7,7 @@
 
 use super::environment::{Environment, SIGMA_W_PER_M2_K4};
 use super::scenario::Network;
+use std::sync::Arc;
 
 /// Largest RK4 step (s). The fastest node, a panel (45 J/K on ≈ 0.6 W/K), has a time
 /// constant of about 75 s: 2 s steps are well inside RK4's stability and accurate to
@@ -14,13 +15,45 @@ use super::scenario::Network;
 pub const STEP_S: f64 = 2.0;
 
 /// A heater on `node` with a thermostat reading that node: on below `on_k`, off above
-/// `off_k`.
+/// `off_k`. The thermostat reads the node's temperature plus `reads_offset` (K, a
+/// function of time; none: the node as modelled).
 #[derive(Clone, Debug)]
 pub struct Thermostat {
     pub node: usize,
     pub power_w: f64,
     pub on_k: f64,
     pub off_k: f64,
+    pub reads_offset: Option<Arc<Table>>,
+}
+
+impl Thermostat {
+    /// What the thermostat reads at time `t` in state `y`, K.
+    pub fn reads_k(&self, t: f64, y: &[f64]) -> f64 {
+        y[self.node] + self.reads_offset.as_ref().map_or(0.0, |o| o.at(t))
+    }
+}
+
+/// A function of time by linear interpolation between its points (times increasing),
+/// held constant before the first and after the last.
+#[derive(Clone, Debug)]
+pub struct Table {
+    pub times_s: Vec<f64>,
+    pub values: Vec<f64>,
+}
+
+impl Table {
+    pub fn at(&self, t: f64) -> f64 {
+        let (ts, vs) = (&self.times_s, &self.values);
+        let k = ts.partition_point(|&x| x <= t);
+        if k == 0 {
+            return vs[0];
+        }
+        if k == ts.len() {
+            return vs[k - 1];
+        }
+        let w = (t - ts[k - 1]) / (ts[k] - ts[k - 1]);
+        vs[k - 1] + w * (vs[k] - vs[k - 1])
+    }
 }
 
 /// A dissipation on `node` from time `t_on_s` on.
@@ -159,13 +192,13 @@ impl Solver<'_> {
             .collect()
     }
 
-    /// Whether any thermostat must switch in state `y`.
-    fn must_switch(&self, y: &[f64], on: &[bool]) -> bool {
+    /// Whether any thermostat must switch at time `t` in state `y`.
+    fn must_switch(&self, t: f64, y: &[f64], on: &[bool]) -> bool {
         self.add.thermostats.iter().zip(on).any(|(h, &is_on)| {
             if is_on {
-                y[h.node] > h.off_k
+                h.reads_k(t, y) > h.off_k
             } else {
-                y[h.node] < h.on_k
+                h.reads_k(t, y) < h.on_k
             }
         })
     }
@@ -195,7 +228,7 @@ impl Solver<'_> {
             .add
             .thermostats
             .iter()
-            .map(|h| y[h.node] < h.on_k)
+            .map(|h| h.reads_k(self.t_start_s, &y) < h.on_k)
             .collect();
         let mut run = Run {
             states: Vec::with_capacity(times.len()),
@@ -227,7 +260,7 @@ impl Solver<'_> {
                 };
                 let mut y1 = self.rk4(t, h, &y, &ctx);
                 let mut t1 = t_next;
-                let switching = self.must_switch(&y1, &on);
+                let switching = self.must_switch(t_next, &y1, &on);
                 if switching {
                     (t1, y1) = self.locate_switch(t, h, &y, &ctx);
                 }
@@ -253,7 +286,7 @@ impl Solver<'_> {
         while hi - lo > 1e-3 {
             let mid = 0.5 * (lo + hi);
             let ym = self.rk4(t, mid, y, ctx);
-            if self.must_switch(&ym, ctx.heater_on) {
+            if self.must_switch(t + mid, &ym, ctx.heater_on) {
                 (hi, y_hi) = (mid, ym);
             } else {
                 lo = mid;
@@ -265,7 +298,8 @@ impl Solver<'_> {
     /// Switches every thermostat whose set point `y` has crossed, logging it.
     fn switch(&self, t: f64, y: &[f64], on: &mut [bool], log: &mut Vec<(f64, usize, bool)>) {
         for (k, (h, is_on)) in self.add.thermostats.iter().zip(on.iter_mut()).enumerate() {
-            if (*is_on && y[h.node] > h.off_k) || (!*is_on && y[h.node] < h.on_k) {
+            let reads = h.reads_k(t, y);
+            if (*is_on && reads > h.off_k) || (!*is_on && reads < h.on_k) {
                 *is_on = !*is_on;
                 log.push((t, k, *is_on));
             }
