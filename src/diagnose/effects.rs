@@ -527,6 +527,12 @@ pub struct Hints {
 /// of absorbed sunlight) the global sunlight scale (sd 25 %) and infrared scale (sd
 /// 15 %) and the thermal masses of its two largest nodes (sd 30 %). Returns the set and
 /// its nominal parameters.
+///
+/// A number the user declared is fitted on its own and nothing else in the set writes
+/// it: the global scales leave it out (they scale every other face), and a mass scale
+/// of a node whose capacitance is declared is not in the set. Without this the number
+/// written last won, and a declared face's α or ε stayed at nominal whatever the data
+/// said (its interval then came from its prior alone).
 pub fn calibration_set(model: &Model, cands: &mut Vec<Candidate>) -> (Vec<Candidate>, Vec<f64>) {
     let spec = model.spec();
     let mut largest: Vec<(f64, &str)> = spec
@@ -560,7 +566,27 @@ pub fn calibration_set(model: &Model, cands: &mut Vec<Candidate>) -> (Vec<Candid
         }
     }
     *cands = rest;
-    (set, nominal)
+    let declared: Vec<Number> = set
+        .iter()
+        .filter(|c| c.effect == Effect::UncertainParameter)
+        .flat_map(|c| c.setters.iter().map(|s| s.number.clone()))
+        .collect();
+    let mut kept = Vec::new();
+    let mut kept_nominal = Vec::new();
+    for (mut c, n) in set.into_iter().zip(nominal) {
+        if c.effect != Effect::UncertainParameter {
+            let before = c.setters.len();
+            c.setters.retain(|s| !declared.contains(&s.number));
+            // a scale left with nothing to write, or a per-element one whose number
+            // is declared, is the declared number's business
+            if c.setters.is_empty() || (before == 1 && c.setters.len() < before) {
+                continue;
+            }
+        }
+        kept.push(c);
+        kept_nominal.push(n);
+    }
+    (kept, kept_nominal)
 }
 
 /// A switched dissipation's window lasts until this time, s (beyond any recording).
@@ -1357,6 +1383,62 @@ fn pair_name(spec: &ScenarioSpec, i: usize) -> String {
             format!("mesh{i}")
         }
     })
+}
+
+#[cfg(test)]
+mod calibration {
+    use super::*;
+
+    /// FUNcube-1 with a face's absorptivity and the chassis' capacitance declared
+    /// uncertain: the calibration fits each declared number, and nothing else in the
+    /// set writes it (the sunlight scale keeps the other five faces, the chassis has no
+    /// mass scale beside its declared capacitance, the stack keeps its own).
+    #[test]
+    fn core_a_declared_number_is_written_by_its_own_calibration_only() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(root.join("scenarios/funcube-1.toml")).unwrap()
+            + "\n[[uncertain]]\npath = \"face.px.absorptivity\"\nmin = 0.3\nmax = 0.9\n\
+               \n[[uncertain]]\npath = \"node.chassis.capacitance_j_per_k\"\nmin = 100.0\nmax = 600.0\n";
+        let spec = crate::io::scenario_toml::parse_spec(&text, "funcube-1.toml").unwrap();
+        let model = Model::new(spec).unwrap();
+        let channels: Vec<(String, bool)> = model
+            .spec()
+            .sensor
+            .iter()
+            .map(|s| (s.name.clone().unwrap(), true))
+            .collect();
+        let mut cands = candidates(&model, &channels, &Hints::default());
+        let (set, nominal) = calibration_set(&model, &mut cands);
+        assert_eq!(set.len(), nominal.len());
+        let number = |path: &str| Number::of_param(&model, &model.param(path).unwrap());
+        let alpha_px = number("face.px.absorptivity");
+        let chassis = number("node.chassis.capacitance_j_per_k");
+        let writers = |n: &Number| -> Vec<Effect> {
+            set.iter()
+                .filter(|c| c.setters.iter().any(|s| s.number == *n))
+                .map(|c| c.effect)
+                .collect()
+        };
+        assert_eq!(writers(&alpha_px), vec![Effect::UncertainParameter]);
+        assert_eq!(writers(&chassis), vec![Effect::UncertainParameter]);
+        let sunlight = set
+            .iter()
+            .find(|c| c.effect == Effect::SunlightScale)
+            .unwrap();
+        assert_eq!(
+            sunlight.setters.len(),
+            5,
+            "the other five faces' absorptivity"
+        );
+        assert_eq!(
+            writers(&number("face.mx.absorptivity")),
+            vec![Effect::SunlightScale]
+        );
+        assert_eq!(
+            writers(&number("node.stack.capacitance_j_per_k")),
+            vec![Effect::CapacitanceScale]
+        );
+    }
 }
 
 #[cfg(test)]
