@@ -314,6 +314,50 @@ fn val_inject_funcube_heater_cycles() {
         let got = y[chassis] + flight_minus_model.at(*t) - inject::ZERO_C_K;
         assert!((got - want).abs() < 2e-3, "switch at {t}: {got} vs {want}");
     }
+    // the same from the written recording, without the table: the chassis sensors'
+    // mean (flight plus signature), interpolated between the measured rows around each
+    // switch, is at the set point (to what 60 s rows resolve of a heater's kink)
+    let sensors: Vec<usize> = (0..g.craft.sensors.len())
+        .filter(|&k| g.craft.sensors[k].node == chassis)
+        .collect();
+    let reads: Vec<Option<f64>> = (0..g.telemetry.rows.len())
+        .map(|j| {
+            let v: Option<Vec<f64>> = sensors
+                .iter()
+                .map(|&k| {
+                    let col = g.telemetry.column(&g.craft.sensors[k].column);
+                    g.telemetry.values(col)[j].map(|x| x + sig[k][j])
+                })
+                .collect();
+            v.map(|v| v.iter().sum::<f64>() / v.len() as f64)
+        })
+        .collect();
+    let rows: Vec<(f64, f64)> = g
+        .telemetry
+        .times_s
+        .iter()
+        .zip(&reads)
+        .filter_map(|(t, r)| r.map(|r| (*t, r)))
+        .collect();
+    let mut checked = 0;
+    for (t, _, on) in sim.run.switches.iter().filter(|s| s.0 >= rows[0].0) {
+        let k = rows.partition_point(|r| r.0 <= *t);
+        if k == 0 || k == rows.len() || rows[k].0 - rows[k - 1].0 > 90.0 {
+            continue;
+        }
+        let ((t0, r0), (t1, r1)) = (rows[k - 1], rows[k]);
+        let read = r0 + (t - t0) / (t1 - t0) * (r1 - r0);
+        let want = if *on { on_c } else { off_c };
+        assert!(
+            (read - want).abs() < 0.25,
+            "switch at {t}: the recording reads {read:.3} °C, set point {want}"
+        );
+        checked += 1;
+    }
+    assert!(
+        checked >= 10,
+        "only {checked} switches between measured rows"
+    );
 }
 
 /// The switched dissipation: exactly zero before the switch, positive on every channel

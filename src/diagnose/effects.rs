@@ -528,11 +528,12 @@ pub struct Hints {
 /// 15 %) and the thermal masses of its two largest nodes (sd 30 %). Returns the set and
 /// its nominal parameters.
 ///
-/// A number the user declared is fitted on its own and nothing else in the set writes
-/// it: the global scales leave it out (they scale every other face), and a mass scale
-/// of a node whose capacitance is declared is not in the set. Without this the number
-/// written last won, and a declared face's α or ε stayed at nominal whatever the data
-/// said (its interval then came from its prior alone).
+/// A number the user declared is fitted on its own and nothing else writes it: the
+/// global scales leave it out (they scale every other face, [`Generator::global_scale`]),
+/// and a candidate of that one number (a mass scale beside a declared capacitance, a
+/// face's α scale beside its declared α) is neither in the set nor searched later: it
+/// would overwrite the declared number, which then stayed at nominal whatever the data
+/// said (its interval came from its prior alone).
 pub fn calibration_set(model: &Model, cands: &mut Vec<Candidate>) -> (Vec<Candidate>, Vec<f64>) {
     let spec = model.spec();
     let mut largest: Vec<(f64, &str)> = spec
@@ -565,28 +566,26 @@ pub fn calibration_set(model: &Model, cands: &mut Vec<Candidate>) -> (Vec<Candid
             _ => rest.push(c),
         }
     }
-    *cands = rest;
     let declared: Vec<Number> = set
         .iter()
         .filter(|c| c.effect == Effect::UncertainParameter)
         .flat_map(|c| c.setters.iter().map(|s| s.number.clone()))
         .collect();
-    let mut kept = Vec::new();
-    let mut kept_nominal = Vec::new();
-    for (mut c, n) in set.into_iter().zip(nominal) {
-        if c.effect != Effect::UncertainParameter {
-            let before = c.setters.len();
-            c.setters.retain(|s| !declared.contains(&s.number));
-            // a scale left with nothing to write, or a per-element one whose number
-            // is declared, is the declared number's business
-            if c.setters.is_empty() || (before == 1 && c.setters.len() < before) {
-                continue;
-            }
-        }
-        kept.push(c);
-        kept_nominal.push(n);
-    }
-    (kept, kept_nominal)
+    // a candidate of one number the calibration fits already (a mass scale beside a
+    // declared capacitance, a face's α scale beside its declared α) would overwrite it
+    let owns_declared = |c: &Candidate| {
+        c.effect != Effect::UncertainParameter
+            && c.setters.len() == 1
+            && declared.contains(&c.setters[0].number)
+    };
+    rest.retain(|c| !owns_declared(c));
+    *cands = rest;
+    let (set, nominal): (Vec<Candidate>, Vec<f64>) = set
+        .into_iter()
+        .zip(nominal)
+        .filter(|(c, _)| !owns_declared(c))
+        .unzip();
+    (set, nominal)
 }
 
 /// A switched dissipation's window lasts until this time, s (beyond any recording).
@@ -1141,15 +1140,13 @@ impl<'a> Generator<'a> {
         pick: &dyn Fn(&Param) -> Option<bool>,
     ) -> Option<Candidate> {
         let keys = crate::spec::keys::element_keys(self.spec);
+        let declared = self.declared_numbers();
         let mut upper = 20.0f64;
         let mut setters = Vec::new();
         for p in self.model.params() {
             let Some(optical) = pick(&p) else { continue };
             if p.value.is_nan() || p.value <= 0.0 {
                 continue;
-            }
-            if optical {
-                upper = upper.min(1.0 / p.value);
             }
             let row = p.id.row();
             let element = row
@@ -1161,6 +1158,13 @@ impl<'a> Generator<'a> {
                 element,
                 sub: p.id.sub,
             };
+            // a number the user declared is fitted on its own
+            if declared.contains(&number) {
+                continue;
+            }
+            if optical {
+                upper = upper.min(1.0 / p.value);
+            }
             setters.push(Setter::scaled(number, 0, p.value));
         }
         // one number is a per-element scale the vocabulary has already
@@ -1325,7 +1329,10 @@ impl Generator<'_> {
     /// entries (uniform and triangular: their range; normal: mean ± 3 sd; log-normal:
     /// median × / ÷ e^(3σ)). A path the model does not have is skipped (the scenario's
     /// compile has refused it already).
-    fn uncertain(&self) -> Vec<Candidate> {
+    /// The numbers the user declared uncertain: each `[[uncertain]]` path with its range,
+    /// then each `[[dispersion]]` path not declared already (uniform and triangular:
+    /// its range; normal: mean ± 3 sd; log-normal: median ×/÷ e^(3σ)).
+    fn declared(&self) -> Vec<(String, f64, f64)> {
         let mut declared: Vec<(String, f64, f64)> = self
             .spec
             .uncertain
@@ -1347,11 +1354,35 @@ impl Generator<'_> {
                 declared.push((d.path.clone(), lo, hi));
             }
         }
-        let mut out = Vec::new();
-        for (path, lo, hi) in declared {
+        declared
+    }
+
+    /// The model numbers [`Generator::declared`] names (each once).
+    fn declared_numbers(&self) -> Vec<Number> {
+        let mut out: Vec<Number> = Vec::new();
+        for (path, ..) in self.declared() {
+            if let Ok(id) = self.model.param(&path) {
+                let n = Number::of_param(self.model, &id);
+                if !out.contains(&n) {
+                    out.push(n);
+                }
+            }
+        }
+        out
+    }
+
+    /// One calibration of each number the user declared uncertain, within its range
+    /// (two paths to one number give one: the first).
+    fn uncertain(&self) -> Vec<Candidate> {
+        let mut out: Vec<Candidate> = Vec::new();
+        for (path, lo, hi) in self.declared() {
             let Ok(id) = self.model.param(&path) else {
                 continue;
             };
+            let number = Number::of_param(self.model, &id);
+            if out.iter().any(|c| c.setters[0].number == number) {
+                continue;
+            }
             let Some(now) = self.model.value(&id) else {
                 continue;
             };
@@ -1362,7 +1393,7 @@ impl Generator<'_> {
             let null = now.clamp(lo, hi);
             out.push(Candidate {
                 params: vec![ParamDef::new("value", lo, hi, 1e-3 * span)],
-                setters: vec![Setter::scaled(Number::of_param(self.model, &id), 0, 1.0)],
+                setters: vec![Setter::scaled(number, 0, 1.0)],
                 starts: [0.1, 0.35, 0.65, 0.9]
                     .iter()
                     .map(|f| vec![lo + f * span])
@@ -1410,6 +1441,10 @@ mod calibration {
         let mut cands = candidates(&model, &channels, &Hints::default());
         let (set, nominal) = calibration_set(&model, &mut cands);
         assert_eq!(set.len(), nominal.len());
+        for (c, n) in set.iter().zip(&nominal) {
+            assert_eq!(c.null.as_ref().unwrap()[0], *n, "{}", c.label());
+            assert_eq!(c.params[0].prior.unwrap().0, *n, "{}", c.label());
+        }
         let number = |path: &str| Number::of_param(&model, &model.param(path).unwrap());
         let alpha_px = number("face.px.absorptivity");
         let chassis = number("node.chassis.capacitance_j_per_k");
@@ -1438,6 +1473,30 @@ mod calibration {
             writers(&number("node.stack.capacitance_j_per_k")),
             vec![Effect::CapacitanceScale]
         );
+        // the declared face's other number stays with the global scale
+        assert_eq!(
+            writers(&number("face.px.emissivity")),
+            vec![Effect::InfraredScale]
+        );
+        // and nothing searched later writes a declared number
+        for c in &cands {
+            for s in &c.setters {
+                assert!(
+                    s.number != alpha_px && s.number != chassis,
+                    "{} writes a declared number",
+                    c.label()
+                );
+            }
+        }
+        // a declared face of α 1 does not take the global scale from the others
+        let mut spec = crate::io::scenario_toml::parse_spec(&text, "funcube-1.toml").unwrap();
+        spec.face[0].absorptivity = 1.0;
+        let model = Model::new(spec).unwrap();
+        let mut cands = candidates(&model, &channels, &Hints::default());
+        let (set, _) = calibration_set(&model, &mut cands);
+        let sunlight = set.iter().find(|c| c.effect == Effect::SunlightScale);
+        assert_eq!(sunlight.map(|c| c.setters.len()), Some(5));
+        assert!(sunlight.unwrap().params[0].upper > 1.0);
     }
 }
 

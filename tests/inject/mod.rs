@@ -504,9 +504,6 @@ impl Generator {
 }
 
 impl Generator {
-    /// The flight's reading of `node` (the mean of the sensors on it) at the measured
-    /// row nearest each thermostat switch of `sim` (within 60 s), averaged over the
-    /// switches on and over the switches off, °C.
     /// The flight temperature of `node` (the mean of its sensors) minus this model's
     /// own temperature of it without effects, at the measured rows where every sensor
     /// of the node reads, K. A concealed thermostat reads its node through this, so it
@@ -534,9 +531,16 @@ impl Generator {
                 }
             }
         }
-        Table { times_s, values }
+        Table {
+            times_s,
+            values,
+            period_s: self.env.eclipses.period_s,
+        }
     }
 
+    /// The flight's reading of `node` (the mean of the sensors on it) at the measured
+    /// row nearest each thermostat switch of `sim` (within 60 s), averaged over the
+    /// switches on and over the switches off, °C.
     pub fn flight_at_switches(&self, sim: &Simulation, node: &str) -> [f64; 2] {
         let node = Some(self.craft.net.index(node));
         let columns: Vec<Vec<Option<f64>>> = self

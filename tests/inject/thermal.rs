@@ -33,17 +33,24 @@ impl Thermostat {
     }
 }
 
-/// A function of time by linear interpolation between its points (times increasing),
-/// held constant before the first and after the last.
+/// A function of time by linear interpolation between its points (times increasing):
+/// before the first, the first `period_s` repeated (the spin-up orbits before a
+/// recording see its first orbit again); after the last, held.
 #[derive(Clone, Debug)]
 pub struct Table {
     pub times_s: Vec<f64>,
     pub values: Vec<f64>,
+    pub period_s: f64,
 }
 
 impl Table {
     pub fn at(&self, t: f64) -> f64 {
         let (ts, vs) = (&self.times_s, &self.values);
+        assert!(!ts.is_empty(), "a table without points");
+        if t < ts[0] && self.period_s > 0.0 {
+            let back = ((ts[0] - t) / self.period_s).ceil();
+            return self.at(t + back * self.period_s);
+        }
         let k = ts.partition_point(|&x| x <= t);
         if k == 0 {
             return vs[0];
