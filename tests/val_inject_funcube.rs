@@ -317,17 +317,12 @@ fn val_inject_funcube_heater_cycles() {
     // the same from the written recording, without the table: the chassis sensors'
     // mean (flight plus signature), interpolated between the measured rows around each
     // switch, is at the set point (to what 60 s rows resolve of a heater's kink)
-    let sensors: Vec<usize> = (0..g.craft.sensors.len())
-        .filter(|&k| g.craft.sensors[k].node == chassis)
-        .collect();
+    let sensors = g.node_sensors("chassis");
     let reads: Vec<Option<f64>> = (0..g.telemetry.rows.len())
         .map(|j| {
             let v: Option<Vec<f64>> = sensors
                 .iter()
-                .map(|&k| {
-                    let col = g.telemetry.column(&g.craft.sensors[k].column);
-                    g.telemetry.values(col)[j].map(|x| x + sig[k][j])
-                })
+                .map(|(k, flight)| flight[j].map(|x| x + sig[*k][j]))
                 .collect();
             v.map(|v| v.iter().sum::<f64>() / v.len() as f64)
         })

@@ -1324,11 +1324,6 @@ fn calibration_of(p: &Param, keys: &ElementKeys, first: bool) -> Option<Candidat
 }
 
 impl Generator<'_> {
-    /// The numbers the user declared uncertain, each a calibration candidate within
-    /// its bounds: `[[uncertain]]` (a key path, `min`, `max`) and the `[[dispersion]]`
-    /// entries (uniform and triangular: their range; normal: mean ± 3 sd; log-normal:
-    /// median × / ÷ e^(3σ)). A path the model does not have is skipped (the scenario's
-    /// compile has refused it already).
     /// The numbers the user declared uncertain: each `[[uncertain]]` path with its range,
     /// then each `[[dispersion]]` path not declared already (uniform and triangular:
     /// its range; normal: mean ± 3 sd; log-normal: median ×/÷ e^(3σ)).
@@ -1357,22 +1352,18 @@ impl Generator<'_> {
         declared
     }
 
-    /// The model numbers [`Generator::declared`] names (each once).
+    /// The model numbers [`Generator::uncertain`] calibrates, each once.
     fn declared_numbers(&self) -> Vec<Number> {
-        let mut out: Vec<Number> = Vec::new();
-        for (path, ..) in self.declared() {
-            if let Ok(id) = self.model.param(&path) {
-                let n = Number::of_param(self.model, &id);
-                if !out.contains(&n) {
-                    out.push(n);
-                }
-            }
-        }
-        out
+        self.uncertain()
+            .into_iter()
+            .map(|c| c.setters[0].number.clone())
+            .collect()
     }
 
-    /// One calibration of each number the user declared uncertain, within its range
-    /// (two paths to one number give one: the first).
+    /// One calibration candidate of each number the user declared uncertain
+    /// ([`Generator::declared`]), within its range; two paths to one number give one
+    /// (the first). A path the model does not have is skipped (the scenario's compile
+    /// has refused it already).
     fn uncertain(&self) -> Vec<Candidate> {
         let mut out: Vec<Candidate> = Vec::new();
         for (path, lo, hi) in self.declared() {

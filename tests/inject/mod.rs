@@ -504,6 +504,19 @@ impl Generator {
 }
 
 impl Generator {
+    /// The sensors on `node`: each one's index and its flight values (°C, `None` on
+    /// fill rows).
+    pub fn node_sensors(&self, node: &str) -> Vec<(usize, Vec<Option<f64>>)> {
+        let k = self.craft.net.index(node);
+        (0..self.craft.sensors.len())
+            .filter(|&s| self.craft.sensors[s].node == k)
+            .map(|s| {
+                let column = self.telemetry.column(&self.craft.sensors[s].column);
+                (s, self.telemetry.values(column))
+            })
+            .collect()
+    }
+
     /// The flight temperature of `node` (the mean of its sensors) minus this model's
     /// own temperature of it without effects, at the measured rows where every sensor
     /// of the node reads, K. A concealed thermostat reads its node through this, so it
@@ -511,13 +524,8 @@ impl Generator {
     /// point: the flight temperature plus the heater's own signature.
     pub fn flight_minus_model(&self, node: &str) -> Table {
         let k = self.craft.net.index(node);
-        let columns: Vec<Vec<Option<f64>>> = self
-            .craft
-            .sensors
-            .iter()
-            .filter(|s| s.node == k)
-            .map(|s| self.telemetry.values(self.telemetry.column(&s.column)))
-            .collect();
+        let columns: Vec<Vec<Option<f64>>> =
+            self.node_sensors(node).into_iter().map(|c| c.1).collect();
         assert!(!columns.is_empty(), "no sensor on node {node}");
         let model = self.simulate_rows(&Effect::None);
         let (mut times_s, mut values) = (Vec::new(), Vec::new());
@@ -542,14 +550,8 @@ impl Generator {
     /// row nearest each thermostat switch of `sim` (within 60 s), averaged over the
     /// switches on and over the switches off, °C.
     pub fn flight_at_switches(&self, sim: &Simulation, node: &str) -> [f64; 2] {
-        let node = Some(self.craft.net.index(node));
-        let columns: Vec<Vec<Option<f64>>> = self
-            .craft
-            .sensors
-            .iter()
-            .filter(|s| Some(s.node) == node)
-            .map(|s| self.telemetry.values(self.telemetry.column(&s.column)))
-            .collect();
+        let columns: Vec<Vec<Option<f64>>> =
+            self.node_sensors(node).into_iter().map(|c| c.1).collect();
         let mut sums = [(0.0, 0.0); 2];
         for &(t, _, on) in sim.run.switches.iter().filter(|s| s.0 >= 0.0) {
             let nearest = (0..self.telemetry.rows.len())
