@@ -52,25 +52,27 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
     cov / (va * vb).sqrt()
 }
 
-/// Per-channel RMS of (model − flight) on the measured rows, as measured when the
-/// suite was written (°C; `docs/validation.md` reports 5.56 … 10.27 for orbitlash's
-/// own baseline). Each bound is that figure plus 0.5 K.
+/// Per-channel RMS of (model − flight) on the measured rows, as measured with the
+/// frame at the ISIS structure's 164 J/K (°C; `docs/validation.md` reports
+/// 4.45 … 9.85 for orbitlash's own baseline). Each bound is that figure plus 0.5 K.
+/// (With the earlier 432 J/K frame: 5.7 … 10.6 K, correlations 0.957 … 0.986.)
 const FLIGHT_RMS_BOUND_K: [(&str, f64); 8] = [
-    ("chassis_black_c", 7.2),
-    ("chassis_silver_c", 7.9),
-    ("panel_black_c", 7.8),
-    ("panel_silver_c", 11.1),
-    ("panel_px_c", 6.2),
-    ("panel_mx_c", 6.7),
-    ("panel_py_c", 6.3),
-    ("panel_my_c", 6.4),
+    ("chassis_black_c", 6.5),
+    ("chassis_silver_c", 7.3),
+    ("panel_black_c", 6.9),
+    ("panel_silver_c", 10.6),
+    ("panel_px_c", 5.0),
+    ("panel_mx_c", 5.9),
+    ("panel_py_c", 5.7),
+    ("panel_my_c", 5.4),
 ];
 
 /// The model without effects against the flight day, channel by channel: RMS within
-/// its bound, correlation ≥ 0.95 (the orbit's shape and phase), the eclipse-phase
-/// mean within 6 K of the data, the sunlit mean 4 … 12 K too cold (the shortfall the
-/// scenario's public numbers leave, the same for orbitlash's baseline), and the
-/// mean over the whole orbits within 10 K.
+/// its bound, correlation ≥ 0.97 (the orbit's shape and phase), the sunlit mean
+/// 4 … 12 K too cold (the shortfall the scenario's public numbers leave, the same for
+/// orbitlash's baseline), the eclipse mean within 3 K of the sunlit one (the model
+/// lacks heat, by about as much in both phases, not timing), and the means over the
+/// eclipses and the whole orbits within 10 K.
 #[test]
 fn val_inject_funcube_model_reproduces_the_flight_day() {
     let Some(g) = generator() else { return };
@@ -111,8 +113,13 @@ fn val_inject_funcube_model_reproduces_the_flight_day() {
             .unwrap()
             .1;
         assert!(e_rms <= bound, "{}: RMS {e_rms} > {bound}", sensor.name);
-        assert!(corr >= 0.95, "{}: correlation {corr}", sensor.name);
-        assert!(e_ecl.abs() <= 6.0, "{}: eclipse bias {e_ecl}", sensor.name);
+        assert!(corr >= 0.97, "{}: correlation {corr}", sensor.name);
+        assert!(e_ecl.abs() <= 10.0, "{}: eclipse bias {e_ecl}", sensor.name);
+        assert!(
+            (e_ecl - e_sun).abs() <= 3.0,
+            "{}: eclipse {e_ecl} against sunlit {e_sun}",
+            sensor.name
+        );
         assert!(
             (-12.0..=-4.0).contains(&e_sun),
             "{}: sunlit {e_sun}",
@@ -624,8 +631,10 @@ fn val_inject_funcube_diagnose_score() {
 /// `--out D` writes a calibrated `D/corrected.toml`; a later recording diagnosed
 /// against it with `--no-calibration` names what changed, and only that. Here the
 /// later recordings are the day with a 1.5 K offset on the black chassis channel
-/// (found, within ±0.5 K, and nothing else new) and with a drift outside the
-/// vocabulary (nothing named).
+/// (found, within ±0.5 K, and nothing else new), with face +Y's absorptivity × 0.8
+/// (found within ±20 %, and nothing else new: a thermostat on the frame whose band
+/// ends on its floor in the final joint fit once took 4.1 W and pulled the scale to
+/// × 0.45) and with a drift outside the vocabulary (nothing named).
 #[test]
 fn val_inject_funcube_workflow_names_what_changed() {
     let Some(g) = generator() else { return };
@@ -705,6 +714,25 @@ fn val_inject_funcube_workflow_names_what_changed() {
     assert!(
         news.iter().all(|f| f.2 < 0.03),
         "besides the offset, nothing new above 3 % of the residual: {news:?}"
+    );
+    let alpha = run("face_absorptivity");
+    let found = named(&alpha);
+    let hit = alpha["findings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|f| f["effect"] == "absorptivity_scale" && f["face"] == "py")
+        .unwrap_or_else(|| panic!("the absorptivity of face py is named: {found:?}"));
+    let scale = hit["parameters"]["scale"].as_f64().unwrap();
+    assert!((scale / 0.8 - 1.0).abs() <= 0.2, "scale {scale}, truth 0.8");
+    let news: Vec<_> = found
+        .iter()
+        .filter(|f| f.0 != "absorptivity_scale")
+        .filter(|f| !again.iter().any(|a| a.0 == f.0 && a.1 == f.1))
+        .collect();
+    assert!(
+        news.iter().all(|f| f.2 < 0.03),
+        "besides the absorptivity, nothing new above 3 % of the residual: {news:?}"
     );
     let control = named(&run("control"));
     let news: Vec<_> = control

@@ -163,11 +163,25 @@ pub struct ParamDef {
     /// A prior toward a value, (centre, standard deviation): a calibration number stays
     /// near nominal unless the data move it.
     pub prior: Option<(f64, f64)>,
-    /// The lower bound is a value the effect really takes, not the end of its range:
-    /// a fit that ends on it is not a stand-in (a thermostat's hysteresis of 0.1 K is
-    /// a near-proportional one; a bore fit of no interference still closes by
-    /// differential expansion; a switched load of no power is the effect absent).
-    pub floor_is_a_value: bool,
+    /// What a fit that ends on the lower bound means ([`Floor`]).
+    pub floor: Floor,
+}
+
+/// What the lower bound of a parameter's range is to a fit that ends on it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Floor {
+    /// The end of the range: a fit pushed onto it wants to go further, a stand-in.
+    Bound,
+    /// A value the effect really takes: a bore fit of no interference still closes by
+    /// differential expansion; a switched load of no power is the effect absent.
+    Value,
+    /// A value the effect takes as an entry, a stand-in in the final joint fit: a
+    /// thermostat's band of 0.1 K is a near-proportional heater, which a lone
+    /// controller may be, but when every other finding is fitted with it and it still
+    /// wants no band it is heat that follows the node's temperature, taking what the
+    /// model's own error leaves (on FUNcube-1, 4.1 W that pulled an absorptivity found
+    /// at × 0.80 to × 0.45; `docs/validation.md`).
+    ValueAsEntry,
 }
 
 /// A number of the model written as a linear function of the parameters:
@@ -246,14 +260,23 @@ impl ParamDef {
             upper,
             step,
             prior: None,
-            floor_is_a_value: false,
+            floor: Floor::Bound,
         }
     }
 
-    /// The same, its lower bound a value the effect takes ([`ParamDef::floor_is_a_value`]).
+    /// The same, its lower bound a value the effect takes ([`Floor::Value`]).
     pub fn floored(self) -> ParamDef {
         ParamDef {
-            floor_is_a_value: true,
+            floor: Floor::Value,
+            ..self
+        }
+    }
+
+    /// The same, its lower bound a value the effect takes as an entry only
+    /// ([`Floor::ValueAsEntry`]).
+    pub fn floored_as_entry(self) -> ParamDef {
+        ParamDef {
+            floor: Floor::ValueAsEntry,
             ..self
         }
     }
@@ -817,7 +840,7 @@ impl<'a> Generator<'a> {
             params: vec![
                 ParamDef::new(registry::HEATER_POWER_W.name, 0.01, 1000.0, 0.02),
                 ParamDef::new("on_c", on_c - 30.0, on_c + 30.0, 0.05),
-                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored(),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored_as_entry(),
             ],
             setters: vec![
                 Setter::scaled(pp, 0, 1.0),

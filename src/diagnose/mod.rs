@@ -1108,15 +1108,33 @@ fn unstable(
     None
 }
 
+/// What forward selection kept: the chain of hypotheses (the last the best), whether
+/// it explains the residual, and the members dropped from the final joint fit with
+/// the reason (candidate index, reason).
+struct Selection {
+    chain: Vec<Hypothesis>,
+    explained: bool,
+    dropped: Vec<(usize, String)>,
+}
+
 /// The candidates' final statuses once the best hypothesis is known (None: nothing
 /// explains the residual), most relevant first: accepted, rejected, not fitted, each
-/// by ranking score.
+/// by ranking score. A member `dropped` from the final joint fit is rejected with the
+/// reason it was dropped.
 fn settle_candidates(
     reports: &mut [CandidateReport],
     cands: &[Candidate],
     best: Option<&Hypothesis>,
+    dropped: &[(usize, String)],
 ) {
     for (ci, rep) in reports.iter_mut().enumerate() {
+        if let Some((_, why)) = dropped.iter().find(|(m, _)| *m == ci)
+            && !best.is_some_and(|h| h.members.contains(&ci))
+        {
+            rep.status = CandidateStatus::Rejected;
+            rep.reason = format!("dropped from the final joint fit: it {why}");
+            continue;
+        }
         match best {
             Some(h) if h.members.contains(&ci) => {
                 rep.status = CandidateStatus::Accepted;
@@ -1284,7 +1302,11 @@ pub fn diagnose(
         .map(|h| (h.members[0], search::rivals(&problem, &cands, h, &tried)))
         .into_iter()
         .collect();
-    let (chain, explained) = cx.select(&singles, &ranked, &mut report, &mut rivals, progress);
+    let Selection {
+        chain,
+        explained,
+        dropped,
+    } = cx.select(&singles, &ranked, &mut report, &mut rivals, progress);
     let best = chain.last().cloned();
 
     // 7. The verdict, the findings, the calibration and the corrected model.
@@ -1304,7 +1326,7 @@ pub fn diagnose(
     if let Some(h) = best.as_ref().or(calibrated.as_ref()) {
         report.calibration = calibrated_numbers(&problem, h);
     }
-    settle_candidates(&mut reports, &cands, best.as_ref());
+    settle_candidates(&mut reports, &cands, best.as_ref(), &dropped);
     report.candidates = reports;
     series.fill_model_grid(&obs, model, report.corrected.as_ref())?;
     report.series = series;
@@ -1460,11 +1482,16 @@ impl Search<'_> {
         report: &mut Diagnosis,
         rivals: &mut Rivals,
         progress: Progress<'_>,
-    ) -> (Vec<Hypothesis>, bool) {
+    ) -> Selection {
         let (opts, cands) = (self.opts, self.cands);
         let mut chain: Vec<Hypothesis> = Vec::new();
+        let mut dropped = Vec::new();
         let Some(first) = singles.first() else {
-            return (chain, false);
+            return Selection {
+                chain,
+                explained: false,
+                dropped,
+            };
         };
         let mut explained = explains(self.obs, self.noise, opts, first);
         chain.push(first.clone());
@@ -1541,7 +1568,7 @@ impl Search<'_> {
             chain.clear();
         }
         if let Some(last) = chain.last().cloned() {
-            let kept = self.drop_small(last, singles, &chain, report);
+            let kept = self.drop_small(last, singles, &chain, report, &mut dropped);
             if kept
                 .as_ref()
                 .is_none_or(|k| k.members != chain.last().unwrap().members)
@@ -1552,7 +1579,11 @@ impl Search<'_> {
                     .is_some_and(|h| explains(self.obs, self.noise, opts, h));
             }
         }
-        (chain, explained)
+        Selection {
+            chain,
+            explained,
+            dropped,
+        }
     }
 
     /// For each member of `h`, the fit of `h` without it: one found among `fitted` (the
@@ -1598,53 +1629,24 @@ impl Search<'_> {
     }
 
     /// `h` without the members that remove less than [`MIN_FINDING_SHARE`] of what `h`
-    /// without them leaves of the held-out χ² (in the final joint fit),
-    /// the smallest first, one at a time (None: nothing is left). Each dropped member
-    /// is named in a note.
+    /// without them leaves of the held-out χ² (in the final joint fit), the smallest
+    /// first, one at a time, and then without those the final joint fit leaves on a
+    /// bound of their range (stand-ins: [`search::pinned_at`]), each time refitted
+    /// (None: nothing is left). Each dropped member is named in a note.
     fn drop_small(
         &self,
         mut h: Hypothesis,
         singles: &[Hypothesis],
         chain: &[Hypothesis],
         report: &mut Diagnosis,
+        dropped: &mut Vec<(usize, String)>,
     ) -> Option<Hypothesis> {
         let total = self.reference.holdout_chi2;
         loop {
             let fitted: Vec<&Hypothesis> = singles.iter().chain(chain).collect();
             let without = self.without_each(&h, &fitted);
-            // A member the final joint fit pushed onto a bound is a stand-in there.
-            let mut off = self.problem.calibration_len();
-            let mut pinned = None;
-            for (i, &m) in h.members.iter().enumerate() {
-                let c = &self.cands[m];
-                if let Some(name) = search::pinned_at(&h.theta, off, c) {
-                    pinned = Some((i, name));
-                    break;
-                }
-                off += c.params.len();
-            }
-            if let Some((i, name)) = pinned {
-                let label = self.cands[h.members[i]].label();
-                let rest = without.into_iter().nth(i).flatten();
-                // the others that cannot be fitted without it keep it, and say so
-                let kept = rest.is_none() && h.members.len() > 1;
-                report.notes.push(if kept {
-                    format!(
-                        "{label} ends with its {name} on a bound of its range in the final joint fit (read it as a stand-in); the fit without it failed, so it is kept"
-                    )
-                } else {
-                    format!(
-                        "{label} ends with its {name} on a bound of its range in the final joint fit (a stand-in there): not a finding"
-                    )
-                });
-                match rest {
-                    Some(w) => {
-                        h = w;
-                        continue;
-                    }
-                    None => return kept.then_some(h),
-                }
-            }
+            // Members that explain (almost) nothing go first, the smallest first, so
+            // that they do not decide how the others are judged.
             let shares: Vec<f64> = without
                 .iter()
                 .map(|w| {
@@ -1652,24 +1654,66 @@ impl Search<'_> {
                     (before - h.holdout_chi2) / before
                 })
                 .collect();
-            let Some((i, share)) = shares
+            if let Some((i, share)) = shares
                 .iter()
                 .copied()
                 .enumerate()
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .filter(|(_, s)| s.is_nan() || *s < MIN_FINDING_SHARE)
-            else {
+            {
+                let why = format!(
+                    "removes {:.2} % of the held-out residual the final fit leaves without it (under {:.0} %)",
+                    100.0 * share,
+                    100.0 * MIN_FINDING_SHARE
+                );
+                let label = self.cands[h.members[i]].label();
+                report.notes.push(format!("{label} {why}: not a finding"));
+                dropped.push((h.members[i], why));
+                match without.into_iter().nth(i).flatten() {
+                    Some(w) => {
+                        h = w;
+                        continue;
+                    }
+                    None => return None,
+                }
+            }
+            // A member the final joint fit pushed onto a bound is a stand-in there (a
+            // lone finding is judged as it entered).
+            let fit = if h.members.len() > 1 {
+                search::Fit::FinalJoint
+            } else {
+                search::Fit::Entry
+            };
+            let mut off = self.problem.calibration_len();
+            let mut pinned = None;
+            for (i, &m) in h.members.iter().enumerate() {
+                let c = &self.cands[m];
+                if let Some(name) = search::pinned_at(&h.theta, off, c, fit) {
+                    pinned = Some((i, name));
+                    break;
+                }
+                off += c.params.len();
+            }
+            let Some((i, name)) = pinned else {
                 return Some(h);
             };
-            report.notes.push(format!(
-                "{} removes {:.2} % of the held-out residual the final fit leaves without it (under {:.0} %): not a finding",
-                self.cands[h.members[i]].label(),
-                100.0 * share,
-                100.0 * MIN_FINDING_SHARE
-            ));
-            match without.into_iter().nth(i).flatten() {
+            let label = self.cands[h.members[i]].label();
+            let rest = without.into_iter().nth(i).flatten();
+            // the others that cannot be fitted without it keep it, and say so
+            let kept = rest.is_none() && h.members.len() > 1;
+            let why =
+                format!("ends with its {name} on a bound of its range in the final joint fit");
+            report.notes.push(if kept {
+                format!(
+                    "{label} {why} (read it as a stand-in); the fit without it failed, so it is kept"
+                )
+            } else {
+                dropped.push((h.members[i], format!("{why} (a stand-in there)")));
+                format!("{label} {why} (a stand-in there): not a finding")
+            });
+            match rest {
                 Some(w) => h = w,
-                None => return None,
+                None => return kept.then_some(h),
             }
         }
     }

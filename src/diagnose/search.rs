@@ -17,7 +17,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::data::{Observations, Part};
-use super::effects::{Candidate, ParamDef, Setter};
+use super::effects::{Candidate, Floor, ParamDef, Setter};
 use super::{Options, Progress, lm, predict};
 use crate::spec::model::{Model, ModelError};
 
@@ -406,20 +406,44 @@ impl Problem<'_> {
 }
 
 /// The first of candidate `c`'s parameters (the last of `h`'s) that the fit left on a
-/// bound of its range: [`pinned_at`].
+/// bound of its range as it enters: [`pinned_at`].
 pub(super) fn pinned(h: &Hypothesis, c: &Candidate) -> Option<&'static str> {
-    pinned_at(&h.theta, h.theta.len().checked_sub(c.params.len())?, c)
+    pinned_at(
+        &h.theta,
+        h.theta.len().checked_sub(c.params.len())?,
+        c,
+        Fit::Entry,
+    )
+}
+
+/// Which fit a parameter on its floor is judged in ([`Floor::ValueAsEntry`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Fit {
+    /// The candidate entering (alone, or with the findings before it).
+    Entry,
+    /// The final joint fit of several findings.
+    FinalJoint,
 }
 
 /// The first of candidate `c`'s parameters (from `off` in `theta`) on a bound of its
 /// range, within its finite-difference step (a bounded fit creeps up to a bound it
 /// wants to cross), unless that bound is the parameter's null (a load's power of zero
-/// is the effect absent, not a stand-in) or a value the effect takes
-/// ([`ParamDef::floor_is_a_value`]).
-pub(super) fn pinned_at(theta: &[f64], off: usize, c: &Candidate) -> Option<&'static str> {
+/// is the effect absent, not a stand-in) or a value the effect takes in `fit`
+/// ([`Floor`]).
+pub(super) fn pinned_at(
+    theta: &[f64],
+    off: usize,
+    c: &Candidate,
+    fit: Fit,
+) -> Option<&'static str> {
     c.params.iter().enumerate().find_map(|(i, p)| {
         let v = *theta.get(off + i)?;
-        let on_floor = v - p.lower <= p.step && !p.floor_is_a_value;
+        let floor_is_a_value = match p.floor {
+            Floor::Bound => false,
+            Floor::Value => true,
+            Floor::ValueAsEntry => fit == Fit::Entry,
+        };
+        let on_floor = v - p.lower <= p.step && !floor_is_a_value;
         let on_ceiling = p.upper - v <= p.step;
         let at_null = c.null.as_ref().is_some_and(|z| (v - z[i]).abs() <= p.step);
         ((on_floor || on_ceiling) && !at_null).then_some(p.name)
@@ -1013,7 +1037,8 @@ mod tests {
 
     /// A fit that ends on a bound of a parameter's range (within its step) is a
     /// stand-in; not when the bound is the parameter's null (the effect absent) or a
-    /// floor the effect takes (a thermostat's smallest hysteresis, no interference).
+    /// floor the effect takes (no interference; a thermostat's smallest hysteresis as
+    /// it enters, not in the final joint fit).
     /// The candidate's parameters are found from their offset, after the
     /// calibration's.
     #[test]
@@ -1022,34 +1047,39 @@ mod tests {
             vec![ParamDef::new("scale", 0.2, 5.0, 0.003)],
             Some(vec![1.0]),
         );
-        assert_eq!(pinned_at(&[0.2, 0.2], 1, &scale), Some("scale"));
-        assert_eq!(pinned_at(&[0.7, 0.2025], 1, &scale), Some("scale"));
-        assert_eq!(pinned_at(&[0.7, 4.999], 1, &scale), Some("scale"));
-        assert_eq!(pinned_at(&[0.2, 0.25], 1, &scale), None);
+        let entry = |t: &[f64], off, c| pinned_at(t, off, c, Fit::Entry);
+        let last = |t: &[f64], off, c| pinned_at(t, off, c, Fit::FinalJoint);
+        assert_eq!(entry(&[0.2, 0.2], 1, &scale), Some("scale"));
+        assert_eq!(entry(&[0.7, 0.2025], 1, &scale), Some("scale"));
+        assert_eq!(entry(&[0.7, 4.999], 1, &scale), Some("scale"));
+        assert_eq!(entry(&[0.2, 0.25], 1, &scale), None);
+        assert_eq!(last(&[0.2, 0.2], 1, &scale), Some("scale"));
         let heater = candidate(
             vec![
                 ParamDef::new("power_w", 0.0, 1000.0, 0.02),
                 ParamDef::new("on_c", -30.0, 30.0, 0.05),
-                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored(),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored_as_entry(),
             ],
             Some(vec![0.0, 0.0, 5.0]),
         );
         // no power is the effect absent; the smallest hysteresis a proportional heater
-        assert_eq!(pinned_at(&[0.0, -6.0, 0.1], 0, &heater), None);
-        assert_eq!(pinned_at(&[2.0, -6.0, 0.1], 0, &heater), None);
-        assert_eq!(pinned_at(&[2.0, -30.0, 3.0], 0, &heater), Some("on_c"));
-        assert_eq!(
-            pinned_at(&[2.0, -6.0, 50.0], 0, &heater),
-            Some("hysteresis_k")
-        );
-        assert_eq!(pinned_at(&[1000.0, -6.0, 3.0], 0, &heater), Some("power_w"));
+        // as it enters, a stand-in in the final joint fit (its null never is)
+        assert_eq!(entry(&[0.0, -6.0, 0.1], 0, &heater), None);
+        assert_eq!(entry(&[2.0, -6.0, 0.1], 0, &heater), None);
+        assert_eq!(last(&[2.0, -6.0, 0.1], 0, &heater), Some("hysteresis_k"));
+        assert_eq!(last(&[0.0, -6.0, 5.0], 0, &heater), None);
+        assert_eq!(last(&[2.0, -6.0, 3.0], 0, &heater), None);
+        assert_eq!(entry(&[2.0, -30.0, 3.0], 0, &heater), Some("on_c"));
+        assert_eq!(entry(&[2.0, -6.0, 50.0], 0, &heater), Some("hysteresis_k"));
+        assert_eq!(entry(&[1000.0, -6.0, 3.0], 0, &heater), Some("power_w"));
         // no null, but a floor the effect takes: a bore fit of no interference
         let bore = candidate(
             vec![ParamDef::new("interference_um", 0.0, 500.0, 0.2).floored()],
             None,
         );
-        assert_eq!(pinned_at(&[0.0], 0, &bore), None);
-        assert_eq!(pinned_at(&[500.0], 0, &bore), Some("interference_um"));
+        assert_eq!(entry(&[0.0], 0, &bore), None);
+        assert_eq!(last(&[0.0], 0, &bore), None);
+        assert_eq!(entry(&[500.0], 0, &bore), Some("interference_um"));
     }
 
     /// The quasi-likelihood BIC by which rivals are compared: the plain BIC on white
