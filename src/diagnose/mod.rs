@@ -1708,7 +1708,8 @@ impl Search<'_> {
                     "{label} {why} (read it as a stand-in); the fit without it failed, so it is kept"
                 )
             } else {
-                dropped.push((h.members[i], format!("{why} (a stand-in there)")));
+                let there = format!("ends with its {name} on a bound of its range (a stand-in)");
+                dropped.push((h.members[i], there));
                 format!("{label} {why} (a stand-in there): not a finding")
             });
             match rest {
