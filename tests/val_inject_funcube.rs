@@ -71,8 +71,10 @@ const FLIGHT_RMS_BOUND_K: [(&str, f64); 8] = [
 /// its bound, correlation ≥ 0.97 (the orbit's shape and phase), the sunlit mean
 /// 4 … 12 K too cold (the shortfall the scenario's public numbers leave, the same for
 /// orbitlash's baseline), the eclipse mean within 3 K of the sunlit one (the model
-/// lacks heat, by about as much in both phases, not timing), and the means over the
-/// eclipses and the whole orbits within 10 K.
+/// lacks heat, by about as much in both phases, not timing), the eclipse mean within
+/// 9.3 K (measured −2.2 … −8.8 K, plus 0.5; it was within 6 K with the earlier 432 J/K
+/// frame, which kept the eclipses warm and the sunlit phase cold) and the whole
+/// orbits' within 10 K.
 #[test]
 fn val_inject_funcube_model_reproduces_the_flight_day() {
     let Some(g) = generator() else { return };
@@ -114,7 +116,7 @@ fn val_inject_funcube_model_reproduces_the_flight_day() {
             .1;
         assert!(e_rms <= bound, "{}: RMS {e_rms} > {bound}", sensor.name);
         assert!(corr >= 0.97, "{}: correlation {corr}", sensor.name);
-        assert!(e_ecl.abs() <= 10.0, "{}: eclipse bias {e_ecl}", sensor.name);
+        assert!(e_ecl.abs() <= 9.3, "{}: eclipse bias {e_ecl}", sensor.name);
         assert!(
             (e_ecl - e_sun).abs() <= 3.0,
             "{}: eclipse {e_ecl} against sunlit {e_sun}",

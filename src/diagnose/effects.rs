@@ -175,13 +175,14 @@ pub enum Floor {
     /// A value the effect really takes: a bore fit of no interference still closes by
     /// differential expansion; a switched load of no power is the effect absent.
     Value,
-    /// A value the effect takes as an entry, a stand-in in the final joint fit: a
-    /// thermostat's band of 0.1 K is a near-proportional heater, which a lone
-    /// controller may be, but when every other finding is fitted with it and it still
-    /// wants no band it is heat that follows the node's temperature, taking what the
-    /// model's own error leaves (on FUNcube-1, 4.1 W that pulled an absorptivity found
-    /// at × 0.80 to × 0.45; `docs/validation.md`).
-    ValueAsEntry,
+    /// A value the effect takes alone, a stand-in in a fit with other findings (as it
+    /// enters beside them, and in the final joint fit): a thermostat's band of 0.1 K
+    /// is a near-proportional heater, which a lone controller may be, but when other
+    /// findings are fitted with it and it still wants no band it is heat that follows
+    /// the node's temperature, taking what the model's own error leaves (on
+    /// FUNcube-1, 4.1 W that pulled an absorptivity found at × 0.80 to × 0.45;
+    /// `docs/validation.md`).
+    ValueAlone,
 }
 
 /// A number of the model written as a linear function of the parameters:
@@ -272,11 +273,11 @@ impl ParamDef {
         }
     }
 
-    /// The same, its lower bound a value the effect takes as an entry only
-    /// ([`Floor::ValueAsEntry`]).
-    pub fn floored_as_entry(self) -> ParamDef {
+    /// The same, its lower bound a value the effect takes alone only
+    /// ([`Floor::ValueAlone`]).
+    pub fn floored_alone(self) -> ParamDef {
         ParamDef {
-            floor: Floor::ValueAsEntry,
+            floor: Floor::ValueAlone,
             ..self
         }
     }
@@ -840,7 +841,7 @@ impl<'a> Generator<'a> {
             params: vec![
                 ParamDef::new(registry::HEATER_POWER_W.name, 0.01, 1000.0, 0.02),
                 ParamDef::new("on_c", on_c - 30.0, on_c + 30.0, 0.05),
-                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored_as_entry(),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored_alone(),
             ],
             setters: vec![
                 Setter::scaled(pp, 0, 1.0),

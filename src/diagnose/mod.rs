@@ -1132,7 +1132,7 @@ fn settle_candidates(
             && !best.is_some_and(|h| h.members.contains(&ci))
         {
             rep.status = CandidateStatus::Rejected;
-            rep.reason = format!("dropped from the final joint fit: it {why}");
+            rep.reason = format!("dropped from the final fit: it {why}");
             continue;
         }
         match best {
@@ -1302,22 +1302,18 @@ pub fn diagnose(
         .map(|h| (h.members[0], search::rivals(&problem, &cands, h, &tried)))
         .into_iter()
         .collect();
-    let Selection {
-        chain,
-        explained,
-        dropped,
-    } = cx.select(&singles, &ranked, &mut report, &mut rivals, progress);
-    let best = chain.last().cloned();
+    let selected = cx.select(&singles, &ranked, &mut report, &mut rivals, progress);
+    let best = selected.chain.last().cloned();
 
     // 7. The verdict, the findings, the calibration and the corrected model.
     match (&best, &calibrated) {
         (Some(h), _) => {
             let steps = Steps {
                 singles: &singles,
-                chain: &chain,
+                chain: &selected.chain,
                 rivals: &rivals,
             };
-            cx.conclude(h, explained, steps, &mut report, &mut series)?;
+            cx.conclude(h, selected.explained, steps, &mut report, &mut series)?;
             report.heldout_share = Some(1.0 - h.holdout_chi2 / baseline_reference.holdout_chi2);
         }
         (None, Some(h)) => cx.calibrated_only(h, &mut report, &mut series)?,
@@ -1326,7 +1322,7 @@ pub fn diagnose(
     if let Some(h) = best.as_ref().or(calibrated.as_ref()) {
         report.calibration = calibrated_numbers(&problem, h);
     }
-    settle_candidates(&mut reports, &cands, best.as_ref(), &dropped);
+    settle_candidates(&mut reports, &cands, best.as_ref(), &selected.dropped);
     report.candidates = reports;
     series.fill_model_grid(&obs, model, report.corrected.as_ref())?;
     report.series = series;
@@ -1577,6 +1573,20 @@ impl Search<'_> {
                 explained = chain
                     .last()
                     .is_some_and(|h| explains(self.obs, self.noise, opts, h));
+                // what the drops leave must still be a partial explanation
+                if let Some(k) = chain.last().filter(|_| !explained) {
+                    let share = 1.0 - k.holdout_chi2 / reference.holdout_chi2;
+                    if share < opts.min_partial_share {
+                        report.notes.push(format!(
+                            "without those, {} removes {:.0} % of the baseline's held-out \
+                             residual (a partial finding needs {:.0} %): not reported",
+                            labels(k).join(" with "),
+                            100.0 * share,
+                            100.0 * opts.min_partial_share
+                        ));
+                        chain.clear();
+                    }
+                }
             }
         }
         Selection {
@@ -1628,11 +1638,12 @@ impl Search<'_> {
             .collect()
     }
 
-    /// `h` without the members that remove less than [`MIN_FINDING_SHARE`] of what `h`
-    /// without them leaves of the held-out χ² (in the final joint fit), the smallest
-    /// first, one at a time, and then without those the final joint fit leaves on a
-    /// bound of their range (stand-ins: [`search::pinned_at`]), each time refitted
-    /// (None: nothing is left). Each dropped member is named in a note.
+    /// `h` without the members the final fit leaves on a bound of their range
+    /// (stand-ins: [`search::pinned_at`]) and without those that remove less than
+    /// [`MIN_FINDING_SHARE`] of what `h` without them leaves of the held-out χ² (in the
+    /// final joint fit), one at a time (the stand-ins first, then the smallest share),
+    /// each time refitted (None: nothing is left). Each dropped member is named in a
+    /// note and in `dropped` (candidate index, reason).
     fn drop_small(
         &self,
         mut h: Hypothesis,
@@ -1645,45 +1656,9 @@ impl Search<'_> {
         loop {
             let fitted: Vec<&Hypothesis> = singles.iter().chain(chain).collect();
             let without = self.without_each(&h, &fitted);
-            // Members that explain (almost) nothing go first, the smallest first, so
-            // that they do not decide how the others are judged.
-            let shares: Vec<f64> = without
-                .iter()
-                .map(|w| {
-                    let before = w.as_ref().map_or(total, |w| w.holdout_chi2);
-                    (before - h.holdout_chi2) / before
-                })
-                .collect();
-            if let Some((i, share)) = shares
-                .iter()
-                .copied()
-                .enumerate()
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .filter(|(_, s)| s.is_nan() || *s < MIN_FINDING_SHARE)
-            {
-                let why = format!(
-                    "removes {:.2} % of the held-out residual the final fit leaves without it (under {:.0} %)",
-                    100.0 * share,
-                    100.0 * MIN_FINDING_SHARE
-                );
-                let label = self.cands[h.members[i]].label();
-                report.notes.push(format!("{label} {why}: not a finding"));
-                dropped.push((h.members[i], why));
-                match without.into_iter().nth(i).flatten() {
-                    Some(w) => {
-                        h = w;
-                        continue;
-                    }
-                    None => return None,
-                }
-            }
-            // A member the final joint fit pushed onto a bound is a stand-in there (a
-            // lone finding is judged as it entered).
-            let fit = if h.members.len() > 1 {
-                search::Fit::FinalJoint
-            } else {
-                search::Fit::Entry
-            };
+            // A member the final fit pushed onto a bound is a stand-in there (judged
+            // jointly when there are others: `search::Fit`).
+            let fit = search::Fit::of(&h);
             let mut off = self.problem.calibration_len();
             let mut pinned = None;
             for (i, &m) in h.members.iter().enumerate() {
@@ -1694,27 +1669,59 @@ impl Search<'_> {
                 }
                 off += c.params.len();
             }
-            let Some((i, name)) = pinned else {
+            if let Some((i, name)) = pinned {
+                let label = self.cands[h.members[i]].label();
+                let rest = without.into_iter().nth(i).flatten();
+                // the others that cannot be fitted without it keep it, and say so
+                let kept = rest.is_none() && h.members.len() > 1;
+                let why = format!("ends with its {name} on a bound of its range in the final fit");
+                if kept {
+                    report.notes.push(format!(
+                        "{label} {why} (read it as a stand-in); the fit without it failed, so it is kept"
+                    ));
+                } else {
+                    report
+                        .notes
+                        .push(format!("{label} {why} (a stand-in there): not a finding"));
+                    let there =
+                        format!("ends with its {name} on a bound of its range (a stand-in)");
+                    dropped.push((h.members[i], there));
+                }
+                match rest {
+                    Some(w) => {
+                        h = w;
+                        continue;
+                    }
+                    None => return kept.then_some(h),
+                }
+            }
+            let shares: Vec<f64> = without
+                .iter()
+                .map(|w| {
+                    let before = w.as_ref().map_or(total, |w| w.holdout_chi2);
+                    (before - h.holdout_chi2) / before
+                })
+                .collect();
+            let Some((i, share)) = shares
+                .iter()
+                .copied()
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .filter(|(_, s)| s.is_nan() || *s < MIN_FINDING_SHARE)
+            else {
                 return Some(h);
             };
+            let why = format!(
+                "removes {:.2} % of the held-out residual the final fit leaves without it (under {:.0} %)",
+                100.0 * share,
+                100.0 * MIN_FINDING_SHARE
+            );
             let label = self.cands[h.members[i]].label();
-            let rest = without.into_iter().nth(i).flatten();
-            // the others that cannot be fitted without it keep it, and say so
-            let kept = rest.is_none() && h.members.len() > 1;
-            let why =
-                format!("ends with its {name} on a bound of its range in the final joint fit");
-            report.notes.push(if kept {
-                format!(
-                    "{label} {why} (read it as a stand-in); the fit without it failed, so it is kept"
-                )
-            } else {
-                let there = format!("ends with its {name} on a bound of its range (a stand-in)");
-                dropped.push((h.members[i], there));
-                format!("{label} {why} (a stand-in there): not a finding")
-            });
-            match rest {
+            report.notes.push(format!("{label} {why}: not a finding"));
+            dropped.push((h.members[i], why));
+            match without.into_iter().nth(i).flatten() {
                 Some(w) => h = w,
-                None => return kept.then_some(h),
+                None => return None,
             }
         }
     }
@@ -1895,6 +1902,42 @@ mod tests {
             value_unit: "K",
             is_temperature: unit == "K",
         }
+    }
+
+    /// A member dropped from the final fit is reported rejected with the reason it was
+    /// dropped; a member accepted at its step and not kept, without one, reads that it
+    /// did not explain the residual; a candidate never fitted stays so.
+    #[test]
+    fn core_a_dropped_member_is_reported_with_its_reason() {
+        let report = |status| CandidateReport {
+            effect: effects::Effect::HeaterThermostat,
+            target: String::new(),
+            status,
+            reason: String::new(),
+            rank_chi2_drop: 1.0,
+            delta_bic: None,
+            heldout_chi2_drop: None,
+            parameters: None,
+            time_s: 0.0,
+        };
+        let mut reports = [
+            report(CandidateStatus::Accepted),
+            report(CandidateStatus::Accepted),
+            report(CandidateStatus::NotFitted),
+        ];
+        let why = "ends with its hysteresis_k on a bound of its range (a stand-in)";
+        settle_candidates(&mut reports, &[], None, &[(0, why.to_string())]);
+        assert_eq!(reports[0].status, CandidateStatus::Rejected);
+        assert_eq!(
+            reports[0].reason,
+            format!("dropped from the final fit: it {why}")
+        );
+        assert_eq!(reports[1].status, CandidateStatus::Rejected);
+        assert_eq!(
+            reports[1].reason,
+            "improves the fit but does not explain the residual"
+        );
+        assert_eq!(reports[2].status, CandidateStatus::NotFitted);
     }
 
     /// A channel far smoother than the others of its unit is raised to the median /

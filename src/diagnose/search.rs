@@ -406,23 +406,35 @@ impl Problem<'_> {
 }
 
 /// The first of candidate `c`'s parameters (the last of `h`'s) that the fit left on a
-/// bound of its range as it enters: [`pinned_at`].
+/// bound of its range as it enters: [`pinned_at`], judged [`Fit::of`] `h`.
 pub(super) fn pinned(h: &Hypothesis, c: &Candidate) -> Option<&'static str> {
     pinned_at(
         &h.theta,
         h.theta.len().checked_sub(c.params.len())?,
         c,
-        Fit::Entry,
+        Fit::of(h),
     )
 }
 
-/// Which fit a parameter on its floor is judged in ([`Floor::ValueAsEntry`]).
+/// Which fit a parameter on its floor is judged in ([`Floor::ValueAlone`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Fit {
-    /// The candidate entering (alone, or with the findings before it).
-    Entry,
-    /// The final joint fit of several findings.
-    FinalJoint,
+    /// A candidate fitted alone (beside the calibration).
+    Alone,
+    /// A fit of two or more findings: an extension entering beside the findings
+    /// before it, or the final joint fit.
+    Joint,
+}
+
+impl Fit {
+    /// Alone for a hypothesis of one member, else joint.
+    pub(super) fn of(h: &Hypothesis) -> Fit {
+        if h.members.len() > 1 {
+            Fit::Joint
+        } else {
+            Fit::Alone
+        }
+    }
 }
 
 /// The first of candidate `c`'s parameters (from `off` in `theta`) on a bound of its
@@ -441,7 +453,7 @@ pub(super) fn pinned_at(
         let floor_is_a_value = match p.floor {
             Floor::Bound => false,
             Floor::Value => true,
-            Floor::ValueAsEntry => fit == Fit::Entry,
+            Floor::ValueAlone => fit == Fit::Alone,
         };
         let on_floor = v - p.lower <= p.step && !floor_is_a_value;
         let on_ceiling = p.upper - v <= p.step;
@@ -1037,8 +1049,8 @@ mod tests {
 
     /// A fit that ends on a bound of a parameter's range (within its step) is a
     /// stand-in; not when the bound is the parameter's null (the effect absent) or a
-    /// floor the effect takes (no interference; a thermostat's smallest hysteresis as
-    /// it enters, not in the final joint fit).
+    /// floor the effect takes (no interference; a thermostat's smallest hysteresis
+    /// alone, not beside other findings).
     /// The candidate's parameters are found from their offset, after the
     /// calibration's.
     #[test]
@@ -1047,39 +1059,39 @@ mod tests {
             vec![ParamDef::new("scale", 0.2, 5.0, 0.003)],
             Some(vec![1.0]),
         );
-        let entry = |t: &[f64], off, c| pinned_at(t, off, c, Fit::Entry);
-        let last = |t: &[f64], off, c| pinned_at(t, off, c, Fit::FinalJoint);
-        assert_eq!(entry(&[0.2, 0.2], 1, &scale), Some("scale"));
-        assert_eq!(entry(&[0.7, 0.2025], 1, &scale), Some("scale"));
-        assert_eq!(entry(&[0.7, 4.999], 1, &scale), Some("scale"));
-        assert_eq!(entry(&[0.2, 0.25], 1, &scale), None);
-        assert_eq!(last(&[0.2, 0.2], 1, &scale), Some("scale"));
+        let alone = |t: &[f64], off, c| pinned_at(t, off, c, Fit::Alone);
+        let joint = |t: &[f64], off, c| pinned_at(t, off, c, Fit::Joint);
+        assert_eq!(alone(&[0.2, 0.2], 1, &scale), Some("scale"));
+        assert_eq!(alone(&[0.7, 0.2025], 1, &scale), Some("scale"));
+        assert_eq!(alone(&[0.7, 4.999], 1, &scale), Some("scale"));
+        assert_eq!(alone(&[0.2, 0.25], 1, &scale), None);
+        assert_eq!(joint(&[0.2, 0.2], 1, &scale), Some("scale"));
         let heater = candidate(
             vec![
                 ParamDef::new("power_w", 0.0, 1000.0, 0.02),
                 ParamDef::new("on_c", -30.0, 30.0, 0.05),
-                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored_as_entry(),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05).floored_alone(),
             ],
             Some(vec![0.0, 0.0, 5.0]),
         );
         // no power is the effect absent; the smallest hysteresis a proportional heater
-        // as it enters, a stand-in in the final joint fit (its null never is)
-        assert_eq!(entry(&[0.0, -6.0, 0.1], 0, &heater), None);
-        assert_eq!(entry(&[2.0, -6.0, 0.1], 0, &heater), None);
-        assert_eq!(last(&[2.0, -6.0, 0.1], 0, &heater), Some("hysteresis_k"));
-        assert_eq!(last(&[0.0, -6.0, 5.0], 0, &heater), None);
-        assert_eq!(last(&[2.0, -6.0, 3.0], 0, &heater), None);
-        assert_eq!(entry(&[2.0, -30.0, 3.0], 0, &heater), Some("on_c"));
-        assert_eq!(entry(&[2.0, -6.0, 50.0], 0, &heater), Some("hysteresis_k"));
-        assert_eq!(entry(&[1000.0, -6.0, 3.0], 0, &heater), Some("power_w"));
+        // alone, a stand-in beside other findings
+        assert_eq!(alone(&[0.0, -6.0, 0.1], 0, &heater), None);
+        assert_eq!(alone(&[2.0, -6.0, 0.1], 0, &heater), None);
+        assert_eq!(joint(&[2.0, -6.0, 0.1], 0, &heater), Some("hysteresis_k"));
+        assert_eq!(joint(&[0.0, -6.0, 5.0], 0, &heater), None);
+        assert_eq!(joint(&[2.0, -6.0, 3.0], 0, &heater), None);
+        assert_eq!(alone(&[2.0, -30.0, 3.0], 0, &heater), Some("on_c"));
+        assert_eq!(alone(&[2.0, -6.0, 50.0], 0, &heater), Some("hysteresis_k"));
+        assert_eq!(alone(&[1000.0, -6.0, 3.0], 0, &heater), Some("power_w"));
         // no null, but a floor the effect takes: a bore fit of no interference
         let bore = candidate(
             vec![ParamDef::new("interference_um", 0.0, 500.0, 0.2).floored()],
             None,
         );
-        assert_eq!(entry(&[0.0], 0, &bore), None);
-        assert_eq!(last(&[0.0], 0, &bore), None);
-        assert_eq!(entry(&[500.0], 0, &bore), Some("interference_um"));
+        assert_eq!(alone(&[0.0], 0, &bore), None);
+        assert_eq!(joint(&[0.0], 0, &bore), None);
+        assert_eq!(alone(&[500.0], 0, &bore), Some("interference_um"));
     }
 
     /// The quasi-likelihood BIC by which rivals are compared: the plain BIC on white
