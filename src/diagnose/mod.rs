@@ -1721,7 +1721,18 @@ impl Search<'_> {
             dropped.push((h.members[i], why));
             match without.into_iter().nth(i).flatten() {
                 Some(w) => h = w,
-                None => return None,
+                None => {
+                    // the others could not be fitted without it: they go with it
+                    for (_, &m) in h.members.iter().enumerate().filter(|(j, _)| *j != i) {
+                        let why =
+                            format!("was fitted with {label}, and the fit without that failed");
+                        report
+                            .notes
+                            .push(format!("{}: {why}: not a finding", self.cands[m].label()));
+                        dropped.push((m, why));
+                    }
+                    return None;
+                }
             }
         }
     }
