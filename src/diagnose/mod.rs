@@ -1538,13 +1538,18 @@ impl Search<'_> {
         // A partial explanation: kept when it removes a material share of a real
         // residual (the baseline not at the noise); the verdict stays unexplained.
         let reference = self.reference;
+        let against = if self.problem.calibration_len() > 0 {
+            "the calibrated model's"
+        } else {
+            "the baseline's"
+        };
         let share = 1.0 - last.holdout_chi2 / reference.holdout_chi2;
         if !explained && (report.verdict == Verdict::Consistent || share < opts.min_partial_share) {
             // What forward selection reached, and why it is not reported.
             let names = labels(last);
             let note = format!(
-                "the best {}, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of the \
-                 baseline's held-out residual (a partial finding needs {:.0} %) and does not \
+                "the best {}, {}, improves the fit (BIC −{:.0}) but removes {:.0} % of \
+                 {against} held-out residual (a partial finding needs {:.0} %) and does not \
                  bring the held-out orbits to the noise",
                 if names.len() == 1 {
                     "candidate"
@@ -1576,10 +1581,11 @@ impl Search<'_> {
                 // what the drops leave must still be a partial explanation
                 if let Some(k) = chain.last().filter(|_| !explained) {
                     let share = 1.0 - k.holdout_chi2 / reference.holdout_chi2;
-                    if share < opts.min_partial_share {
+                    if report.verdict == Verdict::Consistent || share < opts.min_partial_share {
                         report.notes.push(format!(
-                            "without those, {} removes {:.0} % of the baseline's held-out \
-                             residual (a partial finding needs {:.0} %): not reported",
+                            "without those, {} removes {:.0} % of {against} held-out \
+                             residual (a partial finding needs {:.0} %) and does not bring the \
+                             held-out orbits to the noise: not reported",
                             labels(k).join(" with "),
                             100.0 * share,
                             100.0 * opts.min_partial_share
@@ -1642,8 +1648,9 @@ impl Search<'_> {
     /// (stand-ins: [`search::pinned_at`]) and without those that remove less than
     /// [`MIN_FINDING_SHARE`] of what `h` without them leaves of the held-out χ² (in the
     /// final joint fit), one at a time (the stand-ins first, then the smallest share),
-    /// each time refitted (None: nothing is left). Each dropped member is named in a
-    /// note and in `dropped` (candidate index, reason).
+    /// each time refitted (None: nothing is left). A member the others cannot be
+    /// fitted without is kept, with a note, and not judged again. Each dropped member
+    /// is named in a note and in `dropped` (candidate index, reason).
     fn drop_small(
         &self,
         mut h: Hypothesis,
@@ -1653,9 +1660,12 @@ impl Search<'_> {
         dropped: &mut Vec<(usize, String)>,
     ) -> Option<Hypothesis> {
         let total = self.reference.holdout_chi2;
+        // members the others cannot be fitted without: kept, and not judged again
+        let mut kept: Vec<usize> = Vec::new();
         loop {
             let fitted: Vec<&Hypothesis> = singles.iter().chain(chain).collect();
             let without = self.without_each(&h, &fitted);
+            let several = h.members.len() > 1;
             // A member the final fit pushed onto a bound is a stand-in there (judged
             // jointly when there are others: `search::Fit`).
             let fit = search::Fit::of(&h);
@@ -1663,7 +1673,9 @@ impl Search<'_> {
             let mut pinned = None;
             for (i, &m) in h.members.iter().enumerate() {
                 let c = &self.cands[m];
-                if let Some(name) = search::pinned_at(&h.theta, off, c, fit) {
+                if !kept.contains(&m)
+                    && let Some(name) = search::pinned_at(&h.theta, off, c, fit)
+                {
                     pinned = Some((i, name));
                     break;
                 }
@@ -1671,28 +1683,28 @@ impl Search<'_> {
             }
             if let Some((i, name)) = pinned {
                 let label = self.cands[h.members[i]].label();
-                let rest = without.into_iter().nth(i).flatten();
-                // the others that cannot be fitted without it keep it, and say so
-                let kept = rest.is_none() && h.members.len() > 1;
                 let why = format!("ends with its {name} on a bound of its range in the final fit");
-                if kept {
-                    report.notes.push(format!(
-                        "{label} {why} (read it as a stand-in); the fit without it failed, so it is kept"
-                    ));
-                } else {
-                    report
-                        .notes
-                        .push(format!("{label} {why} (a stand-in there): not a finding"));
-                    let there =
-                        format!("ends with its {name} on a bound of its range (a stand-in)");
-                    dropped.push((h.members[i], there));
-                }
-                match rest {
-                    Some(w) => {
-                        h = w;
+                match without.into_iter().nth(i).flatten() {
+                    None if several => {
+                        report.notes.push(format!(
+                            "{label} {why} (read it as a stand-in); the fit without it failed, so it is kept"
+                        ));
+                        kept.push(h.members[i]);
                         continue;
                     }
-                    None => return kept.then_some(h),
+                    rest => {
+                        report
+                            .notes
+                            .push(format!("{label} {why} (a stand-in there): not a finding"));
+                        let there =
+                            format!("ends with its {name} on a bound of its range (a stand-in)");
+                        dropped.push((h.members[i], there));
+                        match rest {
+                            Some(w) => h = w,
+                            None => return None,
+                        }
+                        continue;
+                    }
                 }
             }
             let shares: Vec<f64> = without
@@ -1706,6 +1718,7 @@ impl Search<'_> {
                 .iter()
                 .copied()
                 .enumerate()
+                .filter(|(i, _)| !kept.contains(&h.members[*i]))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .filter(|(_, s)| s.is_nan() || *s < MIN_FINDING_SHARE)
             else {
@@ -1717,21 +1730,20 @@ impl Search<'_> {
                 100.0 * MIN_FINDING_SHARE
             );
             let label = self.cands[h.members[i]].label();
-            report.notes.push(format!("{label} {why}: not a finding"));
-            dropped.push((h.members[i], why));
             match without.into_iter().nth(i).flatten() {
-                Some(w) => h = w,
-                None => {
-                    // the others could not be fitted without it: they go with it
-                    for (_, &m) in h.members.iter().enumerate().filter(|(j, _)| *j != i) {
-                        let why =
-                            format!("was fitted with {label}, and the fit without that failed");
-                        report
-                            .notes
-                            .push(format!("{}: {why}: not a finding", self.cands[m].label()));
-                        dropped.push((m, why));
+                None if several => {
+                    report.notes.push(format!(
+                        "{label} {why}, but the fit without it failed, so it is kept"
+                    ));
+                    kept.push(h.members[i]);
+                }
+                rest => {
+                    report.notes.push(format!("{label} {why}: not a finding"));
+                    dropped.push((h.members[i], why));
+                    match rest {
+                        Some(w) => h = w,
+                        None => return None,
                     }
-                    return None;
                 }
             }
         }
