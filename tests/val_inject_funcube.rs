@@ -697,45 +697,47 @@ fn val_inject_funcube_workflow_names_what_changed() {
             .collect()
     };
     let again = named(&run("null"));
+    // the parameters of the finding of `effect` whose `key` is `on` in `report`
+    let parameters = |report: &serde_json::Value, effect: &str, key: &str, on: &str| {
+        report["findings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["effect"] == effect && f[key] == on)
+            .unwrap_or_else(|| panic!("{effect} on {on} is named: {:?}", named(report)))
+            ["parameters"]
+            .clone()
+    };
+    // besides the findings `is_it` picks, nothing new (not named on the null case)
+    // takes 3 % of the residual or more
+    type Named = (String, String, f64);
+    let nothing_else_new = |found: &[Named], is_it: &dyn Fn(&Named) -> bool, what: &str| {
+        let news: Vec<_> = found
+            .iter()
+            .filter(|f| !is_it(f))
+            .filter(|f| !again.iter().any(|a| a.0 == f.0 && a.1 == f.1))
+            .collect();
+        assert!(
+            news.iter().all(|f| f.2 < 0.03),
+            "besides {what}, nothing new above 3 % of the residual: {news:?}"
+        );
+    };
     let offset = run("chassis_offset");
     let found = named(&offset);
-    let hit = offset["findings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|f| f["effect"] == "sensor_offset" && f["channel"] == "chassis_black_c")
-        .unwrap_or_else(|| panic!("the offset on chassis_black_c is named: {found:?}"));
-    let k = hit["parameters"]["offset_k"].as_f64().unwrap();
+    let k = parameters(&offset, "sensor_offset", "channel", "chassis_black_c")["offset_k"]
+        .as_f64()
+        .unwrap();
     assert!((k - 1.5).abs() <= 0.5, "offset {k} K, truth 1.5 K");
     assert_eq!(found[0].0, "sensor_offset", "the offset leads: {found:?}");
-    let news: Vec<_> = found
-        .iter()
-        .filter(|f| !(f.0 == "sensor_offset" && f.1 == "chassis_black_c"))
-        .filter(|f| !again.iter().any(|a| a.0 == f.0 && a.1 == f.1))
-        .collect();
-    assert!(
-        news.iter().all(|f| f.2 < 0.03),
-        "besides the offset, nothing new above 3 % of the residual: {news:?}"
-    );
+    let is_it = |f: &Named| f.0 == "sensor_offset" && f.1 == "chassis_black_c";
+    nothing_else_new(&found, &is_it, "the offset");
     let alpha = run("face_absorptivity");
-    let found = named(&alpha);
-    let hit = alpha["findings"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|f| f["effect"] == "absorptivity_scale" && f["face"] == "py")
-        .unwrap_or_else(|| panic!("the absorptivity of face py is named: {found:?}"));
-    let scale = hit["parameters"]["scale"].as_f64().unwrap();
+    let scale = parameters(&alpha, "absorptivity_scale", "face", "py")["scale"]
+        .as_f64()
+        .unwrap();
     assert!((scale / 0.8 - 1.0).abs() <= 0.2, "scale {scale}, truth 0.8");
-    let news: Vec<_> = found
-        .iter()
-        .filter(|f| f.0 != "absorptivity_scale")
-        .filter(|f| !again.iter().any(|a| a.0 == f.0 && a.1 == f.1))
-        .collect();
-    assert!(
-        news.iter().all(|f| f.2 < 0.03),
-        "besides the absorptivity, nothing new above 3 % of the residual: {news:?}"
-    );
+    let is_it = |f: &Named| f.0 == "absorptivity_scale";
+    nothing_else_new(&named(&alpha), &is_it, "the absorptivity");
     let control = named(&run("control"));
     let news: Vec<_> = control
         .iter()

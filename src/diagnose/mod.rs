@@ -1538,13 +1538,12 @@ impl Search<'_> {
         // A partial explanation: kept when it removes a material share of a real
         // residual (the baseline not at the noise); the verdict stays unexplained.
         let reference = self.reference;
-        let against = if self.problem.calibration_len() > 0 {
-            "the calibrated model's"
-        } else {
-            "the baseline's"
-        };
-        let share = 1.0 - last.holdout_chi2 / reference.holdout_chi2;
-        if !explained && (report.verdict == Verdict::Consistent || share < opts.min_partial_share) {
+        let against = self.reference_name();
+        let consistent = report.verdict == Verdict::Consistent;
+        if let Some(share) = self
+            .short_of_partial(last, consistent)
+            .filter(|_| !explained)
+        {
             // What forward selection reached, and why it is not reported.
             let names = labels(last);
             let note = format!(
@@ -1579,19 +1578,18 @@ impl Search<'_> {
                     .last()
                     .is_some_and(|h| explains(self.obs, self.noise, opts, h));
                 // what the drops leave must still be a partial explanation
-                if let Some(k) = chain.last().filter(|_| !explained) {
-                    let share = 1.0 - k.holdout_chi2 / reference.holdout_chi2;
-                    if report.verdict == Verdict::Consistent || share < opts.min_partial_share {
-                        report.notes.push(format!(
-                            "without those, {} removes {:.0} % of {against} held-out \
-                             residual (a partial finding needs {:.0} %) and does not bring the \
-                             held-out orbits to the noise: not reported",
-                            labels(k).join(" with "),
-                            100.0 * share,
-                            100.0 * opts.min_partial_share
-                        ));
-                        chain.clear();
-                    }
+                if let Some(k) = chain.last().filter(|_| !explained)
+                    && let Some(share) = self.short_of_partial(k, consistent)
+                {
+                    report.notes.push(format!(
+                        "without those, {} removes {:.0} % of {against} held-out \
+                         residual (a partial finding needs {:.0} %) and does not bring the \
+                         held-out orbits to the noise: not reported",
+                        labels(k).join(" with "),
+                        100.0 * share,
+                        100.0 * opts.min_partial_share
+                    ));
+                    chain.clear();
                 }
             }
         }
@@ -1600,6 +1598,24 @@ impl Search<'_> {
             explained,
             dropped,
         }
+    }
+
+    /// Whose held-out residual shares are taken against: "the calibrated model's" or
+    /// "the baseline's".
+    fn reference_name(&self) -> &'static str {
+        if self.problem.calibration_len() > 0 {
+            "the calibrated model's"
+        } else {
+            "the baseline's"
+        }
+    }
+
+    /// The share of the reference's held-out χ² that `h` removes, when that is no
+    /// partial explanation: under `min_partial_share`, or any share when the baseline
+    /// is `consistent` (at the noise: no real residual to explain part of).
+    fn short_of_partial(&self, h: &Hypothesis, consistent: bool) -> Option<f64> {
+        let share = 1.0 - h.holdout_chi2 / self.reference.holdout_chi2;
+        (consistent || share < self.opts.min_partial_share).then_some(share)
     }
 
     /// For each member of `h`, the fit of `h` without it: one found among `fitted` (the
@@ -1803,11 +1819,7 @@ impl Search<'_> {
         };
         report.heldout_share = Some(1.0 - h.holdout_chi2 / reference.holdout_chi2);
         if !explained {
-            let against = if self.problem.calibration_len() > 0 {
-                "the calibrated model's"
-            } else {
-                "the baseline's"
-            };
+            let against = self.reference_name();
             report.notes.push(format!(
                 "a partial explanation: the findings remove {:.0} % of {against} held-out \
                  residual; the rest, below, is physics outside the vocabulary or parameters it \
