@@ -15,7 +15,7 @@ fn funcube_text() -> String {
 fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
     let dir = tmpdir("telemetry-bad");
     let text = funcube_text();
-    let cases: [(&str, &str, &str, &[&str]); 7] = [
+    let cases: [(&str, &str, &str, &[&str]); 9] = [
         (
             "time-format",
             "time_format = \"utc\"",
@@ -45,6 +45,18 @@ fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
                 "unknown variant `last`",
                 "`refuse` or `mean`",
             ],
+        ),
+        (
+            "clock",
+            "time_offset_s = 25.0",
+            "time_offset_s = nan",
+            &["`recording.time_offset_s`", "finite"],
+        ),
+        (
+            "clock-range",
+            "time_offset_s = 25.0",
+            "time_offset_s = 1e6",
+            &["`recording.time_offset_s`", "86400"],
         ),
         (
             "unit",
@@ -315,6 +327,8 @@ fn cli_the_eclipse_flag_follows_a_channel() {
     let format = orbitlash::recording::RecordingFormat {
         time_column: "UTC".into(),
         ignore_columns: Vec::new(),
+        // the stamps as the edges below say (the scenario's clock offset aside)
+        time_offset_s: 0.0,
         ..model.scenario().recording.clone()
     };
     let mut rec =

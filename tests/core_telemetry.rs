@@ -19,6 +19,7 @@ fn utc_format() -> RecordingFormat {
         ignore_columns: vec!["Battery mV".into()],
         repeated_rows_are_fill: true,
         duplicate_times: DuplicateTimes::Refuse,
+        time_offset_s: 0.0,
     }
 }
 
@@ -44,6 +45,22 @@ fn core_utc_time_counts_from_the_start_and_ignored_columns_are_no_channels() {
     .unwrap_err();
     assert!(
         e.contains("wod.csv:2:1") && e.contains("before the scenario's start_utc"),
+        "{e}"
+    );
+    // a clock offset is added to every stamp, and named when it puts a row before the
+    // start
+    let late = RecordingFormat {
+        time_offset_s: 25.0,
+        ..utc_format()
+    };
+    assert_eq!(read(text, &late).unwrap().time_s, vec![25.0, 85.0, 3655.5]);
+    let early = RecordingFormat {
+        time_offset_s: -30.0,
+        ..utc_format()
+    };
+    let e = read(text, &early).unwrap_err();
+    assert!(
+        e.contains("wod.csv:2:1") && e.contains("time_offset_s (-30 s)"),
         "{e}"
     );
     let e = read(

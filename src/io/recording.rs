@@ -21,10 +21,12 @@ pub use crate::recording::{
 
 /// A time cell as seconds since t = 0: a number of seconds, or a UTC date-time
 /// (`2016-02-04 00:01:00.0`, `2016-02-04T00:01:00Z`, RFC 3339 with an offset) less the
-/// origin. `err` makes the error at the cell.
+/// origin, plus `offset_s` (`[recording] time_offset_s`). `err` makes the error at the
+/// cell.
 fn time_of(
     cell: &str,
     format: &TimeFormat,
+    offset_s: f64,
     column: &str,
     err: impl Fn(String) -> RecordingError,
 ) -> Result<f64, RecordingError> {
@@ -41,7 +43,7 @@ fn time_of(
                     "`{cell}` in column `{column}` is not a finite number"
                 )));
             }
-            Ok(t)
+            Ok(t + offset_s)
         }
         TimeFormat::Utc { origin } => {
             use sgp4::chrono::{DateTime, NaiveDateTime};
@@ -60,10 +62,15 @@ fn time_of(
                     "`{cell}` is centuries from the scenario's start_utc"
                 ))
             })?;
-            let t = ns as f64 / 1e9;
+            let t = ns as f64 / 1e9 + offset_s;
             if t < 0.0 {
+                let shifted = if offset_s == 0.0 {
+                    String::new()
+                } else {
+                    format!(" once [recording] time_offset_s ({offset_s} s) is added")
+                };
                 return Err(err(format!(
-                    "`{cell}` is before the scenario's start_utc ({}): the run starts at the recording's first row or earlier",
+                    "`{cell}` is before the scenario's start_utc ({}){shifted}: the run starts at the recording's first row or earlier",
                     origin.format("%Y-%m-%dT%H:%M:%SZ")
                 )));
             }
@@ -89,7 +96,9 @@ impl Recording {
                 source,
             })?;
         if bytes.starts_with(mcap::MAGIC) {
-            return read_mcap(&bytes, &file);
+            let mut rec = read_mcap(&bytes, &file)?;
+            rec.time_s.iter_mut().for_each(|t| *t += fmt.time_offset_s);
+            return Ok(rec);
         }
         let named_mcap = path
             .extension()
@@ -183,6 +192,7 @@ impl Recording {
             let t = time_of(
                 row.get(time_col).unwrap_or(""),
                 &fmt.time,
+                fmt.time_offset_s,
                 &fmt.time_column,
                 |m| cell_error(time_col + 1, m),
             )?;

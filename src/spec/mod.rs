@@ -506,6 +506,9 @@ pub struct RecordingSpec {
     /// `"refuse"` (default) or `"mean"`: rows sharing a time stamp with other readings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub duplicate_times: Option<crate::spec::scenario::DuplicateTimes>,
+    /// Seconds added to every time stamp (when a row was measured against its stamp).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_offset_s: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

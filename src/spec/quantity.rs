@@ -306,6 +306,14 @@ pub const START_OFFSET_S: Quantity = q(
     Some(0.0),
     within(-2_592_000.0, 2_592_000.0, "start offset (s)"),
 );
+/// Seconds added to every time stamp of a recording: when its rows were measured
+/// against when they are stamped (a ground segment stamping a packet when it arrives).
+pub const TIME_OFFSET_S: Quantity = q(
+    "s",
+    "±1 day",
+    Some(0.0),
+    within(-86_400.0, 86_400.0, "a recording's time offset (s)"),
+);
 pub const ORBIT_ANGLE_AT_START_DEG: Quantity = q(
     "deg",
     "any (reduced modulo 360°)",
@@ -458,6 +466,7 @@ pub const SENSOR_OFFSET_K: Quantity = q(
 pub const TABLE: &[(&str, &Quantity)] = &[
     ("ALTITUDE_M", &ALTITUDE_M),
     ("START_OFFSET_S", &START_OFFSET_S),
+    ("TIME_OFFSET_S", &TIME_OFFSET_S),
     ("YAW_DEG", &YAW_DEG),
     ("SPIN_RATE_DEG_PER_S", &SPIN_RATE_DEG_PER_S),
     ("PRESSURE_ANGLE_DEG", &PRESSURE_ANGLE_DEG),

@@ -224,6 +224,8 @@ pub struct RecordingFormat {
     /// measurements: their cells are dropped (reported in [`Recording::fill_rows`]).
     pub repeated_rows_are_fill: bool,
     pub duplicate_times: DuplicateTimes,
+    /// Seconds added to every time stamp, s: a row measured at its stamp plus this.
+    pub time_offset_s: f64,
 }
 
 /// How a recording gives its time.
@@ -255,6 +257,7 @@ impl Default for RecordingFormat {
             ignore_columns: Vec::new(),
             repeated_rows_are_fill: false,
             duplicate_times: DuplicateTimes::Refuse,
+            time_offset_s: 0.0,
         }
     }
 }

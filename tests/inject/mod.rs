@@ -213,7 +213,12 @@ impl Generator {
     /// The scenario `scenarios/funcube-1.toml` and the telemetry file at `telemetry`.
     pub fn load(telemetry: &Path) -> Generator {
         let craft = Spacecraft::read(&repo_root().join(scenario::SCENARIO));
-        let telemetry = Telemetry::read(telemetry, &craft.time_column, &craft.start_utc);
+        let telemetry = Telemetry::read(
+            telemetry,
+            &craft.time_column,
+            &craft.start_utc,
+            craft.time_offset_s,
+        );
         let env = Environment::new(&craft, &telemetry);
         Generator {
             craft,

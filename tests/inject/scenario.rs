@@ -64,6 +64,9 @@ pub struct Spacecraft {
     /// `YYYY-MM-DDTHH:MM:SSZ`: time zero of the recording.
     pub start_utc: String,
     pub time_column: String,
+    /// Seconds added to each time stamp: when a row was measured (the recording's
+    /// clock offset, `[recording] time_offset_s`, 0 when absent).
+    pub time_offset_s: f64,
 }
 
 fn num(t: &Table, key: &str) -> f64 {
@@ -222,6 +225,9 @@ impl Spacecraft {
             tle: [tle[0].clone(), tle[1].clone()],
             start_utc: text(orbit, "start_utc").to_string(),
             time_column: text(table(&doc, "recording"), "time_column").to_string(),
+            time_offset_s: table(&doc, "recording")
+                .get("time_offset_s")
+                .map_or(0.0, |_| num(table(&doc, "recording"), "time_offset_s")),
         }
     }
 

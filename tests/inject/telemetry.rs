@@ -67,7 +67,13 @@ pub fn format_like(like: &str, value: f64) -> String {
 impl Telemetry {
     /// Reads the file; `time_column` must be its first column. Panics on quoted cells
     /// or ragged rows (the file has neither).
-    pub fn read(path: &std::path::Path, time_column: &str, start_utc: &str) -> Telemetry {
+    /// `offset_s` is added to every stamp (the time a row was measured).
+    pub fn read(
+        path: &std::path::Path,
+        time_column: &str,
+        start_utc: &str,
+        offset_s: f64,
+    ) -> Telemetry {
         let text =
             std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         assert!(!text.contains('"'), "{}: quoted cells", path.display());
@@ -83,7 +89,7 @@ impl Telemetry {
         for (k, r) in rows.iter().enumerate() {
             assert_eq!(r.len(), header.len(), "line {}: {} cells", k + 2, r.len());
         }
-        let times_s = rows.iter().map(|r| unix_s(&r[0]) - t0).collect();
+        let times_s = rows.iter().map(|r| unix_s(&r[0]) - t0 + offset_s).collect();
         let fill = (0..rows.len())
             .map(|k| k > 0 && rows[k][1..] == rows[k - 1][1..])
             .collect();

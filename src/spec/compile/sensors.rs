@@ -49,6 +49,7 @@ pub(super) fn recording_format(
     }
     f.repeated_rows_are_fill = spec.repeated_rows == Some(RepeatedRows::Fill);
     f.duplicate_times = spec.duplicate_times.unwrap_or(DuplicateTimes::Refuse);
+    f.time_offset_s = cx.read_or_default(&r::TIME_OFFSET_S, &p, spec.time_offset_s)?;
     Ok(f)
 }
 

@@ -60,13 +60,14 @@ pub enum Section {
     Attitude,
     Face,
     Mode,
+    Recording,
     Sensor,
     GearPair,
 }
 
 impl Section {
     /// Every section, in the order `orbitlash params` lists them.
-    pub const ALL: [Section; 18] = [
+    pub const ALL: [Section; 19] = [
         Section::Orbit,
         Section::Environment,
         Section::Run,
@@ -83,6 +84,7 @@ impl Section {
         Section::Attitude,
         Section::Face,
         Section::Mode,
+        Section::Recording,
         Section::Sensor,
         Section::GearPair,
     ];
@@ -106,6 +108,7 @@ impl Section {
             Section::Attitude => "attitude",
             Section::Face => "face",
             Section::Mode => "mode",
+            Section::Recording => "recording",
             Section::Sensor => "sensor",
             Section::GearPair => "gear_pair",
         }

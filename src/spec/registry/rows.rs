@@ -47,6 +47,7 @@ fields! {
     WINDOWS_DAYS = "windows_days", WINDOW_DAYS;
     TAU_S = "tau_s", SENSOR_TAU_S;
     OFFSET_K = "offset_k", SENSOR_OFFSET_K;
+    TIME_OFFSET_S = "time_offset_s", TIME_OFFSET_S;
 }
 
 type Done = Result<(), SpecError>;
@@ -593,7 +594,7 @@ fn sensor(s: &ScenarioSpec, _: &ElementKeys, sc: &mut Scenario, e: usize) -> Don
 }
 
 fn faces_modes_sensors(t: &mut Vec<Row>) {
-    use Section::{Attitude, Face, Mode, Sensor};
+    use Section::{Attitude, Face, Mode, Recording, Sensor};
     let mode = |s: &ScenarioSpec| s.attitude.as_ref().and_then(|a| a.mode);
     t.extend([
         // a nadir-pointing body's yaw, where there are faces to turn (an absent
@@ -663,6 +664,18 @@ fn faces_modes_sensors(t: &mut Vec<Row>) {
             &WINDOWS_DAYS,
             "[start, end] windows in days",
             |s, e| s.mode[e].windows_days.as_mut().map(Slot::Windows),
+        ),
+        // written only where the scenario reads recordings ([recording] is given)
+        row(
+            Recording,
+            &[],
+            &TIME_OFFSET_S,
+            "seconds added to each of a recording's time stamps (when a row was measured)",
+            |s, _| {
+                s.recording
+                    .as_mut()
+                    .map(|r| Slot::Optional(&mut r.time_offset_s))
+            },
         ),
         row(
             Sensor,
