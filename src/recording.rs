@@ -2,6 +2,7 @@
 //! each row came from (for messages). Reading files into one is `io::recording`'s job;
 //! `diagnose` and the sensors work on this type only.
 
+use crate::orbit::EnvironmentModel;
 use crate::spec::model::Model;
 use crate::spec::scenario::Sensor;
 
@@ -85,6 +86,106 @@ impl Recording {
         Ok(done)
     }
 
+    /// Takes channel `name` out of the recording; whether it was there.
+    pub fn remove_channel(&mut self, name: &str) -> bool {
+        let Some(k) = self.columns.iter().position(|c| c == name) else {
+            return false;
+        };
+        self.columns.remove(k);
+        self.values.remove(k);
+        true
+    }
+
+    /// The recording's eclipses (rows of channel `column` reading below `below`)
+    /// against `env`'s shadow: the share of rows that agree, and each entry and exit
+    /// (the middle of the two rows around a change of state, where they are at most
+    /// 1.5 of the usual row interval apart) less the predicted crossing.
+    pub fn eclipse_check(
+        &self,
+        column: &str,
+        below: f64,
+        env: &impl EnvironmentModel,
+    ) -> Result<EclipseCheck, RecordingError> {
+        let values = self.channel(column).ok_or_else(|| RecordingError::File {
+            file: self.file.clone(),
+            message: format!(
+                "no `{column}` column, which the scenario's [recording] eclipse_column names"
+            ),
+        })?;
+        let rows: Vec<(f64, bool)> = self
+            .time_s
+            .iter()
+            .zip(values)
+            .filter_map(|(&t, v)| v.map(|v| (t, v < below)))
+            .collect();
+        let agree = rows
+            .iter()
+            .filter(|&&(t, dark)| (env.sun_fraction(t) < 0.5) == dark)
+            .count();
+        let mut gaps: Vec<f64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
+        gaps.sort_by(f64::total_cmp);
+        let usual = gaps.get(gaps.len() / 2).copied().unwrap_or(0.0);
+        let window = 0.1 * env.mean_period_s();
+        let (mut entries_s, mut exits_s) = (Vec::new(), Vec::new());
+        for w in rows.windows(2) {
+            let ((t0, d0), (t1, dark)) = (w[0], w[1]);
+            if d0 == dark || t1 - t0 > 1.5 * usual {
+                continue;
+            }
+            // the nearest predicted crossing of the same kind
+            let mut from = t0 - window;
+            let mut nearest: Option<f64> = None;
+            while let Some((tc, entering)) = env.next_shadow_crossing(from, t1 + window) {
+                let better = nearest
+                    .is_none_or(|n| (tc - 0.5 * (t0 + t1)).abs() < (n - 0.5 * (t0 + t1)).abs());
+                if entering == dark && better {
+                    nearest = Some(tc);
+                }
+                from = tc + 1e-6;
+            }
+            if let Some(tc) = nearest {
+                let offset = 0.5 * (t0 + t1) - tc;
+                if dark {
+                    entries_s.push(offset);
+                } else {
+                    exits_s.push(offset);
+                }
+            }
+        }
+        Ok(EclipseCheck {
+            column: column.to_string(),
+            below,
+            rows: rows.len(),
+            agreement: if rows.is_empty() {
+                0.0
+            } else {
+                agree as f64 / rows.len() as f64
+            },
+            entries_s,
+            exits_s,
+        })
+    }
+
+    /// The check of [`Recording::eclipse_check`] on the column `model`'s `[recording]
+    /// eclipse_column` names, against the model's own shadow (None without one); the
+    /// column then leaves the recording (it is no sensor), unless an `[[input]]` reads
+    /// it. Call it before [`Recording::feed_inputs`], which may make the shadow follow
+    /// that very column.
+    pub fn take_eclipse_check(
+        &mut self,
+        model: &Model,
+    ) -> Result<Option<EclipseCheck>, RecordingError> {
+        let Some(e) = &model.scenario().recording.eclipse else {
+            return Ok(None);
+        };
+        let check =
+            self.eclipse_check(&e.column, e.below, &model.scenario().thermal.environment)?;
+        if !model.spec().input.iter().any(|i| i.column == e.column) {
+            self.remove_channel(&e.column);
+        }
+        Ok(Some(check))
+    }
+
     /// Renames the columns the scenario's sensors read to those sensors' channel names
     /// (telemetry's `Black Chassis deg. C` becomes the sensor's `chassis_black_c`).
     pub fn name_channels(&mut self, sensors: &[Sensor]) {
@@ -121,4 +222,56 @@ impl Recording {
     }
 }
 
-pub use crate::spec::scenario::{DuplicateTimes, RecordingFormat, TIME_COLUMN, TimeFormat};
+pub use crate::spec::scenario::{
+    DuplicateTimes, EclipseColumn, RecordingFormat, TIME_COLUMN, TimeFormat,
+};
+
+/// A recording's eclipses against the orbit's ([`Recording::eclipse_check`]): how far
+/// its clock is from the model's.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct EclipseCheck {
+    pub column: String,
+    pub below: f64,
+    /// Rows with a reading of `column`.
+    pub rows: usize,
+    /// The share of those rows the orbit's shadow puts in the same state.
+    pub agreement: f64,
+    /// Each entry into eclipse in the recording less the predicted one, s.
+    pub entries_s: Vec<f64>,
+    /// Each exit in the recording less the predicted one, s.
+    pub exits_s: Vec<f64>,
+}
+
+impl EclipseCheck {
+    fn mean(v: &[f64]) -> Option<f64> {
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    }
+
+    pub fn mean_entry_s(&self) -> Option<f64> {
+        Self::mean(&self.entries_s)
+    }
+
+    pub fn mean_exit_s(&self) -> Option<f64> {
+        Self::mean(&self.exits_s)
+    }
+
+    /// The clock's offset the edges show, s (recorded − predicted, entries and exits
+    /// together), when at least two of each come early or late alike by 10 s or more
+    /// (a shadow of the wrong size moves them apart instead): the recording's stamps
+    /// then want that much less of `[recording] time_offset_s`.
+    pub fn clock_offset_s(&self) -> Option<f64> {
+        let (entry, exit) = (self.mean_entry_s()?, self.mean_exit_s()?);
+        let all: Vec<f64> = self
+            .entries_s
+            .iter()
+            .chain(&self.exits_s)
+            .copied()
+            .collect();
+        let m = Self::mean(&all)?;
+        (self.entries_s.len() >= 2
+            && self.exits_s.len() >= 2
+            && entry.signum() == exit.signum()
+            && m.abs() >= 10.0)
+            .then_some(m)
+    }
+}

@@ -15,7 +15,7 @@ fn funcube_text() -> String {
 fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
     let dir = tmpdir("telemetry-bad");
     let text = funcube_text();
-    let cases: [(&str, &str, &str, &[&str]); 9] = [
+    let cases: [(&str, &str, &str, &[&str]); 11] = [
         (
             "time-format",
             "time_format = \"utc\"",
@@ -51,6 +51,18 @@ fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
             "time_offset_s = 25.0",
             "time_offset_s = nan",
             &["`recording.time_offset_s`", "finite"],
+        ),
+        (
+            "eclipse-ignored",
+            "  \"Battery mV\",\n",
+            "  \"Battery mV\",\n  \"Tot. Photo Curr. mA\",\n",
+            &["`recording.eclipse_column`", "also in ignore_columns"],
+        ),
+        (
+            "eclipse-below",
+            "eclipse_below = 20.0\n",
+            "",
+            &["`recording.eclipse_below`", "is missing"],
         ),
         (
             "clock-range",
@@ -113,7 +125,9 @@ fn cli_funcube_telemetry_reads_with_its_fill_and_repeated_stamps() {
     assert_eq!(rec.time_s.len() + rec.merged_rows.len(), 1394);
     assert_eq!(rec.merged_rows, vec![392, 638]);
     assert_eq!(rec.fill_rows.len(), 226);
-    assert_eq!(rec.columns.len(), 8);
+    // the eight temperatures and the photo-current (`eclipse_column`)
+    assert_eq!(rec.columns.len(), 9);
+    assert!(rec.remove_channel("Tot. Photo Curr. mA"));
     let scenario = orbitlash::io::scenario_toml::parse(&funcube_text(), "funcube-1.toml").unwrap();
     rec.name_channels(&scenario.sensors);
     assert!(rec.columns.contains(&"chassis_black_c".to_string()));
@@ -147,6 +161,65 @@ fn cli_funcube_telemetry_reads_with_its_fill_and_repeated_stamps() {
             "funcube1_wod_2016-02-04.csv:392:1",
             "same time stamp as line 391",
         ],
+    );
+}
+
+/// `diagnose` checks the recording's clock on its eclipse column (FUNcube-1's
+/// photo-current): with the scenario's 25 s offset the edges straddle zero; with the
+/// stamps as sent they come early by about that much, entries and exits alike, and a
+/// warning gives the offset to set.
+#[test]
+fn cli_diagnose_checks_the_recordings_clock_on_its_eclipses() {
+    let Some(csv) = shared("data/funcube-1/funcube1_wod_2016-02-04.csv") else {
+        return;
+    };
+    let dir = tmpdir("telemetry-clock");
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/funcube-1.toml");
+    let report = |name: &str, sets: &[&str]| {
+        let json = dir.join(format!("{name}.json"));
+        let mut cmd = bin();
+        cmd.args(["diagnose"])
+            .arg(&scenario)
+            .arg("--recording")
+            .arg(&csv)
+            .arg("--json")
+            .arg(&json)
+            .arg("--quiet");
+        for s in sets {
+            cmd.args(["--set", s]);
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{name}: {stderr}");
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+        (v, stderr)
+    };
+    let mean = |v: &serde_json::Value| {
+        let a = v.as_array().unwrap();
+        a.iter().map(|x| x.as_f64().unwrap()).sum::<f64>() / a.len() as f64
+    };
+    let (with, stderr) = report("with", &[]);
+    let e = &with["recording"]["eclipses"];
+    assert_eq!(e["column"], "Tot. Photo Curr. mA");
+    assert_eq!(e["rows"], 1166);
+    assert!(e["agreement"].as_f64().unwrap() > 0.99, "{e}");
+    assert!(e["entries_s"].as_array().unwrap().len() >= 10, "{e}");
+    assert!(
+        mean(&e["entries_s"]).abs() < 10.0 && mean(&e["exits_s"]).abs() < 10.0,
+        "{e}"
+    );
+    assert!(!stderr.contains("clock is off"), "{stderr}");
+    // the photo-current is no channel of the fit
+    assert!(with["heldout_rmse"].get("Tot. Photo Curr. mA").is_none());
+    let (sent, stderr) = report("as-sent", &["recording.time_offset_s=0"]);
+    let e = &sent["recording"]["eclipses"];
+    assert!(
+        mean(&e["entries_s"]) < -15.0 && mean(&e["exits_s"]) < -15.0,
+        "{e}"
+    );
+    assert!(
+        stderr.contains("clock is off") && stderr.contains("time_offset_s = 25 (now 0)"),
+        "{stderr}"
     );
 }
 
@@ -261,7 +334,8 @@ fn cli_inputs_follow_recording_channels() {
     let mut rec =
         orbitlash::io::recording::Recording::read_with(&csv, &model.scenario().recording).unwrap();
     rec.feed_inputs(&mut model).unwrap();
-    assert_eq!(rec.columns.len(), 8);
+    // the temperatures and the photo-current (the eclipse column `diagnose` takes out)
+    assert_eq!(rec.columns.len(), 9);
     match &model.spec().dissipation[0].power_w {
         ProfileSpec::Table(t) => {
             assert_eq!(t.value.len(), 1166);
@@ -300,7 +374,7 @@ fn cli_inputs_follow_recording_channels() {
 #[test]
 fn cli_the_eclipse_flag_follows_a_channel() {
     use orbitlash::orbit::EnvironmentModel;
-    let text = funcube_text().replacen("  \"Tot. Photo Curr. mA\",\n", "", 1)
+    let text = funcube_text()
         + "\n[[input]]\ncolumn = \"Tot. Photo Curr. mA\"\ndrives = \"sunlit\"\nbelow = 20.0\n";
     let spec = orbitlash::io::scenario_toml::parse_spec(&text, "sun.toml").unwrap();
     let mut model = orbitlash::spec::model::Model::new(spec).unwrap();
@@ -349,7 +423,7 @@ fn cli_the_eclipse_flag_follows_a_channel() {
     for (case, text, needles) in [
         (
             "no-below",
-            text.replace("below = 20.0\n", ""),
+            text.replace("\nbelow = 20.0\n", "\n"),
             &["`input[0].below`", "needs `below`"][..],
         ),
         (

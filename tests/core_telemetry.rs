@@ -20,6 +20,7 @@ fn utc_format() -> RecordingFormat {
         repeated_rows_are_fill: true,
         duplicate_times: DuplicateTimes::Refuse,
         time_offset_s: 0.0,
+        eclipse: None,
     }
 }
 
@@ -211,4 +212,29 @@ fn core_mean_of_a_shared_stamp_counts_readings_not_rows() {
                 2016-02-04 00:01:00,6,9\n";
     let r = read(text, &mean).unwrap();
     assert_eq!(r.values[0], vec![Some(1.0), Some(5.0)]);
+}
+
+/// A clock's offset moves a recording's eclipse entries and exits alike; a shadow of
+/// the wrong size moves them apart, and is no clock's offset.
+#[test]
+fn core_a_clock_offset_moves_entries_and_exits_alike() {
+    use orbitlash::recording::EclipseCheck;
+    let check = |entries_s: Vec<f64>, exits_s: Vec<f64>| EclipseCheck {
+        column: "photo".into(),
+        below: 20.0,
+        rows: 100,
+        agreement: 0.99,
+        entries_s,
+        exits_s,
+    };
+    let early = check(vec![-20.0, -22.0], vec![-21.0, -19.0]);
+    assert_eq!(early.clock_offset_s(), Some(-20.5));
+    // a longer shadow: entries early, exits late
+    assert_eq!(
+        check(vec![-20.0, -22.0], vec![21.0, 19.0]).clock_offset_s(),
+        None
+    );
+    // within 10 s, or one edge of a kind, is no finding
+    assert_eq!(check(vec![-8.0, -9.0], vec![-8.0, -9.0]).clock_offset_s(), None);
+    assert_eq!(check(vec![-30.0], vec![-30.0, -30.0]).clock_offset_s(), None);
 }

@@ -143,6 +143,8 @@ fn val_funcube_flight_diagnose_improves_every_held_out_channel() {
     let spec = orbitlash::io::scenario_toml::parse_spec(&text, "funcube-1.toml").unwrap();
     let model = orbitlash::spec::model::Model::new(spec).unwrap();
     let mut rec = Recording::read_with(&csv, &model.scenario().recording).unwrap();
+    let eclipses = rec.take_eclipse_check(&model).unwrap().unwrap();
+    assert!(eclipses.agreement > 0.99, "{eclipses:?}");
     rec.name_channels(&model.scenario().sensors);
     let d = orbitlash::diagnose::diagnose(
         &model,

@@ -100,8 +100,10 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     // Inputs that follow the recording ([[input]]) are set in the model diagnosed.
     let mut model = loaded.model.clone();
     let mut followed = Vec::new();
+    let mut eclipses = None;
     let rec = match Recording::read_with(&a.recording, &loaded.scenario().recording) {
         Ok(mut r) => {
+            eclipses = r.take_eclipse_check(&model)?;
             followed = r.feed_inputs(&mut model)?;
             r.name_channels(&loaded.scenario().sensors);
             r
@@ -176,6 +178,14 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     for f in followed.iter().rev() {
         d.notes.insert(0, format!("input: {f}"));
     }
+    if let Some(m) = eclipses.as_ref().and_then(|c| c.clock_offset_s()) {
+        let now = loaded.scenario().recording.time_offset_s;
+        d.warnings.push(format!(
+            "the recording's eclipses come {m:+.1} s from the orbit's, entries and exits alike: its clock is off; try [recording] time_offset_s = {:.0} (now {now})",
+            now - m
+        ));
+    }
+    d.recording.eclipses = eclipses;
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -482,6 +492,21 @@ fn report_head(o: &mut String, d: &Diagnosis, scenario: &str, recording: &str) {
             lines_shown(&r.fill_rows),
             r.merged_rows.len(),
             lines_shown(&r.merged_rows)
+        );
+    }
+    if let Some(c) = &r.eclipses {
+        let shown = |m: Option<f64>| m.map_or("–".to_string(), |m| format!("{m:+.1} s"));
+        outln!(
+            o,
+            "eclipses: `{}` below {} against the orbit's shadow: {:.2} % of {} rows agree; {} entries {}, {} exits {} from the orbit's (recorded − predicted)",
+            c.column,
+            c.below,
+            100.0 * c.agreement,
+            c.rows,
+            c.entries_s.len(),
+            shown(c.mean_entry_s()),
+            c.exits_s.len(),
+            shown(c.mean_exit_s())
         );
     }
     for n in &d.notes {

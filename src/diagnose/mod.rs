@@ -472,6 +472,11 @@ pub struct RecordingRows {
     pub measured_rows: usize,
     pub fill_rows: Vec<u64>,
     pub merged_rows: Vec<u64>,
+    /// The recording's eclipses against the orbit's, where `[recording]
+    /// eclipse_column` names a column that tells them (filled by the caller that read
+    /// the file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eclipses: Option<crate::recording::EclipseCheck>,
 }
 
 impl RecordingRows {
@@ -1213,6 +1218,7 @@ pub fn diagnose(
         measured_rows: recording.time_s.len() - recording.fill_rows.len(),
         fill_rows: recording.fill_rows.clone(),
         merged_rows: recording.merged_rows.clone(),
+        eclipses: None,
     };
     progress("baseline", 1, 1);
     if !validate {

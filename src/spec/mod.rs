@@ -509,6 +509,13 @@ pub struct RecordingSpec {
     /// Seconds added to every time stamp (when a row was measured against its stamp).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_offset_s: Option<f64>,
+    /// A column that tells sunlight from eclipse (a photo-current, a Sun sensor), read
+    /// by `diagnose` to check the recording's clock against the orbit's eclipses.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eclipse_column: Option<String>,
+    /// The reading of `eclipse_column` below which a row is in eclipse (its units).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eclipse_below: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]

@@ -226,6 +226,16 @@ pub struct RecordingFormat {
     pub duplicate_times: DuplicateTimes,
     /// Seconds added to every time stamp, s: a row measured at its stamp plus this.
     pub time_offset_s: f64,
+    /// The column that tells sunlight from eclipse, for the clock's check.
+    pub eclipse: Option<EclipseColumn>,
+}
+
+/// A recording's column that tells sunlight from eclipse (`[recording] eclipse_column`,
+/// `eclipse_below`): a row reading below `below` is in eclipse.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EclipseColumn {
+    pub column: String,
+    pub below: f64,
 }
 
 /// How a recording gives its time.
@@ -258,6 +268,7 @@ impl Default for RecordingFormat {
             repeated_rows_are_fill: false,
             duplicate_times: DuplicateTimes::Refuse,
             time_offset_s: 0.0,
+            eclipse: None,
         }
     }
 }

@@ -50,6 +50,39 @@ pub(super) fn recording_format(
     f.repeated_rows_are_fill = spec.repeated_rows == Some(RepeatedRows::Fill);
     f.duplicate_times = spec.duplicate_times.unwrap_or(DuplicateTimes::Refuse);
     f.time_offset_s = cx.read_or_default(&r::TIME_OFFSET_S, &p, spec.time_offset_s)?;
+    f.eclipse = match (spec.eclipse_column, spec.eclipse_below) {
+        (None, None) => None,
+        (Some(column), Some(below)) => {
+            if column.trim().is_empty() || column == f.time_column {
+                return Err(cx.err(&p.key("eclipse_column"), "is empty or the time column"));
+            }
+            if f.ignore_columns.contains(&column) {
+                return Err(cx.err(
+                    &p.key("eclipse_column"),
+                    format!("`{column}` is also in ignore_columns: a column is read or ignored, not both"),
+                ));
+            }
+            if !below.is_finite() {
+                return Err(cx.err(
+                    &p.key("eclipse_below"),
+                    format!("must be a finite number (got {below})"),
+                ));
+            }
+            Some(crate::spec::scenario::EclipseColumn { column, below })
+        }
+        (Some(_), None) => {
+            return Err(cx.err(
+                &p.key("eclipse_below"),
+                "is missing: give the reading of eclipse_column below which a row is in eclipse",
+            ));
+        }
+        (None, Some(_)) => {
+            return Err(cx.err(
+                &p.key("eclipse_column"),
+                "is missing: eclipse_below needs the column it reads",
+            ));
+        }
+    };
     Ok(f)
 }
 
