@@ -125,30 +125,34 @@ impl Recording {
         let mut gaps: Vec<f64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
         gaps.sort_by(f64::total_cmp);
         let usual = gaps.get(gaps.len() / 2).copied().unwrap_or(0.0);
-        let window = 0.1 * env.mean_period_s();
+        let crossings = match (rows.first(), rows.last()) {
+            (Some(&(first, _)), Some(&(last, _))) => {
+                let window = 0.1 * env.mean_period_s();
+                shadow_crossings(env, first - window, last + window)
+            }
+            _ => Vec::new(),
+        };
         let (mut entries_s, mut exits_s) = (Vec::new(), Vec::new());
-        for w in rows.windows(2) {
-            let ((t0, d0), (t1, dark)) = (w[0], w[1]);
-            if d0 == dark || t1 - t0 > 1.5 * usual {
+        for k in 0..rows.len().saturating_sub(1) {
+            let ((t0, d0), (t1, dark)) = (rows[k], rows[k + 1]);
+            // a change of state held a row either side, between rows the usual
+            // interval apart (a flicker or a gap is no edge)
+            let held =
+                k >= 1 && rows[k - 1].1 == d0 && rows.get(k + 2).is_some_and(|r| r.1 == dark);
+            if d0 == dark || t1 - t0 > 1.5 * usual || !held {
                 continue;
             }
-            // the nearest predicted crossing of the same kind
-            let mut from = t0 - window;
-            let mut nearest: Option<f64> = None;
-            while let Some((tc, entering)) = env.next_shadow_crossing(from, t1 + window) {
-                let better = nearest
-                    .is_none_or(|n| (tc - 0.5 * (t0 + t1)).abs() < (n - 0.5 * (t0 + t1)).abs());
-                if entering == dark && better {
-                    nearest = Some(tc);
-                }
-                from = tc + 1e-6;
-            }
+            let middle = 0.5 * (t0 + t1);
+            let nearest = crossings
+                .iter()
+                .filter(|c| c.1 == dark)
+                .map(|c| c.0)
+                .min_by(|a, b| (a - middle).abs().total_cmp(&(b - middle).abs()));
             if let Some(tc) = nearest {
-                let offset = 0.5 * (t0 + t1) - tc;
                 if dark {
-                    entries_s.push(offset);
+                    entries_s.push(middle - tc);
                 } else {
-                    exits_s.push(offset);
+                    exits_s.push(middle - tc);
                 }
             }
         }
@@ -161,6 +165,7 @@ impl Recording {
             } else {
                 agree as f64 / rows.len() as f64
             },
+            row_interval_s: usual,
             entries_s,
             exits_s,
         })
@@ -236,10 +241,29 @@ pub struct EclipseCheck {
     pub rows: usize,
     /// The share of those rows the orbit's shadow puts in the same state.
     pub agreement: f64,
+    /// The usual interval between those rows (their median), s: each edge is known to
+    /// about this.
+    pub row_interval_s: f64,
     /// Each entry into eclipse in the recording less the predicted one, s.
     pub entries_s: Vec<f64>,
     /// Each exit in the recording less the predicted one, s.
     pub exits_s: Vec<f64>,
+}
+
+/// Every crossing of `env`'s shadow from `from_s` to `until_s`: (time, entering).
+fn shadow_crossings(env: &impl EnvironmentModel, from_s: f64, until_s: f64) -> Vec<(f64, bool)> {
+    let mut out = Vec::new();
+    let mut t = from_s;
+    while let Some((tc, entering)) = env.next_shadow_crossing(t, until_s) {
+        out.push((tc, entering));
+        // on past it (a microsecond is above the float spacing of any run's time)
+        let next = tc + 1e-6;
+        if next <= t {
+            break;
+        }
+        t = next;
+    }
+    out
 }
 
 impl EclipseCheck {
@@ -256,9 +280,12 @@ impl EclipseCheck {
     }
 
     /// The clock's offset the edges show, s (recorded − predicted, entries and exits
-    /// together), when at least two of each come early or late alike by 10 s or more
-    /// (a shadow of the wrong size moves them apart instead): the recording's stamps
-    /// then want that much less of `[recording] time_offset_s`.
+    /// together), when they tell one: at least two entries and two exits, each kind off
+    /// by 10 s or more the same way (a shadow of the wrong size moves them apart), the
+    /// mean beyond three of its standard errors (an edge between rows `row_interval_s`
+    /// apart is uniform over that interval), and the rows' states agreeing with the
+    /// shadow on 90 % or more. The recording's stamps then want that much less of
+    /// `[recording] time_offset_s`.
     pub fn clock_offset_s(&self) -> Option<f64> {
         let (entry, exit) = (self.mean_entry_s()?, self.mean_exit_s()?);
         let all: Vec<f64> = self
@@ -268,10 +295,14 @@ impl EclipseCheck {
             .copied()
             .collect();
         let m = Self::mean(&all)?;
+        let standard_error = self.row_interval_s / (12.0 * all.len() as f64).sqrt();
         (self.entries_s.len() >= 2
             && self.exits_s.len() >= 2
             && entry.signum() == exit.signum()
-            && m.abs() >= 10.0)
+            && entry.abs() >= 10.0
+            && exit.abs() >= 10.0
+            && m.abs() >= 3.0 * standard_error
+            && self.agreement >= 0.9)
             .then_some(m)
     }
 }

@@ -224,17 +224,123 @@ fn core_a_clock_offset_moves_entries_and_exits_alike() {
         below: 20.0,
         rows: 100,
         agreement: 0.99,
+        row_interval_s: 60.0,
         entries_s,
         exits_s,
     };
-    let early = check(vec![-20.0, -22.0], vec![-21.0, -19.0]);
+    let early = check(
+        vec![-20.0, -22.0, -20.0, -22.0],
+        vec![-21.0, -19.0, -21.0, -19.0],
+    );
     assert_eq!(early.clock_offset_s(), Some(-20.5));
     // a longer shadow: entries early, exits late
     assert_eq!(
         check(vec![-20.0, -22.0], vec![21.0, 19.0]).clock_offset_s(),
         None
     );
-    // within 10 s, or one edge of a kind, is no finding
-    assert_eq!(check(vec![-8.0, -9.0], vec![-8.0, -9.0]).clock_offset_s(), None);
-    assert_eq!(check(vec![-30.0], vec![-30.0, -30.0]).clock_offset_s(), None);
+    // within 10 s, one edge of a kind, or one kind near zero is no finding
+    assert_eq!(
+        check(vec![-8.0, -9.0], vec![-8.0, -9.0]).clock_offset_s(),
+        None
+    );
+    assert_eq!(
+        check(vec![-30.0], vec![-30.0, -30.0]).clock_offset_s(),
+        None
+    );
+    assert_eq!(
+        check(vec![-30.0, -30.0], vec![-2.0, -2.0]).clock_offset_s(),
+        None
+    );
+    // eight edges of hourly rows: a mean of 20 s is inside three standard errors
+    // (3 × 3600 / √96 s)
+    let hourly = EclipseCheck {
+        row_interval_s: 3600.0,
+        ..early.clone()
+    };
+    assert_eq!(hourly.clock_offset_s(), None);
+}
+
+/// The eclipse check on a circular orbit (no shared data): a photo-current every
+/// minute whose stamps run 40 s late gives entries and exits 40 ± 30 s late and that
+/// clock offset; on time, no offset; a gap and a one-row flicker make no edge; an empty
+/// column makes no edge and no offset.
+#[test]
+fn core_the_eclipse_check_finds_a_late_clock_on_a_circular_orbit() {
+    use orbitlash::orbit::EnvironmentModel;
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/reference-hinge.toml"),
+    )
+    .unwrap();
+    let sc = orbitlash::io::scenario_toml::parse(&text, "r.toml").unwrap();
+    let env = &sc.thermal.environment;
+    let period = env.mean_period_s();
+    let photo = |late_s: f64, flicker: bool| {
+        let (mut time_s, mut values) = (Vec::new(), Vec::new());
+        let mut t = 60.0;
+        while t < 4.0 * period {
+            // twenty minutes without packets in the second orbit
+            if !(t > 1.2 * period && t < 1.2 * period + 1200.0) {
+                time_s.push(t);
+                let lit = env.sun_fraction(t - late_s) >= 0.5;
+                values.push(Some(if lit { 300.0 } else { 0.0 }));
+            }
+            t += 60.0;
+        }
+        if flicker {
+            // one dark reading in sunlight, away from the edges
+            let k = time_s
+                .iter()
+                .position(|&t| {
+                    env.sun_fraction(t) == 1.0
+                        && env.sun_fraction(t + 900.0) == 1.0
+                        && env.sun_fraction(t - 900.0) == 1.0
+                })
+                .unwrap();
+            values[k] = Some(0.0);
+        }
+        Recording {
+            file: "pc.csv".into(),
+            columns: vec!["pc".into()],
+            rows_at: (1..=time_s.len() as u64).collect(),
+            values: vec![values],
+            time_s,
+            fill_rows: Vec::new(),
+            merged_rows: Vec::new(),
+        }
+    };
+    let late = photo(40.0, false).eclipse_check("pc", 20.0, env).unwrap();
+    assert_eq!(late.row_interval_s, 60.0);
+    assert!(
+        late.entries_s.len() >= 3 && late.exits_s.len() >= 3,
+        "{late:?}"
+    );
+    for e in late.entries_s.iter().chain(&late.exits_s) {
+        assert!((e - 40.0).abs() <= 30.0 + 1e-6, "{late:?}");
+    }
+    let m = late.clock_offset_s().expect("a late clock");
+    assert!((m - 40.0).abs() < 15.0, "{m}");
+    assert!(late.agreement > 0.95, "{late:?}");
+    // a flicker is no edge
+    let flickers = photo(40.0, true).eclipse_check("pc", 20.0, env).unwrap();
+    assert_eq!(flickers.entries_s, late.entries_s);
+    assert_eq!(flickers.exits_s, late.exits_s);
+    // on time: the edges straddle zero and tell no offset
+    let on_time = photo(0.0, false).eclipse_check("pc", 20.0, env).unwrap();
+    assert_eq!(on_time.clock_offset_s(), None, "{on_time:?}");
+    // no readings: no edges
+    let mut empty = photo(0.0, false);
+    empty.values[0].iter_mut().for_each(|v| *v = None);
+    let none = empty.eclipse_check("pc", 20.0, env).unwrap();
+    assert_eq!((none.rows, none.entries_s.len()), (0, 0));
+    assert_eq!(none.clock_offset_s(), None);
+    // a column that is not there is named
+    let e = late_missing(&photo(0.0, false), env);
+    assert!(
+        e.contains("no `sun` column") && e.contains("eclipse_column"),
+        "{e}"
+    );
+}
+
+fn late_missing(r: &Recording, env: &impl orbitlash::orbit::EnvironmentModel) -> String {
+    r.eclipse_check("sun", 20.0, env).unwrap_err().to_string()
 }

@@ -60,8 +60,8 @@ fn val_funcube_flight_eclipses_beta_and_fraction_from_the_tle() {
     )
     .unwrap();
     let sc = orbitlash::io::scenario_toml::parse(&text, "funcube-1.toml").unwrap();
-    let mut format = sc.recording.clone();
-    format.ignore_columns.retain(|c| c != PHOTO);
+    // the photo-current is the scenario's eclipse column: read, not ignored
+    let format = sc.recording.clone();
     let rec = Recording::read_with(&csv, &format).unwrap();
     let photo = rec.channel(PHOTO).unwrap();
     let env = &sc.thermal.environment;

@@ -165,8 +165,14 @@ impl Observations {
             )));
         }
         if rec.time_s[0] < 0.0 {
+            let offset = sc.recording.time_offset_s;
+            let shifted = if offset == 0.0 {
+                String::new()
+            } else {
+                format!(" with [recording] time_offset_s ({offset} s) added")
+            };
             return Err(DiagnoseError::Recording(format!(
-                "{}: time_s starts at {} s; recordings are timed from the scenario's t = 0",
+                "{}: time_s starts at {} s{shifted}; recordings are timed from the scenario's t = 0",
                 rec.file, rec.time_s[0]
             )));
         }

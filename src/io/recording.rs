@@ -86,7 +86,7 @@ impl Recording {
     }
 
     /// Reads a recording laid out as `fmt` says (CSV; an MCAP recording is always
-    /// `time_s` and its channels).
+    /// `time_s` and its channels, its times shifted by `fmt.time_offset_s` too).
     pub fn read_with(path: &Path, fmt: &RecordingFormat) -> Result<Recording, RecordingError> {
         let file = path.display().to_string();
         let bytes = super::output::check_input(path)

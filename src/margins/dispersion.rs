@@ -315,6 +315,9 @@ impl Plan {
             let id = model
                 .param(&d.path)
                 .map_err(|e| err(at.key("path"), e.to_string()))?;
+            if let Some(why) = id.not_of_the_model() {
+                return Err(err(at.key("path"), why).into());
+            }
             let nominal = model
                 .get(&d.path)
                 .map_err(|e| err(at.key("path"), e.to_string()))?;

@@ -239,6 +239,12 @@ impl Model {
                 message,
             };
             self.get(&u.path).map_err(|e| err("path", e.to_string()))?;
+            let id = self
+                .param(&u.path)
+                .map_err(|e| err("path", e.to_string()))?;
+            if let Some(why) = id.not_of_the_model() {
+                return Err(err("path", why));
+            }
             if !(u.min.is_finite() && u.max.is_finite() && u.min < u.max) {
                 return Err(err(
                     "max",
@@ -368,6 +374,18 @@ impl ParamId {
     /// The row, element and place it names.
     pub fn at(&self) -> ParamRef {
         self.at
+    }
+
+    /// Why it cannot be varied in a simulation, if it cannot: a number of how a
+    /// recording is read (`[recording] time_offset_s`) acts when the file is read, not
+    /// on the model, so calibrating or dispersing it would change nothing.
+    pub fn not_of_the_model(&self) -> Option<String> {
+        (self.row.section == registry::Section::Recording).then(|| {
+            format!(
+                "`{}` is how a recording is read, not a number of the model: it cannot be calibrated or dispersed (set it in the file or with --set)",
+                self.canonical
+            )
+        })
     }
 }
 

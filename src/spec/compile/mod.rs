@@ -133,6 +133,17 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         &diffusion,
     )?;
     let recording = recording_format(cx, raw.recording, &environment)?;
+    if let Some(e) = &recording.eclipse
+        && sensors.iter().any(|s| s.source_column == e.column)
+    {
+        return Err(cx.err(
+            &KeyPath::new("recording").key("eclipse_column"),
+            format!(
+                "`{}` is a [[sensor]]'s column: the eclipse column is read to check the clock, not fitted",
+                e.column
+            ),
+        ));
+    }
 
     let network = Network {
         nodes,
