@@ -538,6 +538,10 @@ pub struct Setup<'a> {
     id: u64,
     runs: u64,
     print: std::cell::OnceCell<u64>,
+    /// Whether a run leaves the solver's memory in its state (false in [`simulate`],
+    /// whose state is dropped: the memory's model print, a hash of the model's whole
+    /// `Debug` text, is then never computed).
+    remembers: bool,
 }
 
 static SETUP_IDS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -563,6 +567,7 @@ impl<'a> Setup<'a> {
             id: SETUP_IDS.fetch_add(1, Ordering::Relaxed),
             runs: 0,
             print: std::cell::OnceCell::new(),
+            remembers: true,
         }
     }
 
@@ -820,6 +825,10 @@ impl<'a> Setup<'a> {
         state.temperatures_k = s.y;
         state.heaters_on = s.heaters_on;
         state.sunlit = s.sunlit;
+        if !self.remembers {
+            state.memory = None;
+            return;
+        }
         let mut schedule = s.schedule;
         schedule.shadow_horizon_s = schedule.shadow_horizon_s.max(t_end_s);
         state.memory = Some(Memory {
@@ -1262,6 +1271,7 @@ pub fn simulate<O: Observer>(
     cancel: Option<&AtomicBool>,
 ) -> Result<RunStats, SimError> {
     let mut setup = Setup::new(model, gears, settings);
+    setup.remembers = false; // the state is dropped below
     let mut state = setup.initial_state();
     setup.run(
         &mut state,
