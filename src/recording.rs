@@ -99,7 +99,8 @@ impl Recording {
     /// The recording's eclipses (rows of channel `column` reading below `below`)
     /// against `env`'s shadow: the share of rows that agree, and each entry and exit
     /// (the middle of the two rows around a change of state, where they are at most
-    /// 1.5 of the usual row interval apart) less the predicted crossing.
+    /// 1.5 of the usual row interval apart, the state held a row either side) less the
+    /// nearest predicted crossing of the same kind within a quarter orbit.
     pub fn eclipse_check(
         &self,
         column: &str,
@@ -125,9 +126,10 @@ impl Recording {
         let mut gaps: Vec<f64> = rows.windows(2).map(|w| w[1].0 - w[0].0).collect();
         gaps.sort_by(f64::total_cmp);
         let usual = gaps.get(gaps.len() / 2).copied().unwrap_or(0.0);
+        let period = env.mean_period_s();
         let crossings = match (rows.first(), rows.last()) {
             (Some(&(first, _)), Some(&(last, _))) => {
-                let window = 0.1 * env.mean_period_s();
+                let window = 0.25 * period;
                 shadow_crossings(env, first - window, last + window)
             }
             _ => Vec::new(),
@@ -143,9 +145,11 @@ impl Recording {
                 continue;
             }
             let middle = 0.5 * (t0 + t1);
+            // within a quarter orbit: an edge the model has no eclipse near is no
+            // measure of the clock
             let nearest = crossings
                 .iter()
-                .filter(|c| c.1 == dark)
+                .filter(|c| c.1 == dark && (c.0 - middle).abs() <= 0.25 * period)
                 .map(|c| c.0)
                 .min_by(|a, b| (a - middle).abs().total_cmp(&(b - middle).abs()));
             if let Some(tc) = nearest {

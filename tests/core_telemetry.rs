@@ -233,24 +233,40 @@ fn core_a_clock_offset_moves_entries_and_exits_alike() {
         vec![-21.0, -19.0, -21.0, -19.0],
     );
     assert_eq!(early.clock_offset_s(), Some(-20.5));
+    // each rule alone, on edges known to the second (the standard error then allows
+    // every mean below)
+    let exact = |entries_s: Vec<f64>, exits_s: Vec<f64>| EclipseCheck {
+        row_interval_s: 1.0,
+        ..check(entries_s, exits_s)
+    };
+    assert_eq!(
+        exact(vec![-30.0, -30.0], vec![-30.0, -30.0]).clock_offset_s(),
+        Some(-30.0)
+    );
     // a longer shadow: entries early, exits late
     assert_eq!(
-        check(vec![-20.0, -22.0], vec![21.0, 19.0]).clock_offset_s(),
+        exact(vec![-40.0, -40.0], vec![20.0, 20.0]).clock_offset_s(),
         None
     );
     // within 10 s, one edge of a kind, or one kind near zero is no finding
     assert_eq!(
-        check(vec![-8.0, -9.0], vec![-8.0, -9.0]).clock_offset_s(),
+        exact(vec![-8.0, -9.0], vec![-8.0, -9.0]).clock_offset_s(),
         None
     );
     assert_eq!(
-        check(vec![-30.0], vec![-30.0, -30.0]).clock_offset_s(),
+        exact(vec![-30.0], vec![-30.0, -30.0]).clock_offset_s(),
         None
     );
     assert_eq!(
-        check(vec![-30.0, -30.0], vec![-2.0, -2.0]).clock_offset_s(),
+        exact(vec![-30.0, -30.0], vec![-2.0, -2.0]).clock_offset_s(),
         None
     );
+    // rows that mostly disagree with the shadow tell nothing
+    let poor = EclipseCheck {
+        agreement: 0.8,
+        ..exact(vec![-30.0, -30.0], vec![-30.0, -30.0])
+    };
+    assert_eq!(poor.clock_offset_s(), None);
     // eight edges of hourly rows: a mean of 20 s is inside three standard errors
     // (3 × 3600 / √96 s)
     let hourly = EclipseCheck {
@@ -287,13 +303,16 @@ fn core_the_eclipse_check_finds_a_late_clock_on_a_circular_orbit() {
             t += 60.0;
         }
         if flicker {
-            // one dark reading in sunlight, away from the edges
+            // one dark reading in sunlight, after the second orbit, five to seven
+            // minutes before an eclipse: within reach of that entry
             let k = time_s
                 .iter()
                 .position(|&t| {
-                    env.sun_fraction(t) == 1.0
-                        && env.sun_fraction(t + 900.0) == 1.0
-                        && env.sun_fraction(t - 900.0) == 1.0
+                    t > 2.0 * period
+                        && [-120.0, 0.0, 120.0, 300.0]
+                            .iter()
+                            .all(|d| env.sun_fraction(t + d) == 1.0)
+                        && env.sun_fraction(t + 420.0) == 0.0
                 })
                 .unwrap();
             values[k] = Some(0.0);

@@ -228,9 +228,25 @@ impl Model {
     }
 
     /// Each `[[uncertain]]` names a number of the model, with finite bounds min < max
-    /// that the model accepts at both ends.
+    /// that the model accepts at both ends; no `[[uncertain]]` or `[[dispersion]]`
+    /// names how a recording is read.
     fn check_uncertain(&self) -> Result<(), SpecError> {
         use crate::spec::keys::KeyPath;
+        // a dispersed number is a calibration candidate of `diagnose` too: neither may
+        // be how a recording is read (the rest of a dispersion is `Plan::new`'s check)
+        for (i, d) in self.spec.dispersion.iter().enumerate() {
+            if let Some(why) = self
+                .param(&d.path)
+                .ok()
+                .and_then(|id| id.not_of_the_model())
+            {
+                return Err(SpecError {
+                    also: None,
+                    key: KeyPath::new("dispersion").at(i).key("path"),
+                    message: why,
+                });
+            }
+        }
         for (i, u) in self.spec.uncertain.iter().enumerate() {
             let at = KeyPath::new("uncertain").at(i);
             let err = |key: &'static str, message: String| SpecError {
