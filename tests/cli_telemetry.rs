@@ -293,6 +293,14 @@ fn cli_uncertain_numbers_are_calibration_candidates() {
             needles,
         );
     }
+    // a dispersed number is a calibration candidate too
+    assert_check_refuses(
+        &dir,
+        "dispersed-clock",
+        &(funcube_text()
+            + "\n[[dispersion]]\npath = \"recording.time_offset_s\"\ndistribution = \"uniform\"\nmin = 0.0\nmax = 60.0\n"),
+        &["`dispersion[0].path`", "how a recording is read"],
+    );
 }
 
 /// Telemetry-driven inputs (`[[input]]`): a dissipation's power follows the system
