@@ -226,6 +226,13 @@ fn cli_a_bad_value_gives_the_files_error() {
         c.contains("no such number") && c.contains("housing, motor"),
         "{c}"
     );
+    // the reference hinge has no [recording] table: the clock offset is named with
+    // where it lives
+    let r = err(&["run", "s.toml", "--set", "recording.time_offset_s=25"]);
+    assert!(
+        r.contains("no such number") && r.contains("in a [recording] table"),
+        "{r}"
+    );
     let d = err(&["run", "s.toml", "--set", "environment.beta_deg=twenty"]);
     assert!(
         d.contains("environment.beta_deg") && d.contains("not a number"),

@@ -99,21 +99,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     }
     // Inputs that follow the recording ([[input]]) are set in the model diagnosed.
     let mut model = loaded.model.clone();
-    let mut followed = Vec::new();
-    let mut eclipses = None;
-    let rec = match Recording::read_with(&a.recording, &loaded.scenario().recording) {
-        Ok(mut r) => {
-            eclipses = r.take_eclipse_check(&model)?;
-            followed = r.feed_inputs(&mut model)?;
-            r.name_channels(&loaded.scenario().sensors);
-            r
-        }
-        // An orbitlash run log: its node temperatures and backlash as the sensors read.
-        Err(e) => match recording_from_log(&a.recording, loaded.scenario()) {
-            Some(r) => r,
-            None => return Err(e.into()),
-        },
-    };
+    let (rec, followed, eclipses) = read_recording(&a.recording, &mut model)?;
     // The recording against the model (channels, values, time base, the held-out
     // split), before the cost estimate: what cannot be judged is refused first.
     diagnose::data::Observations::new(&rec, model.scenario(), a.holdout_orbits)?;
@@ -221,6 +207,29 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     }
     print_out(&o)?;
     Ok(Outcome::Pass)
+}
+
+/// The recording at `path` as `model`'s `[recording]` lays it out (or an orbitlash run
+/// log): its clock checked on the eclipse column, its `[[input]]` channels fed to
+/// `model`, its channels named after the sensors. Returns it with what the inputs did
+/// and the clock's check.
+fn read_recording(
+    path: &Path,
+    model: &mut orbitlash::spec::model::Model,
+) -> Result<(Recording, Vec<String>, Option<orbitlash::recording::EclipseCheck>)> {
+    match Recording::read_with(path, &model.scenario().recording) {
+        Ok(mut r) => {
+            let eclipses = r.take_eclipse_check(model)?;
+            let followed = r.feed_inputs(model)?;
+            r.name_channels(&model.scenario().sensors);
+            Ok((r, followed, eclipses))
+        }
+        // An orbitlash run log: its node temperatures and backlash as the sensors read.
+        Err(e) => match recording_from_log(path, model.scenario()) {
+            Some(r) => Ok((r, Vec::new(), None)),
+            None => Err(e.into()),
+        },
+    }
 }
 
 fn residual_plot_name(channel: &str) -> String {

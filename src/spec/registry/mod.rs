@@ -587,6 +587,13 @@ fn unknown(text: &str, keys: &ElementKeys) -> ParamError {
             return None;
         };
         let section = Section::from_name(first).filter(|s| *s != Section::Sensor)?;
+        if section == Section::Recording {
+            // its one number exists only where the table does
+            return Some(format!(
+                " (recording: `{}`, in a [recording] table the scenario must have)",
+                TIME_OFFSET_S.name
+            ));
+        }
         let known: Vec<String> = section.keys(keys)?.iter().map(|k| quote_key(k)).collect();
         Some(format!(" ({first}: {})", known.join(", ")))
     });
