@@ -216,7 +216,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
 fn read_recording(
     path: &Path,
     model: &mut orbitlash::spec::model::Model,
-) -> Result<(Recording, Vec<String>, Option<orbitlash::recording::EclipseCheck>)> {
+) -> Result<(
+    Recording,
+    Vec<String>,
+    Option<orbitlash::recording::EclipseCheck>,
+)> {
     match Recording::read_with(path, &model.scenario().recording) {
         Ok(mut r) => {
             let eclipses = r.take_eclipse_check(model)?;
