@@ -80,8 +80,7 @@ impl Recording {
                 });
             }
             done.push(model.follow_input(i, &readings)?);
-            self.columns.remove(k);
-            self.values.remove(k);
+            self.remove_channel(&inp.column);
         }
         Ok(done)
     }

@@ -14,32 +14,11 @@ const PHOTO: &str = "Tot. Photo Curr. mA";
 /// 100 … 412 mA; in eclipse it reads 0).
 const DARK_MA: f64 = 20.0;
 
-/// The eclipse entries and exits of the photo-current (where consecutive measured rows
-/// a minute apart change state, the middle of that minute) less the predicted crossing,
-/// s: (entries, exits).
+/// The eclipse entries and exits of the photo-current less the predicted crossings, s:
+/// (entries, exits), as `diagnose`'s clock check finds them (`Recording::eclipse_check`).
 fn edge_offsets(rec: &Recording, env: &impl EnvironmentModel) -> (Vec<f64>, Vec<f64>) {
-    let photo = rec.channel(PHOTO).unwrap();
-    let (mut entries, mut exits) = (Vec::new(), Vec::new());
-    let mut last: Option<(f64, bool)> = None;
-    for (j, &t) in rec.time_s.iter().enumerate() {
-        let Some(pc) = photo[j] else { continue };
-        let dark = pc < DARK_MA;
-        if let Some((t0, d0)) = last
-            && d0 != dark
-            && t - t0 <= 61.0
-            && let Some((tc, entering)) = env.next_shadow_crossing(t0 - 120.0, t + 120.0)
-            && entering == dark
-        {
-            let offset = 0.5 * (t0 + t) - tc;
-            if dark {
-                entries.push(offset)
-            } else {
-                exits.push(offset)
-            }
-        }
-        last = Some((t, dark));
-    }
-    (entries, exits)
+    let c = rec.eclipse_check(PHOTO, DARK_MA, env).unwrap();
+    (c.entries_s, c.exits_s)
 }
 
 fn mean(v: &[f64]) -> f64 {

@@ -165,12 +165,7 @@ impl Observations {
             )));
         }
         if rec.time_s[0] < 0.0 {
-            let offset = sc.recording.time_offset_s;
-            let shifted = if offset == 0.0 {
-                String::new()
-            } else {
-                format!(" with [recording] time_offset_s ({offset} s) added")
-            };
+            let shifted = crate::spec::scenario::time_offset_note(sc.recording.time_offset_s);
             return Err(DiagnoseError::Recording(format!(
                 "{}: time_s starts at {} s{shifted}; recordings are timed from the scenario's t = 0",
                 rec.file, rec.time_s[0]

@@ -64,11 +64,7 @@ fn time_of(
             })?;
             let t = ns as f64 / 1e9 + offset_s;
             if t < 0.0 {
-                let shifted = if offset_s == 0.0 {
-                    String::new()
-                } else {
-                    format!(" once [recording] time_offset_s ({offset_s} s) is added")
-                };
+                let shifted = crate::spec::scenario::time_offset_note(offset_s);
                 return Err(err(format!(
                     "`{cell}` is before the scenario's start_utc ({}){shifted}: the run starts at the recording's first row or earlier",
                     origin.format("%Y-%m-%dT%H:%M:%SZ")

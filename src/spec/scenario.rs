@@ -259,6 +259,16 @@ pub enum DuplicateTimes {
     Mean,
 }
 
+/// What an error about a time says of `[recording] time_offset_s` when it is set
+/// (" with [recording] time_offset_s (25 s) added"; nothing at 0).
+pub fn time_offset_note(offset_s: f64) -> String {
+    if offset_s == 0.0 {
+        String::new()
+    } else {
+        format!(" with [recording] time_offset_s ({offset_s} s) added")
+    }
+}
+
 impl Default for RecordingFormat {
     fn default() -> Self {
         RecordingFormat {
