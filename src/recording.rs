@@ -305,7 +305,18 @@ impl EclipseCheck {
             && entry.abs() >= 10.0
             && exit.abs() >= 10.0
             && m.abs() >= 3.0 * standard_error
-            && self.agreement >= 0.9)
+            && self.agreement >= AGREEMENT)
             .then_some(m)
     }
+
+    /// Whether the rows' states agree with the orbit's shadow on less than 90 %: the
+    /// clock, the orbit or the threshold is off by more than the edges can say (a clock
+    /// minutes off, or a day: the edges then meet other crossings, or none).
+    pub fn disagrees(&self) -> bool {
+        self.rows > 0 && self.agreement < AGREEMENT
+    }
 }
+
+/// The share of rows whose state must agree with the orbit's shadow for the edges to
+/// tell the clock's offset.
+const AGREEMENT: f64 = 0.9;

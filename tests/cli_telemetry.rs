@@ -15,7 +15,7 @@ fn funcube_text() -> String {
 fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
     let dir = tmpdir("telemetry-bad");
     let text = funcube_text();
-    let cases: [(&str, &str, &str, &[&str]); 12] = [
+    let cases: [(&str, &str, &str, &[&str]); 14] = [
         (
             "time-format",
             "time_format = \"utc\"",
@@ -63,6 +63,22 @@ fn cli_bad_recording_layouts_and_sensors_are_refused_with_key_and_line() {
             "eclipse_column = \"Tot. Photo Curr. mA\"",
             "eclipse_column = \"Black Chassis deg. C\"",
             &["`recording.eclipse_column`", "a [[sensor]]'s column"],
+        ),
+        (
+            "sensor-ignored",
+            "  \"Battery mV\",\n",
+            "  \"Battery mV\",\n  \"Black Chassis deg. C\",\n",
+            &[
+                "`sensor.chassis_black_c.column`",
+                "ignored column",
+                "read or ignored, not both",
+            ],
+        ),
+        (
+            "sensor-time",
+            "column = \"Silver Chassis deg. C\"",
+            "column = \"Satellite Date/Time UTC\"",
+            &["`sensor.chassis_silver_c.column`", "time column"],
         ),
         (
             "eclipse-below",
@@ -229,6 +245,50 @@ fn cli_diagnose_checks_the_recordings_clock_on_its_eclipses() {
     );
     assert!(
         stderr.contains("clock is off") && stderr.contains("time_offset_s = 25 (now 0)"),
+        "{stderr}"
+    );
+    // Ten minutes off: the rows disagree with the shadow on a fifth of the day, and
+    // the warning says so (the offset rule asks for 90 % agreement).
+    let (far, stderr, _) = report("far", &["recording.time_offset_s=625"]);
+    assert!(
+        stderr.contains("agree with the orbit's shadow on only")
+            && stderr.contains("its clock ([recording] time_offset_s, now 625 s)"),
+        "{stderr}"
+    );
+    assert!(
+        far["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("on only")),
+        "{far}"
+    );
+    // A sensor whose column the recording lacks is named, not dropped in silence.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let without: String = text
+        .lines()
+        .map(|l| {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            cells.remove(2);
+            cells.join(",") + "\n"
+        })
+        .collect();
+    let cut = dir.join("without-silver-chassis.csv");
+    std::fs::write(&cut, without).unwrap();
+    let out = bin()
+        .arg("diagnose")
+        .arg(&scenario)
+        .arg("--recording")
+        .arg(&cut)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(
+            "sensor `chassis_silver_c` (column `Silver Chassis deg. C`) is not in the recording: diagnose fits the other 7 channel(s)"
+        ),
         "{stderr}"
     );
 }

@@ -105,6 +105,27 @@ fn core_recording_errors_name_file_line_and_column() {
             assert!(e.contains(n), "{text:?}: `{e}` lacks `{n}`");
         }
     }
+    // A control character of the file is shown escaped, never sent to the terminal
+    // (a NUL, an escape sequence, a line break inside a quoted cell).
+    for (text, shown) in [
+        ("time_s,a\n0,1.2\u{0}3\n", "`1.2\\u{0}3`"),
+        ("time_s,a\n0,\u{1b}[31m\n", "`\\u{1b}[31m`"),
+        ("time_s,a\n0,\"12\n.5\"\n", "`12\\u{a}.5`"),
+    ] {
+        let e = error(text);
+        assert!(e.contains(shown), "{text:?}: `{e}` lacks `{shown}`");
+        assert!(!e.chars().any(char::is_control), "{text:?}: `{e:?}`");
+    }
+    // Lines that end in a lone CR (old Mac files) are counted as lines, as with LF and
+    // CR LF: the error names the line where the time goes back.
+    for eol in ["\n", "\r\n", "\r"] {
+        let text = ["time_s,a", "0,1", "60,2", "30,3", ""].join(eol);
+        let e = error(&text);
+        assert!(
+            e.contains("rec.csv:4:1") && e.contains("30 s after 60 s on line 3"),
+            "{eol:?}: {e}"
+        );
+    }
     // not UTF-8
     let e = Recording::from_csv(b"time_s,a\n0,\xff\n", "rec.csv")
         .unwrap_err()

@@ -267,6 +267,8 @@ fn core_a_clock_offset_moves_entries_and_exits_alike() {
         ..exact(vec![-30.0, -30.0], vec![-30.0, -30.0])
     };
     assert_eq!(poor.clock_offset_s(), None);
+    // but they are a disagreement of their own, which the offset rule cannot judge
+    assert!(poor.disagrees() && !early.disagrees());
     // eight edges of hourly rows: a mean of 20 s is inside three standard errors
     // (3 × 3600 / √96 s)
     let hourly = EclipseCheck {
@@ -346,12 +348,18 @@ fn core_the_eclipse_check_finds_a_late_clock_on_a_circular_orbit() {
     // on time: the edges straddle zero and tell no offset
     let on_time = photo(0.0, false).eclipse_check("pc", 20.0, env).unwrap();
     assert_eq!(on_time.clock_offset_s(), None, "{on_time:?}");
+    assert!(!on_time.disagrees() && !late.disagrees());
+    // a clock a quarter of an hour late: the rows disagree with the shadow (an eclipse
+    // lasts about 35 minutes), which is said, not hidden behind the offset rule
+    let far = photo(900.0, false).eclipse_check("pc", 20.0, env).unwrap();
+    assert!(far.agreement < 0.9 && far.disagrees(), "{far:?}");
     // no readings: no edges
     let mut empty = photo(0.0, false);
     empty.values[0].iter_mut().for_each(|v| *v = None);
     let none = empty.eclipse_check("pc", 20.0, env).unwrap();
     assert_eq!((none.rows, none.entries_s.len()), (0, 0));
     assert_eq!(none.clock_offset_s(), None);
+    assert!(!none.disagrees());
     // a column that is not there is named
     let e = late_missing(&photo(0.0, false), env);
     assert!(

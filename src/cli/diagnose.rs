@@ -100,6 +100,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     // Inputs that follow the recording ([[input]]) are set in the model diagnosed.
     let mut model = loaded.model.clone();
     let (rec, followed, eclipses) = read_recording(&a.recording, &mut model)?;
+    let absent = absent_sensors(&rec, &model);
     // The recording against the model (channels, values, time base, the held-out
     // split), before the cost estimate: what cannot be judged is refused first.
     diagnose::data::Observations::new(&rec, model.scenario(), a.holdout_orbits)?;
@@ -164,13 +165,13 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     for f in followed.iter().rev() {
         d.notes.insert(0, format!("input: {f}"));
     }
-    if let Some(m) = eclipses.as_ref().and_then(|c| c.clock_offset_s()) {
-        let now = loaded.scenario().recording.time_offset_s;
-        d.warnings.push(format!(
-            "the recording's eclipses come {m:+.1} s from the orbit's, entries and exits alike: its clock is off; try [recording] time_offset_s = {:.0} (now {now})",
-            now - m
-        ));
+    if let Some(w) = eclipses
+        .as_ref()
+        .and_then(|c| eclipse_warning(c, loaded.scenario().recording.time_offset_s))
+    {
+        d.warnings.push(w);
     }
+    d.warnings.extend(absent);
     d.recording.eclipses = eclipses;
     if let Some(b) = bar {
         b.finish_and_clear();
@@ -234,6 +235,53 @@ fn read_recording(
             None => Err(e.into()),
         },
     }
+}
+
+/// What the recording's eclipses say of its clock, when it is off: the offset to set
+/// when its edges tell one ([`EclipseCheck::clock_offset_s`]), else, when its rows
+/// disagree with the orbit's shadow ([`EclipseCheck::disagrees`]), where to look.
+fn eclipse_warning(c: &orbitlash::recording::EclipseCheck, now: f64) -> Option<String> {
+    if let Some(m) = c.clock_offset_s() {
+        return Some(format!(
+            "the recording's eclipses come {m:+.1} s from the orbit's, entries and exits alike: its clock is off; try [recording] time_offset_s = {:.0} (now {now})",
+            now - m
+        ));
+    }
+    c.disagrees().then(|| {
+        let edges = match (c.mean_entry_s(), c.mean_exit_s()) {
+            (Some(e), Some(x)) => format!(
+                "its entries come {e:+.1} s and its exits {x:+.1} s from the orbit's"
+            ),
+            _ => "none of its edges is within a quarter orbit of the orbit's".to_string(),
+        };
+        format!(
+            "the recording's eclipses (`{}` below {}) agree with the orbit's shadow on only {:.1} % of its rows and {edges}: its clock ([recording] time_offset_s, now {now} s), the orbit ([orbit] tle, start_utc) or eclipse_below is off",
+            orbitlash::units::shown(&c.column),
+            c.below,
+            100.0 * c.agreement
+        )
+    })
+}
+
+/// A warning for each sensor of the scenario the recording has no column for (an input
+/// that follows a sensor's column takes it on purpose): the fit goes on without it.
+fn absent_sensors(rec: &Recording, model: &orbitlash::spec::model::Model) -> Vec<String> {
+    let inputs = &model.spec().input;
+    let sensors = &model.scenario().sensors;
+    sensors
+        .iter()
+        .filter(|s| {
+            !rec.columns.contains(&s.column) && !inputs.iter().any(|i| i.column == s.source_column)
+        })
+        .map(|s| {
+            format!(
+                "sensor `{}` (column `{}`) is not in the recording: diagnose fits the other {} channel(s) without it",
+                orbitlash::units::shown(&s.column),
+                orbitlash::units::shown(&s.source_column),
+                rec.columns.len()
+            )
+        })
+        .collect()
 }
 
 fn residual_plot_name(channel: &str) -> String {

@@ -138,11 +138,12 @@ impl Recording {
         file: &str,
         fmt: &RecordingFormat,
     ) -> Result<Recording, RecordingError> {
+        // the file's text may hold anything: control characters are shown escaped
         let at = |line: u64, column: usize, message: String| RecordingError::At {
             file: file.to_string(),
             line,
             column,
-            message,
+            message: crate::units::shown(&message).into_owned(),
         };
         let mut reader = csv::ReaderBuilder::new()
             .has_headers(true)
@@ -199,7 +200,8 @@ impl Recording {
     }
 }
 
-/// Where each line of a text begins: the csv crate does not count blank lines.
+/// Where each line of a text begins: the csv crate does not count blank lines. A line
+/// ends at LF, CR LF or a lone CR (as the csv crate reads them).
 struct LineIndex<'b> {
     bytes: &'b [u8],
     newlines: Vec<usize>,
@@ -210,7 +212,9 @@ impl<'b> LineIndex<'b> {
         let newlines = bytes
             .iter()
             .enumerate()
-            .filter_map(|(i, &b)| (b == b'\n').then_some(i))
+            .filter_map(|(i, &b)| {
+                (b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n'))).then_some(i)
+            })
             .collect();
         LineIndex { bytes, newlines }
     }
