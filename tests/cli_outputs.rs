@@ -229,6 +229,36 @@ fn cli_missing_folders_are_created_only_under_logs() {
         &nothing,
         &["s.toml/x.mcap"],
     );
+    // A folder that takes no file (here /sys, which refuses files to root as well) is
+    // found before the run: nothing is written, the log and the CSV included, where
+    // the JSON used to fail only after the whole run, leaving the others written.
+    refused(
+        "unwritable-json",
+        &[
+            "run",
+            "s.toml",
+            "--orbits",
+            "1",
+            "--out",
+            "n.mcap",
+            "--csv",
+            "n.csv",
+            "--json",
+            "/sys/n.json",
+        ],
+        &nothing,
+        &["/sys/n.json", "cannot be written in"],
+    );
+    // plot's default figure folder is created as well
+    let dir = setup("default-logs-plot");
+    let out = run_in(&dir, &["plot", "l.mcap"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("logs/l.png").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
     // the default log's folder is created
     let dir = setup("default-logs");
     let out = run_in(&dir, &["run", "s.toml", "--orbits", "1", "--quiet"]);

@@ -97,6 +97,37 @@ fn cli_plot_a_log_as_png_and_svg_with_eclipses_verdict_and_smallest_backlash() {
         .filter(|v| v.contains('.'))
         .count();
     assert!(fractional > 1000, "{fractional} sub-pixel coordinates");
+    // A copy cut off before the log's end record (a killed run's, a truncated copy)
+    // draws what it holds and no verdict: PASS was judged from rows that stop early.
+    let cut = dir.join("cut.mcap");
+    let bytes = std::fs::read(&log).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let cut_svg = dir.join("cut.svg");
+    let out = common::bin()
+        .arg("plot")
+        .arg(&cut)
+        .arg("--out")
+        .arg(&cut_svg)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("has no end record"),
+        "{out:?}"
+    );
+    let labels: Vec<String> = std::fs::read_to_string(&cut_svg)
+        .unwrap()
+        .split("aria-label=\"")
+        .skip(1)
+        .map(|t| t.split('"').next().unwrap().to_string())
+        .collect();
+    assert!(
+        labels
+            .iter()
+            .any(|l| l.contains("INCOMPLETE: the log has no end record")),
+        "{labels:?}"
+    );
+    assert!(!labels.iter().any(|l| l.contains("PASS")), "{labels:?}");
 }
 
 #[test]

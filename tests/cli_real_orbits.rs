@@ -520,3 +520,110 @@ fn cli_the_logged_face_fluxes_account_for_the_face_loads() {
     }
     assert!(rows > 40, "{rows} rows");
 }
+
+/// A TLE whose orbit decays in about two weeks (an ISS-like orbit at 16.25 revolutions a
+/// day with a strong drag term). `check` refuses a run past its decay, by the orbit's
+/// perigee, not by where a day's point happens to fall; a `--set` of the run's length
+/// within its life runs, as the same edit in the file would; `environment` refuses the
+/// days after it instead of writing NaN; and a refused run leaves a log already at its
+/// path as it was.
+#[test]
+fn cli_a_decaying_orbit_is_refused_before_anything_is_written() {
+    let dir = tmpdir("tle-decay");
+    let text = tle_text()
+        .replace(
+            "1 39444U 13066AE  16035.38257241  .00000865  00000-0  11531-3 0  9990",
+            "1 99999U 16001A   16035.38257241  .02000000  00000-0  48000-3 0  9997",
+        )
+        .replace(
+            "2 39444  97.7004  94.3150 0060634  98.1157 262.6940 14.80829622117779",
+            "2 99999  51.6400  94.3150 0005000  98.1157 262.6940 16.25000000 10005",
+        )
+        .replace("duration_days = 365.0", "duration_days = 16.0");
+    assert!(text.contains("99999U") && text.contains("duration_days = 16.0"));
+    let file = dir.join("decay.toml");
+    std::fs::write(&file, &text).unwrap();
+    // the run would meet the decay at 15.7 days; a day's points (0 … 16) all lie above
+    // 80 km, the perigee does not
+    let out = bin().arg("check").arg(&file).output().unwrap();
+    assert_error(
+        "decay",
+        &out,
+        &["`orbit.tle`", "has decayed", "perigee altitude"],
+    );
+    // shortened by --set, as in the file
+    let out = bin()
+        .arg("check")
+        .arg(&file)
+        .args(["--set", "run.duration_days=2"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // a good log at the path stays as it was when the run is refused
+    let log = dir.join("kept.mcap");
+    let good = bin()
+        .args(["run", "--orbits", "1", "--quiet", "--out"])
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert!(good.status.success());
+    let before = std::fs::read(&log).unwrap();
+    let out = bin()
+        .arg("run")
+        .arg(&file)
+        .args(["--quiet", "--out"])
+        .arg(&log)
+        .output()
+        .unwrap();
+    assert_error("decay-run", &out, &["has decayed"]);
+    assert_eq!(std::fs::read(&log).unwrap(), before, "the log was replaced");
+    // environment past the decay: refused, no CSV
+    let csv = dir.join("env.csv");
+    let out = bin()
+        .arg("environment")
+        .arg(&file)
+        .args(["--set", "run.duration_days=2", "--orbits", "262", "--csv"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert_error("decay-environment", &out, &["--orbits 262", "has decayed"]);
+    assert!(!csv.exists());
+}
+
+/// An Earth radius that reaches the orbit (a radius in km, or the orbit's own) is
+/// refused, naming the key: the spacecraft would be inside the Earth, in its shadow all
+/// day.
+#[test]
+fn cli_an_earth_radius_above_the_orbit_is_refused() {
+    let dir = tmpdir("tle-earth-radius");
+    let (out, _) = check_with(
+        &dir,
+        "earth-radius",
+        "shadow = \"conical\"",
+        "shadow = \"conical\"\nearth_radius_m = 7.5e6",
+    );
+    assert_error(
+        "earth-radius",
+        &out,
+        &[
+            "`orbit.earth_radius_m`",
+            "(7500 km) reaches the orbit's perigee",
+            "inside the Earth",
+        ],
+    );
+    let (out, _) = check_with(
+        &dir,
+        "earth-radius-ok",
+        "shadow = \"conical\"",
+        "shadow = \"conical\"\nearth_radius_m = 6.371e6",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

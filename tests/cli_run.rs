@@ -231,3 +231,32 @@ fn cli_backlash_calculator_table_and_json() {
         .unwrap();
     assert!(!out.status.success());
 }
+
+/// A smallest backlash at the run's very end (β = 90°: no eclipse, the mechanism still
+/// cooling) is in the run's last orbit, whatever the rounding of N periods: the instant
+/// N T ends orbit N (it was reported as orbit N + 1 for 1, 2 and 4 orbits, orbit N for
+/// 3).
+#[test]
+fn cli_the_run_s_last_instant_is_in_its_last_orbit() {
+    let dir = common::tmpdir("last-orbit");
+    let file = dir.join("beta90.toml");
+    std::fs::write(
+        &file,
+        common::reference_with(&[("beta_deg = 20.0", "beta_deg = 90.0")]),
+    )
+    .unwrap();
+    for n in 1..=4 {
+        let out = common::bin()
+            .arg("run")
+            .arg(&file)
+            .args(["--no-log", "--orbits", &n.to_string()])
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("PASS mesh") || l.starts_with("FAIL mesh"))
+            .unwrap_or_else(|| panic!("{text}"));
+        assert!(line.contains(&format!("orbit {n}, ")), "{n} orbits: {line}");
+    }
+}

@@ -81,6 +81,9 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     let env = &sc.thermal.environment;
     let period = env.mean_period_s();
     let horizon = sc.run.duration_s;
+    // every point of the orbit's table over the orbits shown, or the orbit's failure
+    orbitlash::run::sim::check_orbit(env, horizon)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", loaded.file))?;
     let step = a.step_s.unwrap_or(period / 360.0);
     // the rows are only made for --csv and --plot
     if (a.csv.is_some() || a.plot.is_some()) && horizon / step > MAX_ROWS {

@@ -244,12 +244,24 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
             format!("<embedded {REFERENCE_HINGE_NAME}.toml>"),
         ),
     };
-    let mut model = Model::new(spec).map_err(|e| scenario_toml::located(&toml, &file, e))?;
     let mut changes = Vec::new();
     for s in sets {
         let (key, value) = parse_assignment(s).map_err(|e| anyhow::anyhow!("--set {s}: {e}"))?;
         changes.push((key, value));
     }
+    let mut model = match Model::new(spec.clone()) {
+        Ok(m) => m,
+        // The file's values may fail where the changes fix them (`--set
+        // run.duration_days` within the days a decaying orbit lasts), as editing the
+        // file would: the file's own error stands when they do not.
+        Err(e) => match (!changes.is_empty())
+            .then(|| Model::with_changes(spec, &changes).ok())
+            .flatten()
+        {
+            Some(m) => m,
+            None => return Err(scenario_toml::located(&toml, &file, e).into()),
+        },
+    };
     if !changes.is_empty() {
         model.set_many(&changes).map_err(|e| match e {
             ModelError::Param(p) => {

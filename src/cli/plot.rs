@@ -197,11 +197,13 @@ pub fn plot(a: PlotArgs) -> Result<()> {
         None => {
             // the default, logs/<name>.png: logs/ is made if missing
             let o = default_out(&a.input);
-            Outputs::new(OutputPolicy::default_in_logs(&[&a.input])).folder(
+            let mut folder = Outputs::new(OutputPolicy::default_in_logs(&[&a.input]));
+            folder.folder(
                 "the default figure folder",
                 o.parent().expect("logs/<name>"),
                 true,
             )?;
+            folder.create_folders()?;
             o
         }
     };
@@ -228,8 +230,16 @@ pub fn draw(
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
         || input.to_string_lossy().ends_with(".partial");
     let mut end = end.cloned();
+    let mut cut_off = false;
     let (name, headers, rows) = if is_log {
         let table = read_log(input)?;
+        cut_off = end.is_none() && !table.metadata.contains_key("orbitlash.run_end");
+        if cut_off {
+            eprintln!(
+                "note: {} has no end record (a killed run, a cut-off or recovered copy): the figure shows the rows it holds and no verdict",
+                input.display()
+            );
+        }
         if let Some(e) = table
             .metadata
             .get("orbitlash.run_end")
@@ -260,6 +270,7 @@ pub fn draw(
     let mut series = RunSeries::from_table(&title, &headers, &rows)
         .with_context(|| format!("cannot plot {}", input.display()))?;
     series.end = end;
+    series.cut_off = cut_off && series.end.is_none();
     if !nodes.is_empty() {
         series
             .keep_nodes(nodes)

@@ -159,6 +159,10 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     } else {
         None
     };
+    // A real orbit that fails on the way fails here, before an output is opened (a log
+    // it replaced would be lost to a record of nothing).
+    orbitlash::run::sim::check_orbit(&sc.thermal.environment, t_end_s)
+        .map_err(|e| anyhow!("{}: {e}; nothing was written", loaded.file))?;
 
     // The log keeps the pair statistics (its end record carries the verdict and each
     // pair's smallest backlash); without a log they are kept here.
@@ -636,10 +640,12 @@ fn orbit_phase(sc: &Scenario, t: f64) -> String {
         return "no time (no valid sample)".to_string();
     }
     let env = &sc.thermal.environment;
+    // the run's last instant ends its last orbit (the next one starts there)
+    let last = env.orbit_number(sc.run.duration_s - 1e-9 * env.mean_period_s());
     format!(
         "{}, orbit {}, θ = {:.1}° from noon, {}",
         when(sc, t),
-        env.orbit_number(t),
+        env.orbit_number(t).min(last),
         env.orbit_phase_deg(t),
         if env.sunlit(t) { "sunlit" } else { "eclipse" }
     )

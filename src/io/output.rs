@@ -350,6 +350,21 @@ pub const PARTIAL_SUFFIX: &str = ".partial";
 
 /// Checks that `path` may be written under `policy` (see the module docs). Nothing is
 /// created: a missing default folder under `logs/` is created by [`prepare_output`].
+/// Whether a file can be made in the folder `dir`: an empty file of a name no one
+/// uses is created there and removed (permissions alone do not tell: a read-only
+/// mount, or `/proc` and `/sys`, refuse files to root too). An output is written to a
+/// sibling and renamed into place, so the folder's permission is the one that counts.
+fn writable(dir: &Path) -> std::io::Result<()> {
+    static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let probe = dir.join(format!(".orbitlash-probe-{}-{n}", std::process::id()));
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)?;
+    std::fs::remove_file(&probe)
+}
+
 pub fn check_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputError> {
     if path.as_os_str().is_empty() {
         return Err(OutputError::refused(path, "the path is empty"));
@@ -405,10 +420,15 @@ pub fn check_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputErro
     }
     let parent = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
-        _ => return Ok(()),
+        _ => Path::new("."),
     };
     match std::fs::metadata(parent) {
-        Ok(m) if m.is_dir() => Ok(()),
+        Ok(m) if m.is_dir() => writable(parent).map_err(|e| {
+            OutputError::refused(
+                path,
+                format!("{} cannot be written in: {e}", parent.display()),
+            )
+        }),
         Ok(_) => Err(OutputError::refused(
             path,
             format!("{} is not a directory", parent.display()),

@@ -265,7 +265,7 @@ impl TleOrbit {
             ));
         }
         let radius = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
-        if radius < crate::constants::EARTH_RADIUS_M + 80e3 {
+        if radius < crate::constants::EARTH_RADIUS_M + DECAY_ALTITUDE_M {
             return Err(format!(
                 "the orbit has decayed {:.1} days after the start (altitude {:.0} km)",
                 t_s / 86_400.0,
@@ -322,13 +322,31 @@ impl TleOrbit {
         out
     }
 
+    /// The perigee's distance from the Earth's centre, m, of the osculating orbit at
+    /// `t_s` (two-body, from SGP4's position and velocity there); infinite for an
+    /// orbit that is not bound.
+    pub fn perigee_radius_m(&self, t_s: f64) -> Result<f64, String> {
+        let x = self.propagate(t_s)?;
+        Ok(perigee_radius_m([x[0], x[1], x[2]], [x[3], x[4], x[5]]))
+    }
+
     /// One SGP4 point a day from the start to `t_end_s` (and at it): a decayed or
     /// diverging orbit found cheaply (a few ms for a 30-year run), before anything is
-    /// tabulated; the first failure with its time.
+    /// tabulated; the first failure with its time. A point whose osculating perigee is
+    /// below the decay altitude fails too: the orbit dips below it within a turn, even
+    /// where the point itself is higher (a day's points fall anywhere on the orbit).
     pub fn check_daily(&self, t_end_s: f64) -> Result<(), String> {
         let days = (t_end_s.max(0.0) / 86_400.0).ceil() as u64;
         for d in 0..=days {
-            self.propagate((d as f64 * 86_400.0).min(t_end_s.max(0.0)))?;
+            let t = (d as f64 * 86_400.0).min(t_end_s.max(0.0));
+            let perigee = self.perigee_radius_m(t)?;
+            if perigee < crate::constants::EARTH_RADIUS_M + DECAY_ALTITUDE_M {
+                return Err(format!(
+                    "the orbit has decayed {:.1} days after the start (perigee altitude {:.0} km)",
+                    t / 86_400.0,
+                    (perigee - crate::constants::EARTH_RADIUS_M) / 1e3
+                ));
+            }
         }
         Ok(())
     }
@@ -419,6 +437,27 @@ impl TleOrbit {
                 .collect()
         }))
     }
+}
+
+/// Below this altitude, m, an orbit has decayed (the spacecraft re-enters).
+const DECAY_ALTITUDE_M: f64 = 80e3;
+
+/// The perigee's distance from the Earth's centre, m, of the two-body orbit through
+/// position `r` (m) with velocity `v` (m/s); infinite when it is not bound.
+fn perigee_radius_m(r: [f64; 3], v: [f64; 3]) -> f64 {
+    use super::faces::{cross, dot, norm};
+    let mu = crate::constants::EARTH_MU_M3_PER_S2;
+    let rn = norm(r);
+    let energy = 0.5 * dot(v, v) - mu / rn;
+    if energy.is_nan() || energy >= 0.0 {
+        return f64::INFINITY;
+    }
+    let a = -mu / (2.0 * energy);
+    let h = cross(r, v);
+    // e = (v × h) / μ − r / |r|
+    let vh = cross(v, h);
+    let e = norm([0, 1, 2].map(|k| vh[k] / mu - r[k] / rn));
+    a * (1.0 - e)
 }
 
 /// Checks one TLE line before SGP4's parser sees it: its number, length and checksum,

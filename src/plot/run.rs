@@ -52,6 +52,9 @@ pub struct RunSeries {
     /// and the eclipse windows. Without it they are taken from the rows, which may
     /// have missed the run's smallest value.
     pub end: Option<RunEnd>,
+    /// A log without its end record (a killed run, a cut-off or recovered copy): its
+    /// rows stop before the run did, and no verdict is drawn from them.
+    pub cut_off: bool,
     /// Set by [`RunSeries::keep_nodes`]: how many nodes the table had before the user
     /// chose some (they are then all drawn, in the order given).
     pub chosen_of: Option<usize>,
@@ -82,6 +85,7 @@ impl RunSeries {
             sunlit: None,
             orbit: None,
             end: None,
+            cut_off: false,
             chosen_of: None,
         };
         let mut margins: Vec<(String, Vec<f64>)> = Vec::new();
@@ -239,6 +243,10 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
                 .to_string();
         }
         Some(_) => return String::new(),
+        None if s.cut_off => {
+            return "  —  INCOMPLETE: the log has no end record (a killed run, a cut-off or recovered copy)"
+                .to_string();
+        }
         None if s.allowed_um.is_empty() => return String::new(),
         None => smallest
             .iter()

@@ -90,6 +90,13 @@ fn check_span(env: &crate::orbit::Environment, t_s: f64, t_end_s: f64) -> Result
     }
 }
 
+/// Propagates a real orbit over a run to `t_end_s` (the table its steps read), so that
+/// an orbit that fails on the way (it decays, SGP4 diverges) is refused before any
+/// output is opened; nothing for a circular orbit.
+pub fn check_orbit(env: &crate::orbit::Environment, t_end_s: f64) -> Result<(), SimError> {
+    check_span(env, 0.0, t_end_s)
+}
+
 /// The days a run from t = 0 to `t_end_s` touches (a real orbit's table is propagated
 /// a day at a time).
 fn days_spanned(t_end_s: f64) -> f64 {

@@ -343,6 +343,22 @@ impl Model {
         self.modify(|s| s.sensor.push(sensor))
     }
 
+    /// Compiles `spec` with `changes` (key path, value) written into it first: the
+    /// model a file holding those values gives, also where the file's own values do
+    /// not compile (a run longer than its orbit lasts, shortened by the change).
+    pub fn with_changes<K: AsRef<str>>(
+        spec: ScenarioSpec,
+        changes: &[(K, f64)],
+    ) -> Result<Model, ModelError> {
+        let keys = element_keys(&spec);
+        let mut changed = spec.clone();
+        for (path, value) in changes {
+            let at = registry::resolve(&spec, &keys, path.as_ref())?;
+            write(&mut changed, at, *value, path.as_ref())?;
+        }
+        Ok(Model::new(changed)?)
+    }
+
     fn replace(&mut self, spec: ScenarioSpec) -> Result<(), ModelError> {
         let scenario = compile(spec.clone())?;
         self.keys = element_keys(&spec);

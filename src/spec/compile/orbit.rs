@@ -244,5 +244,25 @@ pub(super) fn dated_environment(
             ),
         ));
     }
+    // The Earth must be inside the orbit (a radius given in km, or the orbit's own
+    // radius, would put the spacecraft in the umbra all day).
+    let perigee_m = environment
+        .orbit
+        .perigee_radius_m(0.0)
+        .map_err(|m| cx.err(&tp, m))?;
+    if perigee_m <= environment.earth_radius_m {
+        return Err(cx.err(
+            &if orbit_spec.earth_radius_m.is_some() {
+                op.key(r::EARTH_RADIUS_M.name)
+            } else {
+                tp.clone()
+            },
+            format!(
+                "the Earth's radius ({:.0} km) reaches the orbit's perigee ({:.0} km from the Earth's centre): the spacecraft would be inside the Earth",
+                environment.earth_radius_m / 1e3,
+                perigee_m / 1e3
+            ),
+        ));
+    }
     Ok((environment.into(), space_sink_k))
 }
