@@ -99,35 +99,61 @@ fn cli_plot_a_log_as_png_and_svg_with_eclipses_verdict_and_smallest_backlash() {
     assert!(fractional > 1000, "{fractional} sub-pixel coordinates");
     // A copy cut off before the log's end record (a killed run's, a truncated copy)
     // draws what it holds and no verdict: PASS was judged from rows that stop early.
-    let cut = dir.join("cut.mcap");
-    let bytes = std::fs::read(&log).unwrap();
-    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
-    let cut_svg = dir.join("cut.svg");
+    // The same for its `recover`ed copy, whose end record says "recovered" and holds
+    // no verdict; and a cut-off failing run still says FAIL.
+    let half = |log: &std::path::Path, name: &str| {
+        let cut = dir.join(format!("{name}.mcap"));
+        let bytes = std::fs::read(log).unwrap();
+        std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+        cut
+    };
+    let cut = half(&log, "cut");
+    let recovered = dir.join("recovered.mcap");
     let out = common::bin()
-        .arg("plot")
+        .arg("recover")
         .arg(&cut)
         .arg("--out")
-        .arg(&cut_svg)
+        .arg(&recovered)
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(0), "{out:?}");
-    assert!(
-        String::from_utf8_lossy(&out.stderr).contains("has no end record"),
-        "{out:?}"
+    assert!(out.status.success(), "{out:?}");
+    let failing = half(
+        &run_log(&dir, "fail", &["gear_pair.mesh.min_backlash_um=30"]),
+        "cut-fail",
     );
-    let labels: Vec<String> = std::fs::read_to_string(&cut_svg)
-        .unwrap()
-        .split("aria-label=\"")
-        .skip(1)
-        .map(|t| t.split('"').next().unwrap().to_string())
-        .collect();
-    assert!(
-        labels
-            .iter()
-            .any(|l| l.contains("INCOMPLETE: the log has no end record")),
-        "{labels:?}"
-    );
-    assert!(!labels.iter().any(|l| l.contains("PASS")), "{labels:?}");
+    for (input, verdict) in [
+        (&cut, "INCOMPLETE: the log has no end record"),
+        (&recovered, "INCOMPLETE: the log has no end record"),
+        (
+            &failing,
+            "FAIL: backlash below the smallest allowed (the log has no end record)",
+        ),
+    ] {
+        let svg = input.with_extension("svg");
+        let out = common::bin()
+            .arg("plot")
+            .arg(input)
+            .arg("--out")
+            .arg(&svg)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{out:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains("has no end record"),
+            "{out:?}"
+        );
+        let labels: Vec<String> = std::fs::read_to_string(&svg)
+            .unwrap()
+            .split("aria-label=\"")
+            .skip(1)
+            .map(|t| t.split('"').next().unwrap().to_string())
+            .collect();
+        assert!(
+            labels.iter().any(|l| l.contains(verdict)),
+            "{input:?}: {labels:?}"
+        );
+        assert!(!labels.iter().any(|l| l.contains("PASS")), "{labels:?}");
+    }
 }
 
 #[test]

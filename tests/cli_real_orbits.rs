@@ -549,7 +549,7 @@ fn cli_a_decaying_orbit_is_refused_before_anything_is_written() {
     assert_error(
         "decay",
         &out,
-        &["`orbit.tle`", "has decayed", "perigee altitude"],
+        &["`orbit.tle`", "has decayed", "its perigee is at"],
     );
     // shortened by --set, as in the file
     let out = bin()
@@ -563,6 +563,14 @@ fn cli_a_decaying_orbit_is_refused_before_anything_is_written() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // a change that is itself wrong is named, not the file's error it would fix
+    let out = bin()
+        .arg("check")
+        .arg(&file)
+        .args(["--set", "run.duration_dayz=2"])
+        .output()
+        .unwrap();
+    assert_error("decay-typo", &out, &["--set run.duration_dayz=2"]);
     // a good log at the path stays as it was when the run is refused
     let log = dir.join("kept.mcap");
     let good = bin()

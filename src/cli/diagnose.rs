@@ -252,7 +252,9 @@ fn eclipse_warning(c: &orbitlash::recording::EclipseCheck, now: f64) -> Option<S
             (Some(e), Some(x)) => format!(
                 "its entries come {e:+.1} s and its exits {x:+.1} s from the orbit's"
             ),
-            _ => "none of its edges is within a quarter orbit of the orbit's".to_string(),
+            (Some(e), None) => format!("its entries come {e:+.1} s from the orbit's (no exit is within a quarter orbit of one)"),
+            (None, Some(x)) => format!("its exits come {x:+.1} s from the orbit's (no entry is within a quarter orbit of one)"),
+            (None, None) => "none of its edges is within a quarter orbit of the orbit's".to_string(),
         };
         format!(
             "the recording's eclipses (`{}` below {}) agree with the orbit's shadow on only {:.1} % of its rows and {edges}: its clock ([recording] time_offset_s, now {now} s), the orbit ([orbit] tle, start_utc) or eclipse_below is off",

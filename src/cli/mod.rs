@@ -249,34 +249,39 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
         let (key, value) = parse_assignment(s).map_err(|e| anyhow::anyhow!("--set {s}: {e}"))?;
         changes.push((key, value));
     }
-    let mut model = match Model::new(spec.clone()) {
-        Ok(m) => m,
+    let set_error = |e: ModelError| match e {
+        ModelError::Param(p) => {
+            let s = sets
+                .iter()
+                .find(|s| s.starts_with(&p.key))
+                .cloned()
+                .unwrap_or_default();
+            anyhow::anyhow!("--set {s}: {p}")
+        }
+        ModelError::Invalid(v) => {
+            anyhow::anyhow!("{file} with --set {}: {v}", sets.join(" --set "))
+        }
+    };
+    let model = match Model::new(spec.clone()) {
+        Ok(mut m) => {
+            if !changes.is_empty() {
+                m.set_many(&changes).map_err(set_error)?;
+            }
+            m
+        }
+        Err(e) if changes.is_empty() => return Err(scenario_toml::located(&toml, &file, e).into()),
         // The file's values may fail where the changes fix them (`--set
         // run.duration_days` within the days a decaying orbit lasts), as editing the
-        // file would: the file's own error stands when they do not.
-        Err(e) => match (!changes.is_empty())
-            .then(|| Model::with_changes(spec, &changes).ok())
-            .flatten()
-        {
-            Some(m) => m,
-            None => return Err(scenario_toml::located(&toml, &file, e).into()),
+        // file would. A change that is itself wrong is named; else the file's own
+        // error stands, with its line.
+        Err(e) => match Model::with_changes(spec, &changes) {
+            Ok(m) => m,
+            Err(p @ ModelError::Param(_)) => return Err(set_error(p)),
+            Err(ModelError::Invalid(_)) => {
+                return Err(scenario_toml::located(&toml, &file, e).into());
+            }
         },
     };
-    if !changes.is_empty() {
-        model.set_many(&changes).map_err(|e| match e {
-            ModelError::Param(p) => {
-                let s = sets
-                    .iter()
-                    .find(|s| s.starts_with(&p.key))
-                    .cloned()
-                    .unwrap_or_default();
-                anyhow::anyhow!("--set {s}: {p}")
-            }
-            ModelError::Invalid(v) => {
-                anyhow::anyhow!("{file} with --set {}: {v}", sets.join(" --set "))
-            }
-        })?;
-    }
     Ok(Loaded {
         model,
         toml,

@@ -197,6 +197,10 @@ pub fn plot(a: PlotArgs) -> Result<()> {
         None => {
             // the default, logs/<name>.png: logs/ is made if missing
             let o = default_out(&a.input);
+            // the input first: a mistyped name makes no logs/ folder
+            if let Err(e) = std::fs::metadata(&a.input) {
+                bail!("cannot read {}: {e}", a.input.display());
+            }
             let mut folder = Outputs::new(OutputPolicy::default_in_logs(&[&a.input]));
             folder.folder(
                 "the default figure folder",
@@ -233,19 +237,22 @@ pub fn draw(
     let mut cut_off = false;
     let (name, headers, rows) = if is_log {
         let table = read_log(input)?;
-        cut_off = end.is_none() && !table.metadata.contains_key("orbitlash.run_end");
-        if cut_off {
-            eprintln!(
-                "note: {} has no end record (a killed run, a cut-off or recovered copy): the figure shows the rows it holds and no verdict",
-                input.display()
-            );
-        }
+        let given = end.is_some();
         if let Some(e) = table
             .metadata
             .get("orbitlash.run_end")
             .and_then(RunEnd::from_metadata)
         {
             end = Some(e);
+        }
+        // no end record that tells the run's verdict (a `recover`ed copy has one
+        // without it)
+        cut_off = !given && end.is_none();
+        if cut_off {
+            eprintln!(
+                "note: {} has no end record (a killed run, a cut-off or recovered copy): the figure shows the rows it holds, and no PASS",
+                input.display()
+            );
         }
         let name = table
             .metadata
@@ -270,7 +277,7 @@ pub fn draw(
     let mut series = RunSeries::from_table(&title, &headers, &rows)
         .with_context(|| format!("cannot plot {}", input.display()))?;
     series.end = end;
-    series.cut_off = cut_off && series.end.is_none();
+    series.cut_off = cut_off;
     if !nodes.is_empty() {
         series
             .keep_nodes(nodes)

@@ -348,23 +348,35 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
 /// place; output paths may not end with it.
 pub const PARTIAL_SUFFIX: &str = ".partial";
 
-/// Checks that `path` may be written under `policy` (see the module docs). Nothing is
-/// created: a missing default folder under `logs/` is created by [`prepare_output`].
 /// Whether a file can be made in the folder `dir`: an empty file of a name no one
 /// uses is created there and removed (permissions alone do not tell: a read-only
 /// mount, or `/proc` and `/sys`, refuse files to root too). An output is written to a
 /// sibling and renamed into place, so the folder's permission is the one that counts.
+/// A name left by a probe that was killed is passed over, and a probe that cannot be
+/// removed is no reason to refuse a folder that took it.
 fn writable(dir: &Path) -> std::io::Result<()> {
     static PROBES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let probe = dir.join(format!(".orbitlash-probe-{}-{n}", std::process::id()));
-    std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&probe)?;
-    std::fs::remove_file(&probe)
+    loop {
+        let n = PROBES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let probe = dir.join(format!(".orbitlash-probe-{}-{n}", std::process::id()));
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&probe)
+        {
+            Ok(_) => {
+                let _ = std::fs::remove_file(&probe);
+                return Ok(());
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && n < 1000 => continue,
+            Err(e) => return Err(e),
+        }
+    }
 }
 
+/// Checks that `path` may be written under `policy` (see the module docs): the only
+/// file made is the probe of its folder ([`writable`]), removed at once; a missing
+/// default folder under `logs/` is created by [`prepare_output`].
 pub fn check_output(path: &Path, policy: &OutputPolicy) -> Result<(), OutputError> {
     if path.as_os_str().is_empty() {
         return Err(OutputError::refused(path, "the path is empty"));

@@ -342,7 +342,7 @@ impl TleOrbit {
             let perigee = self.perigee_radius_m(t)?;
             if perigee < crate::constants::EARTH_RADIUS_M + DECAY_ALTITUDE_M {
                 return Err(format!(
-                    "the orbit has decayed {:.1} days after the start (perigee altitude {:.0} km)",
+                    "the orbit has decayed by {:.1} days after the start (its perigee is at {:.0} km altitude, below 80 km: it enters the atmosphere within a turn)",
                     t / 86_400.0,
                     (perigee - crate::constants::EARTH_RADIUS_M) / 1e3
                 ));

@@ -243,14 +243,22 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
                 .to_string();
         }
         Some(_) => return String::new(),
-        None if s.cut_off => {
-            return "  —  INCOMPLETE: the log has no end record (a killed run, a cut-off or recovered copy)"
-                .to_string();
-        }
         None if s.allowed_um.is_empty() => return String::new(),
-        None => smallest
-            .iter()
-            .any(|(p, _, m)| s.allowed_um.iter().any(|(q, a)| q == p && m < a)),
+        None => {
+            let fails = smallest
+                .iter()
+                .any(|(p, _, m)| s.allowed_um.iter().any(|(q, a)| q == p && m < a));
+            // rows that stop before the run did can fail it, not pass it
+            if s.cut_off {
+                return if fails {
+                    "  —  FAIL: backlash below the smallest allowed (the log has no end record)"
+                } else {
+                    "  —  INCOMPLETE: the log has no end record (a killed run, a cut-off or recovered copy)"
+                }
+                .to_string();
+            }
+            fails
+        }
     };
     if fails {
         "  —  FAIL: backlash below the smallest allowed".to_string()

@@ -244,8 +244,8 @@ pub(super) fn dated_environment(
             ),
         ));
     }
-    // The Earth must be inside the orbit (a radius given in km, or the orbit's own
-    // radius, would put the spacecraft in the umbra all day).
+    // The Earth must be inside the orbit (a radius of the orbit's own size or larger
+    // would put the spacecraft in the umbra all day).
     let perigee_m = environment
         .orbit
         .perigee_radius_m(0.0)
