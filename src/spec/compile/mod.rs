@@ -133,37 +133,7 @@ pub fn compile(raw: ScenarioSpec) -> Result<Scenario, SpecError> {
         &diffusion,
     )?;
     let recording = recording_format(cx, raw.recording, &environment)?;
-    // A column is one thing: a sensor's column is neither the time nor ignored.
-    if let Some((i, s)) = sensors.iter().enumerate().find(|(_, s)| {
-        s.source_column == recording.time_column
-            || recording.ignore_columns.contains(&s.source_column)
-    }) {
-        return Err(cx.err(
-            &KeyPath::new("sensor")
-                .elem(i, &keys.sensor[i])
-                .key("column"),
-            format!(
-                "`{}` is the recording's {}: a column is read or ignored, not both",
-                crate::units::shown(&s.source_column),
-                if s.source_column == recording.time_column {
-                    "time column ([recording] time_column)"
-                } else {
-                    "ignored column ([recording] ignore_columns)"
-                }
-            ),
-        ));
-    }
-    if let Some(e) = &recording.eclipse
-        && sensors.iter().any(|s| s.source_column == e.column)
-    {
-        return Err(cx.err(
-            &KeyPath::new("recording").key("eclipse_column"),
-            format!(
-                "`{}` is a [[sensor]]'s column: the eclipse column is read to check the clock, not fitted",
-                e.column
-            ),
-        ));
-    }
+    columns_read_once(cx, &sensors, &keys.sensor, &recording)?;
 
     let network = Network {
         nodes,
