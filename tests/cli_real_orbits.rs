@@ -602,7 +602,7 @@ fn cli_a_decaying_orbit_is_refused_before_anything_is_written() {
     assert!(!csv.exists());
 }
 
-/// An Earth radius that reaches the orbit (a radius in km, or the orbit's own) is
+/// An Earth radius that reaches the orbit (the orbit's own size or larger) is
 /// refused, naming the key: the spacecraft would be inside the Earth, in its shadow all
 /// day.
 #[test]

@@ -249,19 +249,22 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
                 .iter()
                 .any(|(p, _, m)| s.allowed_um.iter().any(|(q, a)| q == p && m < a));
             // rows that stop before the run did can fail it, not pass it
-            if s.cut_off {
-                return if fails {
-                    "  —  FAIL: backlash below the smallest allowed (the log has no end record)"
-                } else {
-                    "  —  INCOMPLETE: the log has no end record (a killed run, a cut-off or recovered copy)"
-                }
-                .to_string();
+            if s.cut_off && !fails {
+                return "  —  INCOMPLETE: the log has no end record (a killed run, a cut-off or recovered copy)"
+                    .to_string();
             }
             fails
         }
     };
     if fails {
-        "  —  FAIL: backlash below the smallest allowed".to_string()
+        format!(
+            "  —  FAIL: backlash below the smallest allowed{}",
+            if s.cut_off {
+                " (the log has no end record)"
+            } else {
+                ""
+            }
+        )
     } else {
         "  —  PASS".to_string()
     }

@@ -305,11 +305,7 @@ impl Model {
     /// Writes several numbers and compiles once; on any error the model is unchanged
     /// and the error is that of the first offending key.
     pub fn set_many<K: AsRef<str>>(&mut self, changes: &[(K, f64)]) -> Result<(), ModelError> {
-        let mut spec = self.spec.clone();
-        for (path, value) in changes {
-            let at = registry::resolve(&self.spec, &self.keys, path.as_ref())?;
-            write(&mut spec, at, *value, path.as_ref())?;
-        }
+        let spec = written(&self.spec, &self.keys, changes)?;
         self.replace(spec)
     }
 
@@ -350,13 +346,7 @@ impl Model {
         spec: ScenarioSpec,
         changes: &[(K, f64)],
     ) -> Result<Model, ModelError> {
-        let keys = element_keys(&spec);
-        let mut changed = spec.clone();
-        for (path, value) in changes {
-            let at = registry::resolve(&spec, &keys, path.as_ref())?;
-            write(&mut changed, at, *value, path.as_ref())?;
-        }
-        Ok(Model::new(changed)?)
+        Ok(Model::new(written(&spec, &element_keys(&spec), changes)?)?)
     }
 
     fn replace(&mut self, spec: ScenarioSpec) -> Result<(), ModelError> {
@@ -637,6 +627,21 @@ impl Model {
 }
 
 /// Writes `value` at `at` of `spec`, the error naming `path` as given.
+/// `spec` (whose elements have `keys`) with `changes` (key path, value) written into
+/// it, each path resolved in `spec` as it was.
+fn written<K: AsRef<str>>(
+    spec: &ScenarioSpec,
+    keys: &ElementKeys,
+    changes: &[(K, f64)],
+) -> Result<ScenarioSpec, ModelError> {
+    let mut changed = spec.clone();
+    for (path, value) in changes {
+        let at = registry::resolve(spec, keys, path.as_ref())?;
+        write(&mut changed, at, *value, path.as_ref())?;
+    }
+    Ok(changed)
+}
+
 fn write(spec: &mut ScenarioSpec, at: ParamRef, value: f64, path: &str) -> Result<(), ModelError> {
     registry::write(spec, at, value).map_err(|e| {
         ModelError::Param(ParamError {

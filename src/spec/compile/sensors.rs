@@ -214,7 +214,6 @@ pub(super) fn columns_read_once(
     keys: &[String],
     recording: &crate::spec::scenario::RecordingFormat,
 ) -> Result<(), SpecError> {
-    // A column is one thing: a sensor's column is neither the time nor ignored.
     if let Some((i, s)) = sensors.iter().enumerate().find(|(_, s)| {
         s.source_column == recording.time_column
             || recording.ignore_columns.contains(&s.source_column)
