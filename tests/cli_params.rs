@@ -238,6 +238,28 @@ fn cli_a_bad_value_gives_the_files_error() {
         d.contains("environment.beta_deg") && d.contains("not a number"),
         "{d}"
     );
+    // a key given twice is refused, naming both values, before any work
+    let out = bin()
+        .args([
+            "run",
+            "s.toml",
+            "--no-log",
+            "--set",
+            "node.motor.capacitance_j_per_k=80",
+            "--set",
+            "node.motor.capacitance_j_per_k = 90",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let twice = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        twice.contains("--set node.motor.capacitance_j_per_k is given twice")
+            && twice.contains("=80 and")
+            && twice.contains("= 90"),
+        "{twice}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

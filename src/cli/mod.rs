@@ -247,6 +247,11 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
     let mut changes = Vec::new();
     for s in sets {
         let (key, value) = parse_assignment(s).map_err(|e| anyhow::anyhow!("--set {s}: {e}"))?;
+        // A key given twice is a slip (a script's default and an override), not an
+        // order to follow: which one holds would be a guess.
+        if let Some((_, first)) = changes.iter().find(|(k, _)| *k == key) {
+            anyhow::bail!("--set {key} is given twice ({key}={first} and {s}): give it once");
+        }
         changes.push((key, value));
     }
     let set_error = |e: ModelError| match e {
