@@ -67,19 +67,30 @@ impl Recording {
                     drives: inp.drives.clone(),
                 });
             };
-            let readings: Vec<(f64, f64)> = self
+            let (readings, lines): (Vec<(f64, f64)>, Vec<u64>) = self
                 .time_s
                 .iter()
                 .zip(&self.values[k])
-                .filter_map(|(t, v)| v.map(|v| (*t, v)))
-                .collect();
+                .zip(&self.rows_at)
+                .filter_map(|((t, v), line)| v.map(|v| ((*t, v), *line)))
+                .unzip();
             if readings.is_empty() {
                 return Err(InputError::NoReadings {
                     file: self.file.clone(),
                     column: inp.column.clone(),
                 });
             }
-            done.push(model.follow_input(i, &readings)?);
+            let placed = |e: InputError| match e.reading_index() {
+                Some(j) if j < readings.len() => InputError::AtReading {
+                    file: self.file.clone(),
+                    line: lines[j],
+                    column: inp.column.clone(),
+                    reading: readings[j].1,
+                    refused: Box::new(e),
+                },
+                _ => e,
+            };
+            done.push(model.follow_input(i, &readings).map_err(placed)?);
             self.remove_channel(&inp.column);
         }
         Ok(done)

@@ -402,6 +402,18 @@ fn cli_inputs_follow_recording_channels() {
             .unwrap();
     let e = rec.feed_inputs(&mut model).unwrap_err();
     assert!(e.to_string().contains("no column `bus_c`"), "{e}");
+    // a reading the model refuses (below 0 K) is named by its line and value
+    let mut rec = orbitlash::io::recording::Recording::from_csv(
+        b"time_s,housing_c,bus_c\n0,20,10\n60,21,11\n120,22,-400\n180,23,12\n",
+        "r.csv",
+    )
+    .unwrap();
+    let e = rec.feed_inputs(&mut model).unwrap_err().to_string();
+    assert!(
+        e.starts_with("r.csv:4: the reading -400 of `bus_c`: ")
+            && e.contains("boundary.bus.temperature_k"),
+        "{e}"
+    );
 
     // FUNcube-1's dissipation from its system current
     let Some(csv) = shared("data/funcube-1/funcube1_wod_2016-02-04.csv") else {

@@ -47,6 +47,35 @@ pub enum InputError {
         #[source]
         source: ModelError,
     },
+    /// What the model refused comes from one reading: where it is in the recording.
+    #[error("{file}:{line}: the reading {reading} of `{column}`: {refused}")]
+    AtReading {
+        file: String,
+        /// The reading's line (CSV) or message number (MCAP), 1-based.
+        line: u64,
+        column: String,
+        reading: f64,
+        refused: Box<InputError>,
+    },
+}
+
+impl InputError {
+    /// The reading (its index among the readings given to [`Model::follow_input`])
+    /// whose value the model refused, when the refusal names one (`….value[k]`).
+    pub fn reading_index(&self) -> Option<usize> {
+        use crate::spec::keys::Seg;
+        let InputError::Refused {
+            source: ModelError::Invalid(e),
+            ..
+        } = self
+        else {
+            return None;
+        };
+        match e.key.0.as_slice() {
+            [.., Seg::K("value"), Seg::I(k)] => Some(*k),
+            _ => None,
+        }
+    }
 }
 
 /// A load to add to a model.
