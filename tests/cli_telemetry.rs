@@ -545,4 +545,20 @@ fn cli_the_eclipse_flag_follows_a_channel() {
     std::fs::write(&file, circular).unwrap();
     let out = bin().arg("check").arg(&file).output().unwrap();
     assert_error("circular", &out, &["`orbit.eclipses_s`"]);
+    // given eclipses are reported as given, not as the shadow's geometry
+    let given = funcube_text().replacen(
+        "shadow = \"conical\"",
+        "shadow = \"conical\"\neclipses_s = [[100.0, 1900.0], [5900.0, 7700.0]]",
+        1,
+    );
+    let file = dir.join("given.toml");
+    std::fs::write(&file, given).unwrap();
+    let out = bin().arg("check").arg(&file).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success()
+            && text.contains("(the first orbit; the eclipses given, `orbit.eclipses_s`)")
+            && !text.contains("conical shadow"),
+        "{text}"
+    );
 }

@@ -520,9 +520,14 @@ impl DatedEnvironment {
             ),
             format!("  β at the start          {:.2}°", g.beta_rad.to_degrees()),
             format!(
-                "  eclipse fraction        {:.4} (the first orbit; {} shadow)",
+                "  eclipse fraction        {:.4} (the first orbit; {})",
                 self.eclipse_fraction_at(0.0),
-                self.shadow.name()
+                match self.eclipses_s {
+                    // given eclipses (the file's, or an `[[input]]` eclipse flag's) replace the
+                    // shadow's geometry
+                    Some(_) => "the eclipses given, `orbit.eclipses_s`".to_string(),
+                    None => format!("{} shadow", self.shadow.name()),
+                }
             ),
             format!(
                 "  Sun distance            {:.5} AU, solar flux {:.1} W/m² ({:.1} at 1 AU)",
