@@ -155,6 +155,29 @@ fn cli_margins_fail_when_the_bound_is_below_the_minimum() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no [[dispersion]]"));
+    // the limit itself dispersed: refused (each sample judged against its own limit
+    // while the report judged the nominal gave PASS over samples that failed)
+    std::fs::write(
+        dir.join("limit.toml"),
+        reference_text()
+            + "\n[[dispersion]]\npath = \"gear_pair.mesh.min_backlash_um\"\ndistribution = \"uniform\"\nmin = 20\nmax = 40\n",
+    )
+    .unwrap();
+    for args in [
+        &["margins", "limit.toml", "--samples", "10", "--seed", "1"][..],
+        &["check", "limit.toml"][..],
+    ] {
+        let out = bin().args(args).current_dir(&dir).output().unwrap();
+        common::assert_error(
+            "dispersed limit",
+            &out,
+            &[
+                "`dispersion[0].path`",
+                "gear_pair.mesh.min_backlash_um",
+                "acceptance limit",
+            ],
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -429,8 +429,16 @@ impl ParamId {
 
     /// Why it cannot be varied in a simulation, if it cannot: a number of how a
     /// recording is read (`[recording] time_offset_s`) acts when the file is read, not
-    /// on the model, so calibrating or dispersing it would change nothing.
+    /// on the model, so calibrating or dispersing it would change nothing; a gear
+    /// pair's smallest allowed backlash is the verdict's limit, not a property of the
+    /// hardware: `margins` judges every sample against one limit.
     pub fn not_of_the_model(&self) -> Option<String> {
+        if std::ptr::eq(self.row.field, &registry::MIN_BACKLASH_UM) {
+            return Some(format!(
+                "`{}` is the acceptance limit every sample is judged against, not a number of the hardware: it cannot be calibrated or dispersed (set it in the file or with --set)",
+                self.canonical
+            ));
+        }
         (self.row.section == registry::Section::Recording).then(|| {
             format!(
                 "`{}` is how a recording is read, not a number of the model: it cannot be calibrated or dispersed (set it in the file or with --set)",
