@@ -155,6 +155,52 @@ fn cli_margins_fail_when_the_bound_is_below_the_minimum() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no [[dispersion]]"));
+    // more shards than samples: an empty shard says so
+    let out = bin()
+        .args([
+            "margins",
+            "m.toml",
+            "--samples",
+            "2",
+            "--seed",
+            "7",
+            "--orbits",
+            "1",
+            "-q",
+            "--shard",
+            "0/3",
+            "--json",
+            "e0.json",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success()
+            && said.starts_with("shard 0/3: none of the 2 samples (more shards than samples)"),
+        "{said}"
+    );
+    // bench's refusal gives bench's own advice (it has no --force or --orbits)
+    let out = bin()
+        .args([
+            "bench",
+            "--margins",
+            "m.toml",
+            "--samples",
+            "3",
+            "--margins-horizon",
+            "1e12",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    common::assert_error("bench horizon", &out, &["shorten --margins-horizon"]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !said.contains("--force,") && !said.contains("pass --force"),
+        "{said}"
+    );
     // the limit itself dispersed: refused (each sample judged against its own limit
     // while the report judged the nominal gave PASS over samples that failed)
     std::fs::write(

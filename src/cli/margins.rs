@@ -202,11 +202,22 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
             .iter()
             .filter(|o| o.invalid.is_some())
             .count();
+        // more shards than samples: some hold none (still needed by `merge`)
+        let held = if range.is_empty() {
+            format!(
+                "none of the {} samples (more shards than samples), an empty shard,",
+                plan.samples
+            )
+        } else {
+            format!(
+                "samples {} … {} of {}",
+                range.start,
+                range.end - 1,
+                plan.samples
+            )
+        };
         print_out(&format!(
-            "shard {i}/{n}: samples {} … {} of {} written to {}{} (merge the shards with `orbitlash merge`)\n",
-            range.start,
-            range.end.saturating_sub(1),
-            plan.samples,
+            "shard {i}/{n}: {held} written to {}{} (merge the shards with `orbitlash merge`)\n",
             p.display(),
             if invalid > 0 {
                 format!("; {invalid} of them could not be run")
