@@ -887,6 +887,26 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
     );
     let out = run_in(&dir, &["export-csv", "fixed.mcap", "--out", "f.csv"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // a flipped byte in the first chunk (schemas and channels, no message): the
+    // readers refuse the file, so recover writes a readable copy all the same
+    let mut b = std::fs::read(dir.join("l.mcap")).unwrap();
+    b[1000] ^= 0x55;
+    std::fs::write(dir.join("flip1.mcap"), &b).unwrap();
+    let out = run_in(&dir, &["export-csv", "flip1.mcap", "--out", "f1.csv"]);
+    assert_error(
+        "export flipped first chunk",
+        &out,
+        &["does not match its CRC"],
+    );
+    let out = run_in(&dir, &["recover", "flip1.mcap", "--out", "fixed1.mcap"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        !stdout(&out).contains("nothing to recover"),
+        "{}",
+        stdout(&out)
+    );
+    let out = run_in(&dir, &["export-csv", "fixed1.mcap", "--out", "f1.csv"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     // the undamaged log is still complete
     let out = run_in(&dir, &["recover", "l.mcap", "--out", "again.mcap"]);
     assert!(stdout(&out).contains("nothing to recover"));

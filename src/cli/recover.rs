@@ -60,7 +60,17 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             first.t_s
         );
     }
-    if s.complete {
+    // A chunk that fails its CRC without a message in it (schemas, channels): the
+    // readers refuse the file, so a copy is written all the same.
+    let damaged_chunks = s.damaged_chunks.len();
+    if damaged_chunks > 0 && damaged.is_empty() {
+        eprintln!(
+            "{}: {damaged_chunks} chunk(s) fail their CRC (first at byte {}); their records are kept where they still parse and every message decodes with its schema",
+            a.log.display(),
+            s.damaged_chunks[0]
+        );
+    }
+    if s.complete && damaged_chunks == 0 {
         return print_out(&format!(
             "{} is a complete log (run_end: {}); nothing to recover\n",
             a.log.display(),
@@ -83,7 +93,9 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
         ),
     };
     let r = write_recovered(&s, &out, &policy)?;
-    let how = if damaged.is_empty() {
+    let how = if damaged.is_empty() && damaged_chunks > 0 {
+        format!("{damaged_chunks} damaged chunk(s) written again with their CRCs")
+    } else if damaged.is_empty() {
         format!(
             "{} of {} bytes were whole; the rest was cut off",
             r.recovered_bytes, r.file_bytes
