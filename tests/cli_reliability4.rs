@@ -1198,3 +1198,46 @@ fn cli_solver_choices_are_refused_by_the_reader() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(stdout(&out).contains("sparse"), "{}", stdout(&out));
 }
+
+// 19. export-csv stopped by SIGINT or SIGTERM says so and exits 2, leaving neither the
+// CSV nor its unfinished `.partial` (it died with 130/143 and left 40 MB of it).
+#[test]
+fn cli_an_interrupted_export_leaves_nothing() {
+    let dir = tmpdir("r4-export-signal");
+    let root = env!("CARGO_MANIFEST_DIR");
+    let out = run_in(
+        &dir,
+        &[
+            "run",
+            &format!("{root}/scenarios/hinge-90-day-drift.toml"),
+            "--set",
+            "run.duration_days=30",
+            "--quiet",
+            "--out",
+            "d.mcap",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    for signal in [libc::SIGINT, libc::SIGTERM] {
+        let out = signalled(
+            &dir,
+            &["export-csv", "d.mcap", "--all", "--out", "d.csv"],
+            300,
+            signal,
+        );
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "signal {signal}: {}",
+            stderr(&out)
+        );
+        assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+            .filter(|n| n.starts_with("d.csv"))
+            .collect();
+        assert!(left.is_empty(), "{left:?}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

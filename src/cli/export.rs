@@ -117,6 +117,35 @@ impl<'a> Resampled<'a> {
     }
 }
 
+/// A writer of rows that checks, every 4096 rows, whether the process was asked to
+/// stop ([`super::interrupt_flag`] once installed).
+struct Stoppable<'a, W: Write> {
+    w: &'a mut W,
+    written: &'a mut u32,
+}
+
+impl<W: Write> Stoppable<'_, W> {
+    fn row(&mut self, row: &[f64]) -> std::io::Result<()> {
+        *self.written = self.written.wrapping_add(1);
+        if self.written.is_multiple_of(4096) && stop_asked() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::Interrupted,
+                "interrupted: nothing was written",
+            ));
+        }
+        write_row(self.w, row)
+    }
+}
+
+/// Whether a handler was installed and the process was asked to stop.
+fn stop_asked() -> bool {
+    STOPPABLE.load(std::sync::atomic::Ordering::Relaxed)
+        && super::interrupt_flag().load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Set once `export` writes a file (and installed the handler).
+static STOPPABLE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 /// One CSV row as `export-csv` writes it.
 fn write_row(w: &mut impl Write, row: &[f64]) -> std::io::Result<()> {
     write!(w, "{:.3}", row[0])?;
@@ -136,7 +165,16 @@ fn write_table(
     every: Option<f64>,
     extra: &[&Vec<f64>],
 ) -> std::io::Result<()> {
-    writeln!(w, "{}", headers.join(","))?;
+    // Asked to stop (SIGINT, SIGTERM): an `Interrupted` error every 4096 rows, so
+    // that the unfinished file is removed and the command exits 2 (the handler is
+    // installed only for a file: a pipe to stdout stops as pipes do).
+    let mut written = 0u32;
+    let mut w = Stoppable {
+        w,
+        written: &mut written,
+    };
+    let w = &mut w;
+    writeln!(w.w, "{}", headers.join(","))?;
     let ms = |t: f64| (t * 1e3).round();
     match every {
         Some(dt) => {
@@ -145,18 +183,18 @@ fn write_table(
             let mut extra = extra.iter().peekable();
             while grid.next_into(&mut row) {
                 while let Some(x) = extra.next_if(|x| ms(x[0]) < ms(row[0])) {
-                    write_row(w, x)?;
+                    w.row(x)?;
                 }
                 extra.next_if(|x| ms(x[0]) == ms(row[0]));
-                write_row(w, &row)?;
+                w.row(&row)?;
             }
             for x in extra {
-                write_row(w, x)?;
+                w.row(x)?;
             }
         }
         None => {
             for row in rows {
-                write_row(w, row)?;
+                w.row(row)?;
             }
         }
     }
@@ -169,7 +207,17 @@ pub fn export(a: ExportArgs) -> Result<()> {
         Some(p) => Some(AtomicFile::create(p, &OutputPolicy::reading(&[&a.log]))?),
         None => None,
     };
+    if out.is_some() {
+        super::interrupt_flag();
+        STOPPABLE.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
     let table = read_log(&a.log)?;
+    if stop_asked() {
+        anyhow::bail!(
+            "interrupted while reading {}: nothing was written",
+            a.log.display()
+        );
+    }
     if let Some(t) = &table.truncated {
         eprintln!(
             "note: {} was cut off: read {} messages up to t = {:.3} s ({} of {} bytes were whole)",
@@ -238,8 +286,12 @@ choose a longer --every or export fewer columns (without --all)",
         }
         Some(mut f) => {
             let p = f.path().to_path_buf();
-            write_table(&mut f, &headers, &rows, a.every, &extra)
-                .map_err(|e| orbitlash::io::output::OutputError::io(&p, e))?;
+            match write_table(&mut f, &headers, &rows, a.every, &extra) {
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {
+                    anyhow::bail!("interrupted: nothing was written to {}", p.display())
+                }
+                r => r.map_err(|e| orbitlash::io::output::OutputError::io(&p, e))?,
+            }
             f.commit()?;
             Ok(())
         }
