@@ -862,6 +862,22 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
     );
     assert_error("escape", &out, &["esc.csv", "\\u{1b}[31mred_c"]);
     assert!(!stderr(&out).contains('\u{1b}'));
+    // a dispersion group's name with escape bytes: check's table shows them escaped
+    let margins = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenarios/reference-hinge-margins.toml"),
+    )
+    .unwrap()
+    .replace("group = \"17-4PH lot\"", "group = \"bad\\u001b[31m\"");
+    assert!(margins.contains("bad\\u001b"));
+    std::fs::write(dir.join("group.toml"), margins).unwrap();
+    let out = run_in(&dir, &["check", "group.toml"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        !stdout(&out).contains('\u{1b}') && stdout(&out).contains("bad\\u{1b}[31m"),
+        "{}",
+        stdout(&out)
+    );
     // a log with a flipped byte: export-csv names the damaged chunk, recover leaves
     // the damaged messages out instead of calling the log complete
     let out = run_in(&dir, &["run", "s.toml", "--quiet", "--out", "l.mcap"]);
@@ -923,6 +939,26 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
     );
     assert_error("1e300", &out, &["capacitance_j_per_k", "1e12"]);
     assert!(first_error_line(&out).len() < 300);
+    // a backlash limit of 1e308 µm printed a 300-digit margin: refused with its range
+    let out = run_in(
+        &dir,
+        &[
+            "backlash",
+            "s.toml",
+            "--uniform-c",
+            "20",
+            "--set",
+            "gear_pair.mesh.min_backlash_um=1e308",
+        ],
+    );
+    assert_error("limit 1e308", &out, &["min_backlash_um", "0 … 10000"]);
+    assert!(first_error_line(&out).len() < 300);
+    // a normal dispersion's reach is said in exponent form
+    let text = std::fs::read_to_string(dir.join("s.toml")).unwrap()
+        + "\n[[dispersion]]\npath = \"node.motor.capacitance_j_per_k\"\ndistribution = \"normal\"\nmean = 75.0\nsd = 1e300\n";
+    std::fs::write(dir.join("wide.toml"), text).unwrap();
+    let out = run_in(&dir, &["check", "wide.toml"]);
+    assert_error("sd 1e300", &out, &["normal reaches -5.199e300"]);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

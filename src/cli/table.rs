@@ -33,8 +33,14 @@ pub fn new(header: &[&str], align: &[Align]) -> Columns {
 }
 
 impl Columns {
+    /// Adds a row; control characters in a cell (a name from a file) are shown
+    /// escaped, never sent to the terminal.
     pub fn add_row(&mut self, cells: Vec<String>) -> &mut Self {
         debug_assert_eq!(cells.len(), self.align.len());
+        let cells: Vec<String> = cells
+            .into_iter()
+            .map(|c| orbitlash::units::shown(&c).into_owned())
+            .collect();
         self.table.add_row(cells);
         self
     }

@@ -407,8 +407,10 @@ impl Plan {
                 return Err(PlanError::Spec(err(
                     at,
                     format!(
-                        "{} reaches {v}{tail}, which `{}` cannot take: {why}",
-                        d.distribution, d.path
+                        "{} reaches {}{tail}, which `{}` cannot take: {why}",
+                        d.distribution,
+                        crate::units::num(v),
+                        d.path
                     ),
                 )));
             }

@@ -366,7 +366,14 @@ pub const CENTER_DISTANCE_MM: Quantity = q(
     None,
     Rule::Positive,
 );
-pub const MIN_BACKLASH_UM: Quantity = q("µm", "", None, Rule::NonNegative);
+/// The smallest backlash allowed: up to 10 mm, far above any gear pair's backlash
+/// (a limit past it is a slip of unit, and printed 300 digits long).
+pub const MIN_BACKLASH_UM: Quantity = q(
+    "µm",
+    "",
+    None,
+    within(0.0, 1e4, "the smallest allowed backlash (µm)"),
+);
 pub const COATING_THICKNESS_UM: Quantity = q("µm", "", None, Rule::NonNegative);
 /// A linear expansion coefficient (a material's α, a coating's).
 pub const EXPANSION_PER_K: Quantity = q(
