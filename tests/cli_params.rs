@@ -254,6 +254,25 @@ fn cli_a_bad_value_gives_the_files_error() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let twice = String::from_utf8_lossy(&out.stderr);
+    // the same number spelled two ways is the same key
+    let out = bin()
+        .args([
+            "check",
+            "s.toml",
+            "--set",
+            "environment.space_sink_k=4",
+            "--set",
+            "environment.\"space_sink_k\"=5",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let spelled = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        spelled.contains("--set environment.space_sink_k is given twice"),
+        "{spelled}"
+    );
     assert!(
         twice.contains("--set node.motor.capacitance_j_per_k is given twice")
             && twice.contains("=80 and")

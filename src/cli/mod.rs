@@ -287,12 +287,24 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
             }
         },
     };
+    // Each key in one spelling (`environment."space_sink_k"` is
+    // `environment.space_sink_k`): what runs and shards record, and compare.
+    let mut sets: Vec<(String, f64)> = Vec::with_capacity(changes.len());
+    for (key, value) in changes {
+        let key = model.param(&key).map_or(key, |id| id.canonical_path());
+        if let Some((_, first)) = sets.iter().find(|(k, _)| *k == key) {
+            anyhow::bail!(
+                "--set {key} is given twice (= {first} and = {value}, spelled two ways): give it once"
+            );
+        }
+        sets.push((key, value));
+    }
     Ok(Loaded {
         model,
         toml,
         file,
         path: path.map(Path::to_path_buf),
-        sets: changes,
+        sets,
     })
 }
 
