@@ -118,16 +118,17 @@ impl<'a> Resampled<'a> {
 }
 
 /// A writer of rows that checks, every 4096 rows, whether the process was asked to
-/// stop ([`super::interrupt_flag`] once installed).
+/// stop (when `watch`: [`super::interrupt_flag`] installed).
 struct Stoppable<'a, W: Write> {
     w: &'a mut W,
-    written: &'a mut u32,
+    written: u32,
+    watch: bool,
 }
 
 impl<W: Write> Stoppable<'_, W> {
     fn row(&mut self, row: &[f64]) -> std::io::Result<()> {
-        *self.written = self.written.wrapping_add(1);
-        if self.written.is_multiple_of(4096) && stop_asked() {
+        self.written = self.written.wrapping_add(1);
+        if self.watch && self.written.is_multiple_of(4096) && stop_asked() {
             return Err(std::io::Error::new(
                 std::io::ErrorKind::Interrupted,
                 "interrupted: nothing was written",
@@ -137,14 +138,10 @@ impl<W: Write> Stoppable<'_, W> {
     }
 }
 
-/// Whether a handler was installed and the process was asked to stop.
+/// Whether the process was asked to stop (installs the handler on the first call).
 fn stop_asked() -> bool {
-    STOPPABLE.load(std::sync::atomic::Ordering::Relaxed)
-        && super::interrupt_flag().load(std::sync::atomic::Ordering::Relaxed)
+    super::interrupt_flag().load(std::sync::atomic::Ordering::Relaxed)
 }
-
-/// Set once `export` writes a file (and installed the handler).
-static STOPPABLE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 
 /// One CSV row as `export-csv` writes it.
 fn write_row(w: &mut impl Write, row: &[f64]) -> std::io::Result<()> {
@@ -164,14 +161,15 @@ fn write_table(
     rows: &[Vec<f64>],
     every: Option<f64>,
     extra: &[&Vec<f64>],
+    watch: bool,
 ) -> std::io::Result<()> {
-    // Asked to stop (SIGINT, SIGTERM): an `Interrupted` error every 4096 rows, so
-    // that the unfinished file is removed and the command exits 2 (the handler is
-    // installed only for a file: a pipe to stdout stops as pipes do).
-    let mut written = 0u32;
+    // Asked to stop (SIGINT, SIGTERM) while `watch`: an `Interrupted` error every 4096
+    // rows, so that the unfinished file is removed and the command exits 2 (only for
+    // a file: a pipe to stdout stops as pipes do).
     let mut w = Stoppable {
         w,
-        written: &mut written,
+        written: 0,
+        watch,
     };
     let w = &mut w;
     writeln!(w.w, "{}", headers.join(","))?;
@@ -207,12 +205,12 @@ pub fn export(a: ExportArgs) -> Result<()> {
         Some(p) => Some(AtomicFile::create(p, &OutputPolicy::reading(&[&a.log]))?),
         None => None,
     };
-    if out.is_some() {
-        super::interrupt_flag();
-        STOPPABLE.store(true, std::sync::atomic::Ordering::Relaxed);
+    let watch = out.is_some();
+    if watch {
+        stop_asked(); // the handler, before the long read
     }
     let table = read_log(&a.log)?;
-    if stop_asked() {
+    if watch && stop_asked() {
         anyhow::bail!(
             "interrupted while reading {}: nothing was written",
             a.log.display()
@@ -279,14 +277,16 @@ choose a longer --every or export fewer columns (without --all)",
     match out.take() {
         None => {
             let mut w = std::io::BufWriter::new(std::io::stdout().lock());
-            match write_table(&mut w, &headers, &rows, a.every, &extra).and_then(|()| w.flush()) {
+            match write_table(&mut w, &headers, &rows, a.every, &extra, false)
+                .and_then(|()| w.flush())
+            {
                 Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
                 r => Ok(r?),
             }
         }
         Some(mut f) => {
             let p = f.path().to_path_buf();
-            match write_table(&mut f, &headers, &rows, a.every, &extra) {
+            match write_table(&mut f, &headers, &rows, a.every, &extra, true) {
                 Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {
                     anyhow::bail!("interrupted: nothing was written to {}", p.display())
                 }

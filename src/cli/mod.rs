@@ -244,22 +244,30 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
             format!("<embedded {REFERENCE_HINGE_NAME}.toml>"),
         ),
     };
-    let mut changes = Vec::new();
+    // Each key in one spelling (`environment."space_sink_k"` is
+    // `environment.space_sink_k`): what runs and shards record, and compare. A number
+    // given twice is a slip (a script's default and an override), not an order to
+    // follow: which one holds would be a guess.
+    let keys = orbitlash::spec::keys::element_keys(&spec);
+    let mut changes: Vec<(String, f64)> = Vec::new();
     for s in sets {
         let (key, value) = parse_assignment(s).map_err(|e| anyhow::anyhow!("--set {s}: {e}"))?;
-        // A key given twice is a slip (a script's default and an override), not an
-        // order to follow: which one holds would be a guess.
-        if let Some((_, first)) = changes.iter().find(|(k, _)| *k == key) {
-            anyhow::bail!("--set {key} is given twice ({key}={first} and {s}): give it once");
+        let key = orbitlash::spec::registry::resolve(&spec, &keys, &key)
+            .map_or(key, |at| at.key_path(&keys).to_string());
+        if let Some(j) = changes.iter().position(|(k, _)| *k == key) {
+            anyhow::bail!(
+                "--set {key} is given twice ({} and {s}): give it once",
+                sets[j]
+            );
         }
         changes.push((key, value));
     }
     let set_error = |e: ModelError| match e {
         ModelError::Param(p) => {
-            let s = sets
+            let s = changes
                 .iter()
-                .find(|s| s.starts_with(&p.key))
-                .cloned()
+                .position(|(k, _)| *k == p.key)
+                .map(|j| sets[j].clone())
                 .unwrap_or_default();
             anyhow::anyhow!("--set {s}: {p}")
         }
@@ -287,24 +295,12 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
             }
         },
     };
-    // Each key in one spelling (`environment."space_sink_k"` is
-    // `environment.space_sink_k`): what runs and shards record, and compare.
-    let mut sets: Vec<(String, f64)> = Vec::with_capacity(changes.len());
-    for (key, value) in changes {
-        let key = model.param(&key).map_or(key, |id| id.canonical_path());
-        if let Some((_, first)) = sets.iter().find(|(k, _)| *k == key) {
-            anyhow::bail!(
-                "--set {key} is given twice (= {first} and = {value}, spelled two ways): give it once"
-            );
-        }
-        sets.push((key, value));
-    }
     Ok(Loaded {
         model,
         toml,
         file,
         path: path.map(Path::to_path_buf),
-        sets,
+        sets: changes,
     })
 }
 

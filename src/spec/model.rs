@@ -663,7 +663,6 @@ impl Model {
     }
 }
 
-/// Writes `value` at `at` of `spec`, the error naming `path` as given.
 /// `spec` (whose elements have `keys`) with `changes` (key path, value) written into
 /// it, each path resolved in `spec` as it was.
 fn written<K: AsRef<str>>(
@@ -679,6 +678,7 @@ fn written<K: AsRef<str>>(
     Ok(changed)
 }
 
+/// Writes `value` at `at` of `spec`, the error naming `path` as given.
 fn write(spec: &mut ScenarioSpec, at: ParamRef, value: f64, path: &str) -> Result<(), ModelError> {
     registry::write(spec, at, value).map_err(|e| {
         ModelError::Param(ParamError {
