@@ -962,6 +962,80 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Damage after a log's data section: a changed byte in the summary (which viewers seek
+/// through) and bytes after the closing magic. The messages are whole (each chunk has
+/// its own CRC), so the readers read them, but say so and point to `recover`, which
+/// writes a clean copy instead of calling the file complete.
+#[test]
+fn cli_damage_after_the_data_is_named() {
+    let dir = tmpdir("rel-tail");
+    std::fs::write(dir.join("s.toml"), reference_text()).unwrap();
+    let out = run_in(&dir, &["run", "s.toml", "--quiet", "--out", "l.mcap"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let good = std::fs::read(dir.join("l.mcap")).unwrap();
+    // the footer: opcode, length, summary_start, summary_offset_start, summary_crc (29
+    // bytes), then the closing magic (8)
+    let footer_at = good.len() - 8 - 29;
+    assert_eq!(good[footer_at], 0x02, "the footer's opcode");
+    let summary_start = u64::from_le_bytes(good[footer_at + 9..footer_at + 17].try_into().unwrap());
+    assert!(summary_start > 0 && (summary_start as usize) < footer_at);
+    // the last byte of the summary (the high byte of the last summary offset's length)
+    let mut summary = good.clone();
+    summary[footer_at - 1] ^= 0x01;
+    let mut trailing = good.clone();
+    trailing.extend_from_slice(b"junk after the end\n");
+    for (name, bytes, needle) in [
+        ("summary.mcap", &summary, "does not match the footer's CRC"),
+        (
+            "trailing.mcap",
+            &trailing,
+            "19 byte(s) follow its closing MCAP magic",
+        ),
+    ] {
+        std::fs::write(dir.join(name), bytes).unwrap();
+        let csv = format!("{name}.csv");
+        let out = run_in(&dir, &["export-csv", name, "--out", &csv]);
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        let err = stderr(&out);
+        assert!(err.contains(name) && err.contains(needle), "{name}: {err}");
+        assert!(err.contains("orbitlash recover"), "{name}: {err}");
+        assert_eq!(
+            std::fs::read(dir.join(&csv)).unwrap(),
+            {
+                let o = run_in(&dir, &["export-csv", "l.mcap"]);
+                o.stdout
+            },
+            "{name}: the messages read are the good log's"
+        );
+        let json = format!("{name}.json");
+        let out = run_in(&dir, &["layout", name, "--out", &json]);
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        assert!(stderr(&out).contains(needle), "{name}: {}", stderr(&out));
+        let fixed = format!("fixed-{name}");
+        let out = run_in(&dir, &["recover", name, "--out", &fixed]);
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        assert!(
+            stdout(&out).contains(needle) && !stdout(&out).contains("nothing to recover"),
+            "{name}: {}",
+            stdout(&out)
+        );
+        let out = run_in(&dir, &["export-csv", &fixed, "--out", "fixed.csv"]);
+        assert_eq!(out.status.code(), Some(0), "{name}: {}", stderr(&out));
+        assert!(!stderr(&out).contains("note:"), "{name}: {}", stderr(&out));
+        let out = run_in(&dir, &["recover", &fixed, "--out", "again.mcap"]);
+        assert!(
+            stdout(&out).contains("nothing to recover"),
+            "{name}: {}",
+            stdout(&out)
+        );
+    }
+    // the good log: no note
+    let out = run_in(&dir, &["export-csv", "l.mcap", "--out", "good.csv"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("note:"), "{}", stderr(&out));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn cli_margins_count_invalid_samples_and_say_one_orbit() {
     let dir = tmpdir("rel-invalid");

@@ -216,6 +216,9 @@ pub fn export(a: ExportArgs) -> Result<()> {
             a.log.display()
         );
     }
+    if let Some(d) = &table.tail_damage {
+        eprintln!("{}", orbitlash::io::mcap_read::tail_note(&a.log, d));
+    }
     if let Some(t) = &table.truncated {
         eprintln!(
             "note: {} was cut off: read {} messages up to t = {:.3} s ({} of {} bytes were whole)",

@@ -37,6 +37,9 @@ pub fn layout(a: LayoutArgs) -> Result<()> {
         .with_context(|| format!("cannot read {}", a.log.display()))?;
     let s =
         scan(&bytes).with_context(|| format!("{} is not a readable MCAP log", a.log.display()))?;
+    if let Some(d) = &s.tail_damage {
+        eprintln!("{}", orbitlash::io::mcap_read::tail_note(&a.log, d));
+    }
     let o = outline(&s).map_err(|e| anyhow::anyhow!("{}: {e}", a.log.display()))?;
     if !o.topics.keys().any(|t| t.starts_with("/thermal/")) {
         anyhow::bail!(

@@ -237,6 +237,9 @@ pub fn draw(
     let mut cut_off = false;
     let (name, headers, rows) = if is_log {
         let table = read_log(input)?;
+        if let Some(d) = &table.tail_damage {
+            eprintln!("{}", orbitlash::io::mcap_read::tail_note(input, d));
+        }
         let given = end.is_some();
         if let Some(e) = table
             .metadata

@@ -95,6 +95,8 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     let r = write_recovered(&s, &out, &policy)?;
     let how = if damaged.is_empty() && damaged_chunks > 0 {
         format!("{damaged_chunks} damaged chunk(s) written again with their CRCs")
+    } else if let (true, Some(d)) = (damaged.is_empty() && s.data_complete, &s.tail_damage) {
+        format!("every message was whole, but {d}; the summary and footer are written again")
     } else if damaged.is_empty() {
         format!(
             "{} of {} bytes were whole; the rest was cut off",

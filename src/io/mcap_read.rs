@@ -46,6 +46,19 @@ pub struct LogTable {
     pub attachments: Vec<(String, Vec<u8>)>,
     /// The file was cut off: what was read of it.
     pub truncated: Option<Truncation>,
+    /// Damage after the data section (the summary's CRC, bytes after the end): the
+    /// messages were read whole, but a viewer may not open the file.
+    pub tail_damage: Option<super::mcap_scan::TailDamage>,
+}
+
+/// The note a reader of `file` prints when its data was read whole but `d` is wrong
+/// after it.
+pub fn tail_note(file: &Path, d: &super::mcap_scan::TailDamage) -> String {
+    format!(
+        "note: {}: {d}. Every message was read (each chunk matches its own CRC), but a viewer that reads the summary (found from the file's end) may refuse the file or show the wrong data; `orbitlash recover {}` writes a clean copy",
+        file.display(),
+        file.display()
+    )
 }
 
 impl LogTable {
@@ -264,6 +277,7 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
     }
     let mut table = LogTable {
         time_origin_ns: scan.time_origin_ns(),
+        tail_damage: scan.tail_damage.clone(),
         ..LogTable::default()
     };
     for ch in scan.channels.values() {

@@ -53,6 +53,83 @@ pub struct Scan<'a> {
     first_unverified_offset: usize,
     /// File offsets of the chunks whose CRC does not match their bytes.
     pub damaged_chunks: Vec<usize>,
+    /// What is wrong after the data section of a file whose footer was reached: the
+    /// summary fails its CRC, or bytes follow the closing magic. The messages are not
+    /// affected (the chunks carry CRCs of their own), but a reader that seeks through
+    /// the summary's index (a viewer) may refuse the file or read the wrong bytes.
+    pub tail_damage: Option<TailDamage>,
+}
+
+/// Damage after a log's data section (see [`Scan::tail_damage`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum TailDamage {
+    /// The summary section and the footer's start (bytes `from .. to`) do not match the
+    /// footer's `summary_crc`.
+    SummaryCrc { from: usize, to: usize },
+    /// The footer's `summary_start` points at or past the footer itself.
+    SummaryStart {
+        summary_start: u64,
+        footer_at: usize,
+    },
+    /// The footer is not followed by the closing magic (`bytes` after the footer).
+    NoClosingMagic { bytes: usize },
+    /// `bytes` more bytes follow the closing magic.
+    Trailing { bytes: usize },
+}
+
+impl std::fmt::Display for TailDamage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            TailDamage::SummaryCrc { from, to } => write!(
+                f,
+                "its summary section (the index and statistics, bytes {from} … {to}) does not match the footer's CRC: it changed after the file was written"
+            ),
+            TailDamage::SummaryStart {
+                summary_start,
+                footer_at,
+            } => write!(
+                f,
+                "its footer (at byte {footer_at}) says the summary starts at byte {summary_start}, which is not before the footer"
+            ),
+            TailDamage::NoClosingMagic { bytes } => write!(
+                f,
+                "its footer is not followed by the closing MCAP magic ({bytes} byte(s) after the footer)"
+            ),
+            TailDamage::Trailing { bytes } => {
+                write!(f, "{bytes} byte(s) follow its closing MCAP magic")
+            }
+        }
+    }
+}
+
+/// What follows a footer record (`bytes[at..end]`, opcode at `at`): the summary's CRC,
+/// then the closing magic and nothing after it.
+fn tail_damage(bytes: &[u8], at: usize, end: usize, f: &records::Footer) -> Option<TailDamage> {
+    // The CRC covers the summary and the footer up to its own field (opcode, length,
+    // summary_start, summary_offset_start: 25 bytes); a summary_start of 0 means there
+    // is no summary. A CRC of 0 means none was computed.
+    let from = if f.summary_start == 0 {
+        Some(at)
+    } else {
+        usize::try_from(f.summary_start).ok().filter(|&s| s < at)
+    };
+    let Some(from) = from else {
+        return Some(TailDamage::SummaryStart {
+            summary_start: f.summary_start,
+            footer_at: at,
+        });
+    };
+    let to = at + 25;
+    if f.summary_crc != 0 && crc32fast::hash(&bytes[from..to]) != f.summary_crc {
+        return Some(TailDamage::SummaryCrc { from, to });
+    }
+    let after = &bytes[end..];
+    if !after.starts_with(MAGIC) {
+        return Some(TailDamage::NoClosingMagic { bytes: after.len() });
+    }
+    (after.len() > MAGIC.len()).then(|| TailDamage::Trailing {
+        bytes: after.len() - MAGIC.len(),
+    })
 }
 
 impl Scan<'_> {
@@ -161,9 +238,10 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
         })?;
         match record {
             Record::DataEnd(_) => s.data_complete = true,
-            Record::Footer(_) => {
+            Record::Footer(f) => {
                 s.data_complete = true;
-                s.complete = bytes.len() == end + MAGIC.len() && bytes.ends_with(MAGIC);
+                s.tail_damage = tail_damage(bytes, at, end, &f);
+                s.complete = s.tail_damage.is_none();
                 s.recovered_bytes = end;
                 break;
             }
