@@ -112,6 +112,49 @@ fn cli_backlash_has_the_same_exit_statuses() {
     );
     assert_eq!(lost.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&lost.stdout).starts_with("FAIL mesh"));
+    // ... with its reason, and no invented zeros: the mesh quantities are unknown
+    // ("–", null), the geometry is still the gears' own
+    let lost = run_in(&dir, &["backlash", "s.toml", "--uniform-c", "9000"]);
+    assert_eq!(lost.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&lost.stdout).to_string();
+    assert!(
+        text.starts_with("FAIL mesh: no valid mesh in case uniform")
+            && text
+                .lines()
+                .next()
+                .unwrap()
+                .contains("base circles overlap"),
+        "{text}"
+    );
+    let row = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("uniform"))
+        .unwrap();
+    assert!(row.contains('–') && row.contains("30.00000"), "{row}");
+    let lost = run_in(
+        &dir,
+        &["backlash", "s.toml", "--uniform-c", "9000", "--json"],
+    );
+    let json: serde_json::Value = serde_json::from_slice(&lost.stdout).unwrap();
+    let pair = &json["pairs"][0];
+    let allowed = pair["min_backlash_allowed_um"].as_f64().unwrap();
+    assert!((allowed - 30.0).abs() < 1e-9, "{allowed}");
+    assert_eq!(pair["min_backlash_um"], pair["min_backlash_allowed_um"]);
+    assert!(pair["min_margin_um"].is_null());
+    let case = &pair["cases"][1];
+    assert!(case["backlash_um"]["exact"].is_null() && case["contact_ratio"].is_null());
+    assert!(
+        case["no_mesh"]
+            .as_str()
+            .unwrap()
+            .contains("base circles overlap")
+    );
+    // 9000 °C of steel: the base radii grow by about 10 %
+    let rb = case["base_radius_mm"][0].as_f64().unwrap();
+    assert!(rb > 1.05 * 9.3969 && rb < 1.2 * 9.3969, "{rb}");
+    let a = case["center_distance_mm"].as_f64().unwrap();
+    assert!((a - 30.0).abs() < 1e-9, "{a}");
+    assert!(pair["cases"][0]["no_mesh"].is_null());
     let broken = run_in(&dir, &["backlash", "missing.toml"]);
     assert_error("backlash-missing", &broken, &["missing.toml"]);
     let _ = std::fs::remove_dir_all(&dir);

@@ -8,6 +8,7 @@ use anyhow::{Result, bail};
 use clap::Args;
 use orbitlash::constants::ZERO_CELSIUS_K;
 
+use orbitlash::gear::backlash::MeshError;
 use orbitlash::gear::{CenterDistance, DeformedGear, GearPair, MeshState};
 use orbitlash::run::summary::PassFail;
 use orbitlash::units::{c_to_k, k_to_c};
@@ -54,6 +55,14 @@ fn finite(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A case and the mesh it gives: the state, and why the gears do not mesh if they do
+/// not (the state's mesh quantities are then NaN).
+struct Evaluated {
+    case: Case,
+    mesh: MeshState,
+    no_mesh: Option<MeshError>,
+}
+
 struct Case {
     label: String,
     pinion_c: f64,
@@ -63,28 +72,25 @@ struct Case {
 
 /// The case with the smallest margin, and whether every case keeps the minimum
 /// backlash with teeth that do not interfere.
-fn worst(states: &[(Case, MeshState)]) -> (&Case, &MeshState, bool) {
-    let (c, m) = states
+fn worst(states: &[Evaluated]) -> (&Evaluated, bool) {
+    let w = states
         .iter()
-        .min_by(|x, y| x.1.margin_m.total_cmp(&y.1.margin_m))
-        .map(|(c, m)| (c, m))
+        .min_by(|x, y| x.mesh.margin_m.total_cmp(&y.mesh.margin_m))
         .expect("the assembly case");
     let pass = states
         .iter()
-        .all(|(_, m)| m.margin_m >= 0.0 && m.backlash_exact_m > 0.0);
+        .all(|e| e.mesh.margin_m >= 0.0 && e.mesh.backlash_exact_m > 0.0);
     // a case with no valid mesh is the worst of all
-    let (c, m) = states
-        .iter()
-        .find(|(_, m)| m.backlash_exact_m.is_nan())
-        .map_or((c, m), |(c, m)| (c, m));
-    (c, m, pass)
+    let w = states.iter().find(|e| e.no_mesh.is_some()).unwrap_or(w);
+    (w, pass)
 }
 
-fn verdict_line(pair: &GearPair, states: &[(Case, MeshState)]) -> String {
-    let (c, m, pass) = worst(states);
-    if m.backlash_exact_m.is_nan() {
+fn verdict_line(pair: &GearPair, states: &[Evaluated]) -> String {
+    let (w, pass) = worst(states);
+    let (c, m) = (&w.case, &w.mesh);
+    if let Some(e) = &w.no_mesh {
         return format!(
-            "FAIL {}: no valid mesh (base circles overlap or contact ratio below 1) in case {} (pinion {:.2} °C, wheel {:.2} °C)",
+            "FAIL {}: no valid mesh in case {} (pinion {:.2} °C, wheel {:.2} °C): {e}",
             pair.name, c.label, c.pinion_c, c.wheel_c
         );
     }
@@ -140,17 +146,21 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             });
         }
         // A state with no valid mesh is a failed verdict (NaN backlash), as in `run`.
-        let states: Vec<(Case, MeshState)> = list
+        let states: Vec<Evaluated> = list
             .into_iter()
-            .map(|c| {
-                let temps = temperatures(pair, n, &c);
-                let m = orbitlash::run::sim::mesh_or_nan(pair, &temps);
-                (c, m)
+            .map(|case| {
+                let temps = temperatures(pair, n, &case);
+                let (mesh, no_mesh) = pair.evaluate_or_invalid(&temps);
+                Evaluated {
+                    case,
+                    mesh,
+                    no_mesh,
+                }
             })
             .collect();
         cases.push((pair, states));
     }
-    let pass = cases.iter().all(|(_, states)| worst(states).2);
+    let pass = cases.iter().all(|(_, states)| worst(states).1);
     if a.json {
         print_out(&(serde_json::to_string_pretty(&to_json(&sc.name, &cases))? + "\n"))?;
         return Ok(Outcome::from_pass(pass));
@@ -191,18 +201,29 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             ],
             &align,
         );
-        for (c, m) in states {
+        // what a case with no valid mesh does not have
+        let num = |v: f64, digits: usize| {
+            if v.is_nan() {
+                "–".to_string()
+            } else {
+                format!("{v:.digits$}")
+            }
+        };
+        for Evaluated {
+            case: c, mesh: m, ..
+        } in states
+        {
             table.add_row(vec![
                 c.label.clone(),
                 format!("{:.2}", c.pinion_c),
                 format!("{:.2}", c.wheel_c),
                 format!("{:.2}", c.housing_c),
-                format!("{:.3}", m.backlash_exact_m * 1e6),
-                format!("{:.3}", m.backlash_closed_form_m * 1e6),
-                format!("{:.3}", m.backlash_paper_m * 1e6),
-                format!("{:.4}", m.pressure_angle_rad.to_degrees()),
-                format!("{:.5}", m.center_distance_m * 1e3),
-                format!("{:.3}", m.margin_m * 1e6),
+                num(m.backlash_exact_m * 1e6, 3),
+                num(m.backlash_closed_form_m * 1e6, 3),
+                num(m.backlash_paper_m * 1e6, 3),
+                num(m.pressure_angle_rad.to_degrees(), 4),
+                num(m.center_distance_m * 1e3, 5),
+                num(m.margin_m * 1e6, 3),
             ]);
         }
         o += &table::render(&table, "  ");
@@ -248,6 +269,10 @@ struct PairReport<'a> {
     /// "pass" or "fail".
     verdict: PassFail,
     min_margin_um: f64,
+    /// The minimum allowed, µm: the name `run --json` gives it.
+    min_backlash_allowed_um: f64,
+    /// The same minimum allowed under its first name (in `run --json` this name is the
+    /// smallest backlash reached): kept for scripts written against it.
     min_backlash_um: f64,
     cases: Vec<CaseReport<'a>>,
 }
@@ -258,6 +283,9 @@ struct CaseReport<'a> {
     pinion_c: f64,
     wheel_c: f64,
     housing_c: f64,
+    /// Why the gears do not mesh in this case (the mesh quantities are then null);
+    /// null when they mesh.
+    no_mesh: Option<String>,
     backlash_um: Variants,
     margin_um: f64,
     pressure_angle_deg: f64,
@@ -278,25 +306,25 @@ struct Variants {
     paper: f64,
 }
 
-fn to_json<'a>(
-    name: &'a str,
-    cases: &'a [(&GearPair, Vec<(Case, MeshState)>)],
-) -> BacklashReport<'a> {
+fn to_json<'a>(name: &'a str, cases: &'a [(&GearPair, Vec<Evaluated>)]) -> BacklashReport<'a> {
     BacklashReport {
         scenario: name,
-        pass: cases.iter().all(|(_, states)| worst(states).2),
+        pass: cases.iter().all(|(_, states)| worst(states).1),
         pairs: cases
             .iter()
             .map(|(pair, states)| {
-                let (_, w, pass) = worst(states);
+                let (w, pass) = worst(states);
+                let w = &w.mesh;
                 PairReport {
                     name: &pair.name,
                     verdict: PassFail::all([pass]),
                     min_margin_um: w.margin_m * 1e6,
+                    min_backlash_allowed_um: pair.min_backlash_m * 1e6,
                     min_backlash_um: pair.min_backlash_m * 1e6,
                     cases: states
                         .iter()
-                        .map(|(c, m)| {
+                        .map(|e| {
+                            let (c, m) = (&e.case, &e.mesh);
                             let per_gear =
                                 |f: fn(&DeformedGear) -> f64| [f(&m.gears[0]), f(&m.gears[1])];
                             CaseReport {
@@ -304,6 +332,7 @@ fn to_json<'a>(
                                 pinion_c: c.pinion_c,
                                 wheel_c: c.wheel_c,
                                 housing_c: c.housing_c,
+                                no_mesh: e.no_mesh.as_ref().map(ToString::to_string),
                                 backlash_um: Variants {
                                     exact: m.backlash_exact_m * 1e6,
                                     closed_form: m.backlash_closed_form_m * 1e6,

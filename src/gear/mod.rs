@@ -218,14 +218,7 @@ impl GearPair {
 
     /// The pair at node temperatures `temps_k` (indexed like the network's nodes).
     pub fn evaluate(&self, temps_k: &[f64]) -> Result<MeshState, MeshError> {
-        let t_ref = self.reference_temperature_k;
-        let deformed = [self.deform(0, temps_k), self.deform(1, temps_k)];
-        let a = match &self.center {
-            CenterDistance::Fixed => self.center_distance_m,
-            CenterDistance::Housing { node, strain } => {
-                self.center_distance_m * (1.0 + strain.strain(temps_k[*node], t_ref))
-            }
-        };
+        let (deformed, a) = self.geometry(temps_k);
         let flank = |k: usize| FlankGeometry {
             teeth: self.gears[k].teeth,
             base_radius_m: deformed[k].base_radius_m,
@@ -248,6 +241,43 @@ impl GearPair {
             contact_ratio: b.contact_ratio,
             margin_m: b.exact_m - self.min_backlash_m,
         })
+    }
+
+    /// The deformed gears and the centre distance at `temps_k`: what [`Self::evaluate`]
+    /// meshes, computable whether or not they mesh.
+    fn geometry(&self, temps_k: &[f64]) -> ([DeformedGear; 2], f64) {
+        let t_ref = self.reference_temperature_k;
+        let deformed = [self.deform(0, temps_k), self.deform(1, temps_k)];
+        let a = match &self.center {
+            CenterDistance::Fixed => self.center_distance_m,
+            CenterDistance::Housing { node, strain } => {
+                self.center_distance_m * (1.0 + strain.strain(temps_k[*node], t_ref))
+            }
+        };
+        (deformed, a)
+    }
+
+    /// [`Self::evaluate`], or when the gears do not mesh, the state with their geometry
+    /// (deformed gears, centre distance) and NaN for everything of the mesh (backlash
+    /// of every model, margin, pressure angle, contact ratio), with the reason.
+    pub fn evaluate_or_invalid(&self, temps_k: &[f64]) -> (MeshState, Option<MeshError>) {
+        match self.evaluate(temps_k) {
+            Ok(m) => (m, None),
+            Err(e) => {
+                let (gears, a) = self.geometry(temps_k);
+                let state = MeshState {
+                    gears,
+                    center_distance_m: a,
+                    pressure_angle_rad: f64::NAN,
+                    backlash_exact_m: f64::NAN,
+                    backlash_closed_form_m: f64::NAN,
+                    backlash_paper_m: f64::NAN,
+                    contact_ratio: f64::NAN,
+                    margin_m: f64::NAN,
+                };
+                (state, Some(e))
+            }
+        }
     }
 
     /// Nominal normal backlash at the assembly temperature, m.

@@ -105,14 +105,7 @@ fn days_spanned(t_end_s: f64) -> f64 {
 
 /// The pair's state, or a state with NaN backlash when there is no valid mesh.
 pub fn mesh_or_nan(pair: &GearPair, temps_k: &[f64]) -> MeshState {
-    pair.evaluate(temps_k).unwrap_or(MeshState {
-        backlash_exact_m: f64::NAN,
-        backlash_closed_form_m: f64::NAN,
-        backlash_paper_m: f64::NAN,
-        margin_m: f64::NAN,
-        pressure_angle_rad: f64::NAN,
-        ..MeshState::default()
-    })
+    pair.evaluate_or_invalid(temps_k).0
 }
 
 impl StepView<'_> {
