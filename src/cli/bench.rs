@@ -684,10 +684,9 @@ fn bench_margins(a: &BenchArgs) -> Result<()> {
     // margins' own advice names margins' flags (--orbits, --force): bench has its own
     let max_steps = super::estimate::margins(loaded.scenario(), horizon, a.samples, false)
         .map_err(|e| {
-            let text = e.to_string();
-            let cost = text.rsplit_once(": ").map_or(text.as_str(), |(cost, _)| cost);
             anyhow::anyhow!(
-                "{cost}: bench measures only what margins would run without --force; shorten --margins-horizon or lower --samples"
+                "{}: bench measures only what margins would run without --force; shorten --margins-horizon or lower --samples",
+                e.cost
             )
         })?;
     let plan = super::plan(

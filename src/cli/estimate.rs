@@ -79,6 +79,16 @@ pub fn max_memory_bytes() -> f64 {
     total_kib.map_or(8.0 * (1u64 << 30) as f64, |k| 0.5 * k * 1024.0)
 }
 
+/// A job refused by its cost: what it would take and over which limit (`cost`), and
+/// what to change (`hint`). Shown with `--force` as the last resort; a command without
+/// `--force` (`bench`) words its own advice from `cost`.
+#[derive(Debug, thiserror::Error)]
+#[error("{cost}: {hint}, or pass --force")]
+pub struct OverLimit {
+    pub cost: String,
+    pub hint: String,
+}
+
 /// Refuses a job past any of the limits (`limit` solver steps, [`MAX_WALL_S`],
 /// [`max_memory_bytes`]) unless `force`; says what a long or large job will take.
 pub fn judge_cost(
@@ -89,7 +99,7 @@ pub fn judge_cost(
     limit: f64,
     force: bool,
     hint: &str,
-) -> Result<()> {
+) -> Result<(), OverLimit> {
     let time = if wall_s.is_finite() {
         format!(", about {} of computing", duration(wall_s))
     } else {
@@ -115,9 +125,10 @@ pub fn judge_cost(
     if let Some(over) = over
         && !force
     {
-        anyhow::bail!(
-            "{what} would take about {steps:.2e} solver steps{time}{memory}, {over}: {hint}, or pass --force"
-        );
+        return Err(OverLimit {
+            cost: format!("{what} would take about {steps:.2e} solver steps{time}{memory}, {over}"),
+            hint: hint.to_string(),
+        });
     }
     if wall_s > 5.0 || memory_bytes > 1e9 {
         eprintln!("estimate: {what}: about {steps:.3e} solver steps{time}{memory}");
@@ -126,12 +137,19 @@ pub fn judge_cost(
 }
 
 /// [`judge_cost`] without a memory estimate.
-fn judge(what: &str, steps: f64, wall_s: f64, limit: f64, force: bool, hint: &str) -> Result<()> {
+fn judge(
+    what: &str,
+    steps: f64,
+    wall_s: f64,
+    limit: f64,
+    force: bool,
+    hint: &str,
+) -> Result<(), OverLimit> {
     judge_cost(what, steps, wall_s, 0.0, limit, force, hint)
 }
 
 /// `run --steady-state`: the periodic search and the reported period.
-pub fn steady(sc: &Scenario, force: bool) -> Result<()> {
+pub fn steady(sc: &Scenario, force: bool) -> Result<(), OverLimit> {
     let cost = steady_cost(sc);
     judge(
         "the periodic search",
@@ -147,7 +165,12 @@ pub fn steady(sc: &Scenario, force: bool) -> Result<()> {
 /// sample's step budget: 20 × the nominal sample's estimate (and at least 1e5), so a
 /// sample whose dispersed values make a thermostat chatter stops and is reported
 /// instead of running without bound; none with `force`.
-pub fn margins(sc: &Scenario, horizon: Horizon, samples: u64, force: bool) -> Result<u64> {
+pub fn margins(
+    sc: &Scenario,
+    horizon: Horizon,
+    samples: u64,
+    force: bool,
+) -> Result<u64, OverLimit> {
     let per = match horizon {
         Horizon::Orbits(n) => run_cost(sc, n * sc.period_s()),
         Horizon::Mission => run_cost(sc, sc.run.duration_s),
@@ -189,7 +212,13 @@ pub const DIAGNOSE_BASE_BYTES: f64 = 15e6;
 
 /// `diagnose`: about `runs` runs of the scenario over `span_s` of a recording of
 /// `values` readings (rows × channels).
-pub fn diagnose(sc: &Scenario, span_s: f64, values: f64, runs: f64, force: bool) -> Result<()> {
+pub fn diagnose(
+    sc: &Scenario,
+    span_s: f64,
+    values: f64,
+    runs: f64,
+    force: bool,
+) -> Result<(), OverLimit> {
     let per = run_cost(sc, span_s);
     judge(
         "the model over the recording",
