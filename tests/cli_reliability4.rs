@@ -1044,6 +1044,51 @@ fn cli_an_interrupted_margins_run_says_so() {
     }
 }
 
+// 20. diagnose stopped by SIGINT or SIGTERM says so, exits 2 (it died with 130/143) and
+// writes nothing.
+#[test]
+fn cli_an_interrupted_diagnose_says_so() {
+    let dir = tmpdir("r4-diagnose-signal");
+    let root = env!("CARGO_MANIFEST_DIR");
+    for signal in [libc::SIGINT, libc::SIGTERM] {
+        // a recording made long by its rows: about 10 s of analysis here
+        let out = signalled(
+            &dir,
+            &[
+                "diagnose",
+                &format!("{root}/scenarios/reference-hinge.toml"),
+                "--recording",
+                &format!("{root}/examples/recordings/heater-housing.csv"),
+                "--max-effects",
+                "6",
+                "--fits",
+                "64",
+                "--quiet",
+                "--json",
+                "d.json",
+                "--out",
+                "d",
+            ],
+            700,
+            signal,
+        );
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "signal {signal}: {}",
+            stderr(&out)
+        );
+        assert!(
+            stderr(&out).contains("interrupted after")
+                && stderr(&out).contains("nothing was written"),
+            "{}",
+            stderr(&out)
+        );
+        assert!(!dir.join("d.json").exists() && !dir.join("d").exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Per topic of the log at `path`, its messages' log times (the file as written, not
 /// joined into rows).
 fn raw_times(path: &Path) -> std::collections::BTreeMap<String, Vec<u64>> {
