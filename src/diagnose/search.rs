@@ -76,7 +76,10 @@ impl Composite {
         }
         let mut params = Vec::new();
         let mut setters = Vec::new();
+        // each member's setters, by index
+        let mut blocks = Vec::new();
         for c in members {
+            blocks.push(setters.len()..setters.len() + c.setters.len());
             let off = params.len();
             params.extend(c.params.iter().cloned());
             setters.extend(c.setters.iter().map(|s| Setter {
@@ -90,6 +93,20 @@ impl Composite {
             .iter()
             .map(|s| s.number.resolve(&base))
             .collect::<Result<Vec<_>, _>>()?;
+        // A number written twice keeps the later value: a face's absorptivity scale
+        // beside the global sunlight scale takes that face out of the global one (its
+        // value then relative to nominal), which still scales the others. A member all
+        // of whose numbers a later one overwrites would fit parameters that do nothing
+        // (and be counted): refused, naming the number.
+        let overwritten = |j: usize| ids[j + 1..].iter().any(|later| later.same_number(&ids[j]));
+        for b in &blocks {
+            if !b.is_empty() && b.clone().all(overwritten) {
+                return Err(ModelError::Param(crate::spec::registry::ParamError {
+                    key: ids[b.start].canonical_path(),
+                    message: "every number of one of the effects or calibration numbers fitted together is set again by another, so its parameters would do nothing".into(),
+                }));
+            }
+        }
         Ok(Composite {
             base,
             params,
@@ -1032,6 +1049,41 @@ pub(super) fn fit(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every candidate of FUNcube-1 composes with its calibration (a face's α scale
+    /// takes its face out of the global sunlight scale, which keeps the others), and a
+    /// composite in which one member's every number is written again by another is
+    /// refused, naming it, instead of fitting parameters that do nothing.
+    #[test]
+    fn core_one_number_is_written_by_one_setter() {
+        use super::super::effects::{Hints, calibration_set, candidates};
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(root.join("scenarios/funcube-1.toml")).unwrap();
+        let spec = crate::io::scenario_toml::parse_spec(&text, "funcube-1.toml").unwrap();
+        let model = Model::new(spec).unwrap();
+        let channels: Vec<(String, bool)> = model
+            .spec()
+            .sensor
+            .iter()
+            .map(|s| (s.name.clone().unwrap(), true))
+            .collect();
+        let mut cands = candidates(&model, &channels, &Hints::default());
+        let (set, _) = calibration_set(&model, &mut cands);
+        assert!(!set.is_empty() && cands.len() > 50);
+        for c in &cands {
+            if let Err(e) = Composite::new(&model, &set, &[c]) {
+                panic!("{}: {e}", c.label());
+            }
+        }
+        let scale = cands
+            .iter()
+            .find(|c| c.effect == super::super::effects::Effect::ConductanceScale)
+            .expect("a conductance scale");
+        let e = Composite::new(&model, &set, &[scale, scale])
+            .err()
+            .expect("one number twice");
+        assert!(e.to_string().contains("set again by another"), "{e}");
+    }
 
     fn candidate(params: Vec<ParamDef>, null: Option<Vec<f64>>) -> Candidate {
         Candidate {
