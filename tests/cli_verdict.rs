@@ -195,3 +195,46 @@ fn cli_help_documents_the_exit_statuses() {
             && text.contains("2 on any error")
     );
 }
+
+/// A failing run's event counts (interference events, times below the minimum) are the
+/// same whether or not it writes its log: with a log they were 0 in the summary, the
+/// JSON and the log's end record (the log's pair statistics were not told the events).
+#[test]
+fn cli_event_counts_do_not_depend_on_the_log() {
+    let dir = tmpdir("verdict-events-log");
+    with(
+        &dir,
+        &[
+            ("tooth_thinning_um = 19.4745", "tooth_thinning_um = 3.0"),
+            ("tooth_thinning_um = 19.4745", "tooth_thinning_um = 3.0"),
+        ],
+    );
+    let logged = run_in(
+        &dir,
+        &["run", "s.toml", "--json", "a.json", "--out", "a.mcap"],
+    );
+    let alone = run_in(&dir, &["run", "s.toml", "--json", "b.json", "--no-log"]);
+    assert_eq!(logged.status.code(), Some(1));
+    assert_eq!(alone.status.code(), Some(1));
+    let strip = |name: &str| {
+        let mut v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join(name)).unwrap()).unwrap();
+        v["solver"].as_object_mut().unwrap().remove("wall_time_s");
+        v
+    };
+    let (a, b) = (strip("a.json"), strip("b.json"));
+    let pair = &b["gear_pairs"][0];
+    assert_eq!(pair["verdict"], "interference", "{pair}");
+    assert!(pair["interference_events"].as_u64().unwrap() > 0, "{pair}");
+    assert!(pair["margin_events"].as_u64().unwrap() > 0, "{pair}");
+    assert_eq!(a, b);
+    let summary = |o: &Output| {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .find(|l| l.contains("interference events"))
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(summary(&logged), summary(&alone));
+    let _ = std::fs::remove_dir_all(&dir);
+}

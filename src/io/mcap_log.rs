@@ -1221,6 +1221,9 @@ impl Observer for McapLog {
 
     fn on_event(&mut self, event: &Event) -> ObserverResult {
         self.eclipses.on_event(event)?;
+        // the pair statistics count margin and interference events (the summary's and
+        // the end record's counts are theirs)
+        self.smallest.mesh.on_event(event)?;
         let (level, text) = event_text(event.kind, &self.names);
         self.batch.items.push(Item::Event {
             t_s: event.t_s,
