@@ -156,6 +156,78 @@ fn cli_plot_a_log_as_png_and_svg_with_eclipses_verdict_and_smallest_backlash() {
     }
 }
 
+/// The labels of the SVG figure at `svg`.
+fn labels(svg: &std::path::Path) -> Vec<String> {
+    std::fs::read_to_string(svg)
+        .unwrap()
+        .split("aria-label=\"")
+        .skip(1)
+        .map(|t| t.split('"').next().unwrap().to_string())
+        .collect()
+}
+
+/// A failing run's title names why it fails, from its log and from the CSV exported
+/// from it (a run with no valid mesh was titled "backlash below the smallest allowed"
+/// from its log, when its backlash was 525 µm, and PASS from its CSV); the backlash
+/// line is broken where the pair has no mesh, not drawn across.
+#[test]
+fn cli_plot_names_why_a_run_fails() {
+    let dir = common::tmpdir("plot-why");
+    let thin = [
+        "gear_pair.mesh.pinion.tooth_thinning_um=3",
+        "gear_pair.mesh.wheel.tooth_thinning_um=3",
+    ];
+    for (name, sets, why) in [
+        (
+            "low",
+            &["gear_pair.mesh.min_backlash_um=30"][..],
+            "FAIL: backlash below the smallest allowed",
+        ),
+        ("teeth", &thin[..], "FAIL: the teeth interfere"),
+        (
+            "lost",
+            &["gear_pair.mesh.center_distance_mm=30.68"][..],
+            "FAIL: no valid mesh",
+        ),
+    ] {
+        let log = run_log(&dir, name, sets);
+        let csv = dir.join(format!("{name}.csv"));
+        let out = common::bin()
+            .args(["export-csv", "--all", "--out"])
+            .arg(&csv)
+            .arg(&log)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        for input in [&log, &csv] {
+            let svg = dir.join(format!(
+                "{name}-{}.svg",
+                input.extension().unwrap().to_string_lossy()
+            ));
+            let out = common::bin()
+                .arg("plot")
+                .arg(input)
+                .arg("--out")
+                .arg(&svg)
+                .output()
+                .unwrap();
+            assert_eq!(out.status.code(), Some(0), "{out:?}");
+            let l = labels(&svg);
+            assert!(l.iter().any(|t| t.contains(why)), "{input:?}: {l:?}");
+            assert!(!l.iter().any(|t| t.contains("PASS")), "{input:?}: {l:?}");
+            if name == "lost" {
+                // the backlash (the thick blue line of the lower panel) in pieces: one
+                // per stretch with a mesh, about two an orbit
+                let text = std::fs::read_to_string(&svg).unwrap();
+                let pieces = text
+                    .matches("stroke=\"#0072B2\" stroke-width=\"2\"")
+                    .count();
+                assert!(pieces >= 4, "{input:?}: {pieces} pieces");
+            }
+        }
+    }
+}
+
 #[test]
 fn cli_plot_a_csv_and_the_bad_inputs() {
     let dir = common::tmpdir("plot-csv");

@@ -233,8 +233,73 @@ fn smallest_points(s: &RunSeries) -> Vec<(String, f64, f64)> {
         .collect()
 }
 
+/// Why a run fails, in the title, by the worst pair's verdict (as `PairVerdict`
+/// serialises it).
+fn failure(verdict: &str) -> &'static str {
+    match verdict {
+        "no_valid_mesh" => "no valid mesh (base circles overlap or the teeth lose contact)",
+        "interference" => "the teeth interfere (backlash reached zero)",
+        _ => "backlash below the smallest allowed",
+    }
+}
+
+/// A pair's verdict as a name of its own ("pass" for any other).
+fn verdict_name(v: &str) -> &'static str {
+    ["no_valid_mesh", "interference", "margin_violated"]
+        .into_iter()
+        .find(|n| *n == v)
+        .unwrap_or("pass")
+}
+
+/// How bad a pair's verdict is: no mesh, then interference, then a low margin.
+fn severity(verdict: &str) -> u8 {
+    match verdict {
+        "no_valid_mesh" => 3,
+        "interference" => 2,
+        "margin_violated" => 1,
+        _ => 0,
+    }
+}
+
+/// The worst verdict the rows show: a pair's backlash that stops being finite after
+/// it was (no valid mesh), that reaches zero, or that falls below its minimum.
+fn verdict_of_rows(s: &RunSeries, smallest: &[(String, f64, f64)]) -> &'static str {
+    let mut worst = "pass";
+    for (p, v) in &s.backlash_um {
+        let first = v.iter().position(|x| x.is_finite());
+        let verdict = if first.is_some_and(|i| v[i..].iter().any(|x| x.is_nan())) {
+            "no_valid_mesh"
+        } else {
+            let m = smallest
+                .iter()
+                .find(|(q, _, _)| q == p)
+                .map_or(f64::INFINITY, |x| x.2);
+            let below = s.allowed_um.iter().any(|(q, a)| q == p && m < *a);
+            match (m <= 0.0, below) {
+                (true, _) => "interference",
+                (false, true) => "margin_violated",
+                _ => "pass",
+            }
+        };
+        if severity(verdict) > severity(worst) {
+            worst = verdict;
+        }
+    }
+    worst
+}
+
 /// The title's verdict: the run's own when known, else judged from the rows.
 fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
+    let worst = s.end.as_ref().map_or_else(
+        || verdict_of_rows(s, smallest),
+        |e| {
+            e.pairs
+                .iter()
+                .map(|p| p.verdict.as_str())
+                .max_by_key(|v| severity(v))
+                .map_or("pass", verdict_name)
+        },
+    );
     let fails = match s.end.as_ref().map(|e| e.verdict.as_str()) {
         Some("pass") => false,
         Some("fail") => true,
@@ -243,11 +308,9 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
                 .to_string();
         }
         Some(_) => return String::new(),
-        None if s.allowed_um.is_empty() => return String::new(),
+        None if s.allowed_um.is_empty() && worst != "no_valid_mesh" => return String::new(),
         None => {
-            let fails = smallest
-                .iter()
-                .any(|(p, _, m)| s.allowed_um.iter().any(|(q, a)| q == p && m < a));
+            let fails = worst != "pass";
             // rows that stop before the run did can fail it, not pass it
             if s.cut_off && !fails {
                 return "  —  INCOMPLETE: the log has no end record (a killed run, a cut-off or recovered copy)"
@@ -258,7 +321,8 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
     };
     if fails {
         format!(
-            "  —  FAIL: backlash below the smallest allowed{}",
+            "  —  FAIL: {}{}",
+            failure(worst),
             if s.cut_off {
                 " (the log has no end record)"
             } else {
@@ -648,7 +712,8 @@ fn draw_envelopes(
     Ok(legend)
 }
 
-/// Draws each series as a line through its finite samples; returns the legend's names.
+/// Draws each series as lines through its finite samples, broken where a value is not
+/// finite (a pair's backlash while it has no valid mesh); returns the legend's names.
 fn draw_lines(
     chart: &mut Chart<'_, '_>,
     layout: &RunLayout<'_>,
@@ -658,18 +723,21 @@ fn draw_lines(
     let mut legend = Vec::new();
     for (k, (name, v)) in series.iter().enumerate() {
         let c = palette(k);
-        super::fine::line(
-            chart,
-            layout
-                .s
-                .time_s
-                .iter()
-                .zip(v.iter())
-                .filter(|(_, y)| y.is_finite())
-                .map(|(t, y)| (layout.axis.x(*t), *y)),
-            c,
-            if temps_panel { 1.0 } else { 2.0 },
-        )?;
+        let points: Vec<(f64, f64)> = layout
+            .s
+            .time_s
+            .iter()
+            .zip(v.iter())
+            .map(|(t, y)| (layout.axis.x(*t), *y))
+            .collect();
+        for run in points.split(|(_, y)| !y.is_finite()) {
+            super::fine::line(
+                chart,
+                run.iter().copied(),
+                c,
+                if temps_panel { 1.0 } else { 2.0 },
+            )?;
+        }
         legend.push(name.clone());
     }
     Ok(legend)
