@@ -123,7 +123,7 @@ fn cli_backlash_has_the_same_exit_statuses() {
                 .lines()
                 .next()
                 .unwrap()
-                .contains("base circles overlap"),
+                .contains("base circles do not fit"),
         "{text}"
     );
     let row = text
@@ -140,14 +140,17 @@ fn cli_backlash_has_the_same_exit_statuses() {
     let allowed = pair["min_backlash_allowed_um"].as_f64().unwrap();
     assert!((allowed - 30.0).abs() < 1e-9, "{allowed}");
     assert_eq!(pair["min_backlash_um"], pair["min_backlash_allowed_um"]);
-    assert!(pair["min_margin_um"].is_null());
+    // the smallest margin of the cases that mesh (the assembly's: 32.6 − 30 µm), not
+    // hidden by the case that does not
+    let m = pair["min_margin_um"].as_f64().unwrap();
+    assert!((m - 2.6).abs() < 0.01, "{m}");
     let case = &pair["cases"][1];
     assert!(case["backlash_um"]["exact"].is_null() && case["contact_ratio"].is_null());
     assert!(
         case["no_mesh"]
             .as_str()
             .unwrap()
-            .contains("base circles overlap")
+            .contains("base circles do not fit")
     );
     // 9000 °C of steel: the base radii grow by about 10 %
     let rb = case["base_radius_mm"][0].as_f64().unwrap();
@@ -155,6 +158,38 @@ fn cli_backlash_has_the_same_exit_statuses() {
     let a = case["center_distance_mm"].as_f64().unwrap();
     assert!((a - 30.0).abs() < 1e-9, "{a}");
     assert!(pair["cases"][0]["no_mesh"].is_null());
+    // a case that interferes beside one with no mesh: both named, the margin kept
+    let args = [
+        "backlash",
+        "s.toml",
+        "--set",
+        "gear_pair.mesh.min_backlash_um=5",
+        "--set",
+        "gear_pair.mesh.pinion.tooth_thinning_um=3",
+        "--set",
+        "gear_pair.mesh.wheel.tooth_thinning_um=3",
+        "--uniform-c",
+        "9000",
+        "--uniform-c",
+        "100",
+    ];
+    let both = run_in(&dir, &args);
+    assert_eq!(both.status.code(), Some(1));
+    let line = String::from_utf8_lossy(&both.stdout)
+        .lines()
+        .next()
+        .unwrap()
+        .to_string();
+    assert!(
+        line.starts_with("FAIL mesh: no valid mesh in case uniform (pinion 9000.00")
+            && line.contains("; the teeth interfere: margin -20.2")
+            && line.contains("in case uniform (pinion 100.00"),
+        "{line}"
+    );
+    let both = run_in(&dir, &[&args[..], &["--json"]].concat());
+    let json: serde_json::Value = serde_json::from_slice(&both.stdout).unwrap();
+    let m = json["pairs"][0]["min_margin_um"].as_f64().unwrap();
+    assert!((m + 20.236).abs() < 0.01, "{m}");
     let broken = run_in(&dir, &["backlash", "missing.toml"]);
     assert_error("backlash-missing", &broken, &["missing.toml"]);
     let _ = std::fs::remove_dir_all(&dir);

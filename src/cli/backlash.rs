@@ -70,40 +70,67 @@ struct Case {
     housing_c: f64,
 }
 
-/// The case with the smallest margin, and whether every case keeps the minimum
-/// backlash with teeth that do not interfere.
-fn worst(states: &[Evaluated]) -> (&Evaluated, bool) {
-    let w = states
-        .iter()
-        .min_by(|x, y| x.mesh.margin_m.total_cmp(&y.mesh.margin_m))
-        .expect("the assembly case");
-    let pass = states
-        .iter()
-        .all(|e| e.mesh.margin_m >= 0.0 && e.mesh.backlash_exact_m > 0.0);
-    // a case with no valid mesh is the worst of all
-    let w = states.iter().find(|e| e.no_mesh.is_some()).unwrap_or(w);
-    (w, pass)
+/// A pair's cases judged: the case with the smallest margin among those whose gears
+/// mesh (none when no case meshes), the first case with no valid mesh, and whether
+/// every case keeps the minimum backlash with teeth that do not interfere.
+struct Judged<'a> {
+    smallest: Option<&'a Evaluated>,
+    no_mesh: Option<&'a Evaluated>,
+    pass: bool,
 }
 
+fn judge(states: &[Evaluated]) -> Judged<'_> {
+    Judged {
+        smallest: states
+            .iter()
+            .filter(|e| e.mesh.margin_m.is_finite())
+            .min_by(|x, y| x.mesh.margin_m.total_cmp(&y.mesh.margin_m)),
+        no_mesh: states.iter().find(|e| e.no_mesh.is_some()),
+        pass: states
+            .iter()
+            .all(|e| e.mesh.margin_m >= 0.0 && e.mesh.backlash_exact_m > 0.0),
+    }
+}
+
+/// The verdict line of a pair: PASS or FAIL, the smallest margin (said as
+/// interference when the backlash reached zero) and a case with no valid mesh, each
+/// with its case.
 fn verdict_line(pair: &GearPair, states: &[Evaluated]) -> String {
-    let (w, pass) = worst(states);
-    let (c, m) = (&w.case, &w.mesh);
-    if let Some(e) = &w.no_mesh {
-        return format!(
-            "FAIL {}: no valid mesh in case {} (pinion {:.2} °C, wheel {:.2} °C): {e}",
-            pair.name, c.label, c.pinion_c, c.wheel_c
-        );
+    let j = judge(states);
+    let case = |c: &Case| {
+        format!(
+            "in case {} (pinion {:.2} °C, wheel {:.2} °C)",
+            c.label, c.pinion_c, c.wheel_c
+        )
+    };
+    let mut parts = Vec::new();
+    if let Some(e) = j.no_mesh {
+        let why = e
+            .no_mesh
+            .as_ref()
+            .map_or(String::new(), |m| format!(": {m}"));
+        parts.push(format!("no valid mesh {}{why}", case(&e.case)));
+    }
+    if let Some(e) = j.smallest {
+        let m = &e.mesh;
+        parts.push(format!(
+            "{} {:.3} µm (backlash {:.3} µm, minimum {:.1} µm) {}",
+            if m.backlash_exact_m <= 0.0 {
+                "the teeth interfere: margin"
+            } else {
+                "smallest margin"
+            },
+            m.margin_m * 1e6,
+            m.backlash_exact_m * 1e6,
+            pair.min_backlash_m * 1e6,
+            case(&e.case)
+        ));
     }
     format!(
-        "{} {}: smallest margin {:.3} µm (backlash {:.3} µm, minimum {:.1} µm) in case {} (pinion {:.2} °C, wheel {:.2} °C)",
-        if pass { "PASS" } else { "FAIL" },
+        "{} {}: {}",
+        if j.pass { "PASS" } else { "FAIL" },
         pair.name,
-        m.margin_m * 1e6,
-        m.backlash_exact_m * 1e6,
-        pair.min_backlash_m * 1e6,
-        c.label,
-        c.pinion_c,
-        c.wheel_c
+        parts.join("; ")
     )
 }
 
@@ -160,7 +187,7 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             .collect();
         cases.push((pair, states));
     }
-    let pass = cases.iter().all(|(_, states)| worst(states).1);
+    let pass = cases.iter().all(|(_, states)| judge(states).pass);
     if a.json {
         print_out(&(serde_json::to_string_pretty(&to_json(&sc.name, &cases))? + "\n"))?;
         return Ok(Outcome::from_pass(pass));
@@ -309,16 +336,16 @@ struct Variants {
 fn to_json<'a>(name: &'a str, cases: &'a [(&GearPair, Vec<Evaluated>)]) -> BacklashReport<'a> {
     BacklashReport {
         scenario: name,
-        pass: cases.iter().all(|(_, states)| worst(states).1),
+        pass: cases.iter().all(|(_, states)| judge(states).pass),
         pairs: cases
             .iter()
             .map(|(pair, states)| {
-                let (w, pass) = worst(states);
-                let w = &w.mesh;
+                let j = judge(states);
                 PairReport {
                     name: &pair.name,
-                    verdict: PassFail::all([pass]),
-                    min_margin_um: w.margin_m * 1e6,
+                    verdict: PassFail::all([j.pass]),
+                    // of the cases that mesh: null when none does
+                    min_margin_um: j.smallest.map_or(f64::NAN, |e| e.mesh.margin_m * 1e6),
                     min_backlash_allowed_um: pair.min_backlash_m * 1e6,
                     min_backlash_um: pair.min_backlash_m * 1e6,
                     cases: states

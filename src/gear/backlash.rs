@@ -49,7 +49,9 @@ pub struct Backlash {
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum MeshError {
     #[error(
-        "base circles overlap the centre distance: r_b1 + r_b2 = {sum_m:.6e} m ≥ a = {a_m:.6e} m"
+        "the base circles do not fit in the centre distance: r_b1 + r_b2 = {:.5} mm ≥ a = {:.5} mm",
+        sum_m * 1e3,
+        a_m * 1e3
     )]
     BaseCirclesOverlap { sum_m: f64, a_m: f64 },
     #[error("contact ratio {0:.3} < 1: the teeth lose contact during the mesh cycle")]
