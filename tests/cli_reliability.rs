@@ -982,6 +982,8 @@ fn cli_damage_after_the_data_is_named() {
     // the last byte of the summary (the high byte of the last summary offset's length)
     let mut summary = good.clone();
     summary[footer_at - 1] ^= 0x01;
+    // cut within the summary: the data section is whole, the footer is missing
+    let cut = good[..footer_at - 10].to_vec();
     let mut trailing = good.clone();
     trailing.extend_from_slice(b"junk after the end\n");
     for (name, bytes, needle) in [
@@ -991,6 +993,7 @@ fn cli_damage_after_the_data_is_named() {
             &trailing,
             "19 byte(s) follow its closing MCAP magic",
         ),
+        ("cut.mcap", &cut, "has no whole footer"),
     ] {
         std::fs::write(dir.join(name), bytes).unwrap();
         let csv = format!("{name}.csv");

@@ -71,6 +71,9 @@ pub enum TailDamage {
         summary_start: u64,
         footer_at: usize,
     },
+    /// No whole footer after the data section: the file is cut off, or a record of the
+    /// summary or the footer is damaged, at byte `at` (`bytes` from there to the end).
+    NoFooter { at: usize, bytes: usize },
     /// The footer is not followed by the closing magic (`bytes` after the footer).
     NoClosingMagic { bytes: usize },
     /// `bytes` more bytes follow the closing magic.
@@ -90,6 +93,10 @@ impl std::fmt::Display for TailDamage {
             } => write!(
                 f,
                 "its footer (at byte {footer_at}) says the summary starts at byte {summary_start}, which is not before the footer"
+            ),
+            TailDamage::NoFooter { at, bytes } => write!(
+                f,
+                "it has no whole footer: from byte {at} ({bytes} byte(s) to its end) its summary or footer is cut off or damaged"
             ),
             TailDamage::NoClosingMagic { bytes } => write!(
                 f,
@@ -281,6 +288,14 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
         }
         s.recovered_bytes = s.recovered_bytes.max(end);
         at = end;
+    }
+    // the data section ended (its DataEnd record) but no footer was read: cut off or
+    // damaged in the summary or the footer
+    if s.data_complete && !s.complete && s.tail_damage.is_none() {
+        s.tail_damage = Some(TailDamage::NoFooter {
+            bytes: bytes.len() - at,
+            at,
+        });
     }
     Ok(s)
 }
