@@ -897,12 +897,30 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(stderr(&out).contains("damaged"), "{}", stderr(&out));
     assert!(
-        stdout(&out).contains("damaged messages left out"),
+        stdout(&out).contains("damaged messages left out: the copy lacks t = "),
         "{}",
         stdout(&out)
     );
     let out = run_in(&dir, &["export-csv", "fixed.mcap", "--out", "f.csv"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // the copy is not called complete: its end record says recovered (the verdict, the
+    // run's own, kept), and a figure of it says what it lacks
+    let out = run_in(
+        &dir,
+        &["recover", "fixed.mcap", "--out", "again-fixed.mcap"],
+    );
+    assert!(
+        stdout(&out).contains("run_end: recovered"),
+        "{}",
+        stdout(&out)
+    );
+    let out = run_in(&dir, &["plot", "fixed.mcap", "--out", "fixed.svg"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("damaged messages left out, t = "),
+        "{}",
+        stderr(&out)
+    );
     // a flipped byte in the first chunk (schemas and channels, no message): the
     // readers refuse the file, so recover writes a readable copy all the same
     let mut b = std::fs::read(dir.join("l.mcap")).unwrap();

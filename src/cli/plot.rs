@@ -241,6 +241,14 @@ pub fn draw(
             eprintln!("{}", orbitlash::io::mcap_read::tail_note(input, d));
         }
         let given = end.is_some();
+        // a recovered copy that lost messages of a run that ended: its verdict is the
+        // run's, its rows have a hole
+        if let Some(m) = table.metadata.get("orbitlash.run_end")
+            && m.contains_key("original_status")
+            && let Some(d) = m.get("detail")
+        {
+            eprintln!("note: {}: {}", input.display(), orbitlash::units::shown(d));
+        }
         if let Some(e) = table
             .metadata
             .get("orbitlash.run_end")

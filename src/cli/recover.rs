@@ -7,7 +7,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use orbitlash::io::mcap_read::{drop_undecodable, keep_valid_messages};
-use orbitlash::io::mcap_scan::{recover as write_recovered, scan};
+use orbitlash::io::mcap_scan::{LeftOut, recover as write_recovered, scan};
 use orbitlash::io::output::OutputPolicy;
 
 use super::print_out;
@@ -92,7 +92,12 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             OutputPolicy::default_in_logs(&[&a.log]),
         ),
     };
-    let r = write_recovered(&s, &out, &policy)?;
+    let left_out = damaged.first().map(|first| LeftOut {
+        messages: damaged.len(),
+        t_first_s: first.t_s,
+        t_last_s: damaged.last().map_or(first.t_s, |l| l.t_s),
+    });
+    let r = write_recovered(&s, &out, &policy, left_out)?;
     let how = if damaged.is_empty() && damaged_chunks > 0 {
         format!("{damaged_chunks} damaged chunk(s) written again with their CRCs")
     } else if let (true, Some(d)) = (damaged.is_empty() && s.data_complete, &s.tail_damage) {
@@ -103,7 +108,11 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             r.recovered_bytes, r.file_bytes
         )
     } else {
-        format!("{} damaged messages left out", damaged.len())
+        let l = left_out.expect("damaged messages");
+        format!(
+            "{} damaged messages left out: the copy lacks t = {:.3} … {:.3} s",
+            l.messages, l.t_first_s, l.t_last_s
+        )
     };
     print_out(&format!(
         "recovered {} messages up to t = {:.3} s from {} ({how}{})\nwrote {}\n",

@@ -419,13 +419,25 @@ pub struct Recovery {
     pub original_status: Option<String>,
 }
 
+/// Messages a recovery leaves out of a log that otherwise ends properly (damaged
+/// ones): how many, and the log times of the first and last, s.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LeftOut {
+    pub messages: usize,
+    pub t_first_s: f64,
+    pub t_last_s: f64,
+}
+
 /// Writes every record `scan` recovered into a new MCAP file at `out` (atomically, never
 /// over an input: `policy`), with a `orbitlash.run_end` record of status `recovered`
-/// when the original had none. Messages whose channel or schema was lost are skipped.
+/// when the original had none, or when `left_out` messages were left out of one that
+/// had it (its verdict, the run's own, kept; its status kept as `original_status`).
+/// Messages whose channel or schema was lost are skipped.
 pub fn recover(
     scan: &Scan<'_>,
     out: &Path,
     policy: &super::output::OutputPolicy,
+    left_out: Option<LeftOut>,
 ) -> Result<Recovery, super::output::OutputError> {
     use super::output::OutputError;
     let err = |e: mcap::McapError| OutputError::other(out, e);
@@ -490,7 +502,21 @@ pub fn recover(
         .rev()
         .find(|m| m.name == "orbitlash.run_end")
     {
-        Some(m) => m.metadata.clone(),
+        Some(m) => {
+            let mut end = m.metadata.clone();
+            if let Some(l) = left_out {
+                let was = end.insert("status".into(), "recovered".into());
+                end.insert("original_status".into(), was.unwrap_or_default());
+                end.insert(
+                    "detail".into(),
+                    format!(
+                        "recovered: {} damaged messages left out, t = {:.3} … {:.3} s; the verdict is the run's own, over every step",
+                        l.messages, l.t_first_s, l.t_last_s
+                    ),
+                );
+            }
+            end
+        }
         None => [
             ("status", "recovered".to_string()),
             ("t_end_s", format!("{t_end_s}")),
