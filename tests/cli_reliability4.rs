@@ -1188,6 +1188,21 @@ fn cli_logs_stay_in_order_and_interrupted_runs_are_incomplete() {
     assert_eq!(p.status.code(), Some(0), "{}", stderr(&p));
     let svg = std::fs::read_to_string(dir.join("i.svg")).unwrap();
     assert!(svg.contains("INCOMPLETE") && !svg.contains("PASS"));
+    // ... and its summary says so too, instead of PASS (the verdict of a run not
+    // finished)
+    let out = signalled(
+        &dir,
+        &["run", "--orbits", LONG_ORBITS, "--force", "--no-log"],
+        1000,
+        libc::SIGINT,
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let text = stdout(&out);
+    assert!(
+        text.starts_with("INCOMPLETE mesh: margin") && !text.contains("PASS"),
+        "{text}"
+    );
+    assert!(stderr(&out).contains("verdict so far: no pair failed"));
     // a run whose CSV has one row still draws its figure
     let out = run_in(
         &dir,

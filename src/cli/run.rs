@@ -320,7 +320,7 @@ fn report_run(
             "interrupted at t = {:.1} s of {:.1} s; the outputs above are complete up to then (verdict so far: {})",
             stats.t_end_s,
             t_end_s,
-            if pass { "PASS" } else { "FAIL" }
+            if pass { "no pair failed" } else { "FAIL" }
         );
     }
     Ok(Outcome::from_pass(pass))
@@ -819,6 +819,15 @@ fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
     for (pair, r) in sc.gears.iter().zip(&mesh.run_pairs) {
         let min_um = pair.min_backlash_m * 1e6;
         let line = match r.verdict() {
+            // no pass before the run's end
+            PairVerdict::Pass if stats.interrupted => format!(
+                "INCOMPLETE {}: margin {:.3} µm so far (smallest backlash {:.3} µm ≥ {:.1} µm minimum) at {}; the run was interrupted before its end",
+                pair.name,
+                r.min_margin_m * 1e6,
+                r.min_exact_m * 1e6,
+                min_um,
+                orbit_phase(sc, r.t_min_s)
+            ),
             PairVerdict::Pass => format!(
                 "PASS {}: margin {:.3} µm (smallest backlash {:.3} µm ≥ {:.1} µm minimum) at {}",
                 pair.name,
