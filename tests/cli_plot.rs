@@ -199,7 +199,10 @@ fn cli_plot_names_why_a_run_fails() {
             .output()
             .unwrap();
         assert!(out.status.success(), "{out:?}");
-        for input in [&log, &csv] {
+        // a log is told by its first bytes, not its name
+        let renamed = dir.join(format!("{name}-log.dat"));
+        std::fs::copy(&log, &renamed).unwrap();
+        for input in [&log, &csv, &renamed] {
             let svg = dir.join(format!(
                 "{name}-{}.svg",
                 input.extension().unwrap().to_string_lossy()

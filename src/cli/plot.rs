@@ -229,10 +229,12 @@ pub fn draw(
     format_of(out, "--out")?;
     // The output's place is checked before the input is read.
     Outputs::new(OutputPolicy::reading(&[input])).file("--out", out)?;
+    // a log by its first bytes (the MCAP magic), whatever its name
     let is_log = input
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-        || input.to_string_lossy().ends_with(".partial");
+        || input.to_string_lossy().ends_with(".partial")
+        || starts_with_mcap_magic(input);
     let mut end = end.cloned();
     let mut cut_off = false;
     let (name, headers, rows) = if is_log {
@@ -296,4 +298,16 @@ pub fn draw(
     }
     let fig = figure(&series)?;
     write_figure(&fig, out, &[input])
+}
+
+/// Whether the file at `path` starts with the MCAP magic (false when it cannot be read:
+/// reading it as CSV then names the error).
+fn starts_with_mcap_magic(path: &Path) -> bool {
+    use std::io::Read as _;
+    let mut head = [0u8; 8];
+    orbitlash::io::output::check_input(path).is_ok()
+        && std::fs::File::open(path)
+            .and_then(|mut f| f.read_exact(&mut head))
+            .is_ok()
+        && head == *b"\x89MCAP0\r\n"
 }
