@@ -624,6 +624,19 @@ fn cli_impossible_recordings_are_refused_or_warned() {
         "{}",
         stderr(&out)
     );
+    // the readings as written, not as they come back from kelvin (336.53999999999996)
+    let range = stderr(&out)
+        .split("every reading (")
+        .nth(1)
+        .and_then(|r| r.split(" °C)").next())
+        .unwrap()
+        .to_string();
+    assert!(
+        range
+            .split(" … ")
+            .all(|v| v.split('.').nth(1).is_some_and(|d| d.len() == 2)),
+        "{range}"
+    );
     // the untouched recording has no such warning
     let plain = diagnose(
         Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -225,6 +225,27 @@ fn cli_diagnose_checks_the_recordings_clock_on_its_eclipses() {
         stdout.contains("eclipses: `Tot. Photo Curr. mA` below 20 against the orbit's shadow: 99.49 % of 1166 rows agree; 12 entries -3.9 s, 11 exits +3.4 s"),
         "{stdout}"
     );
+    // the channel table's columns line up with names longer than 13 characters
+    // (chassis_silver_c): each row's noise figure ends where the header's "noise" does
+    let header = stdout
+        .lines()
+        .find(|l| l.starts_with("channel ") && l.contains("noise"))
+        .unwrap();
+    let end = header.find("noise").unwrap() + "noise".len();
+    let rows: Vec<&str> = stdout
+        .lines()
+        .skip_while(|l| *l != header)
+        .skip(1)
+        .take(8)
+        .collect();
+    assert!(
+        rows.iter().any(|r| r.starts_with("chassis_silver_c ")),
+        "{rows:?}"
+    );
+    for r in &rows {
+        let noise_end = r.find(" K ").unwrap();
+        assert_eq!(noise_end, end, "{header}\n{r}");
+    }
     let e = &with["recording"]["eclipses"];
     assert_eq!(e["column"], "Tot. Photo Curr. mA");
     assert_eq!(e["rows"], 1166);

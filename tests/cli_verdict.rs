@@ -273,3 +273,68 @@ fn cli_event_counts_do_not_depend_on_the_log() {
     assert_eq!(summary(&logged), summary(&alone));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A run that loses its mesh says when to the millisecond, the same in the text and
+/// the JSON, and its CSV (the solver's interpolant every 30 s) agrees: the first row
+/// with no backlash is at or after that time, the row before it has one. (The time
+/// was the first quarter point or step end that saw the loss, 37 s late here.)
+#[test]
+fn cli_the_time_a_mesh_is_lost_is_the_same_everywhere() {
+    let dir = tmpdir("verdict-lost-time");
+    with(&dir, &[]);
+    let out = run_in(
+        &dir,
+        &[
+            "run",
+            "s.toml",
+            "--orbits",
+            "1",
+            "--set",
+            "gear_pair.mesh.center_distance_mm=30.68",
+            "--no-log",
+            "--csv",
+            "l.csv",
+            "--json",
+            "l.json",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("l.json")).unwrap()).unwrap();
+    let pair = &json["gear_pairs"][0];
+    assert_eq!(pair["verdict"], "no_valid_mesh");
+    let t_lost = pair["t_first_invalid_s"].as_f64().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(
+        text.lines()
+            .next()
+            .unwrap()
+            .contains(&format!("({t_lost:.1} s)")),
+        "{t_lost}: {text}"
+    );
+    let csv = std::fs::read_to_string(dir.join("l.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|h| h.starts_with("mesh.backlash_um") || *h == "backlash_um")
+        .unwrap_or_else(|| panic!("{header:?}"));
+    let rows: Vec<(f64, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[0].parse().unwrap(), c[col].parse().unwrap_or(f64::NAN))
+        })
+        .collect();
+    let first = rows.iter().position(|r| r.1.is_nan()).unwrap();
+    assert!(first > 0);
+    assert!(
+        rows[first - 1].0 < t_lost && t_lost <= rows[first].0,
+        "lost at {t_lost} s; rows {:?} {:?}",
+        rows[first - 1],
+        rows[first]
+    );
+    // the largest backlash, just before the loss, is before it
+    assert!(pair["t_max_backlash_s"].as_f64().unwrap() <= t_lost);
+    let _ = std::fs::remove_dir_all(&dir);
+}

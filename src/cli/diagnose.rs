@@ -607,9 +607,19 @@ fn report_head(o: &mut String, d: &Diagnosis, scenario: &str, recording: &str) {
 /// Each channel's noise and its baseline and corrected residuals.
 fn report_channels(o: &mut String, d: &Diagnosis) {
     outln!(o, "");
+    // the channel column as wide as the longest name
+    let w = d
+        .noise
+        .0
+        .iter()
+        .map(|(n, _)| n.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(13);
     outln!(
         o,
-        "channel        noise   baseline rms (fit / held-out)   corrected held-out rms"
+        "{:<w$}  noise   baseline rms (fit / held-out)   corrected held-out rms",
+        "channel"
     );
     for (name, sigma) in &d.noise.0 {
         let u = unit_of(name);
@@ -618,7 +628,7 @@ fn report_channels(o: &mut String, d: &Diagnosis) {
         let ch = d.heldout_rmse.get(name).unwrap_or(f64::NAN);
         outln!(
             o,
-            "{name:<13} {sigma:>6.3} {u:<2}  {b:>8.3} / {bh:>8.3} {u:<2}        {ch:>8.3} {u:<2} ({:.2}× noise)",
+            "{name:<w$} {sigma:>6.3} {u:<2}  {b:>8.3} / {bh:>8.3} {u:<2}        {ch:>8.3} {u:<2} ({:.2}× noise)",
             ch / sigma
         );
     }
@@ -684,10 +694,17 @@ fn report_where(o: &mut String, d: &Diagnosis, clock: &Clock<'_>) {
         outln!(o, "where: no channel's baseline residual exceeds its noise");
     } else {
         outln!(o, "where the baseline residual sits (largest first):");
-        for m in d.mismatches.iter().take(12) {
+        let shown = &d.mismatches[..d.mismatches.len().min(12)];
+        let w = shown
+            .iter()
+            .map(|m| m.channel.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(13);
+        for m in shown {
             outln!(
                 o,
-                "  {:<13} {:<13} rms {:.3} {} ({:.1}× noise, mean {:+.3}), {:.0} % of the channel's residual; \
+                "  {:<w$} {:<13} rms {:.3} {} ({:.1}× noise, mean {:+.3}), {:.0} % of the channel's residual; \
                  first at t = {}; {:.0} … {:.0} s after orbit noon in {} orbit(s)",
                 m.channel,
                 m.phase,

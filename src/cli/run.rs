@@ -230,6 +230,7 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
         (None, Some(m)) => m,
         (None, None) => unreachable!("the statistics are kept by the log or here"),
     };
+    daily.include_run_extremes(&mesh.run_pairs);
     let run_end = orbitlash::run::summary::RunEnd::new(
         &mesh.run_pairs,
         &sc.gears

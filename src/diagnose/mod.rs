@@ -738,8 +738,8 @@ fn unit_warnings(obs: &Observations) -> Vec<String> {
             "channel `{}`: every reading ({} … {} {}) is implausible in {} and plausible in {other}: \
 is the sensor's unit right (its `unit = \"{other}\"`)?",
             ch.name,
-            crate::units::num(lo),
-            crate::units::num(hi),
+            crate::units::fixed(lo, 2),
+            crate::units::fixed(hi, 2),
             ch.value_unit,
             ch.value_unit
         ));

@@ -524,6 +524,7 @@ impl Observer for MeshStats {
                 continue;
             }
             self.probed_steps += 1;
+            let had_lost = self.run_pairs[k].invalid_samples > 0;
             let ts = [t0, t0 + 0.25 * h, t0 + 0.5 * h, t0 + 0.75 * h];
             let mut values = [b0[0], 0.0, 0.0, 0.0, b1[0]];
             for i in 1..4 {
@@ -532,6 +533,28 @@ impl Observer for MeshStats {
                 self.see(k, ts[i], &m);
             }
             self.see(k, t1, &step.mesh[k]);
+            // The mesh lost for the first time within this step: where, to the
+            // millisecond (bisected between the last point that meshes and the first
+            // that does not), not at the first quarter point or step end that saw it.
+            if !had_lost && self.run_pairs[k].invalid_samples > 0 && !values[0].is_nan() {
+                let times = [t0, ts[1], ts[2], ts[3], t1];
+                if let Some(j) = (1..5).find(|&j| values[j].is_nan()) {
+                    let (mut lo, mut hi) = (times[j - 1], times[j]);
+                    while hi - lo > MIN_TIME_TOLERANCE_S {
+                        let mid = 0.5 * (lo + hi);
+                        if at(mid).backlash_exact_m.is_nan() {
+                            hi = mid;
+                        } else {
+                            lo = mid;
+                        }
+                    }
+                    self.run_pairs[k].t_first_invalid_s = hi;
+                    if hi >= self.start_s && self.pairs[k].invalid_samples > 0 {
+                        let w = &mut self.pairs[k].t_first_invalid_s;
+                        *w = w.min(hi);
+                    }
+                }
+            }
             // Golden-section refinement around an interior minimum.
             let i = (1..4)
                 .min_by(|&x, &y| values[x].total_cmp(&values[y]))
@@ -705,6 +728,8 @@ pub struct PairSummary {
     pub interference_events: u64,
     pub margin_events: u64,
     pub invalid_samples: u64,
+    /// When the mesh was first lost, s (null: never).
+    pub t_first_invalid_s: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -768,6 +793,7 @@ impl RunSummary {
                 interference_events: r.interference_events,
                 margin_events: r.margin_events,
                 invalid_samples: r.invalid_samples,
+                t_first_invalid_s: r.t_first_invalid_s,
             })
             .collect();
         let e = &stats.energy;
@@ -831,8 +857,8 @@ impl RunSummary {
 /// A run's days (of simulated time, from t = 0): per day, each gear pair's smallest
 /// and largest exact backlash, each node's range, and each heater's time on and
 /// energy. A step counts to the day it starts in (steps are minutes; a day is 86 400 s);
-/// extremes are those at step ends (`MeshStats` refines the run's within steps: they
-/// agree to a few nanometres).
+/// extremes are those at step ends (`MeshStats` refines the run's within steps, a few
+/// nanometres further: [`DailyStats::include_run_extremes`] puts those in their days).
 #[derive(Debug, Clone, Default)]
 pub struct DailyStats {
     pub nodes: Vec<String>,
@@ -841,6 +867,28 @@ pub struct DailyStats {
 }
 
 impl DailyStats {
+    /// Each pair's run-wide smallest and largest backlash (`pairs`, refined within
+    /// steps by `MeshStats`) folded into the day each falls in, so that the day of the
+    /// run's extreme shows the run's figure, not the step end's a few nanometres off.
+    pub fn include_run_extremes(&mut self, pairs: &[PairStats]) {
+        for (k, p) in pairs.iter().enumerate() {
+            for (t, v) in [(p.t_min_s, p.min_exact_m), (p.t_max_s, p.max_exact_m)] {
+                if !(t.is_finite() && v.is_finite()) {
+                    continue;
+                }
+                let d = (t / DAY_S).floor().max(0.0) as u64;
+                if let Some(e) = self
+                    .days
+                    .iter_mut()
+                    .find(|x| x.day == d)
+                    .and_then(|x| x.backlash_m.get_mut(k))
+                {
+                    *e = (e.0.min(v), e.1.max(v));
+                }
+            }
+        }
+    }
+
     /// Each heater's power, time on, duty over `span_s` and energy.
     pub fn heater_summaries(&self, span_s: f64) -> Vec<HeaterSummary> {
         self.heaters
