@@ -1002,6 +1002,21 @@ fn cli_damage_after_the_data_is_named() {
     summary[footer_at - 1] ^= 0x01;
     // cut within the summary: the data section is whole, the footer is missing
     let cut = good[..footer_at - 10].to_vec();
+    // a changed letter in the summary's copy of a channel's topic: the data section's
+    // copy, which the messages were written with, is the one read
+    let topic = b"/thermal/temperature";
+    let at = good
+        .windows(topic.len())
+        .rposition(|w| w == topic)
+        .expect("the topic in the summary");
+    assert!(at > summary_start as usize);
+    let mut channel = good.clone();
+    channel[at + 3] ^= 0x20;
+    // the length of the summary's first record made too long for the file: the
+    // summary cannot be read, the messages can
+    let mut length = good.clone();
+    length[summary_start as usize + 1..summary_start as usize + 9]
+        .copy_from_slice(&u64::MAX.to_le_bytes());
     let mut trailing = good.clone();
     trailing.extend_from_slice(b"junk after the end\n");
     for (name, bytes, needle) in [
@@ -1012,6 +1027,8 @@ fn cli_damage_after_the_data_is_named() {
             "19 byte(s) follow its closing MCAP magic",
         ),
         ("cut.mcap", &cut, "has no whole footer"),
+        ("channel.mcap", &channel, "does not match the footer's CRC"),
+        ("length.mcap", &length, "has no whole footer"),
     ] {
         std::fs::write(dir.join(name), bytes).unwrap();
         let csv = format!("{name}.csv");

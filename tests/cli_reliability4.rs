@@ -1205,7 +1205,15 @@ fn cli_logs_stay_in_order_and_interrupted_runs_are_incomplete() {
     // finished)
     let out = signalled(
         &dir,
-        &["run", "--orbits", LONG_ORBITS, "--force", "--no-log"],
+        &[
+            "run",
+            "--orbits",
+            LONG_ORBITS,
+            "--force",
+            "--no-log",
+            "--json",
+            "i.json",
+        ],
         1000,
         libc::SIGINT,
     );
@@ -1215,6 +1223,10 @@ fn cli_logs_stay_in_order_and_interrupted_runs_are_incomplete() {
         text.starts_with("INCOMPLETE mesh: margin") && !text.contains("PASS"),
         "{text}"
     );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("i.json")).unwrap()).unwrap();
+    assert_eq!(json["verdict"], "incomplete");
+    assert_eq!(json["interrupted"], true);
     assert!(stderr(&out).contains("verdict so far: no pair failed"));
     // a run whose CSV has one row still draws its figure
     let out = run_in(

@@ -3,7 +3,6 @@
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use std::sync::atomic::Ordering;
 
 use anyhow::{Context, Result};
 use clap::Args;
@@ -78,6 +77,8 @@ pub struct DiagnoseArgs {
 }
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
+    // Ctrl-C from the start is a stop that says so (exit 2), not a death by signal
+    super::interrupt_flag();
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
     let mut inputs = loaded.inputs();
     inputs.push(&a.recording);
@@ -161,33 +162,20 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
             b.set_position(done as u64);
         }
     };
-    // Asked to stop (Ctrl-C, SIGTERM) while diagnosing: nothing has been written yet
-    // (every output is written when the analysis is done), so the process stops here
-    // and says so, exit 2 as every error. Once the analysis is done the outputs are
-    // written whatever comes.
-    let interrupt = super::interrupt_flag();
-    let finished = std::sync::atomic::AtomicBool::new(false);
-    let result = std::thread::scope(|s| {
-        let (finished, bar) = (&finished, &bar);
-        s.spawn(move || {
-            while !finished.load(Ordering::Relaxed) {
-                if interrupt.load(Ordering::Relaxed) {
-                    if let Some(b) = bar {
-                        b.abandon();
-                    }
-                    eprintln!(
-                        "error: interrupted after {:.1} s: nothing was written (diagnose writes its outputs when the analysis is done)",
-                        t0.elapsed().as_secs_f64()
-                    );
-                    std::process::exit(2);
-                }
-                std::thread::sleep(std::time::Duration::from_millis(50));
+    // Stopped while diagnosing: nothing is written yet, exit 2 saying so (`watched`).
+    let result = super::watched(
+        || {},
+        || {
+            if let Some(b) = &bar {
+                b.abandon();
             }
-        });
-        let r = diagnose::diagnose(&model, &rec, &opts, &progress);
-        finished.store(true, Ordering::Relaxed);
-        r
-    });
+            format!(
+                "interrupted after {:.1} s: nothing was written (diagnose writes its outputs when the analysis is done)",
+                t0.elapsed().as_secs_f64()
+            )
+        },
+        || diagnose::diagnose(&model, &rec, &opts, &progress),
+    );
     let mut d = result.with_context(|| format!("diagnose {} against {}", rec.file, loaded.file))?;
     for f in followed.iter().rev() {
         d.notes.insert(0, format!("input: {f}"));

@@ -371,36 +371,26 @@ fn run_with_progress(
         );
         b
     });
-    let finished = std::sync::atomic::AtomicBool::new(false);
     // Asked to stop while samples run: nothing has been written yet (every output is
     // written once all samples are in), so the process stops here and says so.
-    let interrupt = super::interrupt_flag();
     let total = range.end - range.start;
-    let result = std::thread::scope(|s| {
-        let finished = &finished;
-        let bar = &bar;
-        s.spawn(move || {
-            while !finished.load(Ordering::Relaxed) {
-                if interrupt.load(Ordering::Relaxed) {
-                    if let Some(b) = bar {
-                        b.abandon();
-                    }
-                    eprintln!(
-                        "error: interrupted after {} of {total} samples: nothing was written (margins writes its outputs when every sample has run; shard a long run with --shard I/N)",
-                        done.load(Ordering::Relaxed)
-                    );
-                    std::process::exit(2);
-                }
-                if let Some(b) = bar {
-                    b.set_position(done.load(Ordering::Relaxed));
-                }
-                std::thread::sleep(std::time::Duration::from_millis(50));
+    let result = super::watched(
+        || {
+            if let Some(b) = &bar {
+                b.set_position(done.load(Ordering::Relaxed));
             }
-        });
-        let r = run_samples(model, plan, range, horizon, max_steps, done);
-        finished.store(true, Ordering::Relaxed);
-        r
-    });
+        },
+        || {
+            if let Some(b) = &bar {
+                b.abandon();
+            }
+            format!(
+                "interrupted after {} of {total} samples: nothing was written (margins writes its outputs when every sample has run; shard a long run with --shard I/N)",
+                done.load(Ordering::Relaxed)
+            )
+        },
+        || run_samples(model, plan, range, horizon, max_steps, done),
+    );
     if let Some(b) = bar {
         b.finish_and_clear();
     }

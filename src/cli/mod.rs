@@ -152,6 +152,42 @@ pub fn interrupt_flag() -> &'static std::sync::atomic::AtomicBool {
     &FLAG
 }
 
+/// Runs `work` while a thread watches for a stop request (Ctrl-C, SIGTERM, SIGHUP):
+/// asked to stop before `work` is done, the process prints `error: {stopped()}` and
+/// exits 2 (the commands that use this write their outputs after `work`, so nothing
+/// has been written). `tick` runs every 50 ms meanwhile (a progress bar). The watcher
+/// ends when `work` ends, by a panic too (a guard tells it), so a panic is not a hang.
+pub fn watched<T>(
+    tick: impl Fn() + Sync,
+    stopped: impl Fn() -> String + Sync,
+    work: impl FnOnce() -> T,
+) -> T {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    struct Done<'a>(&'a AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(true, Ordering::Relaxed);
+        }
+    }
+    let interrupt = interrupt_flag();
+    let finished = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let (finished, tick, stopped) = (&finished, &tick, &stopped);
+        s.spawn(move || {
+            while !finished.load(Ordering::Relaxed) {
+                if interrupt.load(Ordering::Relaxed) {
+                    eprintln!("error: {}", stopped());
+                    std::process::exit(2);
+                }
+                tick();
+                std::thread::sleep(std::time::Duration::from_millis(50));
+            }
+        });
+        let _done = Done(finished);
+        work()
+    })
+}
+
 /// Worker threads at most per core: past this, more threads only cost memory (each
 /// has its stack) and start-up.
 pub const MAX_THREADS_PER_CORE: usize = 8;
@@ -386,5 +422,26 @@ pub fn print_out(text: &str) -> Result<()> {
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         r => Ok(r?),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A panic in the watched work reaches the caller instead of leaving the watcher
+    /// waiting for a `finished` that never comes (the process hung).
+    #[test]
+    fn core_a_panic_in_watched_work_is_not_a_hang() {
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let r = std::panic::catch_unwind(|| {
+                super::watched(|| {}, String::new, || -> u32 { panic!("in the work") })
+            });
+            tx.send(r.is_err()).unwrap();
+        });
+        let panicked = rx
+            .recv_timeout(std::time::Duration::from_secs(20))
+            .expect("watched returned");
+        assert!(panicked);
+        assert_eq!(super::watched(|| {}, String::new, || 7), 7);
     }
 }

@@ -235,14 +235,20 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
             break;
         };
         let body = &bytes[body_start..end];
-        super::mcap_lengths::check_record(op, body).map_err(|message| ScanError::Malformed {
-            offset: at,
-            message,
-        })?;
-        let record = mcap::parse_record(op, body).map_err(|e| ScanError::Malformed {
-            offset: at,
-            message: e.to_string(),
-        })?;
+        let parsed = super::mcap_lengths::check_record(op, body)
+            .and_then(|()| mcap::parse_record(op, body).map_err(|e| e.to_string()));
+        let record = match parsed {
+            Ok(r) => r,
+            // past the data section (the summary): the messages are whole; the damage
+            // is said as a missing footer ([`TailDamage::NoFooter`])
+            Err(_) if s.data_complete => break,
+            Err(message) => {
+                return Err(ScanError::Malformed {
+                    offset: at,
+                    message,
+                });
+            }
+        };
         match record {
             Record::DataEnd(_) => s.data_complete = true,
             Record::Footer(f) => {
@@ -284,6 +290,12 @@ pub fn scan(bytes: &[u8]) -> Result<Scan<'_>, ScanError> {
                     }
                 }
             }
+            // the summary repeats the schemas and channels: the data section's copies
+            // are the ones the messages were written with (a changed byte in the
+            // summary must not replace them)
+            Record::Schema { header, .. }
+                if s.data_complete && s.schemas.contains_key(&header.id) => {}
+            Record::Channel(c) if s.data_complete && s.channels.contains_key(&c.id) => {}
             other => keep(other, end, true, &mut s),
         }
         s.recovered_bytes = s.recovered_bytes.max(end);
@@ -506,7 +518,9 @@ pub fn recover(
             let mut end = m.metadata.clone();
             if let Some(l) = left_out {
                 let was = end.insert("status".into(), "recovered".into());
-                end.insert("original_status".into(), was.unwrap_or_default());
+                // a copy of a copy keeps the first original's status
+                end.entry("original_status".into())
+                    .or_insert_with(|| was.unwrap_or_default());
                 end.insert(
                     "detail".into(),
                     format!(

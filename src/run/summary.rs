@@ -636,8 +636,10 @@ fn monotone(b0: f64, b1: f64, slope0: f64, slope1: f64, h_s: f64) -> bool {
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct RunSummary {
     pub scenario: String,
-    /// "pass" when every gear pair kept its minimum backlash, else "fail".
-    pub verdict: PassFail,
+    /// "pass" when every gear pair kept its minimum backlash, else "fail";
+    /// "incomplete" for an interrupted run in which no pair failed so far (as the
+    /// log's end record says).
+    pub verdict: &'static str,
     pub t_start_s: f64,
     pub t_end_s: f64,
     pub orbits: f64,
@@ -800,7 +802,10 @@ impl RunSummary {
         let net = &scenario.thermal.network;
         RunSummary {
             scenario: scenario.name.clone(),
-            verdict: PassFail::all(pairs.iter().map(|p| p.verdict.passes())),
+            verdict: match PassFail::all(pairs.iter().map(|p| p.verdict.passes())) {
+                PassFail::Pass if stats.interrupted => "incomplete",
+                v => v.as_str(),
+            },
             t_start_s: stats.t_start_s,
             t_end_s: stats.t_end_s,
             orbits: (stats.t_end_s - stats.t_start_s) / scenario.period_s(),
@@ -876,11 +881,14 @@ impl DailyStats {
                 if !(t.is_finite() && v.is_finite()) {
                     continue;
                 }
+                // its day, or, when no step starts in that day (the run's last step
+                // crosses midnight), the day of the step it is in
                 let d = (t / DAY_S).floor().max(0.0) as u64;
                 if let Some(e) = self
                     .days
                     .iter_mut()
-                    .find(|x| x.day == d)
+                    .rev()
+                    .find(|x| x.day <= d)
                     .and_then(|x| x.backlash_m.get_mut(k))
                 {
                     *e = (e.0.min(v), e.1.max(v));
