@@ -336,5 +336,39 @@ fn cli_the_time_a_mesh_is_lost_is_the_same_everywhere() {
     );
     // the largest backlash, just before the loss, is before it
     assert!(pair["t_max_backlash_s"].as_f64().unwrap() <= t_lost);
+    // a run that ends without its mesh: its log read back keeps the rows up to the end
+    // (rows with a NaN written were taken for rows cut off and dropped)
+    let out = run_in(
+        &dir,
+        &[
+            "run",
+            "s.toml",
+            "--orbits",
+            "0.7",
+            "--set",
+            "gear_pair.mesh.center_distance_mm=30.68",
+            "--out",
+            "l.mcap",
+            "--json",
+            "e.json",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let t_end =
+        serde_json::from_slice::<serde_json::Value>(&std::fs::read(dir.join("e.json")).unwrap())
+            .unwrap()["t_end_s"]
+            .as_f64()
+            .unwrap();
+    assert!(t_end > t_lost, "the run ends after the loss");
+    let out = run_in(&dir, &["export-csv", "l.mcap", "--out", "e.csv"]);
+    assert_eq!(out.status.code(), Some(0));
+    let csv = std::fs::read_to_string(dir.join("e.csv")).unwrap();
+    let last: Vec<&str> = csv.lines().last().unwrap().split(',').collect();
+    let t_last: f64 = last[0].parse().unwrap();
+    assert!((t_last - t_end).abs() < 1.0, "{t_last} against {t_end}");
+    assert!(
+        last[col].parse::<f64>().map_or(true, f64::is_nan),
+        "{last:?}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -345,8 +345,27 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
         });
     }
     let n = table.columns.len();
+    // The last rows of a cut-off (or recovered) log may lack the topics written after
+    // the cut; every topic is written at every sample otherwise. Counted by the fields
+    // written, not by their values: a NaN written (a lost mesh) is there.
+    let mut seen = vec![false; n];
+    let written: Vec<usize> = rows
+        .values()
+        .map(|vals| {
+            seen.fill(false);
+            vals.iter()
+                .filter(|(i, _)| !std::mem::replace(&mut seen[*i], true))
+                .count()
+        })
+        .collect();
+    let full = written.iter().copied().max().unwrap_or(0);
+    let keep = written
+        .iter()
+        .rposition(|&w| w == full)
+        .map_or(0, |k| k + 1);
     table.rows = rows
         .into_iter()
+        .take(keep)
         .map(|(t, vals)| {
             let mut r = vec![f64::NAN; n];
             for (i, v) in vals {
@@ -355,15 +374,6 @@ pub fn read_log(path: &Path) -> Result<LogTable, LogReadError> {
             (t, r)
         })
         .collect();
-    {
-        // The last rows of a cut-off (or recovered) log may lack the topics written
-        // after the cut; every topic is written at every sample otherwise.
-        let filled = |r: &Vec<f64>| r.iter().filter(|v| !v.is_nan()).count();
-        let full = table.rows.iter().map(|(_, r)| filled(r)).max().unwrap_or(0);
-        while table.rows.last().is_some_and(|(_, r)| filled(r) < full) {
-            table.rows.pop();
-        }
-    }
     Ok(table)
 }
 
