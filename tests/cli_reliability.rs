@@ -1067,6 +1067,21 @@ fn cli_damage_after_the_data_is_named() {
             stdout(&out)
         );
     }
+    // cut just before the data section's end record (DataEnd, 13 bytes): every byte is
+    // a whole record, and recover says so instead of "N of N bytes were whole; the rest
+    // was cut off"
+    assert_eq!(good[summary_start as usize - 13], 0x0F, "DataEnd");
+    std::fs::write(dir.join("whole.mcap"), &good[..summary_start as usize - 13]).unwrap();
+    let out = run_in(
+        &dir,
+        &["recover", "whole.mcap", "--out", "whole-fixed.mcap"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("bytes were whole records, but the log stops there"),
+        "{}",
+        stdout(&out)
+    );
     // the good log: no note
     let out = run_in(&dir, &["export-csv", "l.mcap", "--out", "good.csv"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));

@@ -102,6 +102,11 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
         format!("{damaged_chunks} damaged chunk(s) written again with their CRCs")
     } else if let (true, Some(d)) = (damaged.is_empty() && s.data_complete, &s.tail_damage) {
         format!("every message was whole, but {d}; the summary and footer are written again")
+    } else if damaged.is_empty() && r.recovered_bytes == r.file_bytes {
+        format!(
+            "all {} bytes were whole records, but the log stops there, before its end: its writer was stopped",
+            r.file_bytes
+        )
     } else if damaged.is_empty() {
         format!(
             "{} of {} bytes were whole; the rest was cut off",
