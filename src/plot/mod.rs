@@ -272,8 +272,9 @@ pub(crate) fn palette(i: usize) -> plotters::style::RGBColor {
 }
 
 /// Colours of series, distinguishable in print and for the common colour blindnesses
-/// (Okabe & Ito 2008), then darker variants.
-pub const PALETTE: [(u8, u8, u8); 10] = [
+/// (Okabe & Ito 2008), then darker variants and two more hues: as many as the most
+/// curves a run figure draws ([`run::MAX_TEMPS`]), so that no two share a colour.
+pub const PALETTE: [(u8, u8, u8); 12] = [
     (0, 114, 178),
     (213, 94, 0),
     (0, 158, 115),
@@ -284,6 +285,8 @@ pub const PALETTE: [(u8, u8, u8); 10] = [
     (0, 0, 0),
     (150, 60, 0),
     (0, 90, 60),
+    (110, 60, 160),
+    (160, 150, 0),
 ];
 
 /// Decimals a tick label needs at tick spacing `step` (0 from 1 up).
@@ -523,6 +526,17 @@ pub(crate) fn legend(
 #[cfg(test)]
 mod tests {
     use super::line_segments;
+
+    /// Every curve of a run figure (at most `MAX_TEMPS` nodes) has a colour of its own
+    /// (with 12 nodes, two shared one).
+    #[test]
+    fn core_the_palette_covers_a_run_figure() {
+        let n = super::run::MAX_TEMPS;
+        let colours: std::collections::BTreeSet<_> = (0..n)
+            .map(|k| super::PALETTE[k % super::PALETTE.len()])
+            .collect();
+        assert_eq!(colours.len(), n);
+    }
 
     /// A gap over 3 × the median step and a non-finite value each end a line; a
     /// fill row (a finite model value between readings) does not.
