@@ -927,6 +927,23 @@ fn cli_plot_labels_moved_to_the_legend_stay_on_the_page() {
         .map(|l| l.text.as_str())
         .collect();
     assert!(in_legend.len() >= 2, "{in_legend:?} of {texts:?}");
+    // the legend's swatch of a smallest allowed line is dashed, as the line is: three
+    // red dashes per limit moved to the legend (one solid line before)
+    let red_in_legend = fig
+        .svg
+        .split("<polyline")
+        .skip(1)
+        .filter(|p| p.contains("stroke=\"#FF0000\""))
+        .filter_map(|p| p.split("points=\"").nth(1))
+        .filter_map(|pts| pts.split(',').next()?.trim().parse::<f64>().ok())
+        .filter(|&x0| x0 > 930.0)
+        .count();
+    let limits_in_legend = in_legend
+        .iter()
+        .filter(|t| t.starts_with("smallest allowed"))
+        .count();
+    assert!(limits_in_legend >= 1, "{in_legend:?}");
+    assert_eq!(red_in_legend, 3 * limits_in_legend, "{in_legend:?}");
 }
 
 /// The orbit figure of a scenario without faces, on a synthetic orbit: one point per

@@ -459,6 +459,8 @@ pub(crate) const AFTER: plotters::style::RGBColor = plotters::style::RGBColor(0,
 pub(crate) enum Swatch {
     /// A line of this colour and width.
     Line(plotters::style::RGBColor, u32),
+    /// A dashed line of this colour and width (a limit drawn dashed).
+    Dashed(plotters::style::RGBColor, u32),
     /// A point (a recording's samples).
     Dot(plotters::style::RGBColor),
     /// A ring (a marked point, such as the run's smallest backlash).
@@ -495,6 +497,15 @@ pub(crate) fn legend(
                     c.stroke_width(w),
                 ))
                 .map_err(draw_err)?,
+            Swatch::Dashed(c, w) => {
+                for (a, b) in [(4, 10), (15, 21), (26, 28)] {
+                    root.draw(&PathElement::new(
+                        vec![(x + a, ym), (x + b, ym)],
+                        c.stroke_width(w),
+                    ))
+                    .map_err(draw_err)?;
+                }
+            }
             Swatch::Dot(c) => root
                 .draw(&Circle::new((x + 16, ym), 4, c.filled()))
                 .map_err(draw_err)?,

@@ -856,7 +856,7 @@ fn draw_allowed(
             NEAR,
         ) else {
             // no room off the curves: the legend says it
-            overflow.push((text, Swatch::Line(RED, 2)));
+            overflow.push((text, Swatch::Dashed(RED, 2)));
             continue;
         };
         root.draw(&Text::new(
