@@ -228,14 +228,6 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             ],
             &align,
         );
-        // what a case with no valid mesh does not have
-        let num = |v: f64, digits: usize| {
-            if v.is_nan() {
-                "–".to_string()
-            } else {
-                format!("{v:.digits$}")
-            }
-        };
         for Evaluated {
             case: c, mesh: m, ..
         } in states
@@ -245,12 +237,12 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
                 format!("{:.2}", c.pinion_c),
                 format!("{:.2}", c.wheel_c),
                 format!("{:.2}", c.housing_c),
-                num(m.backlash_exact_m * 1e6, 3),
-                num(m.backlash_closed_form_m * 1e6, 3),
-                num(m.backlash_paper_m * 1e6, 3),
-                num(m.pressure_angle_rad.to_degrees(), 4),
-                num(m.center_distance_m * 1e3, 5),
-                num(m.margin_m * 1e6, 3),
+                table::number(m.backlash_exact_m * 1e6, 3),
+                table::number(m.backlash_closed_form_m * 1e6, 3),
+                table::number(m.backlash_paper_m * 1e6, 3),
+                table::number(m.pressure_angle_rad.to_degrees(), 4),
+                table::number(m.center_distance_m * 1e3, 5),
+                table::number(m.margin_m * 1e6, 3),
             ]);
         }
         o += &table::render(&table, "  ");

@@ -774,13 +774,7 @@ per {} (day 1 starts at t = 0{}; each node's range per orbit: `orbitlash plot` o
                 .iter()
                 .map(|d| d.backlash_m[k].1)
                 .fold(f64::NEG_INFINITY, f64::max);
-            let um = |v: f64| {
-                if v.is_finite() {
-                    format!("{:.3}", v * 1e6)
-                } else {
-                    "–".into()
-                }
-            };
+            let um = |v: f64| table::number(v * 1e6, 3);
             row.push(um(lo));
             row.push(um(hi));
         }
@@ -1031,13 +1025,7 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
             ],
         );
         // "–" where a window saw no step (an interrupted run).
-        let um = |v: f64| {
-            if v.is_finite() {
-                format!("{:.3}", v * 1e6)
-            } else {
-                "–".to_string()
-            }
-        };
+        let um = |v: f64| table::number(v * 1e6, 3);
         let variants: [(&str, Extremes); 3] = [
             ("exact (worst over a mesh)", |p| {
                 (p.min_exact_m, p.max_exact_m)

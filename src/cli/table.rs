@@ -46,6 +46,16 @@ impl Columns {
     }
 }
 
+/// A number's cell with `decimals` digits after the point, or "–" when it is not a
+/// number (a window that saw no step, a case with no valid mesh).
+pub fn number(v: f64, decimals: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.decimals$}")
+    } else {
+        "–".to_string()
+    }
+}
+
 /// The table's lines, each after `indent` and without trailing blanks.
 pub fn render(t: &Columns, indent: &str) -> String {
     let mut table = t.table.clone();
