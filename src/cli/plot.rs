@@ -304,10 +304,11 @@ pub fn draw(
 /// reading it as CSV then names the error).
 fn starts_with_mcap_magic(path: &Path) -> bool {
     use std::io::Read as _;
-    let mut head = [0u8; 8];
+    let magic = orbitlash::io::mcap_scan::MAGIC;
+    let mut head = vec![0u8; magic.len()];
     orbitlash::io::output::check_input(path).is_ok()
         && std::fs::File::open(path)
             .and_then(|mut f| f.read_exact(&mut head))
             .is_ok()
-        && head == *b"\x89MCAP0\r\n"
+        && head == magic
 }

@@ -14,7 +14,8 @@ use std::path::Path;
 
 use mcap::records::{self, Record};
 
-const MAGIC: &[u8] = b"\x89MCAP0\r\n";
+/// The bytes an MCAP file starts and ends with.
+pub const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 const OP_CHUNK: u8 = 0x06;
 
 /// A message found by the scan: its header, its bytes and where its record ends in

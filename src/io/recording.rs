@@ -514,10 +514,11 @@ impl<'de> serde::Deserialize<'de> for UniqueObject {
 /// Every length of an MCAP file checked before the mcap crate's parser allocates what
 /// a length says (`io::mcap_lengths`).
 fn check_lengths(bytes: &[u8], file: &str) -> Result<(), RecordingError> {
-    if !bytes.starts_with(b"\x89MCAP0\r\n") {
+    let magic = super::mcap_scan::MAGIC;
+    if !bytes.starts_with(magic) {
         return Ok(());
     }
-    super::mcap_lengths::check_file(bytes, 8).map_err(|(offset, m)| RecordingError::File {
+    super::mcap_lengths::check_file(bytes, magic.len()).map_err(|(offset, m)| RecordingError::File {
         file: file.to_string(),
         message: format!(
             "is not a readable MCAP file (damaged or cut off): the record at byte {offset} is malformed: {m} (a file cut off by a killed run is recovered by `orbitlash recover`)"
