@@ -233,32 +233,34 @@ fn smallest_points(s: &RunSeries) -> Vec<(String, f64, f64)> {
         .collect()
 }
 
-/// Why a run fails, in the title, by the worst pair's verdict (as `PairVerdict`
-/// serialises it).
+/// The failing verdicts of a pair (as `PairVerdict` serialises them), from the least
+/// to the most severe, with what the title says of each.
+const FAILURES: [(&str, &str); 3] = [
+    ("margin_violated", "backlash below the smallest allowed"),
+    (
+        "interference",
+        "the teeth interfere (backlash reached zero)",
+    ),
+    (
+        "no_valid_mesh",
+        "no valid mesh (base circles overlap or the teeth lose contact)",
+    ),
+];
+
+/// A pair's verdict as one of [`FAILURES`], or "pass", with its severity (0 for pass).
+fn failing(verdict: &str) -> (usize, &'static str) {
+    FAILURES
+        .iter()
+        .position(|(n, _)| *n == verdict)
+        .map_or((0, "pass"), |i| (i + 1, FAILURES[i].0))
+}
+
+/// What the title says of a failing verdict.
 fn failure(verdict: &str) -> &'static str {
-    match verdict {
-        "no_valid_mesh" => "no valid mesh (base circles overlap or the teeth lose contact)",
-        "interference" => "the teeth interfere (backlash reached zero)",
-        _ => "backlash below the smallest allowed",
-    }
-}
-
-/// A pair's verdict as a name of its own ("pass" for any other).
-fn verdict_name(v: &str) -> &'static str {
-    ["no_valid_mesh", "interference", "margin_violated"]
-        .into_iter()
-        .find(|n| *n == v)
-        .unwrap_or("pass")
-}
-
-/// How bad a pair's verdict is: no mesh, then interference, then a low margin.
-fn severity(verdict: &str) -> u8 {
-    match verdict {
-        "no_valid_mesh" => 3,
-        "interference" => 2,
-        "margin_violated" => 1,
-        _ => 0,
-    }
+    FAILURES
+        .iter()
+        .find(|(n, _)| *n == verdict)
+        .map_or(FAILURES[0].1, |(_, why)| why)
 }
 
 /// The worst verdict the rows show: a pair's backlash that is not a number in some row
@@ -281,7 +283,7 @@ fn verdict_of_rows(s: &RunSeries, smallest: &[(String, f64, f64)]) -> &'static s
                 _ => "pass",
             }
         };
-        if severity(verdict) > severity(worst) {
+        if failing(verdict).0 > failing(worst).0 {
             worst = verdict;
         }
     }
@@ -295,9 +297,9 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
         |e| {
             e.pairs
                 .iter()
-                .map(|p| p.verdict.as_str())
-                .max_by_key(|v| severity(v))
-                .map_or("pass", verdict_name)
+                .map(|p| failing(&p.verdict))
+                .max_by_key(|f| f.0)
+                .map_or("pass", |f| f.1)
         },
     );
     let fails = match s.end.as_ref().map(|e| e.verdict.as_str()) {
