@@ -368,6 +368,39 @@ impl MeshStats {
         self.start_s
     }
 
+    /// Pair `k` lost its mesh for the first time within a step probed at `times` with
+    /// exact backlash `values`: where, to the millisecond (bisected on `lost` between
+    /// the last point that meshes and the first that does not), not at the first
+    /// quarter point or step end that saw it. Nothing when the step starts without it.
+    fn refine_first_loss(
+        &mut self,
+        k: usize,
+        times: &[f64; 5],
+        values: &[f64; 5],
+        lost: impl Fn(f64) -> bool,
+    ) {
+        if values[0].is_nan() {
+            return;
+        }
+        let Some(j) = (1..5).find(|&j| values[j].is_nan()) else {
+            return;
+        };
+        let (mut lo, mut hi) = (times[j - 1], times[j]);
+        while hi - lo > MIN_TIME_TOLERANCE_S {
+            let mid = 0.5 * (lo + hi);
+            if lost(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        self.run_pairs[k].t_first_invalid_s = hi;
+        if hi >= self.start_s && self.pairs[k].invalid_samples > 0 {
+            let w = &mut self.pairs[k].t_first_invalid_s;
+            *w = w.min(hi);
+        }
+    }
+
     fn see(&mut self, k: usize, t_s: f64, m: &MeshState) {
         self.run_pairs[k].see(t_s, m);
         if t_s >= self.start_s {
@@ -533,27 +566,9 @@ impl Observer for MeshStats {
                 self.see(k, ts[i], &m);
             }
             self.see(k, t1, &step.mesh[k]);
-            // The mesh lost for the first time within this step: where, to the
-            // millisecond (bisected between the last point that meshes and the first
-            // that does not), not at the first quarter point or step end that saw it.
-            if !had_lost && self.run_pairs[k].invalid_samples > 0 && !values[0].is_nan() {
+            if !had_lost && self.run_pairs[k].invalid_samples > 0 {
                 let times = [t0, ts[1], ts[2], ts[3], t1];
-                if let Some(j) = (1..5).find(|&j| values[j].is_nan()) {
-                    let (mut lo, mut hi) = (times[j - 1], times[j]);
-                    while hi - lo > MIN_TIME_TOLERANCE_S {
-                        let mid = 0.5 * (lo + hi);
-                        if at(mid).backlash_exact_m.is_nan() {
-                            hi = mid;
-                        } else {
-                            lo = mid;
-                        }
-                    }
-                    self.run_pairs[k].t_first_invalid_s = hi;
-                    if hi >= self.start_s && self.pairs[k].invalid_samples > 0 {
-                        let w = &mut self.pairs[k].t_first_invalid_s;
-                        *w = w.min(hi);
-                    }
-                }
+                self.refine_first_loss(k, &times, &values, |t| at(t).backlash_exact_m.is_nan());
             }
             // Golden-section refinement around an interior minimum.
             let i = (1..4)
