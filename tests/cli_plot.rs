@@ -142,12 +142,7 @@ fn cli_plot_a_log_as_png_and_svg_with_eclipses_verdict_and_smallest_backlash() {
             String::from_utf8_lossy(&out.stderr).contains("has no end record"),
             "{out:?}"
         );
-        let labels: Vec<String> = std::fs::read_to_string(&svg)
-            .unwrap()
-            .split("aria-label=\"")
-            .skip(1)
-            .map(|t| t.split('"').next().unwrap().to_string())
-            .collect();
+        let labels = labels(&svg);
         assert!(
             labels.iter().any(|l| l.contains(verdict)),
             "{input:?}: {labels:?}"

@@ -1016,32 +1016,18 @@ fn cli_messages_name_the_right_thing() {
     assert!(!svg.contains('\u{7}') && svg.contains("bell\\u{7}.csv"));
 }
 
-// 18. margins stopped by SIGINT or SIGTERM says so and exits 2 (it died with 130/143
-// and no word), writing nothing.
-#[test]
-fn cli_an_interrupted_margins_run_says_so() {
-    let dir = tmpdir("r4-margins-signal");
-    let root = env!("CARGO_MANIFEST_DIR");
+/// `args` started in `dir` and signalled `after_ms` in, with SIGINT and then SIGTERM:
+/// each time it exits 2, its standard error holds every one of `said`, and none of
+/// `outputs` exists (the commands that write only at the end, `cli::watched`).
+fn assert_stopped_writing_nothing(
+    dir: &Path,
+    args: &[&str],
+    after_ms: u64,
+    said: &[&str],
+    outputs: &[&str],
+) {
     for signal in [libc::SIGINT, libc::SIGTERM] {
-        let out = signalled(
-            &dir,
-            &[
-                "margins",
-                &format!("{root}/scenarios/reference-hinge-margins.toml"),
-                "--samples",
-                "5000",
-                "--seed",
-                "1",
-                "--orbits",
-                "20",
-                "--quiet",
-                "--force",
-                "--json",
-                "m.json",
-            ],
-            1500,
-            signal,
-        );
+        let out = signalled(dir, args, after_ms, signal);
         assert_eq!(
             out.status.code(),
             Some(2),
@@ -1049,12 +1035,40 @@ fn cli_an_interrupted_margins_run_says_so() {
             stderr(&out)
         );
         assert!(
-            stderr(&out).contains("interrupted after"),
+            said.iter().all(|s| stderr(&out).contains(s)),
             "{}",
             stderr(&out)
         );
-        assert!(!dir.join("m.json").exists());
+        assert!(!outputs.iter().any(|o| dir.join(o).exists()), "{outputs:?}");
     }
+}
+
+// 18. margins stopped by SIGINT or SIGTERM says so and exits 2 (it died with 130/143
+// and no word), writing nothing.
+#[test]
+fn cli_an_interrupted_margins_run_says_so() {
+    let dir = tmpdir("r4-margins-signal");
+    let root = env!("CARGO_MANIFEST_DIR");
+    assert_stopped_writing_nothing(
+        &dir,
+        &[
+            "margins",
+            &format!("{root}/scenarios/reference-hinge-margins.toml"),
+            "--samples",
+            "5000",
+            "--seed",
+            "1",
+            "--orbits",
+            "20",
+            "--quiet",
+            "--force",
+            "--json",
+            "m.json",
+        ],
+        1500,
+        &["interrupted after"],
+        &["m.json"],
+    );
 }
 
 // 20. diagnose stopped by SIGINT or SIGTERM says so, exits 2 (it died with 130/143) and
@@ -1063,42 +1077,28 @@ fn cli_an_interrupted_margins_run_says_so() {
 fn cli_an_interrupted_diagnose_says_so() {
     let dir = tmpdir("r4-diagnose-signal");
     let root = env!("CARGO_MANIFEST_DIR");
-    for signal in [libc::SIGINT, libc::SIGTERM] {
-        // a recording made long by its rows: about 10 s of analysis here
-        let out = signalled(
-            &dir,
-            &[
-                "diagnose",
-                &format!("{root}/scenarios/reference-hinge.toml"),
-                "--recording",
-                &format!("{root}/examples/recordings/heater-housing.csv"),
-                "--max-effects",
-                "6",
-                "--fits",
-                "64",
-                "--quiet",
-                "--json",
-                "d.json",
-                "--out",
-                "d",
-            ],
-            700,
-            signal,
-        );
-        assert_eq!(
-            out.status.code(),
-            Some(2),
-            "signal {signal}: {}",
-            stderr(&out)
-        );
-        assert!(
-            stderr(&out).contains("interrupted after")
-                && stderr(&out).contains("nothing was written"),
-            "{}",
-            stderr(&out)
-        );
-        assert!(!dir.join("d.json").exists() && !dir.join("d").exists());
-    }
+    // more effects and fits than the defaults: about 5 s of analysis here
+    assert_stopped_writing_nothing(
+        &dir,
+        &[
+            "diagnose",
+            &format!("{root}/scenarios/reference-hinge.toml"),
+            "--recording",
+            &format!("{root}/examples/recordings/heater-housing.csv"),
+            "--max-effects",
+            "6",
+            "--fits",
+            "64",
+            "--quiet",
+            "--json",
+            "d.json",
+            "--out",
+            "d",
+        ],
+        700,
+        &["interrupted after", "nothing was written"],
+        &["d.json", "d"],
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -1431,8 +1431,34 @@ fn pair_name(spec: &ScenarioSpec, i: usize) -> String {
     })
 }
 
+/// FUNcube-1 for the unit tests of the search and its calibration.
+#[cfg(test)]
+pub(super) mod fixtures {
+    use crate::spec::model::Model;
+
+    /// FUNcube-1's shipped scenario text with `extra` TOML appended.
+    pub fn funcube_text(extra: &str) -> String {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        std::fs::read_to_string(root.join("scenarios/funcube-1.toml")).unwrap() + extra
+    }
+
+    /// The model of scenario `text`, and its sensors as channels, every one recorded.
+    pub fn model_and_channels(text: &str) -> (Model, Vec<(String, bool)>) {
+        let spec = crate::io::scenario_toml::parse_spec(text, "funcube-1.toml").unwrap();
+        let model = Model::new(spec).unwrap();
+        let channels = model
+            .spec()
+            .sensor
+            .iter()
+            .map(|s| (s.name.clone().unwrap(), true))
+            .collect();
+        (model, channels)
+    }
+}
+
 #[cfg(test)]
 mod calibration {
+    use super::fixtures::{funcube_text, model_and_channels};
     use super::*;
 
     /// FUNcube-1 with a face's absorptivity and the chassis' capacitance declared
@@ -1441,18 +1467,11 @@ mod calibration {
     /// mass scale beside its declared capacitance, the stack keeps its own).
     #[test]
     fn core_a_declared_number_is_written_by_its_own_calibration_only() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let text = std::fs::read_to_string(root.join("scenarios/funcube-1.toml")).unwrap()
-            + "\n[[uncertain]]\npath = \"face.px.absorptivity\"\nmin = 0.3\nmax = 0.9\n\
-               \n[[uncertain]]\npath = \"node.chassis.capacitance_j_per_k\"\nmin = 100.0\nmax = 600.0\n";
-        let spec = crate::io::scenario_toml::parse_spec(&text, "funcube-1.toml").unwrap();
-        let model = Model::new(spec).unwrap();
-        let channels: Vec<(String, bool)> = model
-            .spec()
-            .sensor
-            .iter()
-            .map(|s| (s.name.clone().unwrap(), true))
-            .collect();
+        let text = funcube_text(
+            "\n[[uncertain]]\npath = \"face.px.absorptivity\"\nmin = 0.3\nmax = 0.9\n\
+               \n[[uncertain]]\npath = \"node.chassis.capacitance_j_per_k\"\nmin = 100.0\nmax = 600.0\n",
+        );
+        let (model, channels) = model_and_channels(&text);
         let mut cands = candidates(&model, &channels, &Hints::default());
         let (set, nominal) = calibration_set(&model, &mut cands);
         assert_eq!(set.len(), nominal.len());

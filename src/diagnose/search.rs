@@ -1056,17 +1056,9 @@ mod tests {
     /// refused, naming it, instead of fitting parameters that do nothing.
     #[test]
     fn core_one_number_is_written_by_one_setter() {
+        use super::super::effects::fixtures::{funcube_text, model_and_channels};
         use super::super::effects::{Hints, calibration_set, candidates};
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let text = std::fs::read_to_string(root.join("scenarios/funcube-1.toml")).unwrap();
-        let spec = crate::io::scenario_toml::parse_spec(&text, "funcube-1.toml").unwrap();
-        let model = Model::new(spec).unwrap();
-        let channels: Vec<(String, bool)> = model
-            .spec()
-            .sensor
-            .iter()
-            .map(|s| (s.name.clone().unwrap(), true))
-            .collect();
+        let (model, channels) = model_and_channels(&funcube_text(""));
         let mut cands = candidates(&model, &channels, &Hints::default());
         let (set, _) = calibration_set(&model, &mut cands);
         assert!(!set.is_empty() && cands.len() > 50);
