@@ -738,6 +738,42 @@ fn cli_plot_no_valid_mesh_and_pair_names_that_are_not_identifiers() {
     assert!(fig.svg.contains("FAIL"), "9.5 allowed, 9.0 reached");
 }
 
+/// A table without the margin column (no smallest allowed) still shows teeth that
+/// interfere: backlash at or below zero fails the run (it was titled with no verdict);
+/// one whose backlash stays above zero gets no verdict (nothing to pass against).
+#[test]
+fn cli_plot_a_table_without_margins_still_shows_interference() {
+    let headers: Vec<String> = ["time_s", "housing_k", "mesh.backlash_um"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for (lowest_um, verdict) in [(-0.5, Some("FAIL: the teeth interfere")), (0.5, None)] {
+        let rows: Vec<Vec<f64>> = (0..50)
+            .map(|i| {
+                let b = lowest_um + 1.0 + (i as f64 * 0.2).sin();
+                vec![i as f64 * 60.0, 290.0, b]
+            })
+            .collect();
+        let s = RunSeries::from_table("no margins", &headers, &rows).unwrap();
+        assert!(s.allowed_um.is_empty());
+        let fig = figure(&s).unwrap();
+        assert_drawn_right(&fig);
+        let title = &fig
+            .labels
+            .iter()
+            .find(|l| l.text.starts_with("no margins"))
+            .expect("a title")
+            .text;
+        match verdict {
+            Some(v) => assert!(title.contains(v), "{lowest_um} µm: {title}"),
+            None => assert!(
+                !title.contains("FAIL") && !title.contains("PASS"),
+                "{lowest_um} µm: {title}"
+            ),
+        }
+    }
+}
+
 /// `environment --plot`: each face's fluxes over an orbit, eclipses shaded; a scenario
 /// without faces is refused with the reason.
 #[test]
