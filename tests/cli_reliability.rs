@@ -897,12 +897,26 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(stderr(&out).contains("damaged"), "{}", stderr(&out));
     assert!(
-        stdout(&out).contains("damaged messages left out: the copy lacks t = "),
+        stdout(&out).contains("damaged messages left out: the copy lacks messages at "),
         "{}",
         stdout(&out)
     );
     let out = run_in(&dir, &["export-csv", "fixed.mcap", "--out", "f.csv"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // two damaged chunks far apart: the copy lacks two stretches of time, not all
+    // that lies between them (it was told as one, from the first to the last)
+    let mut b = std::fs::read(dir.join("l.mcap")).unwrap();
+    let n = b.len();
+    b[n / 4] ^= 0x01;
+    b[3 * n / 4] ^= 0x01;
+    std::fs::write(dir.join("flip2.mcap"), &b).unwrap();
+    let out = run_in(&dir, &["recover", "flip2.mcap", "--out", "fixed2.mcap"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("the copy lacks messages in 2 stretches, t = "),
+        "{}",
+        stdout(&out)
+    );
     // the copy is not called complete: its end record says recovered (the verdict, the
     // run's own, kept), and a figure of it says what it lacks
     let out = run_in(
@@ -917,7 +931,7 @@ fn cli_damaged_and_foreign_files_are_named_as_such() {
     let out = run_in(&dir, &["plot", "fixed.mcap", "--out", "fixed.svg"]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("damaged messages left out, t = "),
+        stderr(&out).contains("damaged messages left out at t = "),
         "{}",
         stderr(&out)
     );

@@ -92,12 +92,14 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             OutputPolicy::default_in_logs(&[&a.log]),
         ),
     };
-    let left_out = damaged.first().map(|first| LeftOut {
-        messages: damaged.len(),
-        t_first_s: first.t_s,
-        t_last_s: damaged.last().map_or(first.t_s, |l| l.t_s),
-    });
-    let r = write_recovered(&s, &out, &policy, left_out)?;
+    let origin_ns = s.time_origin_ns();
+    let mut kept_s: Vec<f64> = (s.messages.iter())
+        .map(|m| m.header.log_time.saturating_sub(origin_ns) as f64 * 1e-9)
+        .collect();
+    kept_s.sort_by(f64::total_cmp);
+    let left_s: Vec<f64> = damaged.iter().map(|d| d.t_s).collect();
+    let left_out = LeftOut::of(&left_s, &kept_s);
+    let r = write_recovered(&s, &out, &policy, left_out.clone())?;
     let how = if damaged.is_empty() && damaged_chunks > 0 {
         format!("{damaged_chunks} damaged chunk(s) written again with their CRCs")
     } else if let (true, Some(d)) = (damaged.is_empty() && s.data_complete, &s.tail_damage) {
@@ -115,8 +117,9 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     } else {
         let l = left_out.expect("damaged messages");
         format!(
-            "{} damaged messages left out: the copy lacks t = {:.3} … {:.3} s",
-            l.messages, l.t_first_s, l.t_last_s
+            "{} damaged messages left out: the copy lacks messages {}",
+            l.messages,
+            l.stretches()
         )
     };
     print_out(&format!(

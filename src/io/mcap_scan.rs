@@ -433,12 +433,65 @@ pub struct Recovery {
 }
 
 /// Messages a recovery leaves out of a log that otherwise ends properly (damaged
-/// ones): how many, and the log times of the first and last, s.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// ones): how many, and the stretches of log time (s, first and last) they fall in,
+/// split wherever a kept message lies between two left out.
+#[derive(Debug, Clone, PartialEq)]
 pub struct LeftOut {
     pub messages: usize,
-    pub t_first_s: f64,
-    pub t_last_s: f64,
+    pub spans_s: Vec<(f64, f64)>,
+}
+
+/// Stretches listed by name before "and N more".
+const SPANS_SHOWN: usize = 3;
+
+impl LeftOut {
+    /// The messages left out at log times `left_s` (any order), split into stretches
+    /// by the log times `kept_s` (sorted) of the messages kept; None when none was left
+    /// out. A kept message at the same time as one left out does not split them.
+    pub fn of(left_s: &[f64], kept_s: &[f64]) -> Option<LeftOut> {
+        let mut t = left_s.to_vec();
+        t.sort_by(f64::total_cmp);
+        let (&first, rest) = t.split_first()?;
+        let mut spans_s = vec![(first, first)];
+        for &x in rest {
+            let last = spans_s.last_mut().expect("one span");
+            // a kept message strictly between the span's end and x splits them
+            let i = kept_s.partition_point(|&k| k <= last.1);
+            if kept_s.get(i).is_some_and(|&k| k < x) {
+                spans_s.push((x, x));
+            } else {
+                last.1 = x;
+            }
+        }
+        Some(LeftOut {
+            messages: t.len(),
+            spans_s,
+        })
+    }
+
+    /// "at t = a … b s", or "in N stretches, t = a … b, c … d s" (the first few, then
+    /// how many more).
+    pub fn stretches(&self) -> String {
+        let each: Vec<String> = self
+            .spans_s
+            .iter()
+            .take(SPANS_SHOWN)
+            .map(|(a, b)| format!("{a:.3} … {b:.3}"))
+            .collect();
+        let more = self.spans_s.len().saturating_sub(SPANS_SHOWN);
+        match self.spans_s.len() {
+            1 => format!("at t = {} s", each[0]),
+            n => format!(
+                "in {n} stretches, t = {} s{}",
+                each.join(", "),
+                if more > 0 {
+                    format!(" and {more} more")
+                } else {
+                    String::new()
+                }
+            ),
+        }
+    }
 }
 
 /// Writes every record `scan` recovered into a new MCAP file at `out` (atomically, never
@@ -525,8 +578,9 @@ pub fn recover(
                 end.insert(
                     "detail".into(),
                     format!(
-                        "recovered: {} damaged messages left out, t = {:.3} … {:.3} s; the verdict is the run's own, over every step",
-                        l.messages, l.t_first_s, l.t_last_s
+                        "recovered: {} damaged messages left out {}; the verdict is the run's own, over every step",
+                        l.messages,
+                        l.stretches()
                     ),
                 );
             }
@@ -613,5 +667,39 @@ mod damaged_chunk_tests {
         let bytes = broken_topic_length(small_log(false));
         let e = scan(&bytes).expect_err("no CRC: a malformed record");
         assert!(e.to_string().contains("topic"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::LeftOut;
+
+    /// Messages left out are told as the stretches of time they fall in: a kept
+    /// message between two of them splits them (two damaged chunks far apart were one
+    /// stretch from the first to the last, over everything kept between), one at the
+    /// same time does not; none left out is None.
+    #[test]
+    fn core_left_out_messages_are_told_as_their_stretches() {
+        assert_eq!(LeftOut::of(&[], &[1.0]), None);
+        let kept = [0.0, 10.0, 20.0, 30.0, 40.0, 50.0];
+        let one = LeftOut::of(&[12.0, 11.0, 25.0, 13.0], &kept).unwrap();
+        assert_eq!(one.messages, 4);
+        assert_eq!(one.spans_s, vec![(11.0, 13.0), (25.0, 25.0)]);
+        assert_eq!(
+            one.stretches(),
+            "in 2 stretches, t = 11.000 … 13.000, 25.000 … 25.000 s"
+        );
+        let same = LeftOut::of(&[20.0, 21.0, 29.0], &kept).unwrap();
+        assert_eq!(same.spans_s, vec![(20.0, 29.0)]);
+        assert_eq!(same.stretches(), "at t = 20.000 … 29.000 s");
+        let many = LeftOut::of(&[1.0, 11.0, 21.0, 31.0, 41.0], &kept).unwrap();
+        assert_eq!(many.spans_s.len(), 5);
+        assert!(
+            many.stretches().starts_with(
+                "in 5 stretches, t = 1.000 … 1.000, 11.000 … 11.000, 21.000 … 21.000 s and 2 more"
+            ),
+            "{}",
+            many.stretches()
+        );
     }
 }
