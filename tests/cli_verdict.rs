@@ -54,6 +54,39 @@ fn cli_run_fails_with_exit_1_when_the_margin_is_violated() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A limit between the smallest backlash and its rounding: the verdict line prints the
+/// limit to the backlash's own precision, so it cannot read "24.398 µm < 24.4 µm"
+/// (the limit was printed to 0.1 µm in `run`, `backlash` and `margins`).
+#[test]
+fn cli_verdicts_print_the_limit_as_precisely_as_the_backlash() {
+    let dir = tmpdir("verdict-precision");
+    with(&dir, &[("min_backlash_um = 5.0", "min_backlash_um = 24.399")]);
+    bin()
+        .args(["run", "s.toml", "--no-log"])
+        .current_dir(&dir)
+        .assert()
+        .code(1)
+        .stdout(starts_with(
+            "FAIL mesh: margin -0.001 µm (smallest backlash 24.398 µm < 24.399 µm minimum)",
+        ));
+    let out = bin()
+        .args([
+            "backlash",
+            "s.toml",
+            "--uniform-c",
+            "25",
+            "--set",
+            "gear_pair.mesh.min_backlash_um=32.64",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("minimum 32.640 µm"), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn cli_run_fails_with_exit_1_when_the_teeth_interfere() {
     let dir = tmpdir("verdict-interference");

@@ -114,7 +114,7 @@ fn verdict_line(pair: &GearPair, states: &[Evaluated]) -> String {
     if let Some(e) = j.smallest {
         let m = &e.mesh;
         parts.push(format!(
-            "{} {:.3} µm (backlash {:.3} µm, minimum {:.1} µm) {}",
+            "{} {:.3} µm (backlash {:.3} µm, minimum {:.3} µm) {}",
             if m.backlash_exact_m <= 0.0 {
                 "the teeth interfere: margin"
             } else {
@@ -203,7 +203,7 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
         };
         outln!(
             o,
-            "{} / {}: {} × {} teeth, m = {} mm, {centre}, minimum allowed {:.1} µm",
+            "{} / {}: {} × {} teeth, m = {} mm, {centre}, minimum allowed {:.3} µm",
             sc.name,
             pair.name,
             pair.gears[0].teeth,

@@ -492,7 +492,7 @@ pub fn format_report(r: &Report) -> String {
     for p in &r.pairs {
         outln!(
             o,
-            "\ngear pair {} (smallest normal backlash and margin per sample, µm; minimum allowed {:.1} µm):",
+            "\ngear pair {} (smallest normal backlash and margin per sample, µm; minimum allowed {:.3} µm):",
             p.name,
             p.min_backlash_allowed_um
         );

@@ -816,7 +816,7 @@ fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
         let line = match r.verdict() {
             // no pass before the run's end
             PairVerdict::Pass if stats.interrupted => format!(
-                "INCOMPLETE {}: margin {:.3} µm so far (smallest backlash {:.3} µm ≥ {:.1} µm minimum) at {}; the run was interrupted before its end",
+                "INCOMPLETE {}: margin {:.3} µm so far (smallest backlash {:.3} µm ≥ {:.3} µm minimum) at {}; the run was interrupted before its end",
                 pair.name,
                 r.min_margin_m * 1e6,
                 r.min_exact_m * 1e6,
@@ -824,7 +824,7 @@ fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
                 orbit_phase(sc, r.t_min_s)
             ),
             PairVerdict::Pass => format!(
-                "PASS {}: margin {:.3} µm (smallest backlash {:.3} µm ≥ {:.1} µm minimum) at {}",
+                "PASS {}: margin {:.3} µm (smallest backlash {:.3} µm ≥ {:.3} µm minimum) at {}",
                 pair.name,
                 r.min_margin_m * 1e6,
                 r.min_exact_m * 1e6,
@@ -832,7 +832,7 @@ fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
                 orbit_phase(sc, r.t_min_s)
             ),
             PairVerdict::MarginViolated => format!(
-                "FAIL {}: margin {:.3} µm (smallest backlash {:.3} µm < {:.1} µm minimum) at {}",
+                "FAIL {}: margin {:.3} µm (smallest backlash {:.3} µm < {:.3} µm minimum) at {}",
                 pair.name,
                 r.min_margin_m * 1e6,
                 r.min_exact_m * 1e6,
@@ -1010,7 +1010,7 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
     for ((pair, r), l) in sc.gears.iter().zip(&mesh.run_pairs).zip(&mesh.pairs) {
         outln!(
             o,
-            "\ngear pair {} (normal backlash, µm; minimum allowed {:.1} µm):",
+            "\ngear pair {} (normal backlash, µm; minimum allowed {:.3} µm):",
             pair.name,
             pair.min_backlash_m * 1e6
         );

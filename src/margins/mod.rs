@@ -1122,13 +1122,13 @@ impl Samples<'_> {
             Some(t) if t >= allowed_um => (
                 PassFail::Pass,
                 format!(
-                    "95/95 lower bound of the smallest backlash {t:.3} µm ≥ {allowed_um:.1} µm minimum"
+                    "95/95 lower bound of the smallest backlash {t:.3} µm ≥ {allowed_um:.3} µm minimum"
                 ),
             ),
             Some(t) => (
                 PassFail::Fail,
                 format!(
-                    "95/95 lower bound of the smallest backlash {t:.3} µm < {allowed_um:.1} µm minimum"
+                    "95/95 lower bound of the smallest backlash {t:.3} µm < {allowed_um:.3} µm minimum"
                 ),
             ),
         }
