@@ -60,7 +60,10 @@ fn cli_run_fails_with_exit_1_when_the_margin_is_violated() {
 #[test]
 fn cli_verdicts_print_the_limit_as_precisely_as_the_backlash() {
     let dir = tmpdir("verdict-precision");
-    with(&dir, &[("min_backlash_um = 5.0", "min_backlash_um = 24.399")]);
+    with(
+        &dir,
+        &[("min_backlash_um = 5.0", "min_backlash_um = 24.399")],
+    );
     bin()
         .args(["run", "s.toml", "--no-log"])
         .current_dir(&dir)

@@ -407,6 +407,9 @@ fn out_files(
                 c += &format!(" ± {}", sig(*se));
             }
         }
+        if let Some(note) = f.effect.parameters_note() {
+            c += &format!("\n({note})");
+        }
         Some(c)
     };
     let text = orbitlash::io::scenario_toml::edited(&loaded.toml, from, &to, &header, &comment)?;
@@ -549,14 +552,20 @@ fn report_head(o: &mut String, d: &Diagnosis, scenario: &str, recording: &str) {
     outln!(o, "scenario {scenario}, recording {recording}");
     let s = &d.split;
     if s.holdout_orbits > 0 {
+        let span = |a: usize, b: usize| {
+            if a == b {
+                format!("orbit {a}")
+            } else {
+                format!("orbits {a}–{b}")
+            }
+        };
         outln!(
             o,
-            "{} whole orbits of {:.1} s: fitted on orbits 1–{}, checked on orbits {}–{} (held out, never fitted)",
+            "{} whole orbits of {:.1} s: fitted on {}, checked on {} (held out, never fitted)",
             s.orbits,
             s.period_s,
-            s.train_orbits,
-            s.train_orbits + 1,
-            s.orbits
+            span(1, s.train_orbits),
+            span(s.train_orbits + 1, s.orbits)
         );
     }
     let r = &d.recording;
@@ -758,6 +767,9 @@ fn report_findings(o: &mut String, d: &Diagnosis, clock: &Clock<'_>) {
         outln!(o, "what the model left out:");
         for f in &d.findings {
             outln!(o, "  {} ({}) on {}", f.effect, f.kind, finding_target(f));
+            if let Some(note) = f.effect.parameters_note() {
+                outln!(o, "      ({note})");
+            }
             for (k, v) in &f.parameters {
                 let se = f.std_errors.get(k).copied().flatten();
                 match (se, f.intervals_95.get(k).copied().flatten()) {

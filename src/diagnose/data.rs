@@ -149,6 +149,20 @@ pub struct Observations {
 /// Width of the eclipse-entry and eclipse-exit windows, as a fraction of the orbit.
 pub const TRANSITION_FRACTION: f64 = 0.1;
 
+/// How many typical steps a reading must stand off both its neighbours to be an
+/// isolated spike ([`Observations::drop_spikes`]).
+pub const SPIKE_SIGMAS: f64 = 20.0;
+
+/// A reading left out as an isolated spike: its channel (index), row, value (the
+/// recording's unit) and its neighbours' values.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spike {
+    pub channel: usize,
+    pub row: usize,
+    pub reading: f64,
+    pub neighbours: (f64, f64),
+}
+
 impl Observations {
     pub fn new(
         rec: &Recording,
@@ -271,6 +285,50 @@ column in seconds from the scenario's t = 0?)",
             values: rec.values.clone(),
             split,
         })
+    }
+
+    /// Isolated spikes, left out: a reading that both its neighbours leave by more
+    /// than [`SPIKE_SIGMAS`] times the channel's typical step, in the same direction,
+    /// while they agree with each other (within a quarter of that): a glitch of the
+    /// telemetry (a bit error, a bad conversion), not a temperature or backlash a body
+    /// can reach and leave within one sample. The channel's typical step is 1.4826 ×
+    /// the median of its nonzero steps between consecutive readings, at least its
+    /// resolution. Their cells are emptied, and returned.
+    pub fn drop_spikes(&mut self) -> Vec<Spike> {
+        let mut out = Vec::new();
+        for (c, v) in self.values.iter_mut().enumerate() {
+            let mut steps: Vec<f64> = v
+                .windows(2)
+                .filter_map(|w| Some((w[1]? - w[0]?).abs()))
+                .filter(|d| *d > 0.0)
+                .collect();
+            if steps.len() < 3 {
+                continue;
+            }
+            let typical = (1.4826 * median(&mut steps)).max(resolution(v).unwrap_or(0.0));
+            let limit = SPIKE_SIGMAS * typical;
+            let mut found = Vec::new();
+            for j in 1..v.len().saturating_sub(1) {
+                let (Some(p), Some(x), Some(n)) = (v[j - 1], v[j], v[j + 1]) else {
+                    continue;
+                };
+                let (a, b) = (x - p, x - n);
+                let jump = a.abs().min(b.abs());
+                if a * b > 0.0 && jump > limit && (n - p).abs() < 0.25 * jump {
+                    found.push((j, x, (p, n)));
+                }
+            }
+            for (row, reading, neighbours) in found {
+                v[row] = None;
+                out.push(Spike {
+                    channel: c,
+                    row,
+                    reading,
+                    neighbours,
+                });
+            }
+        }
+        out
     }
 
     /// Residuals (recorded − simulated) per channel, None where the cell is missing.

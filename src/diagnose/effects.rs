@@ -146,6 +146,19 @@ impl std::fmt::Display for EffectKind {
 }
 
 impl Effect {
+    /// What its fitted parameters are, where they are not the physical numbers of the
+    /// same name (shown beside them in reports and in `corrected.toml`).
+    pub fn parameters_note(self) -> Option<&'static str> {
+        match self {
+            Effect::EarthAlbedoIr => Some(
+                "albedo and earth_ir_w_per_m2 are effective values, as if on the node's \
+                 whole Sun-facing and space-facing areas; corrected.toml holds the areas that \
+                 give them at the scenario's own albedo and Earth infrared",
+            ),
+            _ => None,
+        }
+    }
+
     pub fn from_id(id: &str) -> Option<Effect> {
         Effect::ALL.iter().copied().find(|e| e.id() == id)
     }
@@ -628,6 +641,27 @@ pub const HEATER_STARTS: usize = 3;
 /// `channels` (sensor columns) can see, in a fixed order: per node, per gear pair, per
 /// temperature channel, then on the whole model; on each element, the effects of that
 /// scope in the vocabulary's order.
+/// The thermostat candidates of `cands` started again from `hints` (what the
+/// calibrated model's residual says, where the first came from the baseline's): each
+/// replaced by its node's candidate from `hints`, and one added for a node that had none
+/// (none found in the baseline's residual); a node `hints` gives no start keeps its own.
+pub fn rehint_thermostats(model: &Model, cands: &mut Vec<Candidate>, hints: &Hints) {
+    let g = Generator::new(model, hints);
+    for (ni, node) in model.spec().node.iter().enumerate() {
+        let Some(fresh) = g.heater_thermostat(ni) else {
+            continue;
+        };
+        let own = |c: &Candidate| {
+            c.effect == Effect::HeaterThermostat
+                && matches!(&c.target, Target::Node(n) if *n == node.name)
+        };
+        match cands.iter_mut().find(|c| own(c)) {
+            Some(c) => *c = fresh,
+            None => cands.push(fresh),
+        }
+    }
+}
+
 pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> Vec<Candidate> {
     let g = Generator::new(model, hints);
     let spec = model.spec();

@@ -483,6 +483,17 @@ pub struct RecordingRows {
 }
 
 impl RecordingRows {
+    /// Of `recording` (its eclipses left to the caller).
+    pub fn of(recording: &Recording) -> RecordingRows {
+        RecordingRows {
+            rows: recording.time_s.len(),
+            measured_rows: recording.time_s.len() - recording.fill_rows.len(),
+            fill_rows: recording.fill_rows.clone(),
+            merged_rows: recording.merged_rows.clone(),
+            eclipses: None,
+        }
+    }
+
     /// Every row a measurement of its own.
     pub fn plain(&self) -> bool {
         self.fill_rows.is_empty() && self.merged_rows.is_empty()
@@ -634,6 +645,22 @@ struct BaselineRun {
 /// when there are held-out ones), floored by the channel's resolution (its smallest
 /// step between readings, / √12) and capped in weight against the others
 /// ([`cap_weights`]). A channel smoother than the floor gets a note.
+/// A model's sensors' predictions, every diffusion node's temperature (K), and the
+/// solver's steps, over a recording.
+type WithNodes = (Vec<Vec<f64>>, Vec<Vec<f64>>, u64);
+
+/// `model` over the recording ([`WithNodes`]).
+fn with_node_temperatures(model: &Model, obs: &Observations) -> Result<WithNodes, SimError> {
+    let whole: Arc<[f64]> = obs.time_s.clone().into();
+    let sc = model.scenario();
+    let node_sensors: Vec<Sensor> = (0..sc.thermal.network.nodes.len())
+        .map(|i| Sensor::new(format!("__node{i}_k"), SensorTarget::Node(i)))
+        .collect();
+    let (mut pred, steps) = predict(model, &whole, &node_sensors, u64::MAX)?;
+    let node_temps_k = pred.split_off(sc.sensors.len());
+    Ok((pred, node_temps_k, steps))
+}
+
 fn baseline(
     model: &Model,
     obs: &Observations,
@@ -641,14 +668,8 @@ fn baseline(
     opts: &Options,
     notes: &mut Vec<String>,
 ) -> Result<BaselineRun, DiagnoseError> {
-    let whole: Arc<[f64]> = obs.time_s.clone().into();
-    let sc = model.scenario();
-    let node_sensors: Vec<Sensor> = (0..sc.thermal.network.nodes.len())
-        .map(|i| Sensor::new(format!("__node{i}_k"), SensorTarget::Node(i)))
-        .collect();
-    let (mut pred, steps) =
-        predict(model, &whole, &node_sensors, u64::MAX).map_err(DiagnoseError::Baseline)?;
-    let node_temps_k = pred.split_off(sc.sensors.len());
+    let (pred, node_temps_k, steps) =
+        with_node_temperatures(model, obs).map_err(DiagnoseError::Baseline)?;
     let residuals = obs.residuals(&pred);
     let fit_part = |j: usize| !validate || obs.part[j] == Part::Train;
     let mut noise = Vec::new();
@@ -677,6 +698,85 @@ fn baseline(
         noise,
         steps,
     })
+}
+
+/// The thermostat candidates of `cands` started again from the calibrated hypothesis
+/// `h`: where its residual starts to warm and its nodes' temperatures then. The
+/// baseline's can be far off when a calibrated number was (a housing mass declared
+/// uncertain, 8 % off, started the heater 25 K from its set point and pinned its fit
+/// on a bound). Left as they were when `h`'s model cannot be run.
+fn rehint_from(
+    h: &Hypothesis,
+    obs: &Observations,
+    noise: &[f64],
+    model: &Model,
+    cands: &mut Vec<Candidate>,
+) {
+    if let Ok((_, temps, _)) = with_node_temperatures(&h.model, obs) {
+        let res = obs.residuals(&h.pred);
+        let fresh = heater_hints(obs, &res, noise, &temps);
+        effects::rehint_thermostats(model, cands, &fresh);
+    }
+}
+
+/// The note of a recording too short to hold orbits out.
+fn no_validation(obs: &Observations) -> String {
+    format!(
+        "the recording covers {} whole orbit(s) of {:.1} s; held-out validation needs at \
+         least two (one to fit, one to check), so only the baseline and the mismatches are \
+         reported",
+        obs.split.orbits, obs.split.period_s
+    )
+}
+
+/// Spikes shown at most, per channel, before "and N more".
+const SPIKES_SHOWN: usize = 3;
+
+/// A warning per channel with isolated spikes left out (`spikes`, from
+/// [`Observations::drop_spikes`]: channel, row, reading, its neighbours'), naming the
+/// recording's lines, times and readings.
+fn spike_warnings(obs: &Observations, rec: &Recording, spikes: &[data::Spike]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (c, ch) in obs.channels.iter().enumerate() {
+        let mine: Vec<_> = spikes.iter().filter(|s| s.channel == c).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let u = ch.value_unit;
+        let each: Vec<String> = mine
+            .iter()
+            .take(SPIKES_SHOWN)
+            .map(|s| {
+                let (j, x, (p, n)) = (s.row, s.reading, s.neighbours);
+                format!(
+                    "line {}, t = {} s: {} {u} between {} and {} {u}",
+                    rec.rows_at.get(j).copied().unwrap_or(j as u64 + 1),
+                    crate::units::num(obs.time_s[j]),
+                    crate::units::num(x),
+                    crate::units::num(p),
+                    crate::units::num(n)
+                )
+            })
+            .collect();
+        let more = mine.len().saturating_sub(SPIKES_SHOWN);
+        out.push(format!(
+            "{}: `{}`: {} left out as isolated spike{} (a reading both neighbours leave by \
+             over {} typical steps while agreeing with each other: a telemetry glitch, not \
+             a temperature reached and left within one sample): {}{}",
+            obs.file,
+            crate::units::shown(&ch.name),
+            crate::units::count(mine.len() as f64, "reading"),
+            if mine.len() == 1 { "" } else { "s" },
+            data::SPIKE_SIGMAS,
+            each.join("; "),
+            if more > 0 {
+                format!("; and {more} more")
+            } else {
+                String::new()
+            }
+        ));
+    }
+    out
 }
 
 /// No channel weighs more than `max_ratio` times the typical channel of its unit (the
@@ -1198,31 +1298,23 @@ pub fn diagnose(
 ) -> Result<Diagnosis, DiagnoseError> {
     let started = Instant::now();
     // 1. The recording matched to the sensors, split into training and held-out orbits.
-    let obs = Observations::new(recording, model.scenario(), opts.holdout_orbits)?;
-    let mut notes = Vec::new();
+    let mut obs = Observations::new(recording, model.scenario(), opts.holdout_orbits)?;
+    let found = obs.drop_spikes();
+    let spikes = spike_warnings(&obs, recording, &found);
     let validate = obs.split.can_validate();
-    if !validate {
-        notes.push(format!(
-            "the recording covers {} whole orbit(s) of {:.1} s; held-out validation needs at \
-             least two (one to fit, one to check), so only the baseline and the mismatches \
-             are reported",
-            obs.split.orbits, obs.split.period_s
-        ));
-    }
+    let mut notes: Vec<String> = (!validate)
+        .then(|| no_validation(&obs))
+        .into_iter()
+        .collect();
 
     // 2. The baseline.
     progress("baseline", 0, 1);
     let base = baseline(model, &obs, validate, opts, &mut notes)?;
-    let warnings = noise_warnings(&obs, &base, validate);
+    let mut warnings = spikes;
+    warnings.extend(noise_warnings(&obs, &base, validate));
     let mut problem = Problem::new(&obs, base.noise.clone(), base.steps);
     let (mut report, mut series) = baseline_report(&obs, &base, &problem, opts, notes, warnings);
-    report.recording = RecordingRows {
-        rows: recording.time_s.len(),
-        measured_rows: recording.time_s.len() - recording.fill_rows.len(),
-        fill_rows: recording.fill_rows.clone(),
-        merged_rows: recording.merged_rows.clone(),
-        eclipses: None,
-    };
+    report.recording = RecordingRows::of(recording);
     progress("baseline", 1, 1);
     if !validate {
         series.fill_model_grid(&obs, model, None)?;
@@ -1272,6 +1364,10 @@ pub fn diagnose(
     report.calibration_heldout_share = calibrated
         .as_ref()
         .map(|h| 1.0 - h.holdout_chi2 / baseline_reference.holdout_chi2);
+    // 3¾. Thermostats started again from the calibrated model.
+    if let Some(h) = &calibrated {
+        rehint_from(h, &obs, &base.noise, model, &mut cands);
+    }
     let start_pred = calibrated.as_ref().map_or(&base.pred, |h| &h.pred);
     let cx = Search {
         model,
@@ -1860,9 +1956,9 @@ impl Search<'_> {
 }
 
 /// Thermostat start points: the channel with the most warming residual in the
-/// training orbits that has a start; in each orbit, where that residual starts (walking back from where
-/// it clearly shows to where it was still at the noise); each node's baseline
-/// temperature then, the median over the orbits.
+/// training orbits that has a start; in each orbit, where that residual starts in the
+/// cold phase ([`warming_starts`]); each node's temperature then in the model that
+/// left residual `res` (`node_temps_k`), the median over the orbits.
 fn heater_hints(
     obs: &Observations,
     res: &[Vec<Option<f64>>],
@@ -1897,7 +1993,7 @@ fn heater_hints(
     // (a sensor's offset) shows no start and gives way to the next.
     let Some(starts) = warming
         .iter()
-        .map(|&(c, _)| warming_starts(obs, &smooth[c], noise[c]))
+        .map(|&(c, _)| warming_starts(obs, &smooth[c], &obs.values[c], noise[c]))
         .find(|s| !s.is_empty())
     else {
         return hints;
@@ -1910,9 +2006,18 @@ fn heater_hints(
 }
 
 /// Where a channel's warming residual (`smooth`, the smoothed residual) starts in
-/// each training orbit: walking back from where it clearly shows (4σ/√5) to where it
-/// was still at the noise (σ/√5); none in an orbit where it never was.
-fn warming_starts(obs: &Observations, smooth: &[Option<f64>], noise: f64) -> Vec<usize> {
+/// each training orbit's cold phase (where its readings `values` are below their
+/// median over the orbit: a thermostat switches its heater on as its node cools):
+/// walking back from where it first clearly shows there (4σ/√5) to where it was still
+/// at the noise (σ/√5); none in an orbit where it never was. (Without the cold phase,
+/// a model's error in the warm phase took the start: a housing 8 % too heavy warms
+/// too slowly in sunlight, and a heater switched on at −10 °C was started at +24 °C.)
+fn warming_starts(
+    obs: &Observations,
+    smooth: &[Option<f64>],
+    values: &[Option<f64>],
+    noise: f64,
+) -> Vec<usize> {
     let hi = 4.0 * noise / 5f64.sqrt();
     let lo = noise / 5f64.sqrt();
     let mut starts = Vec::new();
@@ -1920,7 +2025,17 @@ fn warming_starts(obs: &Observations, smooth: &[Option<f64>], noise: f64) -> Vec
         let idx: Vec<usize> = (0..obs.time_s.len())
             .filter(|&j| obs.orbit[j] == orbit && obs.part[j] == Part::Train)
             .collect();
-        let Some(pos) = idx.iter().position(|&j| smooth[j].is_some_and(|v| v > hi)) else {
+        // the cold phase: the channel's readings below their median over the orbit
+        let mut readings: Vec<f64> = idx.iter().filter_map(|&j| values[j]).collect();
+        if readings.is_empty() {
+            continue;
+        }
+        let median = data::median(&mut readings);
+        let cold = |j: usize| values[j].is_some_and(|v| v < median);
+        let Some(pos) = idx
+            .iter()
+            .position(|&j| cold(j) && smooth[j].is_some_and(|v| v > hi))
+        else {
             continue;
         };
         let mut k = pos;

@@ -363,9 +363,13 @@ impl Rejection {
     /// The reason as the candidate table gives it.
     pub(super) fn reason(self, opts: &Options) -> String {
         match self {
-            Rejection::Bic { gain } => format!(
+            Rejection::Bic { gain } if gain > 0.0 => format!(
                 "BIC improves by {gain:.1}, not by more than the margin {:.0}",
                 opts.bic_margin
+            ),
+            Rejection::Bic { gain } => format!(
+                "BIC does not improve (it rises by {:.1}; the margin to pass is {:.0})",
+                -gain, opts.bic_margin
             ),
             Rejection::Holdout { gain, drop } => format!(
                 "fits the training orbits (BIC −{gain:.0}) but does not improve \

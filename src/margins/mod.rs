@@ -612,8 +612,9 @@ pub enum MergeError {
 /// Reads a shard file's text and checks it against itself: its sizes (samples, shard
 /// i of n, the range shard i of n has, one outcome per index of it, one value per
 /// dispersion, one result per gear pair) and its flags (each must follow from the
-/// values: a hand-edited or damaged shard is refused, naming the sample). Never
-/// panics, whatever the text.
+/// values: a shard damaged or edited so that it contradicts itself is refused, naming
+/// the sample; one edited consistently is not detected). Never panics, whatever the
+/// text.
 pub fn read_shard(text: &str, file: &str) -> Result<Shard, MergeError> {
     let bad = |why: String| MergeError::NotAShard {
         file: file.to_string(),
