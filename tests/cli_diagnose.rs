@@ -343,15 +343,47 @@ fn cli_diagnose_reads_a_run_log_as_a_recording() {
         .arg(&log)
         .assert()
         .code(0);
-    common::bin()
+    let out = common::bin()
         .args(["diagnose", reference().to_str().unwrap(), "--recording"])
         .arg(&log)
-        .assert()
-        .code(0)
-        .stdout(predicate::str::starts_with("CONSISTENT"))
-        .stdout(predicate::str::contains(
-            "model output rather than a measurement",
-        ));
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.starts_with("CONSISTENT"), "{text}");
+    // each smooth channel's notes end with the noise the table gives (the note said
+    // 0.001 where the resolution floor made it 0.009), in the table's units (µm, not
+    // um); the last note on a channel (the weight cap's) is the one that holds
+    let smooth: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains("model output rather than a measurement"))
+        .collect();
+    assert!(!smooth.is_empty(), "{text}");
+    for note in smooth {
+        assert!(!note.contains(" um"), "{note}");
+        let channel = note.split('`').nth(1).unwrap();
+        let last = text
+            .lines()
+            .filter(|l| l.starts_with("note: channel `") && l.split('`').nth(1) == Some(channel))
+            .rfind(|l| l.contains("taken as "))
+            .unwrap();
+        let taken: f64 = last
+            .split("taken as ")
+            .nth(1)
+            .unwrap()
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .trim_end_matches(',')
+            .parse()
+            .unwrap_or_else(|e| panic!("{last}: {e}"));
+        let row = text
+            .lines()
+            .find(|l| l.starts_with(channel) && l.contains(" noise)"))
+            .unwrap_or_else(|| panic!("no table row for {channel}: {text}"));
+        let table: f64 = row.split_whitespace().nth(1).unwrap().parse().unwrap();
+        assert!((taken - table).abs() <= 0.0005 + 1e-12, "{last}\n{row}");
+    }
 }
 
 /// Earth albedo and infrared are fitted as effective values on the node's own areas

@@ -680,15 +680,27 @@ fn baseline(
                 obs.file, obs.channels[c].name
             ))
         })?;
+        let quantum = data::resolution(&obs.values[c]).unwrap_or(0.0);
+        let taken = sigma.max(NOISE_FLOOR).max(quantum / 12f64.sqrt());
         if sigma < NOISE_FLOOR {
+            let unit = match obs.channels[c].unit {
+                "um" => "µm",
+                u => u,
+            };
             notes.push(format!(
-                "channel `{}` is smoother than {NOISE_FLOOR} {} (noise estimated {sigma:.1e}): \
-                 model output rather than a measurement? Its noise is taken as {NOISE_FLOOR}",
-                obs.channels[c].name, obs.channels[c].unit
+                "channel `{}` is smoother than {NOISE_FLOOR} {unit} (noise estimated \
+                 {sigma:.1e}): model output rather than a measurement? Its noise is taken as \
+                 {} {unit}{}",
+                obs.channels[c].name,
+                crate::units::sig(taken),
+                if taken > NOISE_FLOOR {
+                    " (its readings' resolution / √12)"
+                } else {
+                    ""
+                }
             ));
         }
-        let quantum = data::resolution(&obs.values[c]).unwrap_or(0.0);
-        noise.push(sigma.max(NOISE_FLOOR).max(quantum / 12f64.sqrt()));
+        noise.push(taken);
     }
     cap_weights(&obs.channels, &mut noise, opts.max_weight_ratio, notes);
     Ok(BaselineRun {
@@ -806,9 +818,9 @@ fn cap_weights(
                 notes.push(format!(
                     "channel `{}`'s noise ({} {shown}) is under the typical channel's / √{}: taken as {} {shown}, so that it weighs at most {}× a typical channel (--max-weight-ratio)",
                     c.name,
-                    crate::units::num(*n),
+                    crate::units::sig(*n),
                     crate::units::num(max_ratio),
-                    crate::units::num(floor),
+                    crate::units::sig(floor),
                     crate::units::num(max_ratio)
                 ));
                 *n = floor;
