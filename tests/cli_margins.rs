@@ -383,6 +383,46 @@ fn cli_shards_merge_to_the_unsharded_report_bit_for_bit() {
     );
     std::fs::write(dir.join("junk.json"), "{}").unwrap();
     refused(&["merge", "junk.json"], "not a margins shard");
+    // edits that keep a shard consistent with itself: a value moved within its range,
+    // a result rewritten with its flags, the horizon; each merged with exit 0 before
+    // (black-box helper-19), each refused now by the shard's checksum
+    let shard: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("s1.json")).unwrap()).unwrap();
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 3] = [
+        ("value", |v| {
+            let x = v["outcomes"][0]["values"][0].as_f64().unwrap();
+            v["outcomes"][0]["values"][0] = (x * (1.0 + 1e-9)).into();
+        }),
+        ("result", |v| {
+            let p = &mut v["outcomes"][0]["pairs"][0];
+            let b = p["min_backlash_um"].as_f64().unwrap();
+            p["min_backlash_um"] = (b + 1.0).into();
+            p["min_margin_um"] = (p["min_margin_um"].as_f64().unwrap() + 1.0).into();
+        }),
+        ("horizon", |v| {
+            let h = v["limits"]["horizon_s"].as_f64().unwrap();
+            v["limits"]["horizon_s"] = (h * 2.0).into();
+        }),
+    ];
+    for (name, edit) in edits {
+        let mut v = shard.clone();
+        edit(&mut v);
+        assert_ne!(v, shard, "{name}");
+        let file = format!("edited-{name}.json");
+        std::fs::write(dir.join(&file), serde_json::to_string(&v).unwrap()).unwrap();
+        refused(
+            &["merge", "s0.json", &file, "s2.json", "s3.json"],
+            "do not match the SHA-256 it was written with",
+        );
+    }
+    let mut v = shard.clone();
+    v.as_object_mut().unwrap().remove("sha256");
+    std::fs::write(dir.join("bare.json"), serde_json::to_string(&v).unwrap()).unwrap();
+    refused(
+        &["merge", "s0.json", "bare.json", "s2.json", "s3.json"],
+        "it has no SHA-256 of its contents",
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

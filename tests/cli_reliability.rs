@@ -465,7 +465,25 @@ fn cli_merge_trusts_no_shard() {
         pr["violated"] = true.into();
         pr["interference"] = true.into();
     });
-    let out = run_in(&dir, &["merge", "consistent.json", "s1.json"]);
+    // refused by its checksum (it merged before: helper-19)
+    refused_in(
+        &dir,
+        "consistent",
+        &["merge", "consistent.json", "s1.json"],
+        &["consistent.json", "do not match the SHA-256"],
+    );
+    // sealed again, as one who recomputes the checksum: the merged verdict, taken from
+    // the values, fails
+    let text = std::fs::read_to_string(dir.join("consistent.json")).unwrap();
+    let resealed = orbitlash::margins::read_shard(&text, "consistent.json")
+        .unwrap()
+        .sealed();
+    std::fs::write(
+        dir.join("resealed.json"),
+        serde_json::to_string(&resealed).unwrap(),
+    )
+    .unwrap();
+    let out = run_in(&dir, &["merge", "resealed.json", "s1.json"]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stdout(&out).starts_with("FAIL mesh"), "{}", stdout(&out));
     // sizes against the shard's own header, and counts bounded before allocating

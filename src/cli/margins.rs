@@ -193,7 +193,9 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
                 range.clone(),
             ),
             outcomes,
-        };
+            sha256: String::new(),
+        }
+        .sealed();
         let p = a.json.as_deref().expect("--shard requires --json");
         let text = serde_json::to_string(&shard)? + "\n";
         outs.write_all(&[(p, text.as_bytes())])?;

@@ -512,6 +512,32 @@ pub struct Shard {
     /// smallest backlash's time and orbit number), and each dispersion's support.
     pub limits: ShardLimits,
     pub outcomes: Vec<SampleOutcome>,
+    /// SHA-256 (hex) of the shard as written with this field empty ([`Shard::checksum`]):
+    /// a shard edited after it was written, even consistently, is refused by `merge`.
+    #[serde(default)]
+    pub sha256: String,
+}
+
+impl Shard {
+    /// SHA-256 (hex) of the shard's JSON with `sha256` empty. The JSON of a shard read
+    /// back is the JSON written (floats round-trip exactly), so a shard's checksum
+    /// holds until a byte of its contents changes.
+    pub fn checksum(&self) -> String {
+        use sha2::{Digest, Sha256};
+        let mut bare = self.clone();
+        bare.sha256.clear();
+        let text = serde_json::to_string(&bare).expect("a shard serialises");
+        Sha256::digest(text.as_bytes())
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    }
+
+    /// The shard with its checksum set.
+    pub fn sealed(mut self) -> Shard {
+        self.sha256 = self.checksum();
+        self
+    }
 }
 
 /// The bounds a shard's numbers must keep (see [`Shard::limits`]).
@@ -613,8 +639,8 @@ pub enum MergeError {
 /// i of n, the range shard i of n has, one outcome per index of it, one value per
 /// dispersion, one result per gear pair) and its flags (each must follow from the
 /// values: a shard damaged or edited so that it contradicts itself is refused, naming
-/// the sample; one edited consistently is not detected). Never panics, whatever the
-/// text.
+/// the sample; one edited consistently is refused by [`merge`], by its checksum).
+/// Never panics, whatever the text.
 pub fn read_shard(text: &str, file: &str) -> Result<Shard, MergeError> {
     let bad = |why: String| MergeError::NotAShard {
         file: file.to_string(),
@@ -908,6 +934,21 @@ pub fn merge(shards: &[(String, Shard)]) -> Result<(RunIdentity, Vec<SampleOutco
             count: missing,
             total: id.samples,
         });
+    }
+    // last, so that a shard that contradicts itself or its partners is told why: one
+    // whose contents changed after it was written (a value moved within its range, a
+    // result rewritten with its flags) is refused too
+    for (file, s) in shards {
+        if s.sha256 != s.checksum() {
+            return Err(MergeError::NotAShard {
+                file: file.clone(),
+                why: if s.sha256.is_empty() {
+                    "it has no SHA-256 of its contents (`sha256`): written by an older orbitlash, or the field was removed; run the shard again".into()
+                } else {
+                    "its contents do not match the SHA-256 it was written with (`sha256`): edited or damaged after it was written; run the shard again".into()
+                },
+            });
+        }
     }
     let all = order
         .iter()
