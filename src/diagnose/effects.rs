@@ -1556,9 +1556,11 @@ mod calibration {
                 );
             }
         }
-        // a declared face of α 1 does not take the global scale from the others
+        // a declared face of α 1 does not take the global scale from the others (its
+        // declared range widened to hold it: a range must hold the scenario's value)
         let mut spec = crate::io::scenario_toml::parse_spec(&text, "funcube-1.toml").unwrap();
         spec.face[0].absorptivity = 1.0;
+        spec.uncertain[0].max = 1.0;
         let model = Model::new(spec).unwrap();
         let mut cands = candidates(&model, &channels, &Hints::default());
         let (set, _) = calibration_set(&model, &mut cands);
