@@ -287,14 +287,23 @@ column in seconds from the scenario's t = 0?)",
         })
     }
 
-    /// Isolated spikes, left out: a reading that both its neighbours leave by more
-    /// than [`SPIKE_SIGMAS`] times the channel's typical step, in the same direction,
-    /// while they agree with each other (within a quarter of that): a glitch of the
-    /// telemetry (a bit error, a bad conversion), not a temperature or backlash a body
-    /// can reach and leave within one sample. The channel's typical step is 1.4826 ×
-    /// the median of its nonzero steps between consecutive readings, at least its
-    /// resolution. Their cells are emptied, and returned.
+    /// Isolated spikes, left out: a reading beyond both its neighbours, on the same
+    /// side, by more than [`SPIKE_SIGMAS`] times the channel's typical step, where both
+    /// neighbours are present and within 1.5 × the recording's median sampling
+    /// interval of it: a glitch of the telemetry (a bit error, a bad conversion), not
+    /// a temperature or backlash a body can reach and leave within one sample. (A
+    /// reading alone between gaps in time is never one: its neighbours are not
+    /// minutes apart.) The channel's typical step is 1.4826 × the median of its
+    /// nonzero steps between consecutive readings, at least its resolution. Their
+    /// cells are emptied, and returned. Not judged: the first and last rows, and a
+    /// reading next to an empty cell.
     pub fn drop_spikes(&mut self) -> Vec<Spike> {
+        let mut gaps: Vec<f64> = self.time_s.windows(2).map(|w| w[1] - w[0]).collect();
+        if gaps.is_empty() {
+            return Vec::new();
+        }
+        let near = 1.5 * median(&mut gaps);
+        let t = &self.time_s;
         let mut out = Vec::new();
         for (c, v) in self.values.iter_mut().enumerate() {
             let mut steps: Vec<f64> = v
@@ -312,9 +321,12 @@ column in seconds from the scenario's t = 0?)",
                 let (Some(p), Some(x), Some(n)) = (v[j - 1], v[j], v[j + 1]) else {
                     continue;
                 };
-                let (a, b) = (x - p, x - n);
-                let jump = a.abs().min(b.abs());
-                if a * b > 0.0 && jump > limit && (n - p).abs() < 0.25 * jump {
+                if t[j] - t[j - 1] > near || t[j + 1] - t[j] > near {
+                    continue;
+                }
+                // how far beyond the nearer neighbour, on the side of neither
+                let beyond = (x - p.max(n)).max(p.min(n) - x);
+                if beyond > limit {
                     found.push((j, x, (p, n)));
                 }
             }

@@ -637,10 +637,6 @@ const SWITCH_STARTS: usize = 3;
 /// `docs/performance.md`).
 pub const HEATER_STARTS: usize = 3;
 
-/// Every candidate of the vocabulary on every element of `model` that the recording's
-/// `channels` (sensor columns) can see, in a fixed order: per node, per gear pair, per
-/// temperature channel, then on the whole model; on each element, the effects of that
-/// scope in the vocabulary's order.
 /// The thermostat candidates of `cands` started again from `hints` (what the
 /// calibrated model's residual says, where the first came from the baseline's): each
 /// replaced by its node's candidate from `hints`, and one added for a node that had none
@@ -662,6 +658,10 @@ pub fn rehint_thermostats(model: &Model, cands: &mut Vec<Candidate>, hints: &Hin
     }
 }
 
+/// Every candidate of the vocabulary on every element of `model` that the recording's
+/// `channels` (sensor columns) can see, in a fixed order: per node, per gear pair, per
+/// temperature channel, then on the whole model; on each element, the effects of that
+/// scope in the vocabulary's order.
 pub fn candidates(model: &Model, channels: &[(String, bool)], hints: &Hints) -> Vec<Candidate> {
     let g = Generator::new(model, hints);
     let spec = model.spec();

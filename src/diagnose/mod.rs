@@ -640,11 +640,6 @@ struct BaselineRun {
     steps: u64,
 }
 
-/// Step 2: the baseline simulated over the whole recording, with every diffusion node
-/// read too; its residuals; each channel's noise from them (the training orbits only,
-/// when there are held-out ones), floored by the channel's resolution (its smallest
-/// step between readings, / √12) and capped in weight against the others
-/// ([`cap_weights`]). A channel smoother than the floor gets a note.
 /// A model's sensors' predictions, every diffusion node's temperature (K), and the
 /// solver's steps, over a recording.
 type WithNodes = (Vec<Vec<f64>>, Vec<Vec<f64>>, u64);
@@ -661,6 +656,11 @@ fn with_node_temperatures(model: &Model, obs: &Observations) -> Result<WithNodes
     Ok((pred, node_temps_k, steps))
 }
 
+/// Step 2: the baseline simulated over the whole recording, with every diffusion node
+/// read too; its residuals; each channel's noise from them (the training orbits only,
+/// when there are held-out ones), floored by the channel's resolution (its smallest
+/// step between readings, / √12) and capped in weight against the others
+/// ([`cap_weights`]). A channel smoother than the floor gets a note.
 fn baseline(
     model: &Model,
     obs: &Observations,
@@ -772,9 +772,9 @@ fn spike_warnings(obs: &Observations, rec: &Recording, spikes: &[data::Spike]) -
             .collect();
         let more = mine.len().saturating_sub(SPIKES_SHOWN);
         out.push(format!(
-            "{}: `{}`: {} left out as isolated spike{} (a reading both neighbours leave by \
-             over {} typical steps while agreeing with each other: a telemetry glitch, not \
-             a temperature reached and left within one sample): {}{}",
+            "{}: `{}`: {} left out as isolated spike{} (beyond both neighbours, each within \
+             1.5 sampling intervals, by over {} typical steps: a telemetry glitch, not a \
+             temperature or backlash reached and left within one sample): {}{}",
             obs.file,
             crate::units::shown(&ch.name),
             crate::units::count(mine.len() as f64, "reading"),

@@ -363,6 +363,10 @@ impl Rejection {
     /// The reason as the candidate table gives it.
     pub(super) fn reason(self, opts: &Options) -> String {
         match self {
+            Rejection::Bic { gain } if gain.is_nan() => format!(
+                "BIC not computed (its χ² is not a number); the margin to pass is {:.0}",
+                opts.bic_margin
+            ),
             Rejection::Bic { gain } if gain > 0.0 => format!(
                 "BIC improves by {gain:.1}, not by more than the margin {:.0}",
                 opts.bic_margin

@@ -476,7 +476,13 @@ impl LeftOut {
             .spans_s
             .iter()
             .take(SPANS_SHOWN)
-            .map(|(a, b)| format!("{a:.3} … {b:.3}"))
+            .map(|(a, b)| {
+                if a == b {
+                    format!("{a:.3}")
+                } else {
+                    format!("{a:.3} … {b:.3}")
+                }
+            })
             .collect();
         let more = self.spans_s.len().saturating_sub(SPANS_SHOWN);
         match self.spans_s.len() {
@@ -687,7 +693,7 @@ mod tests {
         assert_eq!(one.spans_s, vec![(11.0, 13.0), (25.0, 25.0)]);
         assert_eq!(
             one.stretches(),
-            "in 2 stretches, t = 11.000 … 13.000, 25.000 … 25.000 s"
+            "in 2 stretches, t = 11.000 … 13.000, 25.000 s"
         );
         let same = LeftOut::of(&[20.0, 21.0, 29.0], &kept).unwrap();
         assert_eq!(same.spans_s, vec![(20.0, 29.0)]);
@@ -695,9 +701,8 @@ mod tests {
         let many = LeftOut::of(&[1.0, 11.0, 21.0, 31.0, 41.0], &kept).unwrap();
         assert_eq!(many.spans_s.len(), 5);
         assert!(
-            many.stretches().starts_with(
-                "in 5 stretches, t = 1.000 … 1.000, 11.000 … 11.000, 21.000 … 21.000 s and 2 more"
-            ),
+            many.stretches()
+                .starts_with("in 5 stretches, t = 1.000, 11.000, 21.000 s and 2 more"),
             "{}",
             many.stretches()
         );

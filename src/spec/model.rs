@@ -283,7 +283,7 @@ impl Model {
                 key: at.key(key),
                 message,
             };
-            let nominal = self.get(&u.path).map_err(|e| err("path", e.to_string()))?;
+            self.get(&u.path).map_err(|e| err("path", e.to_string()))?;
             let id = self
                 .param(&u.path)
                 .map_err(|e| err("path", e.to_string()))?;
@@ -302,24 +302,6 @@ impl Model {
                 return Err(err(
                     "max",
                     format!("the bounds must have min < max (got {} … {})", u.min, u.max),
-                ));
-            }
-            // the calibration starts at the nominal and holds a prior toward it: a range
-            // that leaves it out declares another number
-            if !(u.min..=u.max).contains(&nominal) {
-                let (key, side) = if nominal < u.min {
-                    ("min", "below")
-                } else {
-                    ("max", "above")
-                };
-                return Err(err(
-                    key,
-                    format!(
-                        "the scenario's own value {} is {side} the range {} … {}: the range must hold it (it is where the calibration starts, and its prior is centred on it)",
-                        crate::units::num(nominal),
-                        crate::units::num(u.min),
-                        crate::units::num(u.max)
-                    ),
                 ));
             }
             for (key, v) in [("min", u.min), ("max", u.max)] {
