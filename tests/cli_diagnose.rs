@@ -438,7 +438,21 @@ fn cli_diagnose_leaves_out_an_isolated_spike_and_says_so() {
         return;
     };
     let dir = common::tmpdir("diag-spike");
-    let text = std::fs::read_to_string(rec).unwrap();
+    // exit status, stdout, and stdout with stderr of `diagnose` on `recording`
+    let diagnose = |recording: &Path| {
+        let out = common::bin()
+            .arg("diagnose")
+            .arg(reference())
+            .arg("--recording")
+            .arg(recording)
+            .arg("--quiet")
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        let all = format!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
+        (out.status.code(), stdout, all)
+    };
+    let text = std::fs::read_to_string(&rec).unwrap();
     let row = "3000.0,-6.18,1.78,6.05,3.49,7.92,37.065";
     let line = text.lines().position(|l| l == row).expect("the row") + 1;
     for glitch in ["60", "5000"] {
@@ -447,19 +461,9 @@ fn cli_diagnose_leaves_out_an_isolated_spike_and_says_so() {
             &format!("spike-{glitch}.csv"),
             &text.replacen(row, &row.replacen("-6.18", glitch, 1), 1),
         );
-        let out = common::bin()
-            .arg("diagnose")
-            .arg(reference())
-            .arg("--recording")
-            .arg(&bad)
-            .arg("--quiet")
-            .output()
-            .unwrap();
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(0), "{glitch}: {stdout}{stderr}");
+        let (code, stdout, all) = diagnose(&bad);
+        assert_eq!(code, Some(0), "{glitch}: {all}");
         assert!(stdout.starts_with("CONSISTENT"), "{glitch}: {stdout}");
-        let all = format!("{stdout}{stderr}");
         let said = "`housing_c`: 1 reading left out as isolated spike";
         assert!(all.contains(said), "{glitch}: {all}");
         assert!(
@@ -477,36 +481,11 @@ fn cli_diagnose_leaves_out_an_isolated_spike_and_says_so() {
         })
         .map(|l| format!("{l}\n"))
         .collect();
-    let alone = write(&dir, "pass.csv", &pass);
-    let out = common::bin()
-        .arg("diagnose")
-        .arg(reference())
-        .arg("--recording")
-        .arg(&alone)
-        .arg("--quiet")
-        .output()
-        .unwrap();
-    let all = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert_ne!(out.status.code(), Some(2), "{all}");
+    let (code, _, all) = diagnose(&write(&dir, "pass.csv", &pass));
+    assert_ne!(code, Some(2), "{all}");
     assert!(!all.contains("isolated spike"), "{all}");
     // the clean recording has none
-    let out = common::bin()
-        .arg("diagnose")
-        .arg(reference())
-        .arg("--recording")
-        .arg(common::shared("cases/null/recording.csv").unwrap())
-        .arg("--quiet")
-        .output()
-        .unwrap();
-    let all = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (_, _, all) = diagnose(&rec);
     assert!(!all.contains("isolated spike"), "{all}");
     let _ = std::fs::remove_dir_all(&dir);
 }

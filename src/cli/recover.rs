@@ -92,10 +92,7 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             OutputPolicy::default_in_logs(&[&a.log]),
         ),
     };
-    let origin_ns = s.time_origin_ns();
-    let mut kept_s: Vec<f64> = (s.messages.iter())
-        .map(|m| m.header.log_time.saturating_sub(origin_ns) as f64 * 1e-9)
-        .collect();
+    let mut kept_s = s.message_times_s();
     kept_s.sort_by(f64::total_cmp);
     let left_s: Vec<f64> = damaged.iter().map(|d| d.t_s).collect();
     let left_out = LeftOut::of(&left_s, &kept_s);

@@ -149,6 +149,18 @@ pub struct Observations {
 /// Width of the eclipse-entry and eclipse-exit windows, as a fraction of the orbit.
 pub const TRANSITION_FRACTION: f64 = 0.1;
 
+/// One sampling interval with slack: 1.5 × the median step of `time_s` (0 for fewer
+/// than two rows). An orbit counts as whole when the recording ends within it of the
+/// orbit's end, and a spike's neighbours must lie within it.
+fn near_s(time_s: &[f64]) -> f64 {
+    let mut gaps: Vec<f64> = time_s.windows(2).map(|w| w[1] - w[0]).collect();
+    if gaps.is_empty() {
+        0.0
+    } else {
+        1.5 * median(&mut gaps)
+    }
+}
+
 /// How many typical steps a reading must stand off both its neighbours to be an
 /// isolated spike ([`Observations::drop_spikes`]).
 pub const SPIKE_SIGMAS: f64 = 20.0;
@@ -230,13 +242,8 @@ impl Observations {
         check_time_base(rec, sc)?;
         let period = sc.period_s();
         let t_last = *rec.time_s.last().unwrap();
-        let mut gaps: Vec<f64> = rec.time_s.windows(2).map(|w| w[1] - w[0]).collect();
-        let slack = if gaps.is_empty() {
-            0.0
-        } else {
-            1.5 * median(&mut gaps)
-        };
-        let split = Split::new(period, t_last, slack, holdout).map_err(DiagnoseError::Options)?;
+        let split = Split::new(period, t_last, near_s(&rec.time_s), holdout)
+            .map_err(DiagnoseError::Options)?;
         if !split.can_validate() {
             return Err(DiagnoseError::Recording(format!(
                 "{}: the recording ends at t = {} s, {} whole orbit(s) of {:.1} s: diagnose fits \
@@ -298,11 +305,7 @@ column in seconds from the scenario's t = 0?)",
     /// cells are emptied, and returned. Not judged: the first and last rows, and a
     /// reading next to an empty cell.
     pub fn drop_spikes(&mut self) -> Vec<Spike> {
-        let mut gaps: Vec<f64> = self.time_s.windows(2).map(|w| w[1] - w[0]).collect();
-        if gaps.is_empty() {
-            return Vec::new();
-        }
-        let near = 1.5 * median(&mut gaps);
+        let near = near_s(&self.time_s);
         let t = &self.time_s;
         let mut out = Vec::new();
         for (c, v) in self.values.iter_mut().enumerate() {

@@ -218,7 +218,7 @@ pub fn drop_undecodable(scan: &mut super::mcap_scan::Scan<'_>) -> Vec<Undecodabl
                     || format!("channel {}", m.header.channel_id),
                     |c| c.topic.clone(),
                 ),
-                t_s: m.header.log_time.saturating_sub(origin_ns) as f64 * 1e-9,
+                t_s: super::mcap_scan::seconds_since(m.header.log_time, origin_ns),
             });
         }
         keep.push(ok);

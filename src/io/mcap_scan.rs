@@ -163,6 +163,15 @@ impl Scan<'_> {
         Some(it.fold((first, first), |(a, b), t| (a.min(t), b.max(t))))
     }
 
+    /// Every message's time, s from t = 0 ([`seconds_since`] the time origin), in the
+    /// scan's order.
+    pub fn message_times_s(&self) -> Vec<f64> {
+        let origin_ns = self.time_origin_ns();
+        (self.messages.iter())
+            .map(|m| seconds_since(m.header.log_time, origin_ns))
+            .collect()
+    }
+
     /// The log time of t = 0, ns: a dated run's start (`time_origin_unix_ns` of the
     /// provenance record), else 0.
     pub fn time_origin_ns(&self) -> u64 {
@@ -432,6 +441,11 @@ pub struct Recovery {
     pub original_status: Option<String>,
 }
 
+/// A log time (ns) as seconds after `origin_ns` (a log's t = 0), none before it.
+pub fn seconds_since(log_time_ns: u64, origin_ns: u64) -> f64 {
+    log_time_ns.saturating_sub(origin_ns) as f64 * 1e-9
+}
+
 /// Messages a recovery leaves out of a log that otherwise ends properly (damaged
 /// ones): how many, and the stretches of log time (s, first and last) they fall in,
 /// split wherever a kept message lies between two left out.
@@ -567,7 +581,7 @@ pub fn recover(
     let original_status = scan
         .metadata_value("orbitlash.run_end", "status")
         .map(str::to_string);
-    let t_end_s = last_ns.saturating_sub(scan.time_origin_ns()) as f64 * 1e-9;
+    let t_end_s = seconds_since(last_ns, scan.time_origin_ns());
     let end: BTreeMap<String, String> = match scan
         .metadata
         .iter()
