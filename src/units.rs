@@ -65,6 +65,24 @@ pub fn fixed(v: f64, decimals: usize) -> String {
     }
 }
 
+/// Two numbers compared in one line ("12.345 µm < 12.346 µm"), each with the same
+/// number of decimals, [`decimals_apart`].
+pub fn apart(a: f64, b: f64, decimals: usize) -> (String, String) {
+    let d = decimals_apart(a, b, decimals);
+    (fixed(a, d), fixed(b, d))
+}
+
+/// The decimals that two numbers compared in one line need: at least `decimals`, more
+/// (up to 12) while the two would print alike although they differ, so that a verdict
+/// never reads "x < x".
+pub fn decimals_apart(a: f64, b: f64, decimals: usize) -> usize {
+    let mut d = decimals;
+    while d < 12 && a != b && fixed(a, d) == fixed(b, d) {
+        d += 1;
+    }
+    d
+}
+
 /// `v` followed by `unit`, plural unless v is 1: "1 orbit", "6 orbits", "1e300 orbits".
 pub fn count(v: f64, unit: &str) -> String {
     if v == 1.0 {
@@ -124,7 +142,7 @@ pub fn identifier(name: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{exact, num};
+    use super::{apart, exact, num};
 
     #[test]
     fn core_exact_numbers() {
@@ -142,5 +160,15 @@ mod tests {
         assert_eq!(num(0.001), "0.001");
         assert_eq!(num(300.0), "300");
         assert_eq!(num(-2.5e-7), "-2.5e-7");
+    }
+
+    #[test]
+    fn core_two_numbers_compared_never_print_alike() {
+        assert_eq!(apart(24.398, 24.4, 3), ("24.398".into(), "24.400".into()));
+        assert_eq!(
+            apart(10.0001, 10.0004, 3),
+            ("10.0001".into(), "10.0004".into())
+        );
+        assert_eq!(apart(5.0, 5.0, 3), ("5.000".into(), "5.000".into()));
     }
 }

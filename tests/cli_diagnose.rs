@@ -489,3 +489,88 @@ fn cli_diagnose_leaves_out_an_isolated_spike_and_says_so() {
     assert!(!all.contains("isolated spike"), "{all}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A sensor lost part-way through the recording (the motor's readings stop after
+/// the training orbits): the others' held-out orbits still check the fit, so the
+/// diagnosis runs, fits the lost channel on what it has, and says that its fit is
+/// not checked; the table shows no held-out figure for it and the JSON a null. It
+/// was refused outright. A recording whose held-out orbits lack every channel is
+/// still refused.
+#[test]
+fn cli_diagnose_goes_on_when_one_sensor_is_lost() {
+    let Some(rec) = common::shared("cases/null/recording.csv") else {
+        return;
+    };
+    let dir = common::tmpdir("diag-lost");
+    let text = std::fs::read_to_string(&rec).unwrap();
+    let last: f64 = text
+        .lines()
+        .last()
+        .and_then(|l| l.split(',').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap();
+    // the motor (second column) empty, or every channel, from 60 % of the recording on (the held-out orbits are its last third)
+    let cut = |all: bool| -> String {
+        text.lines()
+            .map(|l| {
+                let t: f64 = l.split(',').next().unwrap().parse().unwrap_or(-1.0);
+                if t < 0.6 * last {
+                    return format!("{l}\n");
+                }
+                let cells: Vec<&str> = l.split(',').collect();
+                let kept: Vec<&str> = cells
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| if i == 2 || (all && i > 0) { "" } else { *c })
+                    .collect();
+                format!("{}\n", kept.join(","))
+            })
+            .collect()
+    };
+    let json = dir.join("lost.json");
+    let out = common::bin()
+        .arg("diagnose")
+        .arg(reference())
+        .arg("--recording")
+        .arg(write(&dir, "lost.csv", &cut(false)))
+        .arg("--json")
+        .arg(&json)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let all = format!("{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(out.status.code(), Some(0), "{all}");
+    assert!(stdout.starts_with("CONSISTENT"), "{all}");
+    assert!(
+        all.contains("`motor_c`: the held-out orbits")
+            && all.contains("its fit is not checked on held-out orbits"),
+        "{all}"
+    );
+    let row = stdout
+        .lines()
+        .find(|l| l.starts_with("motor_c "))
+        .expect("the motor's row");
+    assert!(row.contains("(no held-out readings)"), "{row}");
+    assert!(!stdout.contains("NaN"), "{stdout}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(report["heldout_rmse"]["motor_c"].is_null(), "{report}");
+    assert!(report["heldout_rmse"]["housing_c"].as_f64().unwrap() > 0.0);
+    // every channel lost: refused, naming the held-out orbits
+    let out = common::bin()
+        .arg("diagnose")
+        .arg(reference())
+        .arg("--recording")
+        .arg(write(&dir, "gone.csv", &cut(true)))
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("held-out orbits") && err.contains("Hold out fewer"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

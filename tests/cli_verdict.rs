@@ -72,6 +72,22 @@ fn cli_verdicts_print_the_limit_as_precisely_as_the_backlash() {
         .stdout(starts_with(
             "FAIL mesh: margin -0.001 µm (smallest backlash 24.398 µm < 24.399 µm minimum)",
         ));
+    // a limit 0.4 nm above the smallest backlash: printed to the decimals that tell
+    // them apart, margin included (it read "24.398 µm < 24.398 µm", margin "-0.000")
+    bin()
+        .args([
+            "run",
+            "s.toml",
+            "--no-log",
+            "--set",
+            "gear_pair.mesh.min_backlash_um=24.3981",
+        ])
+        .current_dir(&dir)
+        .assert()
+        .code(1)
+        .stdout(starts_with(
+            "FAIL mesh: margin -0.0004 µm (smallest backlash 24.3977 µm < 24.3981 µm minimum)",
+        ));
     let out = bin()
         .args([
             "backlash",

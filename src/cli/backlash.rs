@@ -113,16 +113,19 @@ fn verdict_line(pair: &GearPair, states: &[Evaluated]) -> String {
     }
     if let Some(e) = j.smallest {
         let m = &e.mesh;
+        let (b_um, least_um) = (m.backlash_exact_m * 1e6, pair.min_backlash_m * 1e6);
+        let d = orbitlash::units::decimals_apart(b_um, least_um, 3);
+        let fixed = orbitlash::units::fixed;
         parts.push(format!(
-            "{} {:.3} µm (backlash {:.3} µm, minimum {:.3} µm) {}",
+            "{} {} µm (backlash {} µm, minimum {} µm) {}",
             if m.backlash_exact_m <= 0.0 {
                 "the teeth interfere: margin"
             } else {
                 "smallest margin"
             },
-            m.margin_m * 1e6,
-            m.backlash_exact_m * 1e6,
-            pair.min_backlash_m * 1e6,
+            fixed(m.margin_m * 1e6, d),
+            fixed(b_um, d),
+            fixed(least_um, d),
             case(&e.case)
         ));
     }

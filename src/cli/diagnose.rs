@@ -623,10 +623,24 @@ fn report_channels(o: &mut String, d: &Diagnosis) {
         let b = d.baseline.rmse.get(name).unwrap_or(f64::NAN);
         let bh = d.baseline.heldout_rmse.get(name).unwrap_or(f64::NAN);
         let ch = d.heldout_rmse.get(name).unwrap_or(f64::NAN);
+        // a channel with no held-out readings (a sensor lost) has no held-out figures
+        let shown = |v: f64| {
+            if v.is_finite() {
+                format!("{v:>8.3}")
+            } else {
+                format!("{:>8}", "—")
+            }
+        };
+        let times = if ch.is_finite() {
+            format!("({:.2}× noise)", ch / sigma)
+        } else {
+            "(no held-out readings)".to_string()
+        };
         outln!(
             o,
-            "{name:<w$} {sigma:>6.3} {u:<2}  {b:>8.3} / {bh:>8.3} {u:<2}        {ch:>8.3} {u:<2} ({:.2}× noise)",
-            ch / sigma
+            "{name:<w$} {sigma:>6.3} {u:<2}  {b:>8.3} / {} {u:<2}        {} {u:<2} {times}",
+            shown(bh),
+            shown(ch)
         );
     }
     let scatter: Vec<String> = d

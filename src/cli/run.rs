@@ -19,7 +19,7 @@ use orbitlash::run::sim::{
 use orbitlash::run::summary::{MeshStats, PairStats, PairVerdict, RunSummary, WindowStats};
 use orbitlash::spec::scenario::Scenario;
 use orbitlash::thermal::ThermalModel;
-use orbitlash::units::k_to_c;
+use orbitlash::units::{fixed, k_to_c};
 
 use super::table::{self, Align};
 use super::{Loaded, Outcome, default_log_path, error_chain, load_with, orbits_arg, print_out};
@@ -812,31 +812,27 @@ fn format_verdict(sc: &Scenario, stats: &RunStats, mesh: &MeshStats) -> String {
         outln!(o, "no gear pair: no backlash verdict");
     }
     for (pair, r) in sc.gears.iter().zip(&mesh.run_pairs) {
-        let min_um = pair.min_backlash_m * 1e6;
+        // the backlash, its minimum and the margin between them to the decimals that
+        // tell the first two apart
+        let (b_um, least_um) = (r.min_exact_m * 1e6, pair.min_backlash_m * 1e6);
+        let d = orbitlash::units::decimals_apart(b_um, least_um, 3);
+        let (smallest, least) = (fixed(b_um, d), fixed(least_um, d));
+        let margin = fixed(r.min_margin_m * 1e6, d);
         let line = match r.verdict() {
             // no pass before the run's end
             PairVerdict::Pass if stats.interrupted => format!(
-                "INCOMPLETE {}: margin {:.3} µm so far (smallest backlash {:.3} µm ≥ {:.3} µm minimum) at {}; the run was interrupted before its end",
+                "INCOMPLETE {}: margin {margin} µm so far (smallest backlash {smallest} µm ≥ {least} µm minimum) at {}; the run was interrupted before its end",
                 pair.name,
-                r.min_margin_m * 1e6,
-                r.min_exact_m * 1e6,
-                min_um,
                 orbit_phase(sc, r.t_min_s)
             ),
             PairVerdict::Pass => format!(
-                "PASS {}: margin {:.3} µm (smallest backlash {:.3} µm ≥ {:.3} µm minimum) at {}",
+                "PASS {}: margin {margin} µm (smallest backlash {smallest} µm ≥ {least} µm minimum) at {}",
                 pair.name,
-                r.min_margin_m * 1e6,
-                r.min_exact_m * 1e6,
-                min_um,
                 orbit_phase(sc, r.t_min_s)
             ),
             PairVerdict::MarginViolated => format!(
-                "FAIL {}: margin {:.3} µm (smallest backlash {:.3} µm < {:.3} µm minimum) at {}",
+                "FAIL {}: margin {margin} µm (smallest backlash {smallest} µm < {least} µm minimum) at {}",
                 pair.name,
-                r.min_margin_m * 1e6,
-                r.min_exact_m * 1e6,
-                min_um,
                 orbit_phase(sc, r.t_min_s)
             ),
             PairVerdict::Interference => format!(

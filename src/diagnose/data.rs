@@ -144,6 +144,8 @@ pub struct Observations {
     pub orbit: Vec<usize>,
     /// Eclipse windows (entry, exit) over the recording.
     pub eclipses: Vec<(f64, f64)>,
+    /// Channels too thinly sampled in the held-out orbits to check a fit on them.
+    pub short_holdout: Vec<ShortHoldout>,
 }
 
 /// Width of the eclipse-entry and eclipse-exit windows, as a fraction of the orbit.
@@ -255,7 +257,7 @@ column in seconds from the scenario's t = 0?)",
                 period
             )));
         }
-        check_split_holds_data(rec, &channels, &split)?;
+        let short_holdout = check_split_holds_data(rec, &channels, &split)?;
         let env = &sc.thermal.environment;
         let mut eclipses = Vec::new();
         let mut t = 0.0;
@@ -291,6 +293,7 @@ column in seconds from the scenario's t = 0?)",
             time_s: rec.time_s.clone(),
             values: rec.values.clone(),
             split,
+            short_holdout,
         })
     }
 
@@ -468,18 +471,29 @@ the samples cannot resolve sunlight and eclipse. Is the time column in milliseco
 /// The fewest samples per channel each part of the split must hold.
 pub const MIN_PART_SAMPLES: usize = 10;
 
-/// Refuses a split whose training or held-out orbits hold too few samples of a
-/// channel: at least [`MIN_PART_SAMPLES`], and for the held-out orbits at least a
-/// quarter of what the training orbits' cadence would put there (a recording that
-/// stops, or jumps far ahead, leaves held-out orbits nearly empty and would give a
-/// verdict on nothing).
+/// A channel whose held-out orbits hold fewer samples than a check of its fit needs
+/// (a sensor lost part-way through the recording): it is fitted on the training
+/// orbits, and its held-out figures rest on what there is.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShortHoldout {
+    pub channel: usize,
+    pub samples: usize,
+    pub expected: f64,
+}
+
+/// Checks that the training orbits hold at least [`MIN_PART_SAMPLES`] samples of every
+/// channel, and the held-out orbits at least that and a quarter of what the training
+/// orbits' cadence would put there. A recording whose held-out orbits are short of
+/// every channel (it stops, or jumps far ahead) is refused: its verdict would rest on
+/// nothing. When only some channels are short (a sensor lost), those are returned,
+/// to be reported as not checked on held-out orbits.
 fn check_split_holds_data(
     rec: &Recording,
     channels: &[Channel],
     split: &Split,
-) -> Result<(), DiagnoseError> {
+) -> Result<Vec<ShortHoldout>, DiagnoseError> {
     if !split.can_validate() {
-        return Ok(());
+        return Ok(Vec::new());
     }
     // where the recording has its longest stretch without a sample (for the messages)
     let gap_note = || {
@@ -498,6 +512,8 @@ fn check_split_holds_data(
             String::new()
         }
     };
+    let mut short = Vec::new();
+    let mut refusal = None;
     for (c, ch) in channels.iter().enumerate() {
         let (mut train, mut held) = (0usize, 0usize);
         for (t, v) in rec.time_s.iter().zip(&rec.values[c]) {
@@ -522,18 +538,28 @@ fn check_split_holds_data(
             )));
         }
         if (held as f64) < need {
-            return Err(DiagnoseError::Recording(format!(
-                "{}: the held-out orbits {}–{} hold {held} samples of `{}`, against about {expected:.0} at the cadence of the fitted orbits; \
+            refusal.get_or_insert_with(|| {
+                format!(
+                    "{}: the held-out orbits {}–{} hold {held} samples of `{}`, against about {expected:.0} at the cadence of the fitted orbits; \
 at least {need:.0} are needed to check a fit on them{}. Hold out fewer orbits (--holdout-orbits N) or cut the recording where its data end",
-                rec.file,
-                split.train_orbits + 1,
-                split.orbits,
-                ch.name,
-                gap_note()
-            )));
+                    rec.file,
+                    split.train_orbits + 1,
+                    split.orbits,
+                    ch.name,
+                    gap_note()
+                )
+            });
+            short.push(ShortHoldout {
+                channel: c,
+                samples: held,
+                expected,
+            });
         }
     }
-    Ok(())
+    match refusal {
+        Some(why) if short.len() == channels.len() => Err(DiagnoseError::Recording(why)),
+        _ => Ok(short),
+    }
 }
 
 fn phase_at(eclipses: &[(f64, f64)], t: f64, width: f64) -> Phase {

@@ -791,6 +791,34 @@ fn spike_warnings(obs: &Observations, rec: &Recording, spikes: &[data::Spike]) -
     out
 }
 
+/// A warning per channel too thinly sampled in the held-out orbits to check its fit
+/// there (a sensor lost part-way through the recording): it is still fitted on the
+/// training orbits; its held-out figures rest on what there is.
+fn short_holdout_warnings(obs: &Observations) -> Vec<String> {
+    obs.short_holdout
+        .iter()
+        .map(|s| {
+            format!(
+                "{}: `{}`: the held-out orbits {}–{} hold {} of it, against about {:.0} at the \
+                 cadence of the fitted orbits (its readings stop or thin out): it is fitted on \
+                 orbits 1–{} with the others, but its fit is not checked on held-out orbits{}",
+                obs.file,
+                crate::units::shown(&obs.channels[s.channel].name),
+                obs.split.train_orbits + 1,
+                obs.split.orbits,
+                crate::units::count(s.samples as f64, "sample"),
+                s.expected,
+                obs.split.train_orbits,
+                if s.samples == 0 {
+                    String::new()
+                } else {
+                    " (its held-out figures rest on those samples alone)".to_string()
+                }
+            )
+        })
+        .collect()
+}
+
 /// No channel weighs more than `max_ratio` times the typical channel of its unit (the
 /// median noise's weight): a channel whose residual is smooth (a lagged sensor, a
 /// model output) has a noise estimate far below the others' and would otherwise take
@@ -1312,7 +1340,8 @@ pub fn diagnose(
     // 1. The recording matched to the sensors, split into training and held-out orbits.
     let mut obs = Observations::new(recording, model.scenario(), opts.holdout_orbits)?;
     let found = obs.drop_spikes();
-    let spikes = spike_warnings(&obs, recording, &found);
+    let mut spikes = spike_warnings(&obs, recording, &found);
+    spikes.extend(short_holdout_warnings(&obs));
     let validate = obs.split.can_validate();
     let mut notes: Vec<String> = (!validate)
         .then(|| no_validation(&obs))

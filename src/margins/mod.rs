@@ -1161,18 +1161,24 @@ impl Samples<'_> {
                     "{n} samples cannot show 95/95: a one-sided Wilks bound needs at least {needed}"
                 ),
             ),
-            Some(t) if t >= allowed_um => (
-                PassFail::Pass,
-                format!(
-                    "95/95 lower bound of the smallest backlash {t:.3} µm ≥ {allowed_um:.3} µm minimum"
-                ),
-            ),
-            Some(t) => (
-                PassFail::Fail,
-                format!(
-                    "95/95 lower bound of the smallest backlash {t:.3} µm < {allowed_um:.3} µm minimum"
-                ),
-            ),
+            Some(t) => {
+                let (bound, least) = crate::units::apart(t, allowed_um, 3);
+                if t >= allowed_um {
+                    (
+                        PassFail::Pass,
+                        format!(
+                            "95/95 lower bound of the smallest backlash {bound} µm ≥ {least} µm minimum"
+                        ),
+                    )
+                } else {
+                    (
+                        PassFail::Fail,
+                        format!(
+                            "95/95 lower bound of the smallest backlash {bound} µm < {least} µm minimum"
+                        ),
+                    )
+                }
+            }
         }
     }
 }
