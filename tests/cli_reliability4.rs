@@ -1071,6 +1071,38 @@ fn cli_an_interrupted_margins_run_says_so() {
     );
 }
 
+// A steady-state run stopped during its periodic-orbit search says so, exits 2 and
+// writes nothing: SIGINT was ignored until the search ended, and the run then passed
+// as if complete; SIGTERM killed it with 143 and no word (black-box helper-21).
+#[test]
+fn cli_an_interrupted_periodic_orbit_search_says_so() {
+    let dir = tmpdir("r4-steady-signal");
+    // a 2000-node lattice marches for seconds before its orbit repeats
+    let net = bin()
+        .args(["bench", "--emit-network", "lattice:2000"])
+        .output()
+        .unwrap();
+    assert_eq!(net.status.code(), Some(0), "{}", stderr(&net));
+    std::fs::write(dir.join("lat.toml"), &net.stdout).unwrap();
+    assert_stopped_writing_nothing(
+        &dir,
+        &[
+            "run",
+            "lat.toml",
+            "--steady-state",
+            "--force",
+            "--quiet",
+            "--out",
+            "lat.mcap",
+            "--json",
+            "lat.json",
+        ],
+        1500,
+        &["periodic-orbit search was interrupted"],
+        &["lat.mcap", "lat.json"],
+    );
+}
+
 // 20. diagnose stopped by SIGINT or SIGTERM says so, exits 2 (it died with 130/143) and
 // writes nothing.
 #[test]

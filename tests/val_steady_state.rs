@@ -89,6 +89,52 @@ fn val_second_method_periodic_orbit_with_a_thermostat() {
     check(&sc, p.method.as_str());
 }
 
+/// A node whose time constant is thousands of orbits (the housing at 1e7 and 1e9 J/K)
+/// moves less than the 1e-4 K tolerance per orbit while kelvins from its periodic
+/// orbit: the search must not stop there. Against the brute force of a lighter housing
+/// (1e5 J/K, about 100 orbits of time constant) marched 1500 orbits, whose orbit-start
+/// temperature differs from a heavy one's only by its 0.3 K swing over the orbit. The
+/// search stopped at the start (20 °C, 11.6 K off) for 1e9 and 0.6 K off for 1e7
+/// (black-box helper-21).
+#[test]
+fn val_second_method_periodic_orbit_of_a_node_slow_over_many_orbits() {
+    let heavy = |c: &str| {
+        let text = REFERENCE_HINGE_TOML.replacen(
+            "capacitance_j_per_k = 120.0",
+            &format!("capacitance_j_per_k = {c}"),
+            1,
+        );
+        parse(&text, "<reference, heavy housing>").unwrap()
+    };
+    let housing = 0;
+    let light = heavy("1e5");
+    let mut setup = Setup::new(&light.thermal, &light.gears, &light.solver);
+    let mut marched = setup.initial_state();
+    setup
+        .run(
+            &mut marched,
+            1500.0 * light.period_s(),
+            &mut (),
+            Stop::default(),
+        )
+        .unwrap();
+    let want = marched.temperatures_k[housing];
+    for c in ["1e7", "1e9"] {
+        let sc = heavy(c);
+        let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+        let start = setup.initial_state();
+        let p =
+            periodic_orbit(&mut setup, &start, sc.period_s(), SteadyOptions::default()).unwrap();
+        let got = p.state.temperatures_k[housing];
+        assert!(
+            (got - want).abs() <= 0.2,
+            "{c} J/K: housing {got} K on its periodic orbit, {want} K marched at 1e5 J/K ({} in {} orbits)",
+            p.method,
+            p.orbits
+        );
+    }
+}
+
 #[test]
 fn cli_run_steady_state_writes_one_period_of_the_periodic_orbit() {
     let dir = std::env::temp_dir().join(format!("orbitlash-test-{}-steady", std::process::id()));

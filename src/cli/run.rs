@@ -154,8 +154,16 @@ pub fn run(a: RunArgs) -> Result<Outcome> {
     if a.dry_run {
         return Ok(Outcome::Pass);
     }
+    // the periodic-orbit search writes nothing: stopped (Ctrl-C, SIGTERM), it exits 2
     let steady = if a.steady_state {
-        Some(periodic_start(&sc)?)
+        Some(super::watched(
+            || {},
+            || {
+                "--steady-state: the periodic-orbit search was interrupted; nothing was written"
+                    .to_string()
+            },
+            || periodic_start(&sc),
+        )?)
     } else {
         None
     };
