@@ -86,6 +86,25 @@ fn cli_the_csv_never_replaces_the_scenario_or_the_log() {
     );
 }
 
+/// `environment --csv` and `--plot` on one file: refused like the other commands'
+/// outputs (the plot replaced the CSV the command said it wrote; black-box helper-21).
+#[test]
+fn cli_environment_outputs_never_replace_each_other() {
+    refused(
+        "environment-csv-is-plot",
+        &[
+            "environment",
+            "s.toml",
+            "--plot",
+            "./e.svg",
+            "--csv",
+            "e.svg",
+        ],
+        &nothing,
+        &["--csv", "--plot", "same file"],
+    );
+}
+
 #[test]
 fn cli_outputs_cannot_take_a_temporary_name() {
     // `a.mcap`'s temporary file would be `a.mcap.<pid>.partial`; names ending in

@@ -260,3 +260,46 @@ fn cli_the_run_s_last_instant_is_in_its_last_orbit() {
         assert!(line.contains(&format!("orbit {n}, ")), "{n} orbits: {line}");
     }
 }
+
+/// The β range a run's summary and `environment` print is the run's own, as the
+/// orbit's series over the run gives it: 40 orbits of the 90-day drift, whose β table
+/// goes 0° → 60° over the mission, printed "0.00° … 60.00°" (black-box helper-21).
+#[test]
+fn cli_the_beta_range_is_the_runs_own() {
+    let dir = tmpdir("beta-range");
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/hinge-90-day-drift.toml");
+    let scenario = scenario.to_str().unwrap();
+    let env = bin()
+        .args(["environment", scenario, "--orbits", "40", "--csv", "e.csv"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&env.stdout).into_owned();
+    assert_eq!(env.status.code(), Some(0), "{said}");
+    let csv = std::fs::read_to_string(dir.join("e.csv")).unwrap();
+    let mut lines = csv.lines();
+    let col = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|h| h == "beta_deg")
+        .expect("a beta_deg column");
+    let betas: Vec<f64> = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse().unwrap())
+        .collect();
+    let lo = betas.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = betas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert!(hi < 5.0, "the series over 40 orbits reaches {hi}°");
+    let range = format!("{lo:.2}° … {hi:.2}°");
+    assert!(
+        said.contains(&format!("β range                 {range}")),
+        "{range}\n{said}"
+    );
+    let run = bin()
+        .args(["run", scenario, "--orbits", "40", "--no-log", "--quiet"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(text.contains(&format!("beta {range},")), "{range}\n{text}");
+}

@@ -58,8 +58,16 @@ pub struct EnvironmentArgs {
 
 pub fn environment(a: EnvironmentArgs) -> Result<()> {
     let loaded = load_with(Some(&a.scenario), &a.sets)?;
-    // The output is checked and opened before any work: never an input, a device or
-    // a link.
+    // The outputs are checked before any work: never an input, a device, a link or
+    // each other.
+    let mut planned = orbitlash::io::output::Outputs::new(OutputPolicy::reading(&loaded.inputs()));
+    if let Some(p) = &a.csv {
+        planned.file("--csv", p)?;
+    }
+    if let Some(p) = &a.plot {
+        super::plot::format_of(p, "--plot")?;
+        planned.file("--plot", p)?;
+    }
     let mut csv = match &a.csv {
         Some(p) => Some(AtomicFile::create(
             p,
@@ -68,11 +76,6 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         None => None,
     };
     let input_paths: Vec<PathBuf> = loaded.inputs().iter().map(|p| p.to_path_buf()).collect();
-    if let Some(p) = &a.plot {
-        super::plot::format_of(p, "--plot")?;
-        orbitlash::io::output::Outputs::new(OutputPolicy::reading(&loaded.inputs()))
-            .file("--plot", p)?;
-    }
     let sc = loaded
         .scenario()
         .clone()
@@ -118,7 +121,7 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     for line in env.report() {
         outln!(o, "{line}");
     }
-    let (b_lo, b_hi) = env.beta_range_rad();
+    let (b_lo, b_hi) = env.beta_range_rad(0.0, horizon);
     outln!(
         o,
         "  β range                 {:.2}° … {:.2}°",

@@ -910,7 +910,7 @@ fn format_summary(
 ) -> String {
     let mut o = String::new();
     let env = &model.environment;
-    let (b_lo, b_hi) = env.beta_range_rad();
+    let (b_lo, b_hi) = env.beta_range_rad(stats.t_start_s, stats.t_end_s);
     outln!(
         o,
         "orbit: period {period_s:.3} s, beta {}, eclipse fraction {:.5} (predicted at t = 0), {:.5} (over the run)",

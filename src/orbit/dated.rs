@@ -53,7 +53,7 @@ pub struct DatedEnvironment {
     pub albedo: f64,
     pub earth_ir_w_per_m2: f64,
     pub space_sink_k: f64,
-    /// How long the run lasts, s: the span `beta_range_rad` reports on.
+    /// How long the run lasts, s.
     pub horizon_s: f64,
     /// Eclipses as given (`[orbit] eclipses_s`, or a telemetry channel through
     /// `[[input]] drives = "sunlit"`): [entry, exit) windows, increasing, in place of
@@ -685,12 +685,13 @@ impl EnvironmentModel for DatedEnvironment {
     }
 
     /// β over the run, sampled every six hours (and at its end) from SGP4 directly.
-    fn beta_range_rad(&self) -> (f64, f64) {
+    fn beta_range_rad(&self, t0_s: f64, t1_s: f64) -> (f64, f64) {
         let mut lo = f64::INFINITY;
         let mut hi = f64::NEG_INFINITY;
-        let n = (self.horizon_s / 21_600.0).ceil().max(1.0) as usize;
+        let span = (t1_s - t0_s).max(0.0);
+        let n = (span / 21_600.0).ceil().max(1.0) as usize;
         for k in 0..=n {
-            let t = (k as f64 * 21_600.0).min(self.horizon_s);
+            let t = t0_s + (k as f64 * 21_600.0).min(span);
             let Ok(s6) = self.orbit.propagate(t) else {
                 continue;
             };

@@ -218,8 +218,8 @@ pub trait EnvironmentModel {
     fn breakpoints_s(&self) -> Vec<f64>;
     /// Fraction of the orbit in eclipse for the orbit around `t_s`.
     fn eclipse_fraction_at(&self, t_s: f64) -> f64;
-    /// Smallest and largest β over the mission, rad.
-    fn beta_range_rad(&self) -> (f64, f64);
+    /// Smallest and largest β from `t0_s` to `t1_s` (a run's span), rad.
+    fn beta_range_rad(&self, t0_s: f64, t1_s: f64) -> (f64, f64);
     /// The orbit and its eclipses as `orbitlash check` reports them, one line each.
     fn report(&self) -> Vec<String>;
     /// What body-fixed faces see at the instant `s` (see [`faces`]).
@@ -355,8 +355,8 @@ impl EnvironmentModel for Environment {
     fn eclipse_fraction_at(&self, t_s: f64) -> f64 {
         each_kind!(self, e => EnvironmentModel::eclipse_fraction_at(e, t_s))
     }
-    fn beta_range_rad(&self) -> (f64, f64) {
-        each_kind!(self, e => EnvironmentModel::beta_range_rad(e))
+    fn beta_range_rad(&self, t0_s: f64, t1_s: f64) -> (f64, f64) {
+        each_kind!(self, e => EnvironmentModel::beta_range_rad(e, t0_s, t1_s))
     }
     fn report(&self) -> Vec<String> {
         each_kind!(self, e => EnvironmentModel::report(e))
@@ -416,9 +416,9 @@ impl CircularEnvironment {
         self.orbit.eclipse_fraction(self.beta_rad.at(t_s))
     }
 
-    /// The β range over the mission, rad.
-    pub fn beta_range_rad(&self) -> (f64, f64) {
-        self.beta_rad.range()
+    /// The β range from `t0_s` to `t1_s`, rad.
+    pub fn beta_range_rad(&self, t0_s: f64, t1_s: f64) -> (f64, f64) {
+        self.beta_rad.range_over(t0_s, t1_s)
     }
 
     /// Closed form for constant β: entry at θ = π − φ, exit at θ = π + φ (mod 2π).
@@ -662,8 +662,8 @@ impl EnvironmentModel for CircularEnvironment {
         CircularEnvironment::eclipse_fraction_at(self, t_s)
     }
 
-    fn beta_range_rad(&self) -> (f64, f64) {
-        CircularEnvironment::beta_range_rad(self)
+    fn beta_range_rad(&self, t0_s: f64, t1_s: f64) -> (f64, f64) {
+        CircularEnvironment::beta_range_rad(self, t0_s, t1_s)
     }
 
     fn report(&self) -> Vec<String> {

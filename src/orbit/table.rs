@@ -39,6 +39,22 @@ impl Profile {
         }
     }
 
+    /// Smallest and largest value the profile takes from `t0_s` to `t1_s`: at both
+    /// ends and at the knots between (linear between knots, held outside them).
+    pub fn range_over(&self, t0_s: f64, t1_s: f64) -> (f64, f64) {
+        let inside = self
+            .knots_s()
+            .iter()
+            .filter(|&&t| t > t0_s && t < t1_s)
+            .map(|&t| self.at(t));
+        [self.at(t0_s), self.at(t1_s)]
+            .into_iter()
+            .chain(inside)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
+    }
+
     /// Applies `f` to every value (for unit conversion at the edge).
     pub fn map(self, f: impl Fn(f64) -> f64) -> Profile {
         match self {
@@ -67,5 +83,6 @@ mod tests {
         assert_eq!(p.at(15.0), 1.0);
         assert_eq!(p.at(25.0), -1.0);
         assert_eq!(p.range(), (-1.0, 3.0));
+        assert_eq!(p.range_over(-10.0, 0.0), (p.at(-10.0), p.at(0.0)));
     }
 }
