@@ -1103,6 +1103,30 @@ fn cli_an_interrupted_periodic_orbit_search_says_so() {
     );
 }
 
+/// `recover` given a killed run's CSV (`<csv>.<pid>.partial`) says what it is and
+/// where its rows are recovered from, instead of "not an MCAP file".
+#[test]
+fn cli_recover_tells_a_killed_runs_csv_from_its_log() {
+    let dir = tmpdir("r4-recover-csv");
+    std::fs::write(
+        dir.join("a.csv.4242.partial"),
+        "time_s,housing_k\n0,293.15\n30,29",
+    )
+    .unwrap();
+    let out = bin()
+        .args(["recover", "a.csv.4242.partial"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("a CSV a killed run left") && stderr(&out).contains("export-csv"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!dir.join("logs").exists());
+}
+
 // 20. diagnose stopped by SIGINT or SIGTERM says so, exits 2 (it died with 130/143) and
 // writes nothing.
 #[test]

@@ -17,7 +17,8 @@ pub struct ExportArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Every numeric series of the log, as `<topic>.<field>` columns, after the
-    /// `run --csv` columns.
+    /// `run --csv` columns (but `/thermal/temperature_c`, the viewers' °C copy of the
+    /// `<node>_k` columns).
     #[arg(long)]
     all: bool,
     /// Resample onto a grid of this interval (e.g. 30s): t = 0, 30, 60 … s up to the

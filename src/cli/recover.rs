@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 
 use orbitlash::io::mcap_read::{drop_undecodable, keep_valid_messages};
@@ -46,7 +46,21 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     let bytes = orbitlash::io::output::check_input(&a.log)
         .and_then(|()| std::fs::read(&a.log))
         .with_context(|| format!("cannot read {}", a.log.display()))?;
-    let mut s = scan(&bytes).with_context(|| format!("{} cannot be recovered", a.log.display()))?;
+    let mut s = match scan(&bytes) {
+        Ok(s) => s,
+        // a killed run's CSV (`<name>.csv.<pid>.partial`): its log holds the same rows
+        Err(orbitlash::io::mcap_scan::ScanError::NotMcap) if bytes.starts_with(b"time_s,") => {
+            bail!(
+                "{} cannot be recovered: it is a CSV a killed run left, not its log; its rows up to its last whole line are as written. The run's log (`<name>.mcap.<pid>.partial`) holds them too: `orbitlash recover` it, then `orbitlash export-csv RECOVERED.mcap --every Ts` writes the CSV's grid",
+                a.log.display()
+            )
+        }
+        Err(e) => {
+            return Err(
+                anyhow::Error::new(e).context(format!("{} cannot be recovered", a.log.display()))
+            );
+        }
+    };
     keep_valid_messages(&mut s);
     // A log that ends properly may still hold damaged messages (a flipped byte).
     let damaged = drop_undecodable(&mut s);
