@@ -303,3 +303,26 @@ fn cli_the_beta_range_is_the_runs_own() {
     let text = String::from_utf8_lossy(&run.stdout);
     assert!(text.contains(&format!("beta {range},")), "{range}\n{text}");
 }
+
+/// `backlash --uniform-c T --housing-c H`: the case is labelled "gears" (only the
+/// gears at T), not "uniform", and its housing column shows H (black-box helper-21).
+#[test]
+fn cli_backlash_labels_a_case_uniform_only_when_the_housing_is_too() {
+    let out = bin()
+        .args(["backlash", "--uniform-c", "25", "--housing-c", "60"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    let row = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("gears "))
+        .unwrap_or_else(|| panic!("no gears row: {text}"));
+    assert!(row.contains("60.00"), "{row}");
+    assert!(!text.contains("  uniform "), "{text}");
+    let out = bin()
+        .args(["backlash", "--uniform-c", "25"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stdout).contains("  uniform "));
+}

@@ -228,7 +228,12 @@ fn cli_log_cadence_by_steps_and_by_interval() {
             .output()
             .unwrap();
         assert!(!out.status.success(), "--log-every {bad} accepted");
-        assert!(String::from_utf8_lossy(&out.stderr).contains("--log-every"));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--log-every"), "{err}");
+        // an interval too short (zero, negative) says the shortest there is
+        if bad.ends_with('s') {
+            assert!(err.contains("at least 0.001 s"), "{err}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -160,11 +160,13 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             a.uniform_c.clone()
         };
         for t in uniform {
+            // "uniform" only when the housing shares the gears' temperature
+            let housing_c = a.housing_c.unwrap_or(t);
             list.push(Case {
-                label: "uniform".into(),
+                label: if housing_c == t { "uniform" } else { "gears" }.into(),
                 pinion_c: t,
                 wheel_c: t,
-                housing_c: a.housing_c.unwrap_or(t),
+                housing_c,
             });
         }
         if let (Some(p), Some(w)) = (a.pinion_c, a.wheel_c) {

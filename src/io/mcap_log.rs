@@ -71,7 +71,7 @@ impl std::str::FromStr for LogCadence {
         };
         if let Some(secs) = s.strip_suffix('s') {
             let v: f64 = secs.trim().parse().map_err(|_| bad())?;
-            if !v.is_finite() || v <= 0.0 {
+            if !v.is_finite() {
                 return Err(bad());
             }
             if v < MIN_LOG_INTERVAL_S {
