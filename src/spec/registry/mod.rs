@@ -868,16 +868,49 @@ pub fn parse_assignment(text: &str) -> Result<(String, f64), ParamError> {
         ),
     })?;
     let key = key.trim().to_string();
-    let v: f64 = value.trim().parse().map_err(|_| ParamError {
-        key: key.clone(),
-        message: format!("`{}` is not a number", value.trim()),
-    })?;
+    let value = value.trim();
+    let v = value
+        .parse::<f64>()
+        .ok()
+        .or_else(|| toml_number(value))
+        .ok_or_else(|| ParamError {
+            key: key.clone(),
+            message: format!("`{value}` is not a number"),
+        })?;
     Ok((key, v))
+}
+
+/// A number as the scenario file may write it (TOML: `2_5`, `1_000.0`, `0x1F`), for
+/// the values Rust's own parsing does not take.
+fn toml_number(text: &str) -> Option<f64> {
+    // one value, nothing after it
+    if text.contains(['\n', '\r', '#', '=']) {
+        return None;
+    }
+    match toml::from_str::<toml::Table>(&format!("v = {text}"))
+        .ok()?
+        .get("v")?
+    {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn core_set_values_are_numbers_as_the_file_writes_them() {
+        let v = |t: &str| parse_assignment(t).map(|(_, v)| v);
+        assert_eq!(v("environment.beta_deg=2_5").unwrap(), 25.0);
+        assert_eq!(v("environment.beta_deg=1_000.5").unwrap(), 1000.5);
+        assert_eq!(v("environment.beta_deg=1e-3").unwrap(), 1e-3);
+        for bad in ["2_5\nx = 3", "ten", "\"5\"", "5 # c", "[5]", "5 = 6"] {
+            assert!(v(&format!("k={bad}")).is_err(), "{bad} taken");
+        }
+    }
 
     #[test]
     fn core_every_row_is_found_by_its_own_path() {
