@@ -171,17 +171,11 @@ pub fn periodic_orbit(
         heaters = h;
     }
     let last_move = *moves.last().expect("two warm-up orbits");
-    // Marching contracts by about ρ per orbit, so the state is about move/(1 − ρ)
-    // from the orbit: it needs ln(tol (1 − ρ)/move)/ln ρ more orbits; Newton needs
-    // n + 1 orbits per iteration, two iterations at least.
+    // Marching contracts by about ρ per orbit, so the state is about move·ρ/(1 − ρ)
+    // from the orbit ([`distance`]), which takes [`orbits_to_go`]; Newton needs n + 1
+    // orbits per iteration, two iterations at least.
     let rho = moves[moves.len() - 1] / moves[moves.len() - 2];
-    let marching_orbits = if rho < 1.0 && rho > 0.0 {
-        ((opts.tolerance_k * (1.0 - rho) / last_move).ln() / rho.ln()).max(0.0)
-    } else if last_move == 0.0 {
-        0.0
-    } else {
-        f64::INFINITY
-    };
+    let marching_orbits = orbits_to_go(last_move, rho, opts.tolerance_k);
     let newton = match opts.method {
         Method::Marching => false,
         Method::Newton => true,
@@ -189,73 +183,34 @@ pub fn periodic_orbit(
     };
     let mut iterations = 0;
     let far = distance(last_move, rho) > opts.tolerance_k;
+    let may_newton = opts.method != Method::Marching && n <= opts.max_newton_nodes;
+    let mut newton_tried = false;
+    // the last move and contraction (NaN: not known, after Newton moved the state)
+    let (mut previous, mut last_rho) = (last_move, rho);
     if newton && n <= opts.max_newton_nodes && far {
-        let mut best = (last_move, x.clone(), heaters.clone());
-        // the last monodromy's factors (of ∂Φ/∂x − I)
-        let mut factors: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> = None;
-        for _ in 0..opts.max_newton_iterations {
-            let (fx, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
-            orbits += 1;
-            let r = max_diff(&fx, &x);
-            let f = DVector::from_iterator(n, fx.iter().zip(&x).map(|(a, b)| a - b));
-            // Converged when the orbit returns within the tolerance and the Newton step
-            // from here, (∂Φ/∂x − I)⁻¹ (Φ(x) − x), the distance to the periodic orbit,
-            // is as small. A small return alone is not enough: a node whose time
-            // constant is thousands of orbits returns within 1e-4 K per orbit while
-            // kelvins from its periodic orbit.
-            if r <= opts.tolerance_k {
-                let distance_k = factors
-                    .as_ref()
-                    .and_then(|lu| lu.solve(&f))
-                    .map_or(f64::INFINITY, |d| d.amax());
-                if distance_k <= opts.tolerance_k {
-                    return Ok(Periodic {
-                        state: start_state(setup, t0, x, heaters),
-                        method: PeriodicMethod::Newton,
-                        orbits,
-                        newton_iterations: iterations,
-                        periodicity_error_k: r,
-                    });
-                }
+        newton_tried = true;
+        match newton_search(
+            setup,
+            t0,
+            period_s,
+            x,
+            heaters,
+            last_move,
+            &opts,
+            &mut budget,
+        )? {
+            Shooting::Converged(p) => return Ok(p.counted(orbits)),
+            Shooting::Fell(fell) => {
+                (x, heaters) = (fell.x, fell.heaters);
+                orbits += fell.orbits;
+                iterations = fell.iterations;
+                (previous, last_rho) = (f64::NAN, f64::NAN);
             }
-            if r > 2.0 * best.0 {
-                break; // diverging: march from the best point
-            }
-            if r < best.0 {
-                best = (r, x.clone(), heaters.clone());
-            }
-            // monodromy by forward differences (0.01 K per node)
-            let dx = 1e-2;
-            let mut j = DMatrix::<f64>::zeros(n, n);
-            for c in 0..n {
-                let mut xp = x.clone();
-                xp[c] += dx;
-                let (fp, _) = one_orbit(setup, t0, period_s, &xp, &heaters, &mut budget)?;
-                orbits += 1;
-                for rrow in 0..n {
-                    j[(rrow, c)] = (fp[rrow] - fx[rrow]) / dx;
-                }
-            }
-            for d in 0..n {
-                j[(d, d)] -= 1.0;
-            }
-            let lu = j.lu();
-            let Some(delta) = lu.solve(&(-f)) else {
-                break;
-            };
-            factors = Some(lu);
-            for (xi, di) in x.iter_mut().zip(delta.iter()) {
-                *xi += di;
-            }
-            heaters = h;
-            iterations += 1;
         }
-        x = best.1;
-        heaters = best.2;
     }
     // marching: done when the state is within the tolerance of the orbit, estimated
-    // from the last move and the contraction of the last two
-    let mut previous = last_move;
+    // from the last move and the larger of the last two contractions (one ratio can
+    // come from a fast mode's last move while a slow one remains)
     loop {
         let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
@@ -263,8 +218,13 @@ pub fn periodic_orbit(
         x = y;
         heaters = h;
         let rho = r / previous;
-        previous = r;
-        if r <= opts.tolerance_k && distance(r, rho) <= opts.tolerance_k {
+        let rho_max = if rho.is_nan() || last_rho.is_nan() {
+            f64::NAN
+        } else {
+            rho.max(last_rho)
+        };
+        (previous, last_rho) = (r, rho);
+        if r <= opts.tolerance_k && distance(r, rho_max) <= opts.tolerance_k {
             return Ok(Periodic {
                 state: start_state(setup, t0, x, heaters),
                 method: PeriodicMethod::Marching,
@@ -280,7 +240,149 @@ pub fn periodic_orbit(
                 tolerance_k: opts.tolerance_k,
             });
         }
+        // a slow mode that the warm-up did not show: Newton, once, when marching
+        // would take longer than a few monodromies
+        if may_newton
+            && !newton_tried
+            && orbits_to_go(r, rho, opts.tolerance_k) > 2.0 * (n as f64 + 1.0)
+        {
+            newton_tried = true;
+            match newton_search(
+                setup,
+                t0,
+                period_s,
+                x.clone(),
+                heaters.clone(),
+                r,
+                &opts,
+                &mut budget,
+            )? {
+                Shooting::Converged(p) => return Ok(p.counted(orbits)),
+                Shooting::Fell(fell) => {
+                    (x, heaters) = (fell.x, fell.heaters);
+                    orbits += fell.orbits;
+                    iterations = fell.iterations;
+                    (previous, last_rho) = (f64::NAN, f64::NAN);
+                }
+            }
+        }
     }
+}
+
+/// Orbits marching still needs from a move of `moved` contracting by `rho` per orbit
+/// until the state is within `tol` of the orbit (infinite when it does not contract).
+fn orbits_to_go(moved: f64, rho: f64, tol: f64) -> f64 {
+    if moved == 0.0 {
+        0.0
+    } else if rho.is_finite() && rho > 0.0 && rho < 1.0 {
+        ((tol * (1.0 - rho) / (moved * rho)).ln() / rho.ln()).max(0.0)
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Where Newton shooting ended.
+enum Shooting {
+    Converged(Box<Periodic>),
+    /// Not converged: the best iterate, to march from, and what it spent.
+    Fell(Fell),
+}
+
+struct Fell {
+    x: Vec<f64>,
+    heaters: Vec<bool>,
+    orbits: u64,
+    iterations: u32,
+}
+
+impl Periodic {
+    /// With the orbits spent before the search that found it added.
+    fn counted(mut self: Box<Self>, orbits_before: u64) -> Periodic {
+        self.orbits += orbits_before;
+        *self
+    }
+}
+
+/// Newton shooting on F(x) = Φ(x) − x from `x`, whose last orbit moved it by `moved`.
+#[allow(clippy::too_many_arguments)]
+fn newton_search(
+    setup: &mut Setup<'_>,
+    t0: f64,
+    period_s: f64,
+    mut x: Vec<f64>,
+    mut heaters: Vec<bool>,
+    moved: f64,
+    opts: &SteadyOptions,
+    budget: &mut crate::run::sim::StepBudget,
+) -> Result<Shooting, SteadyError> {
+    let n = x.len();
+    let (mut orbits, mut iterations) = (0u64, 0u32);
+    let mut best = (moved, x.clone(), heaters.clone());
+    // the last monodromy's factors (of ∂Φ/∂x − I)
+    let mut factors: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> = None;
+    for _ in 0..opts.max_newton_iterations {
+        let (fx, h) = one_orbit(setup, t0, period_s, &x, &heaters, budget)?;
+        orbits += 1;
+        let r = max_diff(&fx, &x);
+        let f = DVector::from_iterator(n, fx.iter().zip(&x).map(|(a, b)| a - b));
+        // Converged when the orbit returns within the tolerance and the Newton step
+        // from here, (∂Φ/∂x − I)⁻¹ (Φ(x) − x), the distance to the periodic orbit,
+        // is as small. A small return alone is not enough: a node whose time
+        // constant is thousands of orbits returns within 1e-4 K per orbit while
+        // kelvins from its periodic orbit.
+        if r <= opts.tolerance_k {
+            let distance_k = factors
+                .as_ref()
+                .and_then(|lu| lu.solve(&f))
+                .map_or(f64::INFINITY, |d| d.amax());
+            if distance_k <= opts.tolerance_k {
+                return Ok(Shooting::Converged(Box::new(Periodic {
+                    state: start_state(setup, t0, x, heaters),
+                    method: PeriodicMethod::Newton,
+                    orbits,
+                    newton_iterations: iterations,
+                    periodicity_error_k: r,
+                })));
+            }
+        }
+        if r > 2.0 * best.0 {
+            break; // diverging: march from the best point
+        }
+        if r < best.0 {
+            best = (r, x.clone(), heaters.clone());
+        }
+        // monodromy by forward differences (0.01 K per node)
+        let dx = 1e-2;
+        let mut j = DMatrix::<f64>::zeros(n, n);
+        for c in 0..n {
+            let mut xp = x.clone();
+            xp[c] += dx;
+            let (fp, _) = one_orbit(setup, t0, period_s, &xp, &heaters, budget)?;
+            orbits += 1;
+            for rrow in 0..n {
+                j[(rrow, c)] = (fp[rrow] - fx[rrow]) / dx;
+            }
+        }
+        for d in 0..n {
+            j[(d, d)] -= 1.0;
+        }
+        let lu = j.lu();
+        let Some(delta) = lu.solve(&(-f)) else {
+            break;
+        };
+        factors = Some(lu);
+        for (xi, di) in x.iter_mut().zip(delta.iter()) {
+            *xi += di;
+        }
+        heaters = h;
+        iterations += 1;
+    }
+    Ok(Shooting::Fell(Fell {
+        x: best.1,
+        heaters: best.2,
+        orbits,
+        iterations,
+    }))
 }
 
 /// How far from the periodic orbit a state is whose last orbit moved it by `moved`
