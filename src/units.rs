@@ -77,7 +77,14 @@ pub fn apart(a: f64, b: f64, decimals: usize) -> (String, String) {
 /// never reads "x < x".
 pub fn decimals_apart(a: f64, b: f64, decimals: usize) -> usize {
     let mut d = decimals;
-    while d < 12 && a != b && fixed(a, d) == fixed(b, d) {
+    // and their difference shows a digit that is not zero ("-0.0000")
+    let zero = |d: usize| {
+        fixed(a - b, d)
+            .trim_start_matches('-')
+            .chars()
+            .all(|c| c == '0' || c == '.')
+    };
+    while d < 12 && a != b && (fixed(a, d) == fixed(b, d) || zero(d)) {
         d += 1;
     }
     d
@@ -170,5 +177,19 @@ mod tests {
             ("10.0001".into(), "10.0004".into())
         );
         assert_eq!(apart(5.0, 5.0, 3), ("5.000".into(), "5.000".into()));
+        // their difference shows a digit too (it read "-0.0000" for 5e-5)
+        for (a, b) in [
+            (24.39775, 24.3977505),
+            (24.3977, 24.39775),
+            (1.0, 1.0 + 1e-9),
+        ] {
+            let d = super::decimals_apart(a, b, 3);
+            let diff = super::fixed(a - b, d);
+            assert!(
+                diff.chars().any(|c| ('1'..='9').contains(&c)),
+                "{a} {b}: {diff}"
+            );
+            assert_ne!(super::fixed(a, d), super::fixed(b, d));
+        }
     }
 }

@@ -292,7 +292,7 @@ fn cli_the_beta_range_is_the_runs_own() {
     assert!(hi < 5.0, "the series over 40 orbits reaches {hi}°");
     let range = format!("{lo:.2}° … {hi:.2}°");
     assert!(
-        said.contains(&format!("β range                 {range}")),
+        said.contains(&format!("β over these orbits     {range}")),
         "{range}\n{said}"
     );
     let run = bin()

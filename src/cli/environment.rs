@@ -124,7 +124,7 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     let (b_lo, b_hi) = env.beta_range_rad(0.0, horizon);
     outln!(
         o,
-        "  β range                 {:.2}° … {:.2}°",
+        "  β over these orbits     {:.2}° … {:.2}°",
         b_lo.to_degrees(),
         b_hi.to_degrees()
     );

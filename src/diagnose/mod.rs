@@ -801,7 +801,7 @@ fn short_holdout_warnings(obs: &Observations) -> Vec<String> {
             format!(
                 "{}: `{}`: the held-out orbits {}–{} hold {} of it, against about {:.0} at the \
                  cadence of the fitted orbits (its readings stop or thin out): it is fitted on \
-                 orbits 1–{} with the others, but its fit is not checked on held-out orbits{}",
+                 orbits 1–{} with the others{}",
                 obs.file,
                 crate::units::shown(&obs.channels[s.channel].name),
                 obs.split.train_orbits + 1,
@@ -810,9 +810,11 @@ fn short_holdout_warnings(obs: &Observations) -> Vec<String> {
                 s.expected,
                 obs.split.train_orbits,
                 if s.samples == 0 {
-                    String::new()
+                    ", but its fit is not checked on held-out orbits".to_string()
                 } else {
-                    " (its held-out figures rest on those samples alone)".to_string()
+                    ", and its held-out figures (which count in the verdict) rest on those \
+                     samples alone: fewer than a check needs, weigh them accordingly"
+                        .to_string()
                 }
             )
         })
