@@ -103,11 +103,14 @@ pub enum SteadyError {
     )]
     RealOrbit,
     #[error(
-        "no periodic orbit within {orbits} orbits: the last orbit still moved a node by {error_k:.3e} K (tolerance {tolerance_k} K)"
+        "no periodic orbit within {orbits} orbits: the last orbit still moved a node by {error_k:.3e} K, about {distance_k:.3e} K from the orbit at its contraction (tolerance {tolerance_k} K)"
     )]
     NotConverged {
         orbits: u64,
         error_k: f64,
+        /// The estimated distance to the orbit ([`distance`]; infinite when not
+        /// contracting).
+        distance_k: f64,
         tolerance_k: f64,
     },
 }
@@ -237,6 +240,7 @@ pub fn periodic_orbit(
             return Err(SteadyError::NotConverged {
                 orbits,
                 error_k: r,
+                distance_k: distance(r, rho_max),
                 tolerance_k: opts.tolerance_k,
             });
         }
