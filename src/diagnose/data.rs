@@ -486,7 +486,7 @@ pub struct ShortHoldout {
 /// orbits' cadence would put there. A recording whose held-out orbits are short of
 /// every channel (it stops, or jumps far ahead) is refused: its verdict would rest on
 /// nothing. When only some channels are short (a sensor lost), those are returned,
-/// to be reported as not checked on held-out orbits.
+/// to be reported with a warning.
 fn check_split_holds_data(
     rec: &Recording,
     channels: &[Channel],

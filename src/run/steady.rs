@@ -188,33 +188,28 @@ pub fn periodic_orbit(
     let far = distance(last_move, rho) > opts.tolerance_k;
     let may_newton = opts.method != Method::Marching && n <= opts.max_newton_nodes;
     let mut newton_tried = false;
+    // Newton before marching, when the warm-up asks for it
+    let mut try_newton = newton && n <= opts.max_newton_nodes && far;
     // the last move and contraction (NaN: not known, after Newton moved the state)
     let (mut previous, mut last_rho) = (last_move, rho);
-    if newton && n <= opts.max_newton_nodes && far {
-        newton_tried = true;
-        match newton_search(
-            setup,
-            t0,
-            period_s,
-            x,
-            heaters,
-            last_move,
-            &opts,
-            &mut budget,
-        )? {
-            Shooting::Converged(p) => return Ok(p.counted(orbits)),
-            Shooting::Fell(fell) => {
-                (x, heaters) = (fell.x, fell.heaters);
-                orbits += fell.orbits;
-                iterations = fell.iterations;
-                (previous, last_rho) = (f64::NAN, f64::NAN);
+    // Newton when asked for, then marching: done when the state is within the
+    // tolerance of the orbit, estimated from the last move and the larger of the last
+    // two contractions (one ratio can come from a fast mode's last move while a slow
+    // one remains)
+    loop {
+        if try_newton {
+            newton_tried = true;
+            let (x0, h0) = (std::mem::take(&mut x), std::mem::take(&mut heaters));
+            match newton_search(setup, t0, period_s, x0, h0, previous, &opts, &mut budget)? {
+                Shooting::Converged(p) => return Ok(p.counted(orbits)),
+                Shooting::Fell(fell) => {
+                    (x, heaters) = (fell.x, fell.heaters);
+                    orbits += fell.orbits;
+                    iterations = fell.iterations;
+                    (previous, last_rho) = (f64::NAN, f64::NAN);
+                }
             }
         }
-    }
-    // marching: done when the state is within the tolerance of the orbit, estimated
-    // from the last move and the larger of the last two contractions (one ratio can
-    // come from a fast mode's last move while a slow one remains)
-    loop {
         let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
         let r = max_diff(&y, &x);
@@ -246,30 +241,9 @@ pub fn periodic_orbit(
         }
         // a slow mode that the warm-up did not show: Newton, once, when marching
         // would take longer than a few monodromies
-        if may_newton
+        try_newton = may_newton
             && !newton_tried
-            && orbits_to_go(r, rho, opts.tolerance_k) > 2.0 * (n as f64 + 1.0)
-        {
-            newton_tried = true;
-            match newton_search(
-                setup,
-                t0,
-                period_s,
-                x.clone(),
-                heaters.clone(),
-                r,
-                &opts,
-                &mut budget,
-            )? {
-                Shooting::Converged(p) => return Ok(p.counted(orbits)),
-                Shooting::Fell(fell) => {
-                    (x, heaters) = (fell.x, fell.heaters);
-                    orbits += fell.orbits;
-                    iterations = fell.iterations;
-                    (previous, last_rho) = (f64::NAN, f64::NAN);
-                }
-            }
-        }
+            && orbits_to_go(r, rho, opts.tolerance_k) > 2.0 * (n as f64 + 1.0);
     }
 }
 
