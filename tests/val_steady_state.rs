@@ -148,6 +148,52 @@ fn val_second_method_periodic_orbit_of_a_node_slow_over_many_orbits() {
     }
 }
 
+/// A slow motor: a node inside the mechanism, not the housing that the Sun drives.
+/// Before: the motor of 1e7 J/K started 0.5 K from its orbit stopped after one
+/// marching orbit 0.5 K off (the warm-up's contraction was the fast nodes'), and one of
+/// 2e6 J/K or more was not found in 20 000 orbits (Newton's first step, from a small
+/// return far from the orbit to a larger return near it, was taken as divergence).
+#[test]
+fn val_second_method_periodic_orbit_of_a_slow_motor() {
+    let motor = 1;
+    let with = |c: &str| {
+        let text = REFERENCE_HINGE_TOML.replacen(
+            "capacitance_j_per_k = 75.0\ninitial_temperature_k = 293.15",
+            &format!("capacitance_j_per_k = {c}"),
+            1,
+        );
+        assert_ne!(text, REFERENCE_HINGE_TOML);
+        parse(&text, "<reference, slow motor>").unwrap()
+    };
+    // the second method: a lighter motor (32 orbits' time constant) marched 1500 orbits
+    let light = with("1e5\ninitial_temperature_k = 293.15");
+    let mut setup = Setup::new(&light.thermal, &light.gears, &light.solver);
+    let mut marched = setup.initial_state();
+    let end = 1500.0 * light.period_s();
+    setup
+        .run(&mut marched, end, &mut (), Stop::default())
+        .unwrap();
+    let want = marched.temperatures_k[motor];
+    for c in [
+        "2e6\ninitial_temperature_k = 293.15",
+        "1e7\ninitial_temperature_k = 303.94",
+        "1e9\ninitial_temperature_k = 293.15",
+    ] {
+        let sc = with(c);
+        let mut setup = Setup::new(&sc.thermal, &sc.gears, &sc.solver);
+        let start = setup.initial_state();
+        let p = periodic_orbit(&mut setup, &start, sc.period_s(), SteadyOptions::default())
+            .unwrap_or_else(|e| panic!("{c}: {e}"));
+        let got = p.state.temperatures_k[motor];
+        assert!(
+            (got - want).abs() <= 0.05,
+            "{c}: motor {got} K on its periodic orbit, {want} K marched at 1e5 J/K ({} in {} orbits)",
+            p.method,
+            p.orbits
+        );
+    }
+}
+
 #[test]
 fn cli_run_steady_state_writes_one_period_of_the_periodic_orbit() {
     let dir = std::env::temp_dir().join(format!("orbitlash-test-{}-steady", std::process::id()));

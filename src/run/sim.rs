@@ -314,7 +314,7 @@ pub enum SimError {
         h_s: f64,
         cause: StepFailure,
     },
-    #[error("writing the outputs failed at t = {t_s:.3} s")]
+    #[error("stopped at t = {t_s:.3} s")]
     Observer {
         t_s: f64,
         #[source]

@@ -166,10 +166,12 @@ pub fn periodic_orbit(
     let n = x.len();
     // warm-up: march towards the orbit
     let mut moves = Vec::new();
+    let mut warm_moves = Vec::new();
     for _ in 0..opts.warmup_orbits.max(2) {
         let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
         moves.push(max_diff(&y, &x));
+        warm_moves = y.iter().zip(&x).map(|(a, b)| a - b).collect();
         x = y;
         heaters = h;
     }
@@ -192,27 +194,36 @@ pub fn periodic_orbit(
     let mut try_newton = newton && n <= opts.max_newton_nodes && far;
     // the last move and contraction (NaN: not known, after Newton moved the state)
     let (mut previous, mut last_rho) = (last_move, rho);
+    // each node's last move (None: not known, after Newton moved the state)
+    let mut node_moves = Some(warm_moves);
     // Newton when asked for, then marching: done when the state is within the
     // tolerance of the orbit, estimated from the last move and the larger of the last
     // two contractions (one ratio can come from a fast mode's last move while a slow
-    // one remains)
+    // one remains), and from each node's own contraction (a heavy node's slow mode
+    // moves it less per orbit than the fast nodes' last settling moves them)
     loop {
         if try_newton {
             newton_tried = true;
             let (x0, h0) = (std::mem::take(&mut x), std::mem::take(&mut heaters));
-            match newton_search(setup, t0, period_s, x0, h0, previous, &opts, &mut budget)? {
+            match newton_search(setup, t0, period_s, x0, h0, &opts, &mut budget)? {
                 Shooting::Converged(p) => return Ok(p.counted(orbits)),
                 Shooting::Fell(fell) => {
                     (x, heaters) = (fell.x, fell.heaters);
                     orbits += fell.orbits;
                     iterations = fell.iterations;
                     (previous, last_rho) = (f64::NAN, f64::NAN);
+                    node_moves = None;
                 }
             }
         }
         let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
         let r = max_diff(&y, &x);
+        let moves: Vec<f64> = y.iter().zip(&x).map(|(a, b)| a - b).collect();
+        let slowest = node_moves
+            .as_deref()
+            .map(|before| SlowestNode::of(&moves, before, opts.tolerance_k));
+        node_moves = Some(moves);
         x = y;
         heaters = h;
         let rho = r / previous;
@@ -222,7 +233,11 @@ pub fn periodic_orbit(
             rho.max(last_rho)
         };
         (previous, last_rho) = (r, rho);
-        if r <= opts.tolerance_k && distance(r, rho_max) <= opts.tolerance_k {
+        let distance_k = match slowest {
+            Some(s) => distance(r, rho_max).max(s.distance_k()),
+            None => f64::INFINITY,
+        };
+        if r <= opts.tolerance_k && distance_k <= opts.tolerance_k {
             return Ok(Periodic {
                 state: start_state(setup, t0, x, heaters),
                 method: PeriodicMethod::Marching,
@@ -235,15 +250,55 @@ pub fn periodic_orbit(
             return Err(SteadyError::NotConverged {
                 orbits,
                 error_k: r,
-                distance_k: distance(r, rho_max),
+                distance_k,
                 tolerance_k: opts.tolerance_k,
             });
         }
         // a slow mode that the warm-up did not show: Newton, once, when marching
         // would take longer than a few monodromies
-        try_newton = may_newton
-            && !newton_tried
-            && orbits_to_go(r, rho, opts.tolerance_k) > 2.0 * (n as f64 + 1.0);
+        let to_go = orbits_to_go(r, rho, opts.tolerance_k)
+            .max(slowest.map_or(0.0, |s| s.orbits_to_go(opts.tolerance_k)));
+        try_newton = may_newton && !newton_tried && to_go > 2.0 * (n as f64 + 1.0);
+    }
+}
+
+/// The node furthest from the periodic orbit by its own contraction over the last two
+/// orbits: its last move and the ratio of its last two moves (in magnitude). Nodes
+/// that moved less than a thousandth of the tolerance are left out: their ratio is
+/// rounding, and they are that close already.
+#[derive(Debug, Clone, Copy)]
+struct SlowestNode {
+    moved_k: f64,
+    rho: f64,
+}
+
+impl SlowestNode {
+    fn of(moves: &[f64], before: &[f64], tol: f64) -> SlowestNode {
+        let mut slowest = SlowestNode {
+            moved_k: 0.0,
+            rho: 0.0,
+        };
+        for (&m, &b) in moves.iter().zip(before) {
+            if m.abs() <= 1e-3 * tol {
+                continue;
+            }
+            let node = SlowestNode {
+                moved_k: m.abs(),
+                rho: (m / b).abs(),
+            };
+            if node.distance_k() > slowest.distance_k() || !node.rho.is_finite() {
+                slowest = node;
+            }
+        }
+        slowest
+    }
+
+    fn distance_k(self) -> f64 {
+        distance(self.moved_k, self.rho)
+    }
+
+    fn orbits_to_go(self, tol: f64) -> f64 {
+        orbits_to_go(self.moved_k, self.rho, tol)
     }
 }
 
@@ -281,21 +336,20 @@ impl Periodic {
     }
 }
 
-/// Newton shooting on F(x) = Φ(x) − x from `x`, whose last orbit moved it by `moved`.
-#[allow(clippy::too_many_arguments)]
+/// Newton shooting on F(x) = Φ(x) − x from `x`.
 fn newton_search(
     setup: &mut Setup<'_>,
     t0: f64,
     period_s: f64,
     mut x: Vec<f64>,
     mut heaters: Vec<bool>,
-    moved: f64,
     opts: &SteadyOptions,
     budget: &mut crate::run::sim::StepBudget,
 ) -> Result<Shooting, SteadyError> {
     let n = x.len();
     let (mut orbits, mut iterations) = (0u64, 0u32);
-    let mut best = (moved, x.clone(), heaters.clone());
+    let mut best = (f64::INFINITY, x.clone(), heaters.clone());
+    let mut last_step_k = f64::INFINITY;
     // the last monodromy's factors (of ∂Φ/∂x − I)
     let mut factors: Option<nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>> = None;
     for _ in 0..opts.max_newton_iterations {
@@ -308,26 +362,31 @@ fn newton_search(
         // is as small. A small return alone is not enough: a node whose time
         // constant is thousands of orbits returns within 1e-4 K per orbit while
         // kelvins from its periodic orbit.
-        if r <= opts.tolerance_k {
-            let distance_k = factors
-                .as_ref()
-                .and_then(|lu| lu.solve(&f))
-                .map_or(f64::INFINITY, |d| d.amax());
-            if distance_k <= opts.tolerance_k {
-                return Ok(Shooting::Converged(Box::new(Periodic {
-                    state: start_state(setup, t0, x, heaters),
-                    method: PeriodicMethod::Newton,
-                    orbits,
-                    newton_iterations: iterations,
-                    periodicity_error_k: r,
-                })));
-            }
+        // the distance to the periodic orbit, estimated by the step through the last
+        // monodromy: (∂Φ/∂x − I)⁻¹ (Φ(x) − x)
+        let chord_k = factors
+            .as_ref()
+            .and_then(|lu| lu.solve(&f))
+            .map_or(f64::INFINITY, |d| d.amax());
+        // Converged when the orbit returns within the tolerance and that distance is
+        // as small. A small return alone is not enough: a node whose time constant is
+        // thousands of orbits returns within 1e-4 K per orbit while kelvins from its
+        // periodic orbit.
+        if r <= opts.tolerance_k && chord_k <= opts.tolerance_k {
+            return Ok(Shooting::Converged(Box::new(Periodic {
+                state: start_state(setup, t0, x, heaters),
+                method: PeriodicMethod::Newton,
+                orbits,
+                newton_iterations: iterations,
+                periodicity_error_k: r,
+            })));
         }
-        if r > 2.0 * best.0 {
-            break; // diverging: march from the best point
-        }
-        if r < best.0 {
-            best = (r, x.clone(), heaters.clone());
+        // Diverging when the state is estimated no nearer the orbit than before the
+        // last step: march from the best point. (Judged by the distance, not by the
+        // orbit's return: with a slow node the first step takes the state from a
+        // small return far from the orbit to a larger return near it.)
+        if chord_k.is_finite() && chord_k >= last_step_k {
+            break;
         }
         // monodromy by forward differences (0.01 K per node)
         let dx = 1e-2;
@@ -348,6 +407,11 @@ fn newton_search(
         let Some(delta) = lu.solve(&(-f)) else {
             break;
         };
+        // the best point is the one estimated nearest the orbit, by its Newton step
+        last_step_k = delta.amax();
+        if last_step_k < best.0 {
+            best = (last_step_k, x.clone(), heaters.clone());
+        }
         factors = Some(lu);
         for (xi, di) in x.iter_mut().zip(delta.iter()) {
             *xi += di;
