@@ -339,6 +339,33 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // ... silently: a run never writes NaN for a temperature, so a gap there is said
+    assert!(
+        !String::from_utf8_lossy(&out.stderr).contains("NaN"),
+        "a backlash gap is the tool's own mark"
+    );
+    let mut hole = lines.clone();
+    for l in [5, 9] {
+        hole[l] = hole[l].replacen(
+            &format!(",{},", hole[l].split(',').nth(1).unwrap()),
+            ",NaN,",
+            1,
+        );
+    }
+    let hole_path = dir.join("hole.csv");
+    std::fs::write(&hole_path, hole.join("\n")).unwrap();
+    let out = common::bin()
+        .arg("plot")
+        .arg(&hole_path)
+        .arg("--out")
+        .arg(dir.join("h.svg"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    for want in ["hole.csv", "housing_k", "2 row(s)", "line 6", "gap"] {
+        assert!(err.contains(want), "no {want:?} in: {err}");
+    }
     let mut nan_time = lines.clone();
     nan_time[6] = nan_time[6].replacen(
         &nan_time[6].split(',').next().unwrap().to_string(),

@@ -20,7 +20,8 @@ use super::{Outcome, print_out};
 pub struct BacklashArgs {
     /// Scenario file (TOML). Default: the embedded reference-hinge scenario.
     scenario: Option<PathBuf>,
-    /// Uniform temperatures, °C (repeatable). Default: 100 and −75, after 25 (assembly).
+    /// Uniform temperatures, °C (repeatable). Default: 100 and −75, after the pair's
+    /// assembly temperature (25 in the reference).
     #[arg(long = "uniform-c", allow_negative_numbers = true, value_parser = finite)]
     uniform_c: Vec<f64>,
     /// Pinion temperature, °C (all its nodes); with --wheel-c.
@@ -29,7 +30,9 @@ pub struct BacklashArgs {
     /// Wheel temperature, °C (all its nodes); with --pinion-c.
     #[arg(long, allow_negative_numbers = true, value_parser = finite, requires = "pinion_c")]
     wheel_c: Option<f64>,
-    /// Housing temperature, °C, for a centre distance that follows the housing. Default 25.
+    /// Housing temperature, °C, for a centre distance that follows the housing (every
+    /// case). Default: each uniform case's own temperature, and the pair's assembly
+    /// temperature for --pinion-c/--wheel-c.
     #[arg(long, allow_negative_numbers = true, value_parser = finite)]
     housing_c: Option<f64>,
     /// Print JSON instead of a table.

@@ -89,6 +89,9 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
         );
     }
     let mut rows = Vec::new();
+    // per temperature column: NaN cells and the first one's line (a run never writes a
+    // NaN temperature, so each is said, not only drawn as a gap)
+    let mut nan_k: Vec<(usize, usize)> = vec![(0, 0); headers.len()];
     for (k, rec) in r.records().enumerate() {
         let line = k + 2;
         let rec = rec.with_context(|| format!("{}: line {line}", path.display()))?;
@@ -131,7 +134,20 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
             );
         }
         check_values(path, line, &headers, &row)?;
+        for ((h, v), n) in headers.iter().zip(&row).zip(nan_k.iter_mut()) {
+            if v.is_nan() && h.ends_with("_k") {
+                *n = (n.0 + 1, if n.0 == 0 { line } else { n.1 });
+            }
+        }
         rows.push(row);
+    }
+    for (h, (count, first)) in headers.iter().zip(&nan_k) {
+        if *count > 0 {
+            eprintln!(
+                "note: {}: column {h} has no value (NaN) in {count} row(s), the first at line {first}: drawn as a gap (a run writes NaN only for the gears with no valid mesh, never for a temperature)",
+                path.display()
+            );
+        }
     }
     if rows.len() >= 2 && rows[0][0] == rows[rows.len() - 1][0] {
         bail!(
