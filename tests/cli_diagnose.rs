@@ -384,6 +384,25 @@ fn cli_diagnose_reads_a_run_log_as_a_recording() {
         let table: f64 = row.split_whitespace().nth(1).unwrap().parse().unwrap();
         assert!((taken - table).abs() <= 0.0005 + 1e-12, "{last}\n{row}");
     }
+    assert!(!text.contains("cut off"), "{text}");
+    // a copy cut off part-way (a killed run's log) is read up to its last whole
+    // message, and the report says so (it said nothing: "2 whole orbits" of a 3-orbit
+    // run read as the whole recording)
+    let bytes = std::fs::read(&log).unwrap();
+    let cut = dir.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 4]).unwrap();
+    let out = common::bin()
+        .args(["diagnose", reference().to_str().unwrap(), "--recording"])
+        .arg(&cut)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    let note = text
+        .lines()
+        .find(|l| l.starts_with("note: ") && l.contains("cut.mcap was cut off"))
+        .unwrap_or_else(|| panic!("no note of the cut: {text}"));
+    assert!(note.contains("messages up to t = "), "{note}");
 }
 
 /// Earth albedo and infrared are fitted as effective values on the node's own areas

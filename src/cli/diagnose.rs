@@ -101,7 +101,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     }
     // Inputs that follow the recording ([[input]]) are set in the model diagnosed.
     let mut model = loaded.model.clone();
-    let (rec, followed, eclipses) = read_recording(&a.recording, &mut model)?;
+    let (rec, read_notes, eclipses) = read_recording(&a.recording, &mut model)?;
     let absent = absent_sensors(&rec, &model);
     // The recording against the model (channels, values, time base, the held-out
     // split), before the cost estimate: what cannot be judged is refused first.
@@ -177,8 +177,8 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         || diagnose::diagnose(&model, &rec, &opts, &progress),
     );
     let mut d = result.with_context(|| format!("diagnose {} against {}", rec.file, loaded.file))?;
-    for f in followed.iter().rev() {
-        d.notes.insert(0, format!("input: {f}"));
+    for n in read_notes.into_iter().rev() {
+        d.notes.insert(0, n);
     }
     if let Some(w) = eclipses
         .as_ref()
@@ -227,8 +227,9 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
 
 /// The recording at `path` as `model`'s `[recording]` lays it out (or an orbitlash run
 /// log): its clock checked on the eclipse column, its `[[input]]` channels fed to
-/// `model`, its channels named after the sensors. Returns it with what the inputs did
-/// and the clock's check.
+/// `model`, its channels named after the sensors. Returns it with notes for the report
+/// (what the inputs did; for a log cut off by a killed run, what was read of it) and
+/// the clock's check.
 fn read_recording(
     path: &Path,
     model: &mut orbitlash::spec::model::Model,
@@ -241,12 +242,13 @@ fn read_recording(
         Ok(mut r) => {
             let eclipses = r.take_eclipse_check(model)?;
             let followed = r.feed_inputs(model)?;
+            let followed = followed.iter().map(|f| format!("input: {f}")).collect();
             r.name_channels(&model.scenario().sensors);
             Ok((r, followed, eclipses))
         }
         // An orbitlash run log: its node temperatures and backlash as the sensors read.
         Err(e) => match recording_from_log(path, model.scenario()) {
-            Some(r) => Ok((r, Vec::new(), None)),
+            Some((r, cut)) => Ok((r, cut.into_iter().collect(), None)),
             None => Err(e.into()),
         },
     }
@@ -939,7 +941,11 @@ fn report_candidates(o: &mut String, d: &Diagnosis) {
 /// column's unit) or its pair's exact backlash at every logged time. The sensors' lags
 /// and offsets are not applied (a log holds the model's own values). None when the
 /// file is not an orbitlash log.
-fn recording_from_log(path: &Path, sc: &orbitlash::spec::scenario::Scenario) -> Option<Recording> {
+/// With a note when the log was cut off (read up to its last whole message).
+fn recording_from_log(
+    path: &Path,
+    sc: &orbitlash::spec::scenario::Scenario,
+) -> Option<(Recording, Option<String>)> {
     use orbitlash::run::sensor::{ColumnUnit, SensorTarget};
     let table = orbitlash::io::mcap_read::read_log(path).ok()?;
     let topic = "/thermal/temperature";
@@ -997,5 +1003,15 @@ fn recording_from_log(path: &Path, sc: &orbitlash::spec::scenario::Scenario) -> 
             rec.values[c].push(v.is_finite().then_some(v));
         }
     }
-    Some(rec)
+    let cut = table.truncated.map(|t| {
+        format!(
+            "{} was cut off (a killed run's log, or a truncated copy): read its {} messages up to t = {:.3} s ({} of {} bytes were whole)",
+            path.display(),
+            t.messages,
+            t.t_end_s,
+            t.recovered_bytes,
+            t.file_bytes
+        )
+    });
+    Some((rec, cut))
 }
