@@ -249,6 +249,31 @@ fn cli_environment_reports_eclipses_and_writes_the_series() {
         .output()
         .unwrap();
     assert_error("clobber", &out, &["s.toml"]);
+    // a step longer than half the run is refused (it wrote one row, a point, not a
+    // series); half the run exactly gives three rows
+    let out = bin()
+        .arg("environment")
+        .arg(root.join("scenarios/reference-hinge.toml"))
+        .args(["--step-s", "1e9", "--csv"])
+        .arg(dir.join("one.csv"))
+        .output()
+        .unwrap();
+    assert_error("step", &out, &["--step-s 1e9", "5677.0 s", "1 row(s)"]);
+    assert!(!dir.join("one.csv").exists());
+    let out = bin()
+        .arg("environment")
+        .arg(root.join("scenarios/reference-hinge.toml"))
+        .args(["--step-s", "2838.489", "--csv"])
+        .arg(dir.join("three.csv"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.join("three.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 3, "{csv}");
 }
 
 #[test]

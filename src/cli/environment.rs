@@ -88,7 +88,16 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     orbitlash::run::sim::check_orbit(env, horizon)
         .map_err(|e| anyhow::anyhow!("{}: {e}", loaded.file))?;
     let step = a.step_s.unwrap_or(period / 360.0);
-    // the rows are only made for --csv and --plot
+    // the rows are only made for --csv and --plot: at least two (a series, not a point)
+    if (a.csv.is_some() || a.plot.is_some()) && step > horizon / 2.0 {
+        bail!(
+            "--step-s {}: longer than half the {horizon:.1} s shown ({} orbit(s)), so the series would hold {} row(s); use at most {}",
+            orbitlash::units::num(step),
+            orbitlash::units::num(a.orbits),
+            1 + (horizon / step).floor() as u64,
+            orbitlash::units::num(horizon / 2.0)
+        );
+    }
     if (a.csv.is_some() || a.plot.is_some()) && horizon / step > MAX_ROWS {
         bail!(
             "--step-s {step} over {horizon:.0} s gives {:.2e} rows; at most {MAX_ROWS:.0e}: use a longer step or fewer orbits",
