@@ -490,6 +490,40 @@ fn cli_diagnose_leaves_out_an_isolated_spike_and_says_so() {
             "{glitch}: {all}"
         );
     }
+    // at the ends and beside an empty cell, judged against the two readings on the
+    // other side (they were not judged: a glitch on the first row stayed in the fit)
+    let lines: Vec<&str> = text.lines().collect();
+    let last = lines.len();
+    let glitched = |k: usize| {
+        let cells: Vec<&str> = lines[k].split(',').collect();
+        format!("{},5000,{}", cells[0], cells[2..].join(","))
+    };
+    let mut ends: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    ends[1] = glitched(1);
+    ends[last - 1] = glitched(last - 1);
+    // and one before an empty cell
+    ends[line - 1] = glitched(line - 1);
+    let cells: Vec<&str> = lines[line].split(',').collect();
+    ends[line] = format!("{},,{}", cells[0], cells[2..].join(","));
+    let (code, stdout, all) = diagnose(&write(&dir, "ends.csv", &(ends.join("\n") + "\n")));
+    assert_eq!(code, Some(0), "{all}");
+    assert!(stdout.starts_with("CONSISTENT"), "{stdout}");
+    assert!(
+        all.contains("`housing_c`: 3 readings left out as isolated spikes"),
+        "{all}"
+    );
+    let time = |k: usize| {
+        lines[k]
+            .split(',')
+            .next()
+            .unwrap()
+            .trim_end_matches(".0")
+            .to_string()
+    };
+    for (k, place) in [(1, "before"), (line - 1, "after"), (last - 1, "after")] {
+        let want = format!("line {}, t = {} s: 5000 °C {place} ", k + 1, time(k));
+        assert!(all.contains(&want), "no {want:?} in {all}");
+    }
     // a reading alone between gaps in time (telemetry of a ground pass) is no spike,
     // however far it is from the readings minutes away (it was left out as one)
     let pass: String = text

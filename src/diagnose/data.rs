@@ -168,13 +168,26 @@ fn near_s(time_s: &[f64]) -> f64 {
 pub const SPIKE_SIGMAS: f64 = 20.0;
 
 /// A reading left out as an isolated spike: its channel (index), row, value (the
-/// recording's unit) and its neighbours' values.
+/// recording's unit) and the two readings it was judged against, in time order.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spike {
     pub channel: usize,
     pub row: usize,
     pub reading: f64,
     pub neighbours: (f64, f64),
+    /// Where those two are.
+    pub around: Around,
+}
+
+/// Where the two readings a spike was judged against are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Around {
+    /// One before and one after it.
+    Both,
+    /// The two before it (the last reading, or one before an empty cell or a gap).
+    Before,
+    /// The two after it (the first reading, or one after an empty cell or a gap).
+    After,
 }
 
 impl Observations {
@@ -305,8 +318,11 @@ column in seconds from the scenario's t = 0?)",
     /// reading alone between gaps in time is never one: its neighbours are not
     /// minutes apart.) The channel's typical step is 1.4826 × the median of its
     /// nonzero steps between consecutive readings, at least its resolution. Their
-    /// cells are emptied, and returned. Not judged: the first and last rows, and a
-    /// reading next to an empty cell.
+    /// cells are emptied, and returned. A reading without a neighbour on one side (the
+    /// first and last, one next to an empty cell or a gap) is judged against the two
+    /// on its other side, each within 1.5 sampling intervals of the next: a spike
+    /// when it stands off the nearer by more than the limit plus the step between
+    /// those two (so a steady slope or a fast change that goes on is never one).
     pub fn drop_spikes(&mut self) -> Vec<Spike> {
         let near = near_s(&self.time_s);
         let t = &self.time_s;
@@ -323,26 +339,42 @@ column in seconds from the scenario's t = 0?)",
             let typical = (1.4826 * median(&mut steps)).max(resolution(v).unwrap_or(0.0));
             let limit = SPIKE_SIGMAS * typical;
             let mut found = Vec::new();
-            for j in 1..v.len().saturating_sub(1) {
-                let (Some(p), Some(x), Some(n)) = (v[j - 1], v[j], v[j + 1]) else {
-                    continue;
+            // the reading at row k when it is present and within `near` of row j
+            let at = |k: usize, j: usize| v[k].filter(|_| (t[k] - t[j]).abs() <= near);
+            for j in 0..v.len() {
+                let Some(x) = v[j] else { continue };
+                let before = (j >= 1).then(|| at(j - 1, j)).flatten();
+                let after = v.get(j + 1).and_then(|_| at(j + 1, j));
+                let spike = match (before, after) {
+                    // how far beyond the nearer neighbour, on the side of neither
+                    (Some(p), Some(n)) => {
+                        ((x - p.max(n)).max(p.min(n) - x) > limit).then_some(((p, n), Around::Both))
+                    }
+                    // one side only: against the two there, beyond their own step
+                    (None, Some(a)) => v
+                        .get(j + 2)
+                        .and_then(|_| at(j + 2, j + 1))
+                        .filter(|b| (x - a).abs() - (a - b).abs() > limit)
+                        .map(|b| ((a, b), Around::After)),
+                    (Some(a), None) => (j >= 2)
+                        .then(|| at(j - 2, j - 1))
+                        .flatten()
+                        .filter(|b| (x - a).abs() - (a - b).abs() > limit)
+                        .map(|b| ((b, a), Around::Before)),
+                    (None, None) => None,
                 };
-                if t[j] - t[j - 1] > near || t[j + 1] - t[j] > near {
-                    continue;
-                }
-                // how far beyond the nearer neighbour, on the side of neither
-                let beyond = (x - p.max(n)).max(p.min(n) - x);
-                if beyond > limit {
-                    found.push((j, x, (p, n)));
+                if let Some((neighbours, around)) = spike {
+                    found.push((j, x, neighbours, around));
                 }
             }
-            for (row, reading, neighbours) in found {
+            for (row, reading, neighbours, around) in found {
                 v[row] = None;
                 out.push(Spike {
                     channel: c,
                     row,
                     reading,
                     neighbours,
+                    around,
                 });
             }
         }

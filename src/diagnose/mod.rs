@@ -760,8 +760,13 @@ fn spike_warnings(obs: &Observations, rec: &Recording, spikes: &[data::Spike]) -
             .take(SPIKES_SHOWN)
             .map(|s| {
                 let (j, x, (p, n)) = (s.row, s.reading, s.neighbours);
+                let place = match s.around {
+                    data::Around::Both => "between",
+                    data::Around::Before => "after",
+                    data::Around::After => "before",
+                };
                 format!(
-                    "line {}, t = {} s: {} {u} between {} and {} {u}",
+                    "line {}, t = {} s: {} {u} {place} {} and {} {u}",
                     rec.rows_at.get(j).copied().unwrap_or(j as u64 + 1),
                     crate::units::num(obs.time_s[j]),
                     crate::units::num(x),
@@ -773,7 +778,9 @@ fn spike_warnings(obs: &Observations, rec: &Recording, spikes: &[data::Spike]) -
         let more = mine.len().saturating_sub(SPIKES_SHOWN);
         out.push(format!(
             "{}: `{}`: {} left out as isolated spike{} (beyond both neighbours, each within \
-             1.5 sampling intervals, by over {} typical steps: a telemetry glitch, not a \
+             1.5 sampling intervals, by over {} typical steps, or at an end or beside a gap \
+             beyond the two readings on its other side by that and their own step: a \
+             telemetry glitch, not a \
              temperature or backlash reached and left within one sample): {}{}",
             obs.file,
             crate::units::shown(&ch.name),
