@@ -821,9 +821,11 @@ fn report_findings(o: &mut String, d: &Diagnosis, clock: &Clock<'_>) {
             }
             outln!(
                 o,
-                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0} ({:.1} % of the {}'s, in the final joint fit)",
+                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0} in the final joint fit ({:.1} % of what it leaves without this finding, {:.0} % needed; {:.1} % of the {}'s)",
                 f.delta_bic,
                 f.heldout_chi2_drop,
+                100.0 * f.heldout_share_without,
+                100.0 * orbitlash::diagnose::MIN_FINDING_SHARE,
                 100.0 * f.heldout_share,
                 if d.calibration.is_empty() {
                     "baseline"

@@ -297,6 +297,9 @@ pub struct Finding {
     /// effect removes in the final joint fit (the reference: the calibrated model, or
     /// the baseline without a calibration).
     pub heldout_share: f64,
+    /// The share it removes of the held-out χ² the final fit leaves without it (the
+    /// figure a finding needs [`MIN_FINDING_SHARE`] of to be accepted).
+    pub heldout_share_without: f64,
     /// The key-path values written into the corrected scenario.
     pub set: BTreeMap<String, f64>,
     /// 95 % intervals, value ± 1.96 standard errors (None where the error is not
@@ -1127,14 +1130,16 @@ fn findings(
         let theta = &h.theta[off..off + k];
         let params = member_params(c, h, off);
         let (parameters, std_errors) = values_and_errors(&params);
-        let (delta_bic, hdrop) = match &without[m] {
+        let (delta_bic, hdrop, before) = match &without[m] {
             None => (
                 -problem.bic_gain(h, base.train_chi2, k),
                 base.holdout_chi2 - h.holdout_chi2,
+                base.holdout_chi2,
             ),
             Some(w) => (
                 -problem.bic_gain(h, w.train_chi2, k),
                 w.holdout_chi2 - h.holdout_chi2,
+                w.holdout_chi2,
             ),
         };
         out.push(Finding {
@@ -1151,6 +1156,7 @@ fn findings(
             delta_bic,
             heldout_chi2_drop: hdrop,
             heldout_share: hdrop / base.holdout_chi2,
+            heldout_share_without: hdrop / before,
             set: c.values(theta).into_iter().collect(),
             intervals_95: params
                 .iter()
