@@ -543,6 +543,65 @@ fn cli_diagnose_leaves_out_an_isolated_spike_and_says_so() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A sensor's column with every cell empty is taken as a column the recording lacks:
+/// a warning naming it, and the others fitted (it was refused: "channel `motor_c` has
+/// no values", where a missing column goes on). Every column empty is refused.
+#[test]
+fn cli_diagnose_goes_on_without_an_empty_column() {
+    let Some(rec) = common::shared("cases/null/recording.csv") else {
+        return;
+    };
+    let dir = common::tmpdir("diag-empty-column");
+    let text = std::fs::read_to_string(&rec).unwrap();
+    // the recording with the cells of `columns` (0-based, time is 0) emptied
+    let blank = |columns: &[usize]| -> String {
+        text.lines()
+            .enumerate()
+            .map(|(i, l)| {
+                let row: Vec<&str> = l
+                    .split(',')
+                    .enumerate()
+                    .map(|(k, c)| if i > 0 && columns.contains(&k) { "" } else { c })
+                    .collect();
+                row.join(",") + "\n"
+            })
+            .collect()
+    };
+    let run = |path: &Path| {
+        common::bin()
+            .arg("diagnose")
+            .arg(reference())
+            .arg("--recording")
+            .arg(path)
+            .output()
+            .unwrap()
+    };
+    // motor_c (the third column) empty, the others as recorded
+    let one = write(&dir, "one-empty.csv", &blank(&[2]));
+    let out = run(&one);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("sensor `motor_c` (column `motor_c`): every cell of its column in")
+            && err.contains("the other 5 channel(s) without it"),
+        "{err}"
+    );
+    assert!(!err.contains("not in the recording"), "said twice: {err}");
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("CONSISTENT"));
+    // every sensor's column empty
+    let all = write(&dir, "all-empty.csv", &blank(&[1, 2, 3, 4, 5, 6]));
+    let out = run(&all);
+    common::assert_error(
+        "all empty",
+        &out,
+        &[
+            "all-empty.csv",
+            "every cell of every sensor's column is empty",
+        ],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A sensor lost part-way through the recording (the motor's readings stop after
 /// the training orbits): the others' held-out orbits still check the fit, so the
 /// diagnosis runs, fits the lost channel on what it has, and says that its fit is

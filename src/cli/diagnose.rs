@@ -101,8 +101,9 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
     }
     // Inputs that follow the recording ([[input]]) are set in the model diagnosed.
     let mut model = loaded.model.clone();
-    let (rec, read_notes, eclipses) = read_recording(&a.recording, &mut model)?;
-    let absent = absent_sensors(&rec, &model);
+    let (mut rec, read_notes, eclipses) = read_recording(&a.recording, &mut model)?;
+    let mut absent = absent_sensors(&rec, &model);
+    absent.extend(empty_sensors(&mut rec, &model));
     // The recording against the model (channels, values, time base, the held-out
     // split), before the cost estimate: what cannot be judged is refused first.
     diagnose::data::Observations::new(&rec, model.scenario(), a.holdout_orbits)?;
@@ -280,6 +281,41 @@ fn eclipse_warning(c: &orbitlash::recording::EclipseCheck, now: f64) -> Option<S
             100.0 * c.agreement
         )
     })
+}
+
+/// The sensors' columns of `rec` with every cell empty, taken out of it with a warning
+/// each, as a column the recording lacks is ([`absent_sensors`]): the fit goes on
+/// without them. Kept (and refused by the diagnosis, naming them) when no sensor's
+/// column has a value.
+fn empty_sensors(rec: &mut Recording, model: &orbitlash::spec::model::Model) -> Vec<String> {
+    let sensors = &model.scenario().sensors;
+    let is_sensor = |c: &String| sensors.iter().any(|s| &s.column == c);
+    let empty: Vec<usize> = (0..rec.columns.len())
+        .filter(|&k| is_sensor(&rec.columns[k]) && rec.values[k].iter().all(Option::is_none))
+        .collect();
+    let with_values = (0..rec.columns.len())
+        .filter(|k| is_sensor(&rec.columns[*k]) && !empty.contains(k))
+        .count();
+    if empty.is_empty() || with_values == 0 {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for &k in empty.iter().rev() {
+        let column = rec.columns.remove(k);
+        rec.values.remove(k);
+        let source = sensors
+            .iter()
+            .find(|s| s.column == column)
+            .map_or(column.as_str(), |s| s.source_column.as_str());
+        out.push(format!(
+            "sensor `{}` (column `{}`): every cell of its column in {} is empty: diagnose fits the other {with_values} channel(s) without it",
+            orbitlash::units::shown(&column),
+            orbitlash::units::shown(source),
+            rec.file
+        ));
+    }
+    out.reverse();
+    out
 }
 
 /// A warning for each sensor of the scenario the recording has no column for (an input

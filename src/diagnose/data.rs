@@ -245,10 +245,16 @@ impl Observations {
                     .join(", ")
             )));
         }
+        if rec.values.iter().all(|v| v.iter().all(|x| x.is_none())) {
+            return Err(DiagnoseError::Recording(format!(
+                "{}: every cell of every sensor's column is empty: there is nothing to compare",
+                rec.file
+            )));
+        }
         for (c, v) in channels.iter().zip(&rec.values) {
             if v.iter().all(|x| x.is_none()) {
                 return Err(DiagnoseError::Recording(format!(
-                    "{}: channel `{}` has no values",
+                    "{}: channel `{}` has no values (every cell of its column is empty)",
                     rec.file, c.name
                 )));
             }
