@@ -701,6 +701,22 @@ fn cli_plot_the_90_day_run() {
         fig.svg.contains("simulated time (days)")
             && fig.svg.contains("smallest and largest per orbit")
     );
+    // logged every 600 s, about 9 samples an orbit: the figure says its envelopes miss
+    // the extremes between them (they zig-zag by kelvins with the sampling's beat)
+    assert!(
+        fig.svg
+            .contains(" 9 samples per orbit: extremes between them are not drawn"),
+        "no word of the thin log"
+    );
+    // the run's last sample (on an orbit's start) ends the last orbit's bin; alone in a
+    // bin of its own it drew every envelope plunging to one point (black-box helper-23)
+    let env = envelope(&s, &[&s.time_s]);
+    let last = env.t.len() - 1;
+    assert!(
+        env.hi[0][last] > env.lo[0][last],
+        "the last bin holds one sample, at t = {} s",
+        env.lo[0][last]
+    );
     assert!(fig.svg.contains("PASS"));
     assert!(
         fig.labels

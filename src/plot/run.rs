@@ -146,7 +146,14 @@ pub struct Envelope {
     pub hi: Vec<Vec<f64>>,
     /// "orbit", "day" or "bin".
     pub per: &'static str,
+    /// Samples per bin, on average: with few, the drawn extremes fall short of the
+    /// run's (the figure says so).
+    pub samples_per_bin: f64,
 }
+
+/// Fewer samples per bin than this on average, and the figure says that its envelopes
+/// miss extremes between the samples.
+pub const FEW_SAMPLES_PER_BIN: f64 = 30.0;
 
 /// The envelope of `series` (columns of `s`) that a long run's figure draws.
 pub fn envelope(s: &RunSeries, series: &[&Vec<f64>]) -> Envelope {
@@ -186,11 +193,19 @@ pub fn envelope(s: &RunSeries, series: &[&Vec<f64>]) -> Envelope {
             .collect();
         per = "day";
     }
+    // the run's last sample alone in a bin (it ends on an orbit's or a day's start) is
+    // its bin's end, not a bin of one point (drawn as a plunge to that point)
+    let n = bins.len();
+    if n >= 3 && bins[n - 1] != bins[n - 2] && bins[n - 2] == bins[n - 3] {
+        bins[n - 1] = bins[n - 2];
+    }
+    let distinct = 1 + bins.windows(2).filter(|w| w[0] != w[1]).count();
     let mut env = Envelope {
         t: Vec::new(),
         lo: vec![Vec::new(); series.len()],
         hi: vec![Vec::new(); series.len()],
         per,
+        samples_per_bin: n as f64 / distinct as f64,
     };
     let mut start = 0;
     for i in 1..=bins.len() {
@@ -444,9 +459,18 @@ impl<'s> RunLayout<'s> {
             "simulated time ({}){}",
             self.axis.unit,
             if self.long {
+                let env = envelope(self.s, &[]);
+                let thin = if env.samples_per_bin < FEW_SAMPLES_PER_BIN {
+                    format!(
+                        " of the log's {:.0} samples per {}: extremes between them are not drawn",
+                        env.samples_per_bin, env.per
+                    )
+                } else {
+                    String::new()
+                };
                 format!(
-                    "; each series: its smallest and largest per {}",
-                    envelope(self.s, &[]).per
+                    "; each series: its smallest and largest per {}{thin}",
+                    env.per
                 )
             } else {
                 String::new()
