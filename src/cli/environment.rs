@@ -88,21 +88,9 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     orbitlash::run::sim::check_orbit(env, horizon)
         .map_err(|e| anyhow::anyhow!("{}: {e}", loaded.file))?;
     let step = a.step_s.unwrap_or(period / 360.0);
-    // the rows are only made for --csv and --plot: at least two (a series, not a point)
-    if (a.csv.is_some() || a.plot.is_some()) && step > horizon / 2.0 {
-        bail!(
-            "--step-s {}: longer than half the {horizon:.1} s shown ({} orbit(s)), so the series would hold {} row(s); use at most {}",
-            orbitlash::units::num(step),
-            orbitlash::units::num(a.orbits),
-            1 + (horizon / step).floor() as u64,
-            orbitlash::units::num(horizon / 2.0)
-        );
-    }
-    if (a.csv.is_some() || a.plot.is_some()) && horizon / step > MAX_ROWS {
-        bail!(
-            "--step-s {step} over {horizon:.0} s gives {:.2e} rows; at most {MAX_ROWS:.0e}: use a longer step or fewer orbits",
-            horizon / step
-        );
+    // the rows are only made for --csv and --plot
+    if a.csv.is_some() || a.plot.is_some() {
+        check_step(step, horizon, a.orbits)?;
     }
     // The faces (load name, geometry) and their nodes' names, in the scenario's order.
     let net = &sc.thermal.network;
@@ -378,4 +366,25 @@ fn series(
         text.push('\n');
     }
     text
+}
+
+/// A step for the series' rows that gives at least two over `horizon_s` (`orbits`): a
+/// series, not a point; and at most [`MAX_ROWS`].
+fn check_step(step: f64, horizon_s: f64, orbits: f64) -> Result<()> {
+    if horizon_s / step > MAX_ROWS {
+        bail!(
+            "--step-s {step} over {horizon_s:.0} s gives {:.2e} rows; at most {MAX_ROWS:.0e}: use a longer step or fewer orbits",
+            horizon_s / step
+        );
+    }
+    if step > horizon_s / 2.0 {
+        bail!(
+            "--step-s {}: longer than half the {horizon_s:.1} s shown ({} orbit(s)), so the series would hold {} row(s); use at most {}",
+            orbitlash::units::num(step),
+            orbitlash::units::num(orbits),
+            1 + (horizon_s / step).floor() as u64,
+            orbitlash::units::num(horizon_s / 2.0)
+        );
+    }
+    Ok(())
 }
