@@ -143,6 +143,16 @@ fn one_orbit(
     Ok((s.temperatures_k, s.heaters_on))
 }
 
+/// Each node's move over one orbit, from `x` to `y`.
+fn node_moves_of(y: &[f64], x: &[f64]) -> Vec<f64> {
+    y.iter().zip(x).map(|(a, b)| a - b).collect()
+}
+
+/// The largest move of any node.
+fn largest(moves: &[f64]) -> f64 {
+    moves.iter().map(|m| m.abs()).fold(0.0, f64::max)
+}
+
 fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
@@ -170,8 +180,8 @@ pub fn periodic_orbit(
     for _ in 0..opts.warmup_orbits.max(2) {
         let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
-        moves.push(max_diff(&y, &x));
-        warm_moves = y.iter().zip(&x).map(|(a, b)| a - b).collect();
+        warm_moves = node_moves_of(&y, &x);
+        moves.push(largest(&warm_moves));
         x = y;
         heaters = h;
     }
@@ -218,8 +228,8 @@ pub fn periodic_orbit(
         }
         let (y, h) = one_orbit(setup, t0, period_s, &x, &heaters, &mut budget)?;
         orbits += 1;
-        let r = max_diff(&y, &x);
-        let moves: Vec<f64> = y.iter().zip(&x).map(|(a, b)| a - b).collect();
+        let moves = node_moves_of(&y, &x);
+        let r = largest(&moves);
         let slowest = node_moves
             .as_deref()
             .map(|before| SlowestNode::of(&moves, before, opts.tolerance_k));
