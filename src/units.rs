@@ -44,6 +44,31 @@ pub fn sig(v: f64) -> String {
     }
 }
 
+/// A number to `n` significant digits (n ≥ 1), trailing zeros dropped, in exponent form
+/// outside 1e-3 … 1e5: a sampled value in a line of text (29.9937, 1.11123e-5), where
+/// [`exact`]'s 17 digits are noise and [`sig`]'s four hide a dispersion of microns.
+pub fn digits(v: f64, n: usize) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let n = n.max(1);
+    let e = v.abs().log10().floor() as i32;
+    let trim = |s: &str| {
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    if (-3..5).contains(&e) {
+        trim(&format!("{:.*}", (n as i32 - 1 - e).max(0) as usize, v))
+    } else {
+        let s = format!("{v:.*e}", n - 1);
+        let (mantissa, exponent) = s.split_once('e').expect("exponent form");
+        format!("{}e{exponent}", trim(mantissa))
+    }
+}
+
 /// A number with every digit it has (round-trips), compact: plain between 1e-4 and
 /// 1e7, in exponent form otherwise (6378137, 3.986004418e14).
 pub fn exact(v: f64) -> String {
@@ -157,6 +182,18 @@ mod tests {
         assert_eq!(exact(3.986004418e14), "3.986004418e14");
         assert_eq!(exact(0.002), "0.002");
         assert_eq!(exact(1.5e-5), "1.5e-5");
+    }
+
+    #[test]
+    fn core_numbers_to_n_digits() {
+        use super::digits;
+        assert_eq!(digits(29.993712345, 6), "29.9937");
+        assert_eq!(digits(1.111234567e-5, 6), "1.11123e-5");
+        assert_eq!(digits(1393.0, 6), "1393");
+        assert_eq!(digits(0.0347012, 6), "0.0347012");
+        assert_eq!(digits(123456.7, 6), "1.23457e5");
+        assert_eq!(digits(-0.5, 3), "-0.5");
+        assert_eq!(digits(0.0, 6), "0");
     }
 
     #[test]

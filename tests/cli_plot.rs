@@ -1128,3 +1128,63 @@ fn regress_plot_of_a_csv_and_of_its_log_mark_the_run_s_own_smallest() {
         format!("smallest {b_min:.3} µm at {:.3} h", t_min / 3600.0)
     );
 }
+
+/// `run --plot` says what the figure is when it is not the scenario's plain run: a
+/// replayed margins sample names the sample and its seed, a steady state that it is one
+/// period of the periodic orbit; and the smallest allowed backlash is drawn from the run
+/// itself when the table it plots (a CSV) has no margin column.
+#[test]
+fn cli_run_plot_names_a_replayed_sample_and_a_steady_state() {
+    let dir = common::tmpdir("plot-titles");
+    let scenarios = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let cases: [(&str, &[&str], &str); 2] = [
+        (
+            "reference-hinge.toml",
+            &["--steady-state"],
+            "reference-hinge, steady state: one period of the periodic orbit",
+        ),
+        (
+            "reference-hinge-margins.toml",
+            &["--sample", "2", "--seed", "7", "--orbits", "1"],
+            "reference-hinge-margins, margins sample 2 (seed 7)",
+        ),
+    ];
+    for (i, (scenario, args, title)) in cases.into_iter().enumerate() {
+        let svg = dir.join(format!("{i}.svg"));
+        let out = common::bin()
+            .arg("run")
+            .arg(scenarios.join(scenario))
+            .args(args)
+            .args(["--quiet", "--no-log", "--csv"])
+            .arg(dir.join(format!("{i}.csv")))
+            .arg("--plot")
+            .arg(&svg)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{out:?}");
+        let l = labels(&svg);
+        assert!(l.iter().any(|t| t.starts_with(title)), "{title}: {l:?}");
+        assert!(
+            l.iter().any(|t| t.contains("smallest allowed 5.000 µm")),
+            "{title}: {l:?}"
+        );
+    }
+    // a plain run says neither
+    let svg = dir.join("plain.svg");
+    let out = common::bin()
+        .arg("run")
+        .arg(scenarios.join("reference-hinge.toml"))
+        .args(["--orbits", "1", "--quiet", "--no-log", "--csv"])
+        .arg(dir.join("plain.csv"))
+        .arg("--plot")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    let l = labels(&svg);
+    assert!(
+        !l.iter()
+            .any(|t| t.contains("sample") || t.contains("steady")),
+        "{l:?}"
+    );
+}

@@ -22,6 +22,21 @@ fn cli_run_without_arguments_uses_the_embedded_reference_and_writes_a_log() {
     );
     assert!(stdout.contains("reference-hinge: 6 orbits"), "{stdout}");
     assert!(stdout.contains("last orbit (orbit 6"), "{stdout}");
+    // a run of 2.5 orbits: its last period is not an orbit, and the summary says so
+    let out = bin()
+        .args(["run", "--orbits", "2.5", "--no-log", "--quiet"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("last period (the end of orbit 2, the start of 3, t = "),
+        "{text}"
+    );
+    assert!(
+        text.contains("last period min") && !text.contains("last orbit"),
+        "{text}"
+    );
     for node in ["housing", "gear1.r2", "gear2.r2"] {
         assert!(stdout.contains(node), "{node} missing from the summary");
     }
@@ -166,7 +181,13 @@ fn cli_check_prints_derived_quantities() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(stdout.contains("beta  60.000°"), "{stdout}");
-    assert!(stdout.contains("1 heaters, 1 modes"), "{stdout}");
+    assert!(stdout.contains("1 heater, 1 mode"), "{stdout}");
+    assert!(
+        stdout.contains(
+            "4 loads (1 Sun absorber, 1 albedo absorber, 1 Earth-IR absorber, 1 dissipation)"
+        ),
+        "{stdout}"
+    );
 }
 
 #[test]

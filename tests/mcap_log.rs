@@ -89,6 +89,23 @@ fn cli_log_holds_every_series_by_name_and_its_provenance() {
     assert_eq!(prov["scenario_name"], "reference-hinge");
     assert!(prov["solver"].contains("tr-bdf2"));
     assert_eq!(t.metadata["orbitlash.run_end"]["status"], "complete");
+    // /events ends with the run's end: its time, verdict and the pair's smallest
+    // backlash (the viewers' event panels promise it)
+    let bytes = std::fs::read(&log).unwrap();
+    let scan = orbitlash::io::mcap_scan::scan(&bytes).unwrap();
+    let last_event = scan
+        .messages
+        .iter()
+        .filter(|m| scan.channels[&m.header.channel_id].topic == "/events")
+        .max_by_key(|m| m.header.log_time)
+        .expect("events");
+    let end_text = String::from_utf8_lossy(last_event.data);
+    assert!(
+        end_text.contains("run complete at t = ") && end_text.contains("verdict pass"),
+        "{end_text}"
+    );
+    assert!(end_text.contains("mesh smallest backlash"), "{end_text}");
+    assert_eq!(last_event.header.log_time, t.rows.last().unwrap().0);
     assert_eq!(
         t.attachments,
         vec![("reference-hinge.toml".to_string(), text)]

@@ -65,20 +65,51 @@ pub fn check(a: CheckArgs) -> Result<()> {
     print_out(&o)
 }
 
+/// "1 conductor", "2 conductors".
+fn count(n: usize, what: &str) -> String {
+    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
+}
+
+/// "1 load (1 Sun absorber)", "14 loads (6 faces, 8 dissipations)": what a load is differs (a Sun
+/// absorber, a face, a dissipation), so the count says which.
+fn loads_by_kind(loads: &[orbitlash::thermal::Load]) -> String {
+    use orbitlash::thermal::LoadKind as K;
+    let mut kinds: Vec<(&str, usize)> = Vec::new();
+    for l in loads {
+        let k = match l.kind {
+            K::Sun { .. } => "Sun absorber",
+            K::Albedo { .. } => "albedo absorber",
+            K::EarthIr { .. } => "Earth-IR absorber",
+            K::Dissipation { .. } => "dissipation",
+            K::Face(_) => "face",
+        };
+        match kinds.iter_mut().find(|(n, _)| *n == k) {
+            Some((_, c)) => *c += 1,
+            None => kinds.push((k, 1)),
+        }
+    }
+    let parts: Vec<String> = kinds.iter().map(|(k, c)| count(*c, k)).collect();
+    if parts.is_empty() {
+        count(0, "load")
+    } else {
+        format!("{} ({})", count(loads.len(), "load"), parts.join(", "))
+    }
+}
+
 /// The network: element counts, time constants, linear solver, stiffness.
 fn network_section(o: &mut String, sc: &Scenario) {
     let net = &sc.thermal.network;
     outln!(o, "\nnetwork");
     outln!(
         o,
-        "  {} diffusion nodes, {} boundary nodes, {} conductors, {} radiative conductors, {} loads, {} heaters, {} modes",
-        net.nodes.len(),
-        net.boundaries.len(),
-        net.conductors.len(),
-        net.radiators.len(),
-        net.loads.len(),
-        net.heaters.len(),
-        sc.thermal.modes.len()
+        "  {}, {}, {}, {}, {}, {}, {}",
+        count(net.nodes.len(), "diffusion node"),
+        count(net.boundaries.len(), "boundary node"),
+        count(net.conductors.len(), "conductor"),
+        count(net.radiators.len(), "radiative conductor"),
+        loads_by_kind(&net.loads),
+        count(net.heaters.len(), "heater"),
+        count(sc.thermal.modes.len(), "mode")
     );
     let temps = net.initial_temperatures_k();
     let boundary: Vec<f64> = net

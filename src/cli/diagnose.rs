@@ -12,6 +12,7 @@ use orbitlash::io::output::{OutputPolicy, Outputs};
 use orbitlash::io::recording::Recording;
 use orbitlash::units::sig;
 
+use super::table::{self, Align};
 use super::{Outcome, load_with, print_out};
 
 #[derive(Args, Debug)]
@@ -857,7 +858,7 @@ fn report_findings(o: &mut String, d: &Diagnosis, clock: &Clock<'_>) {
             }
             outln!(
                 o,
-                "      evidence: ΔBIC {:.0} on the fitted orbits, held-out χ² lower by {:.0} in the final joint fit ({:.1} % of what it leaves without this finding, {:.0} % needed; {:.1} % of the {}'s)",
+                "      evidence: ΔBIC {:.0} on the fitted orbits (the final joint fit with it against without), held-out χ² lower by {:.0} in the final joint fit ({:.1} % of what it leaves without this finding, {:.0} % needed; {:.1} % of the {}'s)",
                 f.delta_bic,
                 f.heldout_chi2_drop,
                 100.0 * f.heldout_share_without,
@@ -894,7 +895,11 @@ fn report_doubts(o: &mut String, f: &orbitlash::diagnose::Finding) {
             .iter()
             .map(|a| format!("{} (ΔBIC {:+.1})", a.candidate, a.delta_bic))
             .collect();
-        outln!(o, "      explains about as well: {}", alts.join("; "));
+        outln!(
+            o,
+            "      explains about as well (ΔBIC against this finding, on the fit's noise scale): {}",
+            alts.join("; ")
+        );
     }
     if let Some(why) = &f.unstable {
         outln!(o, "      unstable: {why}");
@@ -908,26 +913,37 @@ fn report_remaining(o: &mut String, d: &Diagnosis) {
         && d.verdict == Verdict::Unexplained
     {
         outln!(o, "the residual that remains sits:");
+        let mut t = table::new(
+            &["channel", "phase", "rms", "× noise", "s after orbit noon"],
+            &[
+                Align::Left,
+                Align::Left,
+                Align::Right,
+                Align::Right,
+                Align::Left,
+            ],
+        );
         for m in d.remaining.iter().take(6) {
-            outln!(
-                o,
-                "  {:<13} {:<13} rms {:.3} {} ({:.1}× noise), {:.0} … {:.0} s after orbit noon",
-                m.channel,
-                m.phase,
-                m.rms,
-                unit_of(&m.channel),
-                m.rms_over_noise,
-                m.orbit_t_start_s,
-                m.orbit_t_end_s
-            );
+            t.add_row(vec![
+                m.channel.clone(),
+                m.phase.to_string(),
+                format!("{:.3} {}", m.rms, unit_of(&m.channel)),
+                format!("{:.1}", m.rms_over_noise),
+                format!("{:.0} … {:.0}", m.orbit_t_start_s, m.orbit_t_end_s),
+            ]);
         }
+        o.push_str(&table::render(&t, "  "));
         outln!(o, "");
     }
 }
 
 /// The candidates tried, the fitted ones first, and the time taken.
 fn report_candidates(o: &mut String, d: &Diagnosis) {
-    outln!(o, "candidates ({} tried):", d.candidates.len());
+    outln!(
+        o,
+        "candidates ({} tried; ΔBIC: each fitted against the model of the step it was tried at):",
+        d.candidates.len()
+    );
     let mut unfitted = 0;
     for c in &d.candidates {
         if c.status == CandidateStatus::NotFitted && c.rank_chi2_drop <= 0.0 {

@@ -561,7 +561,7 @@ pub fn format_report(r: &Report) -> String {
                 w.orbit_phase_deg,
                 w.values
                     .iter()
-                    .map(|(k, v)| format!("{k} = {}", orbitlash::units::exact(*v)))
+                    .map(|(k, v)| format!("{k} = {}", orbitlash::units::digits(*v, 6)))
                     .collect::<Vec<_>>()
                     .join(", ")
             );

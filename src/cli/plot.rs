@@ -304,8 +304,8 @@ pub fn draw(
     // a file's name may hold control characters, which XML cannot: shown escaped
     let title = orbitlash::units::shown(&title).into_owned();
     let mut series = RunSeries::from_table(&title, &headers, &rows)
-        .with_context(|| format!("cannot plot {}", input.display()))?;
-    series.end = end;
+        .with_context(|| format!("cannot plot {}", input.display()))?
+        .with_end(end);
     series.cut_off = cut_off;
     if !nodes.is_empty() {
         series

@@ -307,7 +307,7 @@ fn report_run(
         outln!(o, "{line}");
     }
     o.push_str(&format_summary(&sc.thermal, stats, window, period_s));
-    o.push_str(&format_mesh(sc, mesh));
+    o.push_str(&format_mesh(sc, mesh, window, stats.t_end_s));
     o.push_str(&format_days(sc, daily, stats));
     if a.verbose {
         o.push_str(&format_solver(stats, wall_s, t_end_s / period_s));
@@ -321,7 +321,23 @@ fn report_run(
     if let Some(p) = &a.csv {
         outln!(o, "csv: {}", p.display());
     }
-    o.push_str(&figure_and_log(a, log_path, stats, run_end)?);
+    // a replayed margins sample says which on its figure, a steady state that the
+    // figure is one period of the periodic orbit
+    let mut parts = Vec::new();
+    if let Some((k, seed)) = a.sample.zip(a.seed) {
+        parts.push(format!("margins sample {k} (seed {seed})"));
+    }
+    if a.steady_state {
+        parts.push("steady state: one period of the periodic orbit".to_string());
+    }
+    let title = (!parts.is_empty()).then(|| format!("{}, {}", sc.name, parts.join(", ")));
+    o.push_str(&figure_and_log(
+        a,
+        log_path,
+        stats,
+        run_end,
+        title.as_deref(),
+    )?);
     print_out(&o)?;
     let pass = verdicts.iter().all(|v| v.passes());
     if stats.interrupted {
@@ -342,6 +358,7 @@ fn figure_and_log(
     log_path: Option<&std::path::Path>,
     stats: &RunStats,
     run_end: &orbitlash::run::summary::RunEnd,
+    title: Option<&str>,
 ) -> Result<String> {
     let mut o = String::new();
     if a.plot.is_some() && stats.interrupted {
@@ -356,7 +373,7 @@ fn figure_and_log(
         let source = log_path
             .or(a.csv.as_deref())
             .expect("checked in plan_outputs");
-        super::plot::draw(source, f, None, Some(run_end), &[])
+        super::plot::draw(source, f, title, Some(run_end), &[])
             .map_err(|e| anyhow!("--plot {}: {}", f.display(), error_chain(&e)))?;
         outln!(o, "plot: {}", f.display());
     }
@@ -922,8 +939,6 @@ fn format_summary(
         env.eclipse_fraction_at(stats.t_start_s),
         stats.eclipse_time_s / (stats.t_end_s - stats.t_start_s)
     );
-    // the orbit the window covers (its start rounds to an orbit boundary)
-    let last_orbit = env.orbit_number(window.window_start_s() + 0.5 * period_s);
     if window.window_start_s() == 0.0 && stats.t_end_s > 1.5 * period_s {
         outln!(
             o,
@@ -931,9 +946,20 @@ fn format_summary(
             stats.t_end_s
         );
     } else {
+        let (first, last) = window_orbits(env, window.window_start_s(), stats.t_end_s);
+        let (name, orbits) = if first == last {
+            ("last orbit", format!("orbit {first}"))
+        } else {
+            // a run of 14.3 orbits: the window is the end of orbit 14 and the start of
+            // orbit 15, not one orbit
+            (
+                "last period",
+                format!("the end of orbit {first}, the start of {last}"),
+            )
+        };
         outln!(
             o,
-            "\nlast orbit (orbit {last_orbit}, t = {:.1} … {:.1} s):",
+            "\n{name} ({orbits}, t = {:.1} … {:.1} s):",
             window.window_start_s(),
             stats.t_end_s
         );
@@ -1008,9 +1034,26 @@ fn format_summary(
 /// A model variant's (smallest, largest) backlash from a pair's statistics.
 type Extremes = fn(&PairStats) -> (f64, f64);
 
-fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
+/// The orbits (numbered from 1) a window of one period ends in: the same number
+/// twice when it is one whole orbit.
+fn window_orbits(env: &orbitlash::orbit::Environment, start_s: f64, end_s: f64) -> (u64, u64) {
+    let eps = 1e-6 * env.mean_period_s();
+    (
+        env.orbit_number(start_s + eps),
+        env.orbit_number(end_s - eps),
+    )
+}
+
+fn format_mesh(sc: &Scenario, mesh: &MeshStats, window: &WindowStats, t_end_s: f64) -> String {
     let mut o = String::new();
     let phase = |t: f64| orbit_phase(sc, t);
+    let env = &sc.thermal.environment;
+    let (first, last) = window_orbits(env, window.window_start_s(), t_end_s);
+    let (min, max) = if first == last {
+        ("last orbit min", "last orbit max")
+    } else {
+        ("last period min", "last period max")
+    };
     for ((pair, r), l) in sc.gears.iter().zip(&mesh.run_pairs).zip(&mesh.pairs) {
         outln!(
             o,
@@ -1019,7 +1062,7 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats) -> String {
             pair.min_backlash_m * 1e6
         );
         let mut table = table::new(
-            &["", "run min", "run max", "last orbit min", "last orbit max"],
+            &["", "run min", "run max", min, max],
             &[
                 Align::Left,
                 Align::Right,

@@ -1247,11 +1247,38 @@ impl Observer for McapLog {
                 "stopped on request; the data up to t_end_s are complete",
             )
         } else {
+            let end = self.run_end(stats.t_end_s, true);
+            let (level, text) = run_complete_event(stats.t_end_s, &end);
+            self.batch.items.push(Item::Event {
+                t_s: stats.t_end_s,
+                level,
+                text,
+            });
             ("complete", "")
         };
         self.finish(status, stats.t_end_s, detail)?;
         Ok(())
     }
+}
+
+/// The `/events` entry that closes a complete run: its end time and verdict, and each
+/// pair's smallest backlash with its time (as the `run_end` record carries them);
+/// a warning (level 3) when the verdict fails, else info (2).
+fn run_complete_event(t_end_s: f64, end: &RunEnd) -> (i64, String) {
+    let mut text = format!(
+        "run complete at t = {t_end_s:.3} s: verdict {}",
+        end.verdict
+    );
+    for p in &end.pairs {
+        if let (Some(b), Some(t)) = (p.min_backlash_um, p.t_min_s) {
+            text.push_str(&format!(
+                "; {} smallest backlash {b:.3} µm at t = {t:.1} s ({})",
+                p.name, p.verdict
+            ));
+        }
+    }
+    let level = if end.verdict == "fail" { 3 } else { 2 };
+    (level, text)
 }
 
 /// Names used in event texts.

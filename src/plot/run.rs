@@ -254,7 +254,7 @@ const FAILURES: [(&str, &str); 3] = [
     ("margin_violated", "backlash below the smallest allowed"),
     (
         "interference",
-        "the teeth interfere (backlash reached zero)",
+        "the teeth interfere (backlash at or below zero)",
     ),
     (
         "no_valid_mesh",
@@ -504,6 +504,27 @@ impl<'s> RunLayout<'s> {
 impl RunSeries {
     /// Keeps the temperatures of the nodes `names`, in that order (a name given twice
     /// once); an unknown name is an error that lists the nodes there are.
+    /// Sets how the run ended, and takes from it each pair's smallest allowed backlash
+    /// where the rows do not give it (a CSV has no margin column): the limit line is on
+    /// the figure whatever the table was.
+    pub fn with_end(mut self, end: Option<RunEnd>) -> RunSeries {
+        if let Some(e) = &end {
+            for (p, _) in &self.backlash_um {
+                let known = self.allowed_um.iter().any(|(q, _)| q == p);
+                let from_end = e.pairs.iter().find(|q| {
+                    q.name == *p
+                        || crate::units::identifier(&q.name) == *p
+                        || (p.is_empty() && e.pairs.len() == 1)
+                });
+                if !known && let Some(a) = from_end.and_then(|q| q.min_allowed_um) {
+                    self.allowed_um.push((p.clone(), a));
+                }
+            }
+        }
+        self.end = end;
+        self
+    }
+
     pub fn keep_nodes(&mut self, names: &[String]) -> Result<(), PlotError> {
         let total = self.temps_k.len();
         let mut kept: Vec<(String, Vec<f64>)> = Vec::new();
