@@ -164,6 +164,25 @@ fn cli_export_reads_a_cut_log_and_recover_makes_it_valid() {
     let table = read_log(&recovered).unwrap();
     assert!(table.truncated.is_none());
     assert_eq!(table.rows.len() + 1, rows.len());
+
+    // asked to stop while writing (Ctrl-C: `recover` passes its interrupt flag), the
+    // copy is not written, and neither is its temporary file left behind
+    let s = scan(&bytes[..cut]).unwrap();
+    assert!(s.messages.len() > 256, "{} messages", s.messages.len());
+    let out = dir.join("stopped/run.recovered.mcap");
+    std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+    let policy = orbitlash::io::output::OutputPolicy::reading(&[&partial]);
+    let err = orbitlash::io::mcap_scan::recover(&s, &out, &policy, None, &|| true).unwrap_err();
+    let chain = format!(
+        "{err}: {}",
+        std::error::Error::source(&err).map_or(String::new(), |c| c.to_string())
+    );
+    assert!(
+        chain.contains("interrupted: nothing was written"),
+        "{chain}"
+    );
+    let left: Vec<_> = std::fs::read_dir(out.parent().unwrap()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

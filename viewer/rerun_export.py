@@ -20,7 +20,7 @@ views grouped as an engineer reads them:
   the logged samples, which can miss the minimum between them; a log written before
   that record had them gets both from its samples;
 - heat flows, W; the orbit (sunlit, β, solar flux); face fluxes of a dated scenario;
-- events (eclipse entries and exits, heater switches) as a text log.
+- events (eclipse entries and exits, heater switches, the run's end) as a text log.
 
 Every line keeps its extremes when a pixel covers many samples (aggregation MinMax:
 Rerun's default averages them, and a 90-day run's temperatures would show a third of

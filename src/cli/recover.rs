@@ -110,7 +110,11 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     kept_s.sort_by(f64::total_cmp);
     let left_s: Vec<f64> = damaged.iter().map(|d| d.t_s).collect();
     let left_out = LeftOut::of(&left_s, &kept_s);
-    let r = write_recovered(&s, &out, &policy, left_out.clone())?;
+    // Ctrl-C while writing: the copy is left unfinished and its temporary file removed
+    // (reading is not watched: stopped then, nothing is on disk)
+    let flag = super::interrupt_flag();
+    let stop = || flag.load(std::sync::atomic::Ordering::Relaxed);
+    let r = write_recovered(&s, &out, &policy, left_out.clone(), &stop)?;
     let how = if damaged.is_empty() && damaged_chunks > 0 {
         format!("{damaged_chunks} damaged chunk(s) written again with their CRCs")
     } else if let (true, Some(d)) = (damaged.is_empty() && s.data_complete, &s.tail_damage) {

@@ -518,12 +518,14 @@ impl LeftOut {
 /// over an input: `policy`), with a `orbitlash.run_end` record of status `recovered`
 /// when the original had none, or when `left_out` messages were left out of one that
 /// had it (its verdict, the run's own, kept; its status kept as `original_status`).
-/// Messages whose channel or schema was lost are skipped.
+/// Messages whose channel or schema was lost are skipped. `stop` is asked every 256
+/// messages: when it says yes, the temporary file is removed and nothing is written.
 pub fn recover(
     scan: &Scan<'_>,
     out: &Path,
     policy: &super::output::OutputPolicy,
     left_out: Option<LeftOut>,
+    stop: &dyn Fn() -> bool,
 ) -> Result<Recovery, super::output::OutputError> {
     use super::output::OutputError;
     let err = |e: mcap::McapError| OutputError::other(out, e);
@@ -576,6 +578,10 @@ pub fn recover(
         }
         w.write_to_known_channel(&m.header, m.data).map_err(err)?;
         kept += 1;
+        if kept.is_multiple_of(256) && stop() {
+            // the temporary file goes with `w`: nothing is left under any name
+            return Err(OutputError::other(out, "interrupted: nothing was written"));
+        }
         last_ns = last_ns.max(m.header.log_time);
     }
     let original_status = scan
