@@ -204,9 +204,10 @@ def smallest_point(topic, series, pairs, origin_ns):
     return Smallest(bt[i], bv[i], None, None, None)
 
 
-def smallest_label(pair, low):
-    """E.g. "stage1 smallest: 24.398 µm (FAIL: margin violated)"."""
-    text = f"{low.name or pair} smallest: {low.value_um:.3f} µm"
+def smallest_label(low):
+    """E.g. "smallest: 24.398 µm (FAIL: margin violated)" (the view's title names the
+    pair)."""
+    text = f"smallest: {low.value_um:.3f} µm"
     verdict = VERDICTS.get(low.verdict, str(low.verdict).upper()) if low.verdict else None
     return f"{text} ({verdict})" if verdict else text
 
@@ -271,7 +272,7 @@ def send_gear(out, topic, field, t, v, series, pairs, groups):
     if field in BACKLASH_FIELDS:
         entity = f"backlash/{pair}/{field[:-3]}"
         colour = PALETTE[BACKLASH_FIELDS.index(field)]
-        out.series(entity, t, v, f"{pair} {field[:-3].replace('_', ' ')} (µm)", colour)
+        out.series(entity, t, v, field[len("backlash_"):-3].replace("_", " "), colour)
         groups[backlash].append(entity)
     elif field == "margin_um" and (topic, "backlash_exact_um") in series:
         bt, bv = series[(topic, "backlash_exact_um")]
@@ -280,14 +281,14 @@ def send_gear(out, topic, field, t, v, series, pairs, groups):
             allowed = [low.allowed_um] * len(bt)
         else:  # a log before pairs_json: backlash less margin
             allowed = [b - m for b, m in zip(bv, v)]
-        label = f"{pair} smallest allowed (µm)"
+        label = "smallest allowed"
         if low.t_ns is None and low.verdict:  # no point to carry the verdict
             label += f" ({VERDICTS.get(low.verdict, str(low.verdict).upper())})"
         entity = f"backlash/{pair}/minimum_allowed"
         out.series(entity, bt, allowed, label, ALLOWED_RED)
         groups[backlash].append(entity)
         if low.t_ns is not None:
-            out.point(f"backlash/{pair}/smallest", low.t_ns, low.value_um, smallest_label(pair, low))
+            out.point(f"backlash/{pair}/smallest", low.t_ns, low.value_um, smallest_label(low))
             groups[backlash].append(f"backlash/{pair}/smallest")
     else:
         entity = f"gears/{pair}/{field}"
@@ -366,15 +367,15 @@ def send_envelopes(out, series, channels, pairs, starts, eclipses=None):
             title = (f"{g[0]} per orbit: min and max (°C)" if g
                      else "node temperatures per orbit: min and max (°C)")
             # a gear's node keeps the colour of its radial index, as in the samples tab
-            both(title, f"temperature/{node}", f"{node} (°C)", t, v, offset=-273.15, k=g[1] if g else None)
+            both(title, f"temperature/{node}", node, t, v, offset=-273.15, k=g[1] if g else None)
         elif topic.startswith("/gears/") and field == "backlash_exact_um":
             pair = topic[len("/gears/"):].replace("/", "_")
             title = f"backlash per orbit, gear pair {pair} (µm)"
-            both(title, f"backlash/{pair}", f"{pair} exact (µm)", t, v)
+            both(title, f"backlash/{pair}", "exact", t, v)
             low = smallest_point(topic, series, pairs, out.origin_ns)
             if low.allowed_um is not None:  # the smallest allowed: a line from start to end
                 out.series(f"per_orbit/backlash/{pair}/minimum_allowed", [t[0], t[-1]], [low.allowed_um] * 2,
-                           f"{pair} smallest allowed (µm)", ALLOWED_RED)
+                           "smallest allowed", ALLOWED_RED)
                 views[title].append(f"per_orbit/backlash/{pair}/minimum_allowed")
             if low.t_ns is not None:  # the run's smallest, sent with the samples
                 views[title].append(f"backlash/{pair}/smallest")
@@ -383,7 +384,7 @@ def send_envelopes(out, series, channels, pairs, starts, eclipses=None):
             title = "heat flows, orbit average (W)"
             entity = f"per_orbit/heat/{field}"
             name = field[:-2] if field.endswith("_w") else field
-            out.series(entity, mid, mean, f"{name} (W)", PALETTE[colour[title] % len(PALETTE)])
+            out.series(entity, mid, mean, name, PALETTE[colour[title] % len(PALETTE)])
             colour[title] += 1
             views[title].append(entity)
         elif (topic, field) == ("/orbit/state", "sunlit"):
@@ -430,14 +431,14 @@ def send_series(out, series, channels, pairs):
             g = radial(node, field)
             entity = f"temperature/{g[0]}/r{g[1]}" if g else f"temperature/body/{node}"
             k = g[1] if g else len(body)
-            out.series(entity, t, [x - 273.15 for x in v], f"{node} (°C)", PALETTE[k % len(PALETTE)])
+            out.series(entity, t, [x - 273.15 for x in v], node, PALETTE[k % len(PALETTE)])
             (gears[g[0]] if g else body).append(entity)
         elif topic.startswith("/gears/"):
             send_gear(out, topic, field, t, v, series, pairs, groups)
         elif topic == "/thermal/heat":
             entity = f"heat/{field}"
             k = len(groups["heat flows (W)"])
-            out.series(entity, t, v, f"{field[:-2] if field.endswith('_w') else field} (W)", PALETTE[k % len(PALETTE)])
+            out.series(entity, t, v, field[:-2] if field.endswith("_w") else field, PALETTE[k % len(PALETTE)])
             groups["heat flows (W)"].append(entity)
         elif topic.startswith("/diagnose/"):
             # diagnose.mcap: one topic per channel, fields recorded/baseline/corrected/residuals

@@ -487,7 +487,7 @@ def test_smallest_from_run(tmp, sparse):
     expect(abs(t_ns - T_MIN_S * 1e9) < 1e3, f"smallest at sim_time {t_ns * 1e-9} s, the run's at {T_MIN_S} s")
     expect(utc_ns is not None and abs(utc_ns - (ORIGIN_NS + T_MIN_S * 1e9)) < 1e3,
            f"smallest at utc {utc_ns} ns, the run's at {ORIGIN_NS + T_MIN_S * 1e9:.0f}")
-    expect(label == f"mesh smallest: {value:.3f} µm (PASS)", f"label {label!r}")
+    expect(label == f"smallest: {value:.3f} µm (PASS)", f"label {label!r}")
     expect(allowed == {5.0}, f"smallest allowed line {sorted(allowed)}")
 
 
@@ -498,7 +498,7 @@ def test_smallest_verdict_fail(tmp, sparse):
     run_end = {"verdict": "fail", "pairs_json": json.dumps([pair])}
     (label, value, _, _), allowed = smallest_of(export_imitation(tmp, sparse, "run-fail", run_end))
     expect(value == pair["min_backlash_um"], f"smallest {value} µm, the run's {pair['min_backlash_um']}")
-    expect(label.startswith(f"mesh smallest: {value:.3f} µm (FAIL"), f"label {label!r}")
+    expect(label.startswith(f"smallest: {value:.3f} µm (FAIL"), f"label {label!r}")
     expect(allowed == {25.0}, f"smallest allowed line {sorted(allowed)}, not the run's 25.0")
 
 
@@ -506,7 +506,7 @@ def test_smallest_older_log(tmp, sparse):
     """A log without pairs_json: the smallest of the samples, as before."""
     t_ns, value = min(logged_backlash(sparse), key=lambda x: x[1])
     (label, got, got_t, _), _ = smallest_of(export_imitation(tmp, sparse, "older", {}))
-    expect(got == value and got_t == t_ns and label == f"mesh smallest: {value:.3f} µm",
+    expect(got == value and got_t == t_ns and label == f"smallest: {value:.3f} µm",
            f"smallest {label!r} {got} at {got_t} ns, the samples' {value} at {t_ns} ns")
 
 
@@ -528,7 +528,7 @@ def test_smallest_binary_log(tmp, sparse, pairs):
     (label, value, t_ns, _), allowed = smallest_of(rrd, pair["name"])
     expect(value == pair["min_backlash_um"] and abs(t_ns - pair["t_min_s"] * 1e9) < 1e3,
            f"smallest {value} µm at {t_ns * 1e-9} s, the run's {pair['min_backlash_um']} at {pair['t_min_s']} s")
-    expect(label == f"{pair['name']} smallest: {value:.3f} µm ({pair['verdict'].upper()})", f"label {label!r}")
+    expect(label == f"smallest: {value:.3f} µm ({pair['verdict'].upper()})", f"label {label!r}")
     expect(allowed == {pair["min_allowed_um"]}, f"smallest allowed line {sorted(allowed)}")
 
 
