@@ -447,7 +447,8 @@ def send_series(out, series, channels, pairs):
                 continue  # the fitted/held-out flag, not a series
             entity = f"diagnose/{ch}/{field}"
             # the recording as points, the corrected model as the boldest line
-            out.series(entity, t, v, f"{ch} {field.replace('_', ' ')}", DIAGNOSE_COLORS.get(field),
+            # (the view's title names the channel)
+            out.series(entity, t, v, field.replace("_", " "), DIAGNOSE_COLORS.get(field),
                        points=field == "recorded", width=2.5 if field.endswith(("corrected", "after")) else None)
             key = "residuals" if field.startswith("residual") else "series"
             groups[f"{ch}: {key}"].append(entity)
