@@ -69,6 +69,11 @@ fn cli_diagnose_heater_report_json_and_out_folder() {
             "heater_thermostat (physics) on node housing",
         ))
         .stdout(predicate::str::contains("on_c = "))
+        // the example ends 23.7 s (under its 30 s sampling interval) before its
+        // 12th orbit does: counted whole, and said
+        .stdout(predicate::str::contains(
+            "12 whole orbits of 5677.0 s (the recording stops 23.7 s before the last one ends",
+        ))
         // times in the figures' unit (hours for a recording of hours)
         .stdout(predicate::str::is_match(r"first at t = \d+\.\d{3} … \d+\.\d{3} h;").unwrap());
     // The contract's keys.

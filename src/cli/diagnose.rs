@@ -598,9 +598,18 @@ fn report_head(o: &mut String, d: &Diagnosis, scenario: &str, recording: &str) {
                 format!("orbits {a}–{b}")
             }
         };
+        // an orbit short by under a sampling interval counts as whole: said when it is
+        let short = if s.last_orbit_short_s >= 0.05 {
+            format!(
+                " (the recording stops {:.1} s before the last one ends, within a sampling interval)",
+                s.last_orbit_short_s
+            )
+        } else {
+            String::new()
+        };
         outln!(
             o,
-            "{} whole orbits of {:.1} s: fitted on {}, checked on {} (held out, never fitted)",
+            "{} whole orbits of {:.1} s{short}: fitted on {}, checked on {} (held out, never fitted)",
             s.orbits,
             s.period_s,
             span(1, s.train_orbits),

@@ -29,6 +29,10 @@ pub struct Split {
     pub holdout_orbits: usize,
     pub train_end_s: f64,
     pub holdout_end_s: f64,
+    /// How far before the last whole orbit's end the recording stops (0 when it
+    /// reaches it): an orbit short by less than `slack_s` still counts as whole.
+    #[serde(skip)]
+    pub last_orbit_short_s: f64,
 }
 
 impl Split {
@@ -44,6 +48,7 @@ impl Split {
         holdout: Option<usize>,
     ) -> Result<Split, String> {
         let orbits = ((t_last_s + slack_s.max(1e-6 * period_s)) / period_s).floor() as usize;
+        let last_orbit_short_s = (orbits as f64 * period_s - t_last_s).max(0.0);
         if orbits < 2 {
             return Ok(Split {
                 period_s,
@@ -52,6 +57,7 @@ impl Split {
                 holdout_orbits: 0,
                 train_end_s: f64::INFINITY,
                 holdout_end_s: f64::INFINITY,
+                last_orbit_short_s,
             });
         }
         let h = holdout.unwrap_or((orbits / 3).max(1));
@@ -69,6 +75,7 @@ impl Split {
             holdout_orbits: h,
             train_end_s: train as f64 * period_s,
             holdout_end_s: orbits as f64 * period_s,
+            last_orbit_short_s,
         })
     }
 
