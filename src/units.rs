@@ -44,15 +44,16 @@ pub fn sig(v: f64) -> String {
     }
 }
 
-/// A number to `n` significant digits (n ≥ 1), trailing zeros dropped, in exponent form
-/// outside 1e-3 … 1e5: a sampled value in a line of text (29.9937, 1.11123e-5), where
-/// [`exact`]'s 17 digits are noise and [`sig`]'s four hide a dispersion of microns.
+/// A number to `n` significant digits (n ≥ 1), trailing zeros dropped: plain when its
+/// rounded value is within 1e-3 … 1e5 and `n` digits reach its units, else in exponent
+/// form (29.9937, 1.11123e-5, 1.23e4 for 12345 to 3 digits, 1e5 for 99999.96 to 6): a
+/// sampled value in a line of text, where [`exact`]'s 17 digits are noise and [`sig`]'s
+/// four hide a dispersion of microns.
 pub fn digits(v: f64, n: usize) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
     }
-    let n = n.max(1);
-    let e = v.abs().log10().floor() as i32;
+    let n = n.max(1) as i32;
     let trim = |s: &str| {
         if s.contains('.') {
             s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -60,11 +61,13 @@ pub fn digits(v: f64, n: usize) -> String {
             s.to_string()
         }
     };
-    if (-3..5).contains(&e) {
-        trim(&format!("{:.*}", (n as i32 - 1 - e).max(0) as usize, v))
+    // rounded first: its exponent after rounding (99999.96 to 6 digits is 1e5)
+    let sci = format!("{v:.*e}", (n - 1) as usize);
+    let (mantissa, exponent) = sci.split_once('e').expect("exponent form");
+    let e: i32 = exponent.parse().expect("an exponent");
+    if (-3..5).contains(&e) && n - 1 - e >= 0 {
+        trim(&format!("{:.*}", (n - 1 - e) as usize, v))
     } else {
-        let s = format!("{v:.*e}", n - 1);
-        let (mantissa, exponent) = s.split_once('e').expect("exponent form");
         format!("{}e{exponent}", trim(mantissa))
     }
 }
@@ -194,6 +197,14 @@ mod tests {
         assert_eq!(digits(123456.7, 6), "1.23457e5");
         assert_eq!(digits(-0.5, 3), "-0.5");
         assert_eq!(digits(0.0, 6), "0");
+        // fewer digits than the integer part has, and values that round up a decade
+        assert_eq!(digits(12345.0, 3), "1.23e4");
+        assert_eq!(digits(1393.0, 1), "1e3");
+        assert_eq!(digits(99999.96, 6), "1e5");
+        assert_eq!(digits(-99999.99, 6), "-1e5");
+        assert_eq!(digits(99999.95, 6), "99999.9");
+        assert_eq!(digits(9.9996, 4), "10");
+        assert_eq!(digits(0.00099999, 6), "9.9999e-4");
     }
 
     #[test]

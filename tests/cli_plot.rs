@@ -1137,7 +1137,7 @@ fn regress_plot_of_a_csv_and_of_its_log_mark_the_run_s_own_smallest() {
 fn cli_run_plot_names_a_replayed_sample_and_a_steady_state() {
     let dir = common::tmpdir("plot-titles");
     let scenarios = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
-    let cases: [(&str, &[&str], &str); 2] = [
+    let cases: [(&str, &[&str], &str); 3] = [
         (
             "reference-hinge.toml",
             &["--steady-state"],
@@ -1147,6 +1147,22 @@ fn cli_run_plot_names_a_replayed_sample_and_a_steady_state() {
             "reference-hinge-margins.toml",
             &["--sample", "2", "--seed", "7", "--orbits", "1"],
             "reference-hinge-margins, margins sample 2 (seed 7)",
+        ),
+        (
+            "reference-hinge-margins.toml",
+            &[
+                "--sample",
+                "2",
+                "--seed",
+                "7",
+                "--sampling",
+                "lhs",
+                "--samples",
+                "10",
+                "--orbits",
+                "1",
+            ],
+            "reference-hinge-margins, margins sample 2 (seed 7, lhs of 10)",
         ),
     ];
     for (i, (scenario, args, title)) in cases.into_iter().enumerate() {
@@ -1187,4 +1203,52 @@ fn cli_run_plot_names_a_replayed_sample_and_a_steady_state() {
             .any(|t| t.contains("sample") || t.contains("steady")),
         "{l:?}"
     );
+}
+
+/// A CSV's pair takes its smallest allowed backlash and its smallest point from the end
+/// record's pair of its exact name, not from another pair whose name made an identifier
+/// is the same (`Stage-1` → `stage_1`, beside a pair called `stage_1`).
+#[test]
+fn cli_plot_pairs_whose_identifiers_collide_keep_their_own_limits() {
+    use orbitlash::run::summary::{PairEnd, RunEnd};
+    let h: Vec<String> = [
+        "time_s",
+        "housing_k",
+        "Stage-1.backlash_um",
+        "stage_1.backlash_um",
+    ]
+    .iter()
+    .map(|x| x.to_string())
+    .collect();
+    let r: Vec<Vec<f64>> = (0..50)
+        .map(|i| {
+            vec![
+                i as f64 * 60.0,
+                290.0,
+                20.0 + i as f64 * 0.1,
+                25.0 + i as f64 * 0.1,
+            ]
+        })
+        .collect();
+    let pair = |name: &str, min: f64, t: f64, allowed: f64, verdict: &str| PairEnd {
+        name: name.into(),
+        min_backlash_um: Some(min),
+        t_min_s: Some(t),
+        min_allowed_um: Some(allowed),
+        verdict: verdict.into(),
+    };
+    let end = RunEnd {
+        verdict: "fail".into(),
+        pairs: vec![
+            pair("Stage-1", 20.0, 0.0, 5.0, "pass"),
+            pair("stage_1", 25.0, 0.0, 30.0, "margin_violated"),
+        ],
+        eclipses_s: vec![],
+    };
+    let s = RunSeries::from_table("collide", &h, &r)
+        .unwrap()
+        .with_end(Some(end));
+    let allowed = |p: &str| s.allowed_um.iter().find(|(q, _)| q == p).map(|x| x.1);
+    assert_eq!(allowed("Stage-1"), Some(5.0));
+    assert_eq!(allowed("stage_1"), Some(30.0));
 }

@@ -37,6 +37,23 @@ fn cli_run_without_arguments_uses_the_embedded_reference_and_writes_a_log() {
         text.contains("last period min") && !text.contains("last orbit"),
         "{text}"
     );
+    // shorter than an orbit: the whole run, in the mesh table too
+    let out = bin()
+        .args(["run", "--orbits", "0.3", "--no-log", "--quiet"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("the whole run (0.30 of an orbit, t = 0 … "),
+        "{text}"
+    );
+    assert!(
+        text.contains("whole run min")
+            && !text.contains("last orbit")
+            && !text.contains("last period"),
+        "{text}"
+    );
     for node in ["housing", "gear1.r2", "gear2.r2"] {
         assert!(stdout.contains(node), "{node} missing from the summary");
     }

@@ -314,6 +314,13 @@ fn cli_ctrl_c_closes_the_log_and_says_so() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "an interrupted run must not exit 0");
     assert!(stderr.contains("interrupted at t ="), "{stderr}");
+    // the summary's window is the whole run, and says so (not "last period")
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("the whole run (interrupted before its last orbit), t = 0 … ")
+            && !stdout.contains("last period"),
+        "{stdout}"
+    );
     let t = read_log(&log).unwrap();
     let end = &t.metadata["orbitlash.run_end"];
     assert_eq!(end["status"], "interrupted");

@@ -307,7 +307,7 @@ fn report_run(
         outln!(o, "{line}");
     }
     o.push_str(&format_summary(&sc.thermal, stats, window, period_s));
-    o.push_str(&format_mesh(sc, mesh, window, stats.t_end_s));
+    o.push_str(&format_mesh(sc, mesh, stats));
     o.push_str(&format_days(sc, daily, stats));
     if a.verbose {
         o.push_str(&format_solver(stats, wall_s, t_end_s / period_s));
@@ -325,7 +325,12 @@ fn report_run(
     // figure is one period of the periodic orbit
     let mut parts = Vec::new();
     if let Some((k, seed)) = a.sample.zip(a.seed) {
-        parts.push(format!("margins sample {k} (seed {seed})"));
+        // a Latin hypercube's sample K depends on N too
+        let lhs = match (a.sampling, a.samples) {
+            (super::margins::SamplingArg::Lhs, Some(n)) => format!(", lhs of {n}"),
+            _ => String::new(),
+        };
+        parts.push(format!("margins sample {k} (seed {seed}{lhs})"));
     }
     if a.steady_state {
         parts.push("steady state: one period of the periodic orbit".to_string());
@@ -939,31 +944,8 @@ fn format_summary(
         env.eclipse_fraction_at(stats.t_start_s),
         stats.eclipse_time_s / (stats.t_end_s - stats.t_start_s)
     );
-    if window.window_start_s() == 0.0 && stats.t_end_s > 1.5 * period_s {
-        outln!(
-            o,
-            "\nthe whole run (interrupted before its last orbit), t = 0 … {:.1} s:",
-            stats.t_end_s
-        );
-    } else {
-        let (first, last) = window_orbits(env, window.window_start_s(), stats.t_end_s);
-        let (name, orbits) = if first == last {
-            ("last orbit", format!("orbit {first}"))
-        } else {
-            // a run of 14.3 orbits: the window is the end of orbit 14 and the start of
-            // orbit 15, not one orbit
-            (
-                "last period",
-                format!("the end of orbit {first}, the start of {last}"),
-            )
-        };
-        outln!(
-            o,
-            "\n{name} ({orbits}, t = {:.1} … {:.1} s):",
-            window.window_start_s(),
-            stats.t_end_s
-        );
-    }
+    let (heading, _) = window_label(env, window.window_start_s(), stats);
+    outln!(o, "\n{heading}:");
     let mut table = table::new(
         &["node", "min °C", "max °C", "mean °C"],
         &[Align::Left, Align::Right, Align::Right, Align::Right],
@@ -1034,26 +1016,60 @@ fn format_summary(
 /// A model variant's (smallest, largest) backlash from a pair's statistics.
 type Extremes = fn(&PairStats) -> (f64, f64);
 
-/// The orbits (numbered from 1) a window of one period ends in: the same number
-/// twice when it is one whole orbit.
-fn window_orbits(env: &orbitlash::orbit::Environment, start_s: f64, end_s: f64) -> (u64, u64) {
-    let eps = 1e-6 * env.mean_period_s();
-    (
+/// What the summary's window (from `start_s` to the run's end) is: its heading and the
+/// name its columns take. The last orbit when it is one whole orbit; "last period" when
+/// the run ends inside an orbit (14.3 orbits: the end of orbit 14 and the start of 15);
+/// the whole run when the run is shorter than an orbit, or was interrupted before its
+/// last orbit began (the window then starts at 0; a window that starts after the end
+/// saw nothing, and keeps the last orbit's name over its dashes).
+fn window_label(
+    env: &orbitlash::orbit::Environment,
+    start_s: f64,
+    stats: &RunStats,
+) -> (String, &'static str) {
+    let period_s = env.mean_period_s();
+    let end_s = stats.t_end_s;
+    let eps = 1e-6 * period_s;
+    let (first, last) = (
         env.orbit_number(start_s + eps),
         env.orbit_number(end_s - eps),
-    )
+    );
+    if start_s >= end_s {
+        ("last orbit (not reached)".into(), "last orbit")
+    } else if start_s == 0.0 && stats.interrupted {
+        (
+            format!("the whole run (interrupted before its last orbit), t = 0 … {end_s:.1} s"),
+            "whole run",
+        )
+    } else if start_s == 0.0 && end_s < period_s - eps {
+        (
+            format!(
+                "the whole run ({} of an orbit, t = 0 … {end_s:.1} s)",
+                fixed(end_s / period_s, 2)
+            ),
+            "whole run",
+        )
+    } else if first == last {
+        (
+            format!("last orbit (orbit {first}, t = {start_s:.1} … {end_s:.1} s)"),
+            "last orbit",
+        )
+    } else {
+        (
+            format!(
+                "last period (the end of orbit {first}, the start of {last}, t = {start_s:.1} … {end_s:.1} s)"
+            ),
+            "last period",
+        )
+    }
 }
 
-fn format_mesh(sc: &Scenario, mesh: &MeshStats, window: &WindowStats, t_end_s: f64) -> String {
+fn format_mesh(sc: &Scenario, mesh: &MeshStats, stats: &RunStats) -> String {
     let mut o = String::new();
     let phase = |t: f64| orbit_phase(sc, t);
-    let env = &sc.thermal.environment;
-    let (first, last) = window_orbits(env, window.window_start_s(), t_end_s);
-    let (min, max) = if first == last {
-        ("last orbit min", "last orbit max")
-    } else {
-        ("last period min", "last period max")
-    };
+    // the pair statistics' own window (it is not the temperatures' when interrupted)
+    let (_, name) = window_label(&sc.thermal.environment, mesh.window_start_s(), stats);
+    let (min, max) = (format!("{name} min"), format!("{name} max"));
     for ((pair, r), l) in sc.gears.iter().zip(&mesh.run_pairs).zip(&mesh.pairs) {
         outln!(
             o,
@@ -1062,7 +1078,7 @@ fn format_mesh(sc: &Scenario, mesh: &MeshStats, window: &WindowStats, t_end_s: f
             pair.min_backlash_m * 1e6
         );
         let mut table = table::new(
-            &["", "run min", "run max", min, max],
+            &["", "run min", "run max", &min, &max],
             &[
                 Align::Left,
                 Align::Right,

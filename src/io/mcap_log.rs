@@ -1270,11 +1270,16 @@ fn run_complete_event(t_end_s: f64, end: &RunEnd) -> (i64, String) {
         end.verdict
     );
     for p in &end.pairs {
-        if let (Some(b), Some(t)) = (p.min_backlash_um, p.t_min_s) {
-            text.push_str(&format!(
+        match (p.min_backlash_um, p.t_min_s) {
+            (Some(b), Some(t)) => text.push_str(&format!(
                 "; {} smallest backlash {b:.3} µm at t = {t:.1} s ({})",
                 p.name, p.verdict
-            ));
+            )),
+            // no valid mesh at any step: no smallest, but the pair and its verdict
+            _ => text.push_str(&format!(
+                "; {}: no smallest backlash ({})",
+                p.name, p.verdict
+            )),
         }
     }
     let level = if end.verdict == "fail" { 3 } else { 2 };

@@ -584,6 +584,10 @@ pub fn recover(
         }
         last_ns = last_ns.max(m.header.log_time);
     }
+    // asked once more after the last messages (the file is then whole at the rename)
+    if stop() {
+        return Err(OutputError::other(out, "interrupted: nothing was written"));
+    }
     let original_status = scan
         .metadata_value("orbitlash.run_end", "status")
         .map(str::to_string);

@@ -185,7 +185,7 @@ fn draw_channel(
     }
     let (ylo, yhi) = nice_range(lo, hi);
     let head = format!(
-        "{} ({unit}): held-out RMSE {:.2} → {:.2} {unit}",
+        "{}: held-out RMSE {:.2} → {:.2} {unit}",
         s.channels[c],
         heldout_rms(s, c, &s.baseline[c]),
         heldout_rms(s, c, &s.corrected[c])

@@ -229,11 +229,7 @@ fn smallest_points(s: &RunSeries) -> Vec<(String, f64, f64)> {
         .iter()
         .map(|(p, v)| {
             let from_end = s.end.as_ref().and_then(|e| {
-                let pe = e.pairs.iter().find(|q| {
-                    q.name == *p
-                        || crate::units::identifier(&q.name) == *p
-                        || (p.is_empty() && e.pairs.len() == 1)
-                })?;
+                let pe = end_pair(e, p)?;
                 Some((pe.t_min_s?, pe.min_backlash_um?))
             });
             let (t, m) = from_end.unwrap_or_else(|| {
@@ -501,9 +497,22 @@ impl<'s> RunLayout<'s> {
     }
 }
 
+/// The end record's entry of the pair a table calls `p`: its exact name first, then the
+/// name made an identifier (a log's topic: `Stage-1` → `stage_1`, which another pair may
+/// be called exactly), then the only pair for a table's bare `backlash_um`.
+fn end_pair<'e>(e: &'e RunEnd, p: &str) -> Option<&'e crate::run::summary::PairEnd> {
+    e.pairs
+        .iter()
+        .find(|q| q.name == p)
+        .or_else(|| {
+            e.pairs
+                .iter()
+                .find(|q| crate::units::identifier(&q.name) == p)
+        })
+        .or_else(|| (p.is_empty() && e.pairs.len() == 1).then(|| &e.pairs[0]))
+}
+
 impl RunSeries {
-    /// Keeps the temperatures of the nodes `names`, in that order (a name given twice
-    /// once); an unknown name is an error that lists the nodes there are.
     /// Sets how the run ended, and takes from it each pair's smallest allowed backlash
     /// where the rows do not give it (a CSV has no margin column): the limit line is on
     /// the figure whatever the table was.
@@ -511,12 +520,7 @@ impl RunSeries {
         if let Some(e) = &end {
             for (p, _) in &self.backlash_um {
                 let known = self.allowed_um.iter().any(|(q, _)| q == p);
-                let from_end = e.pairs.iter().find(|q| {
-                    q.name == *p
-                        || crate::units::identifier(&q.name) == *p
-                        || (p.is_empty() && e.pairs.len() == 1)
-                });
-                if !known && let Some(a) = from_end.and_then(|q| q.min_allowed_um) {
+                if !known && let Some(a) = end_pair(e, p).and_then(|q| q.min_allowed_um) {
                     self.allowed_um.push((p.clone(), a));
                 }
             }
@@ -525,6 +529,8 @@ impl RunSeries {
         self
     }
 
+    /// Keeps the temperatures of the nodes `names`, in that order (a name given twice
+    /// once); an unknown name is an error that lists the nodes there are.
     pub fn keep_nodes(&mut self, names: &[String]) -> Result<(), PlotError> {
         let total = self.temps_k.len();
         let mut kept: Vec<(String, Vec<f64>)> = Vec::new();
