@@ -22,38 +22,32 @@ fn cli_run_without_arguments_uses_the_embedded_reference_and_writes_a_log() {
     );
     assert!(stdout.contains("reference-hinge: 6 orbits"), "{stdout}");
     assert!(stdout.contains("last orbit (orbit 6"), "{stdout}");
-    // a run of 2.5 orbits: its last period is not an orbit, and the summary says so
-    let out = bin()
-        .args(["run", "--orbits", "2.5", "--no-log", "--quiet"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        text.contains("last period (the end of orbit 2, the start of 3, t = "),
-        "{text}"
-    );
-    assert!(
-        text.contains("last period min") && !text.contains("last orbit"),
-        "{text}"
-    );
+    // a run of 2.5 orbits: its last period is not an orbit, and the summary says so;
     // shorter than an orbit: the whole run, in the mesh table too
-    let out = bin()
-        .args(["run", "--orbits", "0.3", "--no-log", "--quiet"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        text.contains("the whole run (0.30 of an orbit, t = 0 … "),
-        "{text}"
-    );
-    assert!(
-        text.contains("whole run min")
-            && !text.contains("last orbit")
-            && !text.contains("last period"),
-        "{text}"
-    );
+    for (orbits, heading, column, absent) in [
+        (
+            "2.5",
+            "last period (the end of orbit 2, the start of 3, t = ",
+            "last period min",
+            &["last orbit"][..],
+        ),
+        (
+            "0.3",
+            "the whole run (0.30 of an orbit, t = 0 … ",
+            "whole run min",
+            &["last orbit", "last period"][..],
+        ),
+    ] {
+        let out = bin()
+            .args(["run", "--orbits", orbits, "--no-log", "--quiet"])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.contains(heading), "{text}");
+        assert!(text.contains(column), "{text}");
+        assert!(absent.iter().all(|a| !text.contains(a)), "{text}");
+    }
     for node in ["housing", "gear1.r2", "gear2.r2"] {
         assert!(stdout.contains(node), "{node} missing from the summary");
     }

@@ -67,7 +67,7 @@ pub fn check(a: CheckArgs) -> Result<()> {
 
 /// "1 conductor", "2 conductors".
 fn count(n: usize, what: &str) -> String {
-    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
+    orbitlash::units::count(n as f64, what)
 }
 
 /// "1 load (1 Sun absorber)", "14 loads (6 faces, 8 dissipations)": what a load is differs (a Sun

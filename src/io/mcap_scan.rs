@@ -570,6 +570,8 @@ pub fn recover(
     for a in &scan.attachments {
         w.attach(a).map_err(err)?;
     }
+    // the temporary file goes with `w`: nothing is left under any name
+    let stopped = || OutputError::other(out, "interrupted: nothing was written");
     let mut kept = 0usize;
     let mut last_ns = 0u64;
     for m in &scan.messages {
@@ -579,14 +581,13 @@ pub fn recover(
         w.write_to_known_channel(&m.header, m.data).map_err(err)?;
         kept += 1;
         if kept.is_multiple_of(256) && stop() {
-            // the temporary file goes with `w`: nothing is left under any name
-            return Err(OutputError::other(out, "interrupted: nothing was written"));
+            return Err(stopped());
         }
         last_ns = last_ns.max(m.header.log_time);
     }
     // asked once more after the last messages (the file is then whole at the rename)
     if stop() {
-        return Err(OutputError::other(out, "interrupted: nothing was written"));
+        return Err(stopped());
     }
     let original_status = scan
         .metadata_value("orbitlash.run_end", "status")
