@@ -130,11 +130,22 @@ pub fn count(v: f64, unit: &str) -> String {
 /// A number of orbits as a person writes it: "1 orbit", "6 orbits" when whole (to a
 /// billionth), else with `decimals` digits ("0.50 orbits").
 pub fn orbits(v: f64, decimals: usize) -> String {
-    let r = v.round();
-    if v.is_finite() && (v - r).abs() <= 1e-9 * v.abs().max(1.0) {
+    let r = snap_whole(v);
+    if r.fract() == 0.0 {
         count(r, "orbit")
     } else {
         format!("{v:.decimals$} orbits")
+    }
+}
+
+/// `v` as the whole number it is within a billionth of (a count of orbits computed as
+/// a run's length over its period: 6 P / P can be 5.999999999999999), else as it is.
+pub fn snap_whole(v: f64) -> f64 {
+    let r = v.round();
+    if v.is_finite() && (v - r).abs() <= 1e-9 * v.abs().max(1.0) {
+        r
+    } else {
+        v
     }
 }
 

@@ -103,6 +103,23 @@ fn cli_diagnose_heater_report_json_and_out_folder() {
     for k in ["power_w", "on_c", "off_c"] {
         assert!(f["parameters"][k].is_f64(), "{k}");
     }
+    // the correlations are of the parameters reported (off_c, not the hysteresis
+    // the fit works in: black-box helper-25), 1 on the diagonal, symmetric
+    let order: Vec<&str> = f["correlation_order"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(order, ["power_w", "on_c", "off_c"]);
+    let c = &f["correlation"];
+    for i in 0..3 {
+        assert_eq!(c[i][i].as_f64(), Some(1.0));
+        for j in 0..3 {
+            let (a, b) = (c[i][j].as_f64().unwrap(), c[j][i].as_f64().unwrap());
+            assert!((a - b).abs() < 1e-12 && a.abs() <= 1.0 + 1e-12, "{c}");
+        }
+    }
     assert!(f["delta_bic"].as_f64().unwrap() < 0.0);
     assert!(f["heldout_rmse"]["housing_c"].as_f64().unwrap() < 0.3);
 

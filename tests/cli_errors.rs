@@ -68,6 +68,34 @@ fn cli_malformed_toml_names_the_line() {
     );
 }
 
+/// A malformed line of 400 000 characters is shown around its error's column, not
+/// whole (black-box helper-25), the caret still under the character it marks.
+#[test]
+fn cli_a_long_malformed_line_is_shown_around_its_column() {
+    let dir = common::tmpdir("long-line");
+    let n = 200_000;
+    let text = format!("x = {}{}\n", "[".repeat(n), "]".repeat(n));
+    std::fs::write(dir.join("deep.toml"), text).unwrap();
+    let out = common::bin()
+        .args(["check", "deep.toml"])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.len() < 1000, "{} bytes", err.len());
+    assert!(err.contains("deep.toml") && err.contains("line 1"), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    let caret = lines
+        .iter()
+        .position(|l| l.trim_end().ends_with('^'))
+        .unwrap();
+    let source: Vec<char> = lines[caret - 1].chars().collect();
+    let at = lines[caret].chars().count() - 1;
+    assert!(lines[caret - 1].contains("| …["), "{err}");
+    assert_eq!(source[at], '[', "{err}");
+}
+
 #[test]
 fn cli_unknown_key_is_named_with_its_line() {
     assert_rejected(

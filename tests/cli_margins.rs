@@ -227,50 +227,69 @@ fn cli_margins_fail_when_the_bound_is_below_the_minimum() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The report's replay command (`replay`, printed above the worst samples) run as it
+/// says gives the worst sample's smallest backlash to the last digit, for each flag
+/// that changes a sample. It named the seed and the sampling only: with `--orbits 2`,
+/// `--set` or `--steady-state` it replayed another run (black-box helper-25).
 #[test]
 fn cli_run_replays_a_margins_sample_to_the_last_digit() {
     let dir = setup("margins-replay", "min_backlash_um = 5.0");
-    for (sampling, extra) in [("random", vec![]), ("lhs", vec!["--samples", "60"])] {
-        let out = bin()
-            .args([
-                "margins",
-                "m.toml",
-                "--samples",
-                "60",
-                "--seed",
-                "5",
+    let two = ["--orbits", "2"];
+    let cases: [(&str, &[&str]); 4] = [
+        ("random", &two),
+        ("lhs", &two),
+        (
+            "random",
+            &[
                 "--orbits",
                 "2",
-            ])
+                "--set",
+                "node.housing.capacitance_j_per_k=400",
+            ],
+        ),
+        ("random", &["--steady-state"]),
+    ];
+    for (sampling, flags) in cases {
+        let out = bin()
+            .args(["margins", "m.toml", "--samples", "60", "--seed", "5"])
+            .args(flags)
             .args(["--sampling", sampling, "--json", "r.json", "--quiet"])
             .current_dir(&dir)
             .output()
             .unwrap();
-        assert_eq!(out.status.code(), Some(0));
+        assert_eq!(out.status.code(), Some(0), "{flags:?}");
         let r: serde_json::Value =
             serde_json::from_slice(&std::fs::read(dir.join("r.json")).unwrap()).unwrap();
         let worst = &r["pairs"][0]["worst"][0];
         let k = worst["index"].as_u64().unwrap().to_string();
+        let replay = r["replay"].as_str().unwrap();
+        assert!(
+            String::from_utf8_lossy(&out.stdout).contains(&format!("replay one with `{replay}`")),
+            "{replay}"
+        );
+        // every flag of the margins run that changes a sample is in it
+        for f in flags.iter().filter(|f| f.starts_with("--")) {
+            assert!(replay.contains(f), "{replay} lacks {f}");
+        }
+        let words: Vec<String> = replay
+            .split_whitespace()
+            .skip(1) // orbitlash
+            .map(|w| match w {
+                "SCENARIO" => "m.toml".to_string(),
+                "K" => k.clone(),
+                w => w.trim_matches('\'').to_string(),
+            })
+            .collect();
         let _ = std::fs::remove_file(dir.join("s.json"));
         let out = bin()
-            .args([
-                "run",
-                "m.toml",
-                "--sample",
-                &k,
-                "--seed",
-                "5",
-                "--sampling",
-                sampling,
-            ])
-            .args(extra)
-            .args(["--orbits", "2", "--no-log", "--quiet", "--json", "s.json"])
+            .args(&words)
+            .args(["--no-log", "--quiet", "--json", "s.json"])
             .current_dir(&dir)
             .output()
             .unwrap();
         assert!(
             out.status.code() != Some(2),
-            "{}",
+            "{words:?}: {}",
             String::from_utf8_lossy(&out.stderr)
         );
         let text = String::from_utf8_lossy(&out.stdout);
@@ -279,7 +298,7 @@ fn cli_run_replays_a_margins_sample_to_the_last_digit() {
             serde_json::from_slice(&std::fs::read(dir.join("s.json")).unwrap()).unwrap();
         assert_eq!(
             s["gear_pairs"][0]["min_backlash_um"], worst["min_backlash_um"],
-            "{sampling}: sample {k}"
+            "{words:?}"
         );
     }
     // a Latin hypercube sample depends on N: without --samples, an error

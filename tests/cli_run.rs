@@ -293,6 +293,31 @@ fn cli_the_run_s_last_instant_is_in_its_last_orbit() {
     }
 }
 
+/// A run of a whole number of orbits says that number in its JSON's `orbits`: 6 and
+/// 3, not 5.999999999999999 and 2.9999999999999996 (its length over the period;
+/// black-box helper-25); 2.5 stays 2.5.
+#[test]
+fn cli_run_json_counts_whole_orbits_as_whole() {
+    let dir = common::tmpdir("json-orbits");
+    for (args, want) in [
+        (vec![], 6.0),
+        (vec!["--orbits", "3"], 3.0),
+        (vec!["--orbits", "2.5"], 2.5),
+    ] {
+        let out = common::bin()
+            .arg("run")
+            .args(&args)
+            .args(["--no-log", "--quiet", "--json", "o.json"])
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0), "{args:?}");
+        let j: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("o.json")).unwrap()).unwrap();
+        assert_eq!(j["orbits"].as_f64(), Some(want), "{args:?}");
+    }
+}
+
 /// The β range a run's summary and `environment` print is the run's own, as the
 /// orbit's series over the run gives it: 40 orbits of the 90-day drift, whose β table
 /// goes 0° → 60° over the mission, printed "0.00° … 60.00°" (black-box helper-21).

@@ -591,29 +591,36 @@ fn report_head(o: &mut String, d: &Diagnosis, scenario: &str, recording: &str) {
     outln!(o, "scenario {scenario}, recording {recording}");
     let s = &d.split;
     if s.holdout_orbits > 0 {
-        let span = |a: usize, b: usize| {
-            if a == b {
-                format!("orbit {a}")
-            } else {
-                format!("orbits {a}–{b}")
-            }
-        };
-        // an orbit short by under a sampling interval counts as whole: said when it is
-        let short = if s.last_orbit_short_s >= 0.05 {
+        // an orbit short by under a sampling interval counts as whole: said when it is;
+        // a recording that starts after the scenario's t = 0 keeps the scenario's orbit
+        // numbers (as its times, the figures and `baseline.orbit_rmse` do)
+        let stops = (s.last_orbit_short_s >= 0.05).then(|| {
             format!(
-                " (the recording stops {:.1} s before the last one ends, within a sampling interval)",
+                "stops {:.1} s before the last one ends, within a sampling interval",
                 s.last_orbit_short_s
             )
+        });
+        let what = if s.first_orbit > 0 {
+            let starts = format!("starts at t = {} s", orbitlash::units::num(s.start_s));
+            let and = stops.map(|x| format!(" and {x}")).unwrap_or_default();
+            format!(
+                "{} orbits of {:.1} s, {}–{} of the scenario (the recording {starts}{and})",
+                s.recorded_orbits(),
+                s.period_s,
+                s.first_orbit + 1,
+                s.orbits
+            )
         } else {
-            String::new()
+            let stops = stops
+                .map(|x| format!(" (the recording {x})"))
+                .unwrap_or_default();
+            format!("{} whole orbits of {:.1} s{stops}", s.orbits, s.period_s)
         };
         outln!(
             o,
-            "{} whole orbits of {:.1} s{short}: fitted on {}, checked on {} (held out, never fitted)",
-            s.orbits,
-            s.period_s,
-            span(1, s.train_orbits),
-            span(s.train_orbits + 1, s.orbits)
+            "{what}: fitted on {}, checked on {} (held out, never fitted)",
+            s.fitted_span(),
+            s.held_span()
         );
     }
     let r = &d.recording;

@@ -540,16 +540,7 @@ pub fn format_report(r: &Report) -> String {
             ]);
         }
         o += &table::render(&t, "    ");
-        outln!(
-            o,
-            "  worst samples (replay one with `orbitlash run SCENARIO --sample K --seed {}{}`):",
-            r.seed,
-            if r.sampling == Sampling::LatinHypercube {
-                format!(" --sampling lhs --samples {}", r.samples)
-            } else {
-                String::new()
-            }
-        );
+        outln!(o, "  worst samples (replay one with `{}`):", r.replay);
         for w in &p.worst {
             outln!(
                 o,

@@ -25,6 +25,13 @@ pub struct Split {
     pub period_s: f64,
     /// Whole orbits the recording covers (from t = 0).
     pub orbits: usize,
+    /// The orbit the recording's first sample is in, counted from 0 at the scenario's
+    /// t = 0 (as `baseline.orbit_rmse` is): the orbits before it hold no data (the
+    /// model runs through them as it runs up to any recording's start).
+    pub first_orbit: usize,
+    /// The recording's first sample, s from the scenario's t = 0.
+    pub start_s: f64,
+    /// The training orbits end here (an orbit count from t = 0, as `orbits`).
     pub train_orbits: usize,
     pub holdout_orbits: usize,
     pub train_end_s: f64,
@@ -36,23 +43,29 @@ pub struct Split {
 }
 
 impl Split {
-    /// The last `holdout` of the whole orbits are held out; `None`: a third (at least
-    /// one). Fewer than two whole orbits: nothing can be held out (`holdout_orbits`
-    /// 0, everything is training).
+    /// The last `holdout` of the whole orbits are held out; `None`: a third of the
+    /// orbits that hold data (at least one). Fewer than two orbits with data: nothing
+    /// can be held out (`holdout_orbits` 0, everything is training).
+    /// `t_first_s`, `t_last_s`: the recording's first and last sample times.
     /// `slack_s`: an orbit counts as whole when the recording ends within this of its
     /// end (one sampling interval).
     pub fn new(
         period_s: f64,
+        t_first_s: f64,
         t_last_s: f64,
         slack_s: f64,
         holdout: Option<usize>,
     ) -> Result<Split, String> {
         let orbits = ((t_last_s + slack_s.max(1e-6 * period_s)) / period_s).floor() as usize;
         let last_orbit_short_s = (orbits as f64 * period_s - t_last_s).max(0.0);
-        if orbits < 2 {
+        let first_orbit = ((t_first_s.max(0.0) / period_s).floor() as usize).min(orbits);
+        let recorded = orbits - first_orbit;
+        if recorded < 2 {
             return Ok(Split {
                 period_s,
                 orbits,
+                first_orbit,
+                start_s: t_first_s,
                 train_orbits: orbits,
                 holdout_orbits: 0,
                 train_end_s: f64::INFINITY,
@@ -60,10 +73,15 @@ impl Split {
                 last_orbit_short_s,
             });
         }
-        let h = holdout.unwrap_or((orbits / 3).max(1));
-        if h == 0 || h >= orbits {
+        let h = holdout.unwrap_or((recorded / 3).max(1));
+        if h == 0 || h >= recorded {
+            let from = if first_orbit > 0 {
+                format!(" (orbits {}–{orbits} of the scenario)", first_orbit + 1)
+            } else {
+                String::new()
+            };
             return Err(format!(
-                "--holdout-orbits {h}: the recording has {orbits} whole orbits; hold out \
+                "--holdout-orbits {h}: the recording has {recorded} whole orbits{from}; hold out \
                  at least 1 and leave at least 1 to fit"
             ));
         }
@@ -71,12 +89,35 @@ impl Split {
         Ok(Split {
             period_s,
             orbits,
+            first_orbit,
+            start_s: t_first_s,
             train_orbits: train,
             holdout_orbits: h,
             train_end_s: train as f64 * period_s,
             holdout_end_s: orbits as f64 * period_s,
             last_orbit_short_s,
         })
+    }
+
+    /// Orbits with data before the held-out ones (`train_orbits` counts from t = 0).
+    pub fn fitted_orbits(&self) -> usize {
+        self.train_orbits.saturating_sub(self.first_orbit)
+    }
+
+    /// Whole orbits with data (the recording's, not the scenario's from t = 0).
+    pub fn recorded_orbits(&self) -> usize {
+        self.orbits - self.first_orbit
+    }
+
+    /// The fitted orbits as the report names them, numbered from 1 at the scenario's
+    /// t = 0 ("orbits 3–8"; "orbit 3").
+    pub fn fitted_span(&self) -> String {
+        orbit_span(self.first_orbit + 1, self.train_orbits)
+    }
+
+    /// The held-out orbits as the report names them ("orbits 9–12").
+    pub fn held_span(&self) -> String {
+        orbit_span(self.train_orbits + 1, self.orbits)
     }
 
     pub fn part(&self, t_s: f64) -> Part {
@@ -91,6 +132,15 @@ impl Split {
 
     pub fn can_validate(&self) -> bool {
         self.holdout_orbits > 0
+    }
+}
+
+/// "orbit a" or "orbits a–b".
+fn orbit_span(a: usize, b: usize) -> String {
+    if a == b {
+        format!("orbit {a}")
+    } else {
+        format!("orbits {a}–{b}")
     }
 }
 
@@ -270,7 +320,7 @@ impl Observations {
         check_time_base(rec, sc)?;
         let period = sc.period_s();
         let t_last = *rec.time_s.last().unwrap();
-        let split = Split::new(period, t_last, near_s(&rec.time_s), holdout)
+        let split = Split::new(period, rec.time_s[0], t_last, near_s(&rec.time_s), holdout)
             .map_err(DiagnoseError::Options)?;
         if !split.can_validate() {
             return Err(DiagnoseError::Recording(format!(
@@ -571,13 +621,14 @@ fn check_split_holds_data(
                 Part::Tail => {}
             }
         }
-        let expected = train as f64 * split.holdout_orbits as f64 / split.train_orbits as f64;
+        let expected =
+            train as f64 * split.holdout_orbits as f64 / split.fitted_orbits().max(1) as f64;
         let need = (MIN_PART_SAMPLES as f64).max((0.25 * expected).ceil());
         if (train as f64) < MIN_PART_SAMPLES as f64 {
             return Err(DiagnoseError::Recording(format!(
-                "{}: the fitted orbits 1–{} hold {train} samples of `{}`; at least {MIN_PART_SAMPLES} are needed{}",
+                "{}: the fitted {} hold {train} samples of `{}`; at least {MIN_PART_SAMPLES} are needed{}",
                 rec.file,
-                split.train_orbits,
+                split.fitted_span(),
                 ch.name,
                 gap_note()
             )));
@@ -585,11 +636,10 @@ fn check_split_holds_data(
         if (held as f64) < need {
             refusal.get_or_insert_with(|| {
                 format!(
-                    "{}: the held-out orbits {}–{} hold {held} samples of `{}`, against about {expected:.0} at the cadence of the fitted orbits; \
+                    "{}: the held-out {} hold {held} samples of `{}`, against about {expected:.0} at the cadence of the fitted orbits; \
 at least {need:.0} are needed to check a fit on them{}. Hold out fewer orbits (--holdout-orbits N) or cut the recording where its data end",
                     rec.file,
-                    split.train_orbits + 1,
-                    split.orbits,
+                    split.held_span(),
                     ch.name,
                     gap_note()
                 )

@@ -524,29 +524,87 @@ impl Candidate {
             .collect()
     }
 
-    /// Parameters as the report gives them (derived ones added: a heater's `off_c`).
+    /// The parameters as the report gives them, each a linear combination of the
+    /// fitted ones (a row of J): the fitted ones as they are, but a heater's
+    /// `hysteresis_k`, which is reported as `off_c` = `on_c` + `hysteresis_k`.
+    fn report_rows(&self) -> Vec<(String, Vec<f64>)> {
+        let k = self.params.len();
+        let unit = |i: usize| (0..k).map(|j| f64::from(u8::from(i == j))).collect();
+        let mut rows: Vec<(String, Vec<f64>)> = Vec::with_capacity(k);
+        for (i, p) in self.params.iter().enumerate() {
+            if self.effect == Effect::HeaterThermostat && p.name == "hysteresis_k" {
+                let on = self.params.iter().position(|q| q.name == "on_c");
+                let mut row: Vec<f64> = unit(i);
+                if let Some(on) = on {
+                    row[on] = 1.0;
+                }
+                rows.push(("off_c".into(), row));
+            } else {
+                rows.push((p.name.to_string(), unit(i)));
+            }
+        }
+        rows
+    }
+
+    /// Parameters as the report gives them ([`Candidate::report_rows`]): name, value
+    /// and standard error (from the fitted parameters' covariance `cov`, NaN without).
     pub fn report_params(
         &self,
         theta: &[f64],
         cov: Option<&[Vec<f64>]>,
     ) -> Vec<(String, f64, f64)> {
-        let se = |i: usize| cov.map_or(f64::NAN, |c| c[i][i].max(0.0).sqrt());
-        let mut out: Vec<(String, f64, f64)> = self
-            .params
+        let cov_of = |a: &[f64], b: &[f64]| cov.map_or(f64::NAN, |c| bilinear(a, c, b));
+        self.report_rows()
+            .into_iter()
+            .map(|(name, row)| {
+                let v = row.iter().zip(theta).map(|(a, t)| a * t).sum();
+                let se = cov_of(&row, &row).max(0.0).sqrt();
+                (name, v, se)
+            })
+            .collect()
+    }
+
+    /// The reported parameters' names and their correlations (from the fitted
+    /// parameters' covariance `cov`; `None` where a standard error is zero or not
+    /// finite), in the order of [`Candidate::report_params`].
+    pub fn report_correlation(
+        &self,
+        cov: Option<&[Vec<f64>]>,
+    ) -> (Vec<String>, Vec<Vec<Option<f64>>>) {
+        let rows = self.report_rows();
+        let cv = |a: &[f64], b: &[f64]| cov.map_or(f64::NAN, |c| bilinear(a, c, b));
+        let se: Vec<f64> = rows.iter().map(|(_, r)| cv(r, r).max(0.0).sqrt()).collect();
+        let corr = rows
             .iter()
             .enumerate()
-            .filter(|(_, p)| p.name != "hysteresis_k")
-            .map(|(i, p)| (p.name.to_string(), theta[i], se(i)))
+            .map(|(i, (_, a))| {
+                rows.iter()
+                    .enumerate()
+                    .map(|(j, (_, b))| {
+                        let r = if i == j {
+                            1.0
+                        } else {
+                            cv(a, b) / (se[i] * se[j])
+                        };
+                        (se[i] > 0.0 && se[j] > 0.0 && r.is_finite()).then_some(r)
+                    })
+                    .collect()
+            })
             .collect();
-        if self.effect == Effect::HeaterThermostat {
-            // off = on + hysteresis; var = var(on) + var(h) + 2 cov(on, h).
-            let v = cov.map_or(f64::NAN, |c| {
-                (c[1][1] + c[2][2] + 2.0 * c[1][2]).max(0.0).sqrt()
-            });
-            out.push(("off_c".into(), theta[1] + theta[2], v));
-        }
-        out
+        (rows.into_iter().map(|(n, _)| n).collect(), corr)
     }
+}
+
+/// aᵀ C b over the nonzero coefficients only (a covariance's other entries may be
+/// NaN where a parameter is not determined).
+fn bilinear(a: &[f64], c: &[Vec<f64>], b: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for (i, &ai) in a.iter().enumerate().filter(|(_, x)| **x != 0.0) {
+        for (j, &bj) in b.iter().enumerate().filter(|(_, x)| **x != 0.0) {
+            s += ai * c[i][j] * bj;
+        }
+    }
+    s
 }
 
 /// What the data say before any fit, used to start candidates that a cost surface

@@ -740,7 +740,8 @@ fn no_validation(obs: &Observations) -> String {
         "the recording covers {} whole orbit(s) of {:.1} s; held-out validation needs at \
          least two (one to fit, one to check), so only the baseline and the mismatches are \
          reported",
-        obs.split.orbits, obs.split.period_s
+        obs.split.recorded_orbits(),
+        obs.split.period_s
     )
 }
 
@@ -809,16 +810,15 @@ fn short_holdout_warnings(obs: &Observations) -> Vec<String> {
         .iter()
         .map(|s| {
             format!(
-                "{}: `{}`: the held-out orbits {}–{} hold {} of it, against about {:.0} at the \
+                "{}: `{}`: the held-out {} hold {} of it, against about {:.0} at the \
                  cadence of the fitted orbits (its readings stop or thin out): it is fitted on \
-                 orbits 1–{} with the others{}",
+                 {} with the others{}",
                 obs.file,
                 crate::units::shown(&obs.channels[s.channel].name),
-                obs.split.train_orbits + 1,
-                obs.split.orbits,
+                obs.split.held_span(),
                 crate::units::count(s.samples as f64, "sample"),
                 s.expected,
-                obs.split.train_orbits,
+                obs.split.fitted_span(),
                 if s.samples == 0 {
                     ", but its fit is not checked on held-out orbits".to_string()
                 } else {
@@ -1120,7 +1120,6 @@ fn findings(
     rivals: &Rivals,
     heldout_rmse: &ChannelMap,
 ) -> Vec<Finding> {
-    let corr = h.fit.correlation();
     let mut out = Vec::new();
     // the calibration's parameters come first
     let mut off = problem.calibration_len();
@@ -1130,6 +1129,9 @@ fn findings(
         let theta = &h.theta[off..off + k];
         let params = member_params(c, h, off);
         let (parameters, std_errors) = values_and_errors(&params);
+        // as reported: a heater's off_c, not the hysteresis it is fitted as
+        let (correlation_order, correlation) =
+            c.report_correlation(member_covariance(c, h, off).as_deref());
         let (delta_bic, hdrop, before) = match &without[m] {
             None => (
                 -problem.bic_gain(h, base.train_chi2, k),
@@ -1148,10 +1150,8 @@ fn findings(
             target: c.target.clone(),
             parameters,
             std_errors,
-            correlation: (off..off + k)
-                .map(|i| (off..off + k).map(|j| finite(corr[i][j])).collect())
-                .collect(),
-            correlation_order: c.params.iter().map(|p| p.name.to_string()).collect(),
+            correlation,
+            correlation_order,
             heldout_rmse: heldout_rmse.clone(),
             delta_bic,
             heldout_chi2_drop: hdrop,
@@ -1533,12 +1533,20 @@ fn calibration_step(
 /// standard error from its block of `h`'s covariance).
 fn member_params(c: &Candidate, h: &Hypothesis, off: usize) -> Vec<(String, f64, f64)> {
     let k = c.params.len();
-    let block: Option<Vec<Vec<f64>>> = h.fit.covariance.as_ref().map(|cv| {
+    c.report_params(
+        &h.theta[off..off + k],
+        member_covariance(c, h, off).as_deref(),
+    )
+}
+
+/// The covariance of member `c`'s fitted parameters in `h` (they start at `off`).
+fn member_covariance(c: &Candidate, h: &Hypothesis, off: usize) -> Option<Vec<Vec<f64>>> {
+    let k = c.params.len();
+    h.fit.covariance.as_ref().map(|cv| {
         (off..off + k)
             .map(|i| (off..off + k).map(|j| cv[(i, j)]).collect())
             .collect()
-    });
-    c.report_params(&h.theta[off..off + k], block.as_deref())
+    })
 }
 
 /// Reported parameters as the JSON keeps them: values, and standard errors (None
@@ -2047,9 +2055,14 @@ fn heater_hints(
     warming.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     // The first whose warming starts somewhere: a channel that is never at its noise
     // (a sensor's offset) shows no start and gives way to the next.
-    let Some(starts) = warming
+    // Starts where the residual is back at the noise first, from any channel; a
+    // floor's starts only when no channel has those.
+    let all: Vec<(Vec<usize>, Vec<usize>)> = warming
         .iter()
         .map(|&(c, _)| warming_starts(obs, &smooth[c], &obs.values[c], noise[c]))
+        .collect();
+    let Some(starts) = (all.iter().map(|s| &s.0))
+        .chain(all.iter().map(|s| &s.1))
         .find(|s| !s.is_empty())
     else {
         return hints;
@@ -2068,15 +2081,27 @@ fn heater_hints(
 /// at the noise (σ/√5); none in an orbit where it never was. (Without the cold phase,
 /// a model's error in the warm phase took the start: a housing 8 % too heavy warms
 /// too slowly in sunlight, and a heater switched on at −10 °C was started at +24 °C.)
+///
+/// Returns those, and second, for when no orbit of any channel gets back to the noise (the tail of each
+/// orbit's heating lasts into the next: a recording that starts while the heater
+/// already cycles): each orbit's start from its cold phase's peak back to within
+/// σ/√5 of its floor (its lowest before the peak), where the peak stands 4σ/√5 clear
+/// of that floor. Before, such a recording gave no start, so no heater was tried: the
+/// shared heater case with its first two orbits cut off named an eclipse dissipation,
+/// a mass and a conductance. Only then: where some orbit does get back to the noise,
+/// its start is the better one (with the floor's starts as well, a 9 W heater cycling
+/// in eclipse was started mid-cycle and fitted at 5.8 W, and FUNcube-1's concealed
+/// heater was not tried).
 fn warming_starts(
     obs: &Observations,
     smooth: &[Option<f64>],
     values: &[Option<f64>],
     noise: f64,
-) -> Vec<usize> {
+) -> (Vec<usize>, Vec<usize>) {
     let hi = 4.0 * noise / 5f64.sqrt();
     let lo = noise / 5f64.sqrt();
     let mut starts = Vec::new();
+    let mut from_floor = Vec::new();
     for orbit in 0..obs.split.train_orbits {
         let idx: Vec<usize> = (0..obs.time_s.len())
             .filter(|&j| obs.orbit[j] == orbit && obs.part[j] == Part::Train)
@@ -2094,15 +2119,40 @@ fn warming_starts(
         else {
             continue;
         };
-        let mut k = pos;
-        while k > 0 && smooth[idx[k]].is_none_or(|v| v > lo) {
-            k -= 1;
-        }
-        if k > 0 || smooth[idx[0]].is_some_and(|v| v <= lo) {
+        // back to where it was at `level`: from `from` while above it
+        let walk_back = |from: usize, level: f64| {
+            let mut k = from;
+            while k > 0 && smooth[idx[k]].is_none_or(|v| v > level) {
+                k -= 1;
+            }
+            (k > 0 || smooth[idx[0]].is_some_and(|v| v <= level)).then_some(k)
+        };
+        if let Some(k) = walk_back(pos, lo) {
             starts.push(idx[k]);
+            continue;
+        }
+        if !starts.is_empty() {
+            continue;
+        }
+        // never back at the noise: from the cold phase's peak back to its floor
+        let mut peak = pos;
+        for i in pos..idx.len() {
+            if cold(idx[i]) && smooth[idx[i]] > smooth[idx[peak]] {
+                peak = i;
+            }
+        }
+        let floor = idx[..peak]
+            .iter()
+            .filter(|&&j| cold(j))
+            .filter_map(|&j| smooth[j])
+            .fold(f64::INFINITY, f64::min)
+            .max(0.0);
+        let top = smooth[idx[peak]].unwrap_or(f64::NEG_INFINITY);
+        if floor.is_finite() && top >= floor + hi {
+            from_floor.extend(walk_back(peak, floor + lo).map(|k| idx[k]));
         }
     }
-    starts
+    (starts, from_floor)
 }
 
 #[cfg(test)]

@@ -79,7 +79,7 @@ pub fn located(text: &str, file: &str, e: SpecError) -> ScenarioError {
 /// Reads scenario text into its spec (no validation beyond the schema).
 pub fn parse_spec(text: &str, file: &str) -> Result<ScenarioSpec, ScenarioError> {
     toml::from_str(text).map_err(|e| {
-        let excerpt = e.to_string().trim_end().to_string();
+        let excerpt = shorten_excerpt(e.to_string().trim_end());
         // A schema error (unknown key, wrong type, missing key) names its key path on
         // the first line, like every other error; a malformed file names the line.
         match e
@@ -102,6 +102,52 @@ pub fn parse_spec(text: &str, file: &str) -> Result<ScenarioSpec, ScenarioError>
             },
         }
     })
+}
+
+/// Characters of a source line shown either side of the error's column.
+const EXCERPT_HALF_WIDTH: usize = 60;
+
+/// A parse error's excerpt (`N | source line` over `  | ^` at the column) with a long
+/// source line cut to [`EXCERPT_HALF_WIDTH`] characters either side of the caret, "…"
+/// where it was cut: a 400 000-character line was printed whole.
+fn shorten_excerpt(excerpt: &str) -> String {
+    let lines: Vec<&str> = excerpt.lines().collect();
+    // the caret's line and the column of its caret, in characters after "| "
+    let caret = lines.iter().enumerate().find_map(|(i, l)| {
+        let (gutter, rest) = l.split_once("| ")?;
+        (gutter.trim().is_empty() && rest.trim_start().starts_with('^'))
+            .then(|| (i, rest.chars().take_while(|c| *c == ' ').count()))
+    });
+    let Some((at, col)) = caret else {
+        return excerpt.to_string();
+    };
+    let from = col.saturating_sub(EXCERPT_HALF_WIDTH);
+    let to = col + EXCERPT_HALF_WIDTH;
+    let long = at > 0
+        && lines[at - 1]
+            .split_once("| ")
+            .is_some_and(|(_, r)| r.chars().count() > 2 * EXCERPT_HALF_WIDTH + 1);
+    let mut out = Vec::with_capacity(lines.len());
+    for (i, l) in lines.iter().enumerate() {
+        // the source line (just above the caret's) and the caret's, when long
+        let cut_here = (i == at || i + 1 == at) && long;
+        let Some((gutter, rest)) = l.split_once("| ").filter(|_| cut_here) else {
+            out.push(l.to_string());
+            continue;
+        };
+        let n = rest.chars().count();
+        let cut: String = rest.chars().skip(from).take(to - from).collect();
+        let (head, tail) = match (i == at, from > 0, to < n) {
+            (true, true, _) => (" ", ""), // the caret keeps its place under the "…"
+            (true, false, _) => ("", ""),
+            (false, h, t) => (if h { "…" } else { "" }, if t { "…" } else { "" }),
+        };
+        out.push(format!(
+            "{gutter}| {head}{}{tail}",
+            cut.trim_end_matches(' ')
+        ));
+    }
+    out.join("\n")
 }
 
 /// The embedded reference scenario.

@@ -344,6 +344,10 @@ pub struct Report {
     pub sampling: Sampling,
     pub horizon: String,
     pub dispersed: Vec<String>,
+    /// The command that replays sample K with full logging, to the last digit of its
+    /// smallest backlash: `orbitlash run SCENARIO --sample K` and every flag of this run
+    /// that changes a sample (seed, sampling, horizon, `--set`).
+    pub replay: String,
     pub pairs: Vec<PairReport>,
 }
 
@@ -445,6 +449,11 @@ fn probability(count: u64, n: u64) -> Probability {
     }
 }
 
+/// A horizon of the scenario's own run length, as a report names it.
+const MISSION_HORIZON: &str = "the scenario's run";
+/// A steady-state horizon, as a report names it.
+const STEADY_HORIZON: &str = "one period of the periodic orbit";
+
 /// What a margin run is, apart from its samples: enough to write its report and to
 /// tell whether two shards belong to the same run.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -463,6 +472,27 @@ pub struct RunIdentity {
 }
 
 impl RunIdentity {
+    /// `orbitlash run SCENARIO --sample K` and the flags that make it this run's
+    /// sample K: the seed, the sampling, the horizon, every `--set` in order (values
+    /// as the shortest text that reads back to the same number).
+    pub fn replay(&self) -> String {
+        let mut f = format!("orbitlash run SCENARIO --sample K --seed {}", self.seed);
+        if self.sampling == Sampling::LatinHypercube {
+            f += &format!(" --sampling lhs --samples {}", self.samples);
+        }
+        if self.horizon == STEADY_HORIZON {
+            f += " --steady-state";
+        } else if let Some(n) =
+            (self.horizon.strip_suffix(" orbits")).or_else(|| self.horizon.strip_suffix(" orbit"))
+        {
+            f += &format!(" --orbits {n}");
+        }
+        for (k, v) in &self.sets {
+            f += &format!(" --set {}", shell_word(&format!("{k}={v}")));
+        }
+        f
+    }
+
     pub fn new(
         scenario_toml: &str,
         sets: &[(String, f64)],
@@ -483,8 +513,8 @@ impl RunIdentity {
             sampling: plan.sampling,
             horizon: match horizon {
                 Horizon::Orbits(o) => crate::units::count(o, "orbit"),
-                Horizon::Mission => "the scenario's run".to_string(),
-                Horizon::SteadyState => "one period of the periodic orbit".to_string(),
+                Horizon::Mission => MISSION_HORIZON.to_string(),
+                Horizon::SteadyState => STEADY_HORIZON.to_string(),
             },
             dispersed: plan.dispersions.iter().map(|d| d.path.clone()).collect(),
             pairs: sc
@@ -493,6 +523,17 @@ impl RunIdentity {
                 .map(|g| (g.name.clone(), g.min_backlash_m * 1e6))
                 .collect(),
         }
+    }
+}
+
+/// A word as a POSIX shell reads it back: as it is when it holds only characters no
+/// shell treats specially, else in single quotes.
+fn shell_word(w: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "._-=+:/,@%".contains(c);
+    if !w.is_empty() && w.chars().all(plain) {
+        w.to_string()
+    } else {
+        format!("'{}'", w.replace('\'', "'\\''"))
     }
 }
 
@@ -1000,6 +1041,7 @@ pub fn report(id: &RunIdentity, all: &[SampleOutcome]) -> Option<Report> {
         sampling: id.sampling,
         horizon: id.horizon.clone(),
         dispersed: id.dispersed.clone(),
+        replay: id.replay(),
         pairs,
     })
 }

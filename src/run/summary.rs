@@ -823,7 +823,10 @@ impl RunSummary {
             },
             t_start_s: stats.t_start_s,
             t_end_s: stats.t_end_s,
-            orbits: (stats.t_end_s - stats.t_start_s) / scenario.period_s(),
+            // a whole number of orbits as that number, not 5.999999999999999
+            orbits: crate::units::snap_whole(
+                (stats.t_end_s - stats.t_start_s) / scenario.period_s(),
+            ),
             interrupted: stats.interrupted,
             window: Window {
                 start_s: window.window_start_s(),
