@@ -375,11 +375,30 @@ fn cli_shards_merge_to_the_unsharded_report_bit_for_bit() {
         &["merge", "s0.json", "s1.json", "s3.json"],
         "samples 30 … 44 are in no shard",
     );
+    // one file given twice is said as such (it read "in both s0.json and s0.json");
+    // a copy of a shard under another name holds the same samples
     refused(
         &[
-            "merge", "s0.json", "s0.json", "s1.json", "s2.json", "s3.json",
+            "merge",
+            "s0.json",
+            "./s0.json",
+            "s1.json",
+            "s2.json",
+            "s3.json",
         ],
-        "is in both s0.json and s0.json",
+        "the shard ./s0.json is given twice (also as s0.json)",
+    );
+    std::fs::copy(dir.join("s0.json"), dir.join("s0-copy.json")).unwrap();
+    refused(
+        &[
+            "merge",
+            "s0.json",
+            "s0-copy.json",
+            "s1.json",
+            "s2.json",
+            "s3.json",
+        ],
+        "is in both s0.json and s0-copy.json",
     );
     ok(&[
         "margins",

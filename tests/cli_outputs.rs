@@ -346,5 +346,17 @@ fn cli_recover_never_replaces_its_input() {
         },
         &["y.mcap", "input"],
     );
+    // a `logs` that is a file: refused as `run` refuses it, naming the folder (it read
+    // "Not a directory (os error 20)"; black-box helper-25)
+    refused(
+        "recover-logs-file",
+        &["recover", "z.mcap"],
+        &|d| {
+            let b = std::fs::read(d.join("l.mcap")).unwrap();
+            std::fs::write(d.join("z.mcap"), &b[..b.len() / 2]).unwrap();
+            std::fs::write(d.join("logs"), "").unwrap();
+        },
+        &["logs", "the default log folder", "regular file"],
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

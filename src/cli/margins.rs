@@ -687,6 +687,21 @@ const MAX_SHARD_BYTES: u64 = 4 << 30;
 
 pub fn merge_shards(a: MergeArgs) -> Result<Outcome> {
     let inputs: Vec<&Path> = a.shards.iter().map(PathBuf::as_path).collect();
+    // one file named twice (by the same or another path) is said as such, not as a
+    // sample "in both sh1.json and sh1.json"
+    let mut seen: Vec<(PathBuf, &Path)> = Vec::new();
+    for p in &a.shards {
+        if let Ok(c) = std::fs::canonicalize(p) {
+            if let Some((_, first)) = seen.iter().find(|(s, _)| *s == c) {
+                anyhow::bail!(
+                    "the shard {} is given twice (also as {}): give each shard once",
+                    p.display(),
+                    first.display()
+                );
+            }
+            seen.push((c, p));
+        }
+    }
     let mut shards = Vec::new();
     for p in &a.shards {
         let text = orbitlash::io::output::check_input(p)

@@ -278,8 +278,20 @@ pub fn draw(
         // without it)
         cut_off = !given && end.is_none();
         if cut_off {
+            // a recovered copy of a killed run has an end record, of its own status
+            let which = match table
+                .metadata
+                .get("orbitlash.run_end")
+                .and_then(|m| m.get("status"))
+            {
+                Some(status) => format!(
+                    "its end record (status `{}`: a copy of a killed or cut-off run) holds no verdict",
+                    orbitlash::units::shown(status)
+                ),
+                None => "has no end record (a killed run or a cut-off copy)".to_string(),
+            };
             eprintln!(
-                "note: {} has no end record (a killed run, a cut-off or recovered copy): the figure shows the rows it holds, and no PASS",
+                "note: {} {which}: the figure shows the rows it holds, and no PASS",
                 input.display()
             );
         }

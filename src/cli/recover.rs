@@ -99,13 +99,20 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             s.recovered_bytes
         );
     }
-    let (out, policy) = match &a.out {
-        Some(p) => (p.clone(), OutputPolicy::reading(&[&a.log])),
-        None => (
-            default_out(&a.log),
-            OutputPolicy::default_in_logs(&[&a.log]),
-        ),
-    };
+    let (out, policy) =
+        match &a.out {
+            Some(p) => (p.clone(), OutputPolicy::reading(&[&a.log])),
+            None => {
+                // a `logs` that is not a folder is refused as `run` and `layout` refuse it
+                // (it read "Not a directory (os error 20)")
+                orbitlash::io::output::Outputs::new(OutputPolicy::default_in_logs(&[&a.log]))
+                    .folder("the default log folder", Path::new("logs"), true)?;
+                (
+                    default_out(&a.log),
+                    OutputPolicy::default_in_logs(&[&a.log]),
+                )
+            }
+        };
     let mut kept_s = s.message_times_s();
     kept_s.sort_by(f64::total_cmp);
     let left_s: Vec<f64> = damaged.iter().map(|d| d.t_s).collect();

@@ -328,7 +328,7 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
             let fails = worst != "pass";
             // rows that stop before the run did can fail it, not pass it
             if s.cut_off && !fails {
-                return "  —  INCOMPLETE: the log has no end record (a killed run, a cut-off or recovered copy)"
+                return "  —  INCOMPLETE: the log holds no verdict (a killed run, a cut-off or recovered copy)"
                     .to_string();
             }
             fails
@@ -339,7 +339,7 @@ fn verdict_suffix(s: &RunSeries, smallest: &[(String, f64, f64)]) -> String {
             "  —  FAIL: {}{}",
             failure(worst),
             if s.cut_off {
-                " (the log has no end record)"
+                " (the log holds no verdict)"
             } else {
                 ""
             }
