@@ -235,7 +235,7 @@ fn cli_margins_fail_when_the_bound_is_below_the_minimum() {
 fn cli_run_replays_a_margins_sample_to_the_last_digit() {
     let dir = setup("margins-replay", "min_backlash_um = 5.0");
     let two = ["--orbits", "2"];
-    let cases: [(&str, &[&str]); 4] = [
+    let cases: [(&str, &[&str]); 5] = [
         ("random", &two),
         ("lhs", &two),
         (
@@ -248,6 +248,9 @@ fn cli_run_replays_a_margins_sample_to_the_last_digit() {
             ],
         ),
         ("random", &["--steady-state"]),
+        // a horizon that 4 significant digits would change (it read 5.432e-4: review
+        // helper-26)
+        ("random", &["--orbits", "0.00054321"]),
     ];
     for (sampling, flags) in cases {
         let out = bin()
@@ -268,9 +271,10 @@ fn cli_run_replays_a_margins_sample_to_the_last_digit() {
             "{replay}"
         );
         // every flag of the margins run that changes a sample is in it
-        for f in flags.iter().filter(|f| f.starts_with("--")) {
-            assert!(replay.contains(f), "{replay} lacks {f}");
-        }
+        assert!(
+            replay.contains(&flags.join(" ")),
+            "{replay} lacks {flags:?}"
+        );
         let words: Vec<String> = replay
             .split_whitespace()
             .skip(1) // orbitlash

@@ -200,6 +200,24 @@ fn val_shared_cases_heater_in_a_recording_that_starts_late() {
             late.push('\n');
         }
     }
+    // cut to its last orbit: too short, and said in its own orbits (it read "ends at
+    // t = 68100 s, 12 whole orbit(s)": review helper-26)
+    let last: String = late
+        .lines()
+        .enumerate()
+        .filter(|(i, l)| {
+            *i == 0 || l.split(',').next().unwrap().parse::<f64>().unwrap() >= 62_460.0
+        })
+        .map(|(_, l)| format!("{l}\n"))
+        .collect();
+    let rec = Recording::from_csv(last.as_bytes(), "last.csv").unwrap();
+    let e = diagnose(&reference(), &rec, &Options::default(), &|_, _, _| {})
+        .expect_err("one orbit cannot be split")
+        .to_string();
+    assert!(
+        e.contains("runs from t = 62460 to 68100 s, 1 whole orbit(s)"),
+        "{e}"
+    );
     let rec = Recording::from_csv(late.as_bytes(), "late.csv").unwrap();
     let d = diagnose(&reference(), &rec, &Options::default(), &|_, _, _| {}).unwrap();
     let s = &d.split;

@@ -807,7 +807,7 @@ fn bench_diagnose(a: &BenchArgs, recording: &std::path::Path) -> Result<()> {
         "  {} samples × {} channels, {} whole orbits ({} held out)",
         d.series.time_s.len(),
         d.series.channels.len(),
-        d.split.orbits,
+        d.split.recorded_orbits(),
         d.split.holdout_orbits
     );
     print_out(&o)

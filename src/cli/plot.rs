@@ -284,8 +284,9 @@ pub fn draw(
                 .get("orbitlash.run_end")
                 .and_then(|m| m.get("status"))
             {
+                Some(status) if status == "recovered" => "its end record (status `recovered`: a copy of a killed or cut-off run) holds no verdict".to_string(),
                 Some(status) => format!(
-                    "its end record (status `{}`: a copy of a killed or cut-off run) holds no verdict",
+                    "its end record (status `{}`) holds no verdict (a log written before end records kept it)",
                     orbitlash::units::shown(status)
                 ),
                 None => "has no end record (a killed run or a cut-off copy)".to_string(),

@@ -25,9 +25,11 @@ pub struct Split {
     pub period_s: f64,
     /// Whole orbits the recording covers (from t = 0).
     pub orbits: usize,
-    /// The orbit the recording's first sample is in, counted from 0 at the scenario's
-    /// t = 0 (as `baseline.orbit_rmse` is): the orbits before it hold no data (the
-    /// model runs through them as it runs up to any recording's start).
+    /// The recording's first orbit, counted from 0 at the scenario's t = 0 (as
+    /// `baseline.orbit_rmse` is): the one its first sample is in, or the next when the
+    /// recording holds less than half of that one (the lead-in is fitted with it). The
+    /// orbits before it hold no data (the model runs through them as it runs up to any
+    /// recording's start).
     pub first_orbit: usize,
     /// The recording's first sample, s from the scenario's t = 0.
     pub start_s: f64,
@@ -58,7 +60,10 @@ impl Split {
     ) -> Result<Split, String> {
         let orbits = ((t_last_s + slack_s.max(1e-6 * period_s)) / period_s).floor() as usize;
         let last_orbit_short_s = (orbits as f64 * period_s - t_last_s).max(0.0);
-        let first_orbit = ((t_first_s.max(0.0) / period_s).floor() as usize).min(orbits);
+        // the orbit the first sample is in, or the next when it holds less than half
+        // of that one (a few samples before a boundary are a lead-in, not an orbit)
+        let t0 = t_first_s.max(0.0) / period_s;
+        let first_orbit = ((t0 + 0.5).floor() as usize).min(orbits);
         let recorded = orbits - first_orbit;
         if recorded < 2 {
             return Ok(Split {
@@ -323,14 +328,28 @@ impl Observations {
         let split = Split::new(period, rec.time_s[0], t_last, near_s(&rec.time_s), holdout)
             .map_err(DiagnoseError::Options)?;
         if !split.can_validate() {
+            // a recording that starts late: its orbits, not the scenario's from t = 0
+            let span = if split.first_orbit > 0 {
+                format!(
+                    "runs from t = {} to {} s, {} whole orbit(s) of {:.1} s",
+                    crate::units::num(rec.time_s[0]),
+                    crate::units::num(t_last),
+                    split.recorded_orbits(),
+                    period
+                )
+            } else {
+                format!(
+                    "ends at t = {} s, {} whole orbit(s) of {:.1} s",
+                    crate::units::num(t_last),
+                    split.orbits,
+                    period
+                )
+            };
             return Err(DiagnoseError::Recording(format!(
-                "{}: the recording ends at t = {} s, {} whole orbit(s) of {:.1} s: diagnose fits \
-whole orbits and checks the fit on later ones held out, so it needs at least two (is the time \
-column in seconds from the scenario's t = 0?)",
+                "{}: the recording {span}: diagnose fits whole orbits and checks the fit on \
+later ones held out, so it needs at least two (is the time column in seconds from the \
+scenario's t = 0?)",
                 rec.file,
-                crate::units::num(t_last),
-                split.orbits,
-                period
             )));
         }
         let short_holdout = check_split_holds_data(rec, &channels, &split)?;
@@ -947,6 +966,47 @@ pub fn orbit_rms(obs: &Observations, residuals: &[Vec<Option<f64>>]) -> Vec<Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A recording that starts late counts its orbits from its first (the scenario's
+    /// numbers kept), holds a third of those out, and takes a lead-in of less than half
+    /// an orbit as part of the next: 2 samples before a boundary made "orbit 6" of 60 s
+    /// (review helper-26).
+    #[test]
+    fn core_a_late_recording_counts_its_own_orbits() {
+        let p = 5677.0;
+        let s = Split::new(p, 11_400.0, 12.0 * p, 30.0, None).unwrap();
+        assert_eq!(
+            (s.first_orbit, s.recorded_orbits(), s.holdout_orbits),
+            (2, 10, 3)
+        );
+        assert_eq!(
+            (s.fitted_span(), s.held_span()),
+            ("orbits 3–9".into(), "orbits 10–12".into())
+        );
+        let s = Split::new(p, 5.0 * p + 0.6 * p, 12.0 * p, 30.0, None).unwrap();
+        assert_eq!(
+            (s.first_orbit, s.recorded_orbits()),
+            (6, 6),
+            "less than half: a lead-in"
+        );
+        let s = Split::new(p, 5.0 * p + 0.4 * p, 12.0 * p, 30.0, None).unwrap();
+        assert_eq!(
+            (s.first_orbit, s.recorded_orbits()),
+            (5, 7),
+            "more than half: an orbit"
+        );
+        let s = Split::new(p, 0.0, 12.0 * p, 30.0, None).unwrap();
+        assert_eq!(
+            (s.first_orbit, s.holdout_orbits, s.fitted_span()),
+            (0, 4, "orbits 1–8".into())
+        );
+        // hold out all the recording's orbits: refused, naming them
+        let e = Split::new(p, 11_400.0, 12.0 * p, 30.0, Some(10)).unwrap_err();
+        assert!(
+            e.contains("10 whole orbits (orbits 3–12 of the scenario)"),
+            "{e}"
+        );
+    }
 
     /// The resolution is the smallest change between consecutive readings: repeats
     /// and gaps are skipped.

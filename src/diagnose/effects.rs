@@ -527,7 +527,7 @@ impl Candidate {
     /// The parameters as the report gives them, each a linear combination of the
     /// fitted ones (a row of J): the fitted ones as they are, but a heater's
     /// `hysteresis_k`, which is reported as `off_c` = `on_c` + `hysteresis_k`.
-    fn report_rows(&self) -> Vec<(String, Vec<f64>)> {
+    pub(crate) fn report_rows(&self) -> Vec<(String, Vec<f64>)> {
         let k = self.params.len();
         let unit = |i: usize| (0..k).map(|j| f64::from(u8::from(i == j))).collect();
         let mut rows: Vec<(String, Vec<f64>)> = Vec::with_capacity(k);
@@ -558,7 +558,13 @@ impl Candidate {
             .into_iter()
             .map(|(name, row)| {
                 let v = row.iter().zip(theta).map(|(a, t)| a * t).sum();
-                let se = cov_of(&row, &row).max(0.0).sqrt();
+                // NaN without a covariance (NaN.max(0.0) would be 0: "± 0")
+                let var = cov_of(&row, &row);
+                let se = if var.is_nan() {
+                    var
+                } else {
+                    var.max(0.0).sqrt()
+                };
                 (name, v, se)
             })
             .collect()
@@ -1670,5 +1676,65 @@ mod vocabulary_doc {
             );
         }
         assert_eq!(rows.len(), Effect::ALL.len());
+    }
+}
+
+#[cfg(test)]
+mod reported {
+    use super::*;
+
+    fn heater() -> Candidate {
+        Candidate {
+            effect: Effect::HeaterThermostat,
+            target: Target::Node("housing".into()),
+            params: vec![
+                ParamDef::new("power_w", 0.0, 1000.0, 0.02),
+                ParamDef::new("on_c", -30.0, 30.0, 0.05),
+                ParamDef::new("hysteresis_k", 0.1, 50.0, 0.05),
+            ],
+            setters: Vec::new(),
+            starts: Vec::new(),
+            null: None,
+            edits: Vec::new(),
+            multi_start: 1,
+            grid: Vec::new(),
+        }
+    }
+
+    /// A heater reports off_c = on_c + hysteresis_k, its variance var(on) + var(h) +
+    /// 2 cov(on, h), and its correlations from the transformed covariance: by hand for
+    /// σ = (0.1, 0.2, 0.3) and ρ(p, on) = −0.5, ρ(p, h) = 0.25, ρ(on, h) = −0.4.
+    /// Without a covariance the errors are NaN (not 0: "± 0") and the correlations
+    /// none.
+    #[test]
+    fn core_a_heater_reports_off_c_with_its_error_and_correlations() {
+        let s = [0.1, 0.2, 0.3];
+        let r = [[1.0, -0.5, 0.25], [-0.5, 1.0, -0.4], [0.25, -0.4, 1.0]];
+        let cov: Vec<Vec<f64>> = (0..3)
+            .map(|i| (0..3).map(|j| r[i][j] * s[i] * s[j]).collect())
+            .collect();
+        let h = heater();
+        let p = h.report_params(&[2.0, -6.0, 3.0], Some(&cov));
+        let names: Vec<&str> = p.iter().map(|x| x.0.as_str()).collect();
+        assert_eq!(names, ["power_w", "on_c", "off_c"]);
+        assert_eq!((p[0].1, p[1].1, p[2].1), (2.0, -6.0, -3.0));
+        let var_off: f64 = 0.04 + 0.09 + 2.0 * (-0.4 * 0.2 * 0.3);
+        assert!((p[2].2 - var_off.sqrt()).abs() < 1e-15, "{p:?}");
+        assert!((p[0].2 - 0.1).abs() < 1e-15 && (p[1].2 - 0.2).abs() < 1e-15);
+        let (order, c) = h.report_correlation(Some(&cov));
+        assert_eq!(order, ["power_w", "on_c", "off_c"]);
+        // cov(p, off) = cov(p, on) + cov(p, h); cov(on, off) = var(on) + cov(on, h)
+        let p_off = (-0.5 * 0.1 * 0.2 + 0.25 * 0.1 * 0.3) / (0.1 * var_off.sqrt());
+        let on_off = (0.04 - 0.4 * 0.2 * 0.3) / (0.2 * var_off.sqrt());
+        assert!((c[0][2].unwrap() - p_off).abs() < 1e-12, "{c:?}");
+        assert!((c[2][1].unwrap() - on_off).abs() < 1e-12, "{c:?}");
+        assert!((c[0][1].unwrap() + 0.5).abs() < 1e-12);
+        for (i, row) in c.iter().enumerate() {
+            assert_eq!(row[i], Some(1.0));
+        }
+        let none = h.report_params(&[2.0, -6.0, 3.0], None);
+        assert!(none.iter().all(|x| x.2.is_nan()), "{none:?}");
+        let (_, c) = h.report_correlation(None);
+        assert!(c.iter().flatten().all(Option::is_none));
     }
 }

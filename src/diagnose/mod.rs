@@ -1192,11 +1192,67 @@ fn owners(problem: &Problem<'_>, cands: &[Candidate], h: &Hypothesis) -> Vec<(St
     let found = h.members.iter().map(|&m| (cands[m].label(), &cands[m]));
     cal.chain(found)
         .flat_map(|(l, c)| {
-            c.params
-                .iter()
-                .map(move |p| (l.clone(), p.name.to_string()))
+            c.report_rows()
+                .into_iter()
+                .map(move |(name, _)| (l.clone(), name))
         })
         .collect()
+}
+
+/// `h`'s parameters as the report gives them ([`Candidate::report_rows`]: a heater's
+/// `off_c` for the `hysteresis_k` it is fitted as): the transform T over all of `h`'s
+/// parameters (the calibration's first, then each member's), block by block; the
+/// reported values are T θ and their covariance T C Tᵀ.
+fn report_transform(
+    problem: &Problem<'_>,
+    cands: &[Candidate],
+    h: &Hypothesis,
+) -> nalgebra::DMatrix<f64> {
+    let n = h.theta.len();
+    let mut t = nalgebra::DMatrix::zeros(n, n);
+    let mut off = 0;
+    let owners = (problem.calibration.iter()).chain(h.members.iter().map(|&m| &cands[m]));
+    for c in owners {
+        for (i, (_, row)) in c.report_rows().into_iter().enumerate() {
+            for (j, a) in row.into_iter().enumerate() {
+                t[(off + i, off + j)] = a;
+            }
+        }
+        off += c.params.len();
+    }
+    t
+}
+
+/// The covariance of `h`'s parameters as the report gives them (T C Tᵀ), if the fit
+/// has one.
+fn report_covariance(
+    problem: &Problem<'_>,
+    cands: &[Candidate],
+    h: &Hypothesis,
+) -> Option<nalgebra::DMatrix<f64>> {
+    let t = report_transform(problem, cands, h);
+    let n = t.nrows();
+    // over the nonzero coefficients only: an entry of C that is not finite stays in
+    // its own row and column, as it does without the transform
+    let nz: Vec<Vec<(usize, f64)>> = (0..n)
+        .map(|i| {
+            (0..n)
+                .filter(|&k| t[(i, k)] != 0.0)
+                .map(|k| (k, t[(i, k)]))
+                .collect()
+        })
+        .collect();
+    h.fit.covariance.as_ref().map(|c| {
+        nalgebra::DMatrix::from_fn(n, n, |i, j| {
+            let mut v = 0.0;
+            for &(k, a) in &nz[i] {
+                for &(l, b) in &nz[j] {
+                    v += a * c[(k, l)] * b;
+                }
+            }
+            v
+        })
+    })
 }
 
 /// The parameters outside `off..off + k` (one finding's) that one of its parameters
@@ -1208,12 +1264,20 @@ fn correlated(
     off: usize,
     k: usize,
 ) -> Vec<Correlated> {
-    let corr = h.fit.correlation();
+    // of the parameters as reported (a heater's off_c, not its hysteresis_k)
+    let Some(cov) = report_covariance(problem, cands, h) else {
+        return Vec::new();
+    };
+    let se = |i: usize| cov[(i, i)].max(0.0).sqrt();
     let who = owners(problem, cands, h);
     let mut out = Vec::new();
     for i in off..off + k {
         for (j, (label, name)) in who.iter().enumerate() {
-            let r = corr[i][j];
+            let r = if se(i) > 0.0 && se(j) > 0.0 {
+                cov[(i, j)] / (se(i) * se(j))
+            } else {
+                f64::NAN
+            };
             if !(off..off + k).contains(&j) && r.abs() > CORRELATED {
                 out.push(Correlated {
                     parameter: who[i].1.clone(),
@@ -1249,18 +1313,27 @@ fn unstable(
     };
     let ci = h.members[m];
     let here = start(h, ci)?;
-    let se = h.fit.std_errors();
+    // the parameters as reported (a heater's off_c, not its hysteresis_k)
+    let rows = cands[ci].report_rows();
+    let value = |hyp: &Hypothesis, at: usize, row: &[f64]| -> f64 {
+        row.iter()
+            .enumerate()
+            .map(|(q, a)| a * hyp.theta[at + q])
+            .sum()
+    };
+    let cov = report_covariance(problem, cands, h);
+    let se = |i: usize| cov.as_ref().map_or(f64::NAN, |c| c[(i, i)].max(0.0).sqrt());
     for (other, w) in without.iter().enumerate() {
         let Some(w) = w.as_ref().filter(|_| other != m) else {
             continue;
         };
         let Some(there) = start(w, ci) else { continue };
-        for (p, def) in cands[ci].params.iter().enumerate() {
-            let (a, b) = (w.theta[there + p], h.theta[here + p]);
-            if se[here + p].is_finite() && (a - b).abs() > 1.96 * se[here + p] {
+        for (p, (name, row)) in rows.iter().enumerate() {
+            let (a, b) = (value(w, there, row), value(h, here, row));
+            if se(here + p).is_finite() && (a - b).abs() > 1.96 * se(here + p) {
                 return Some(format!(
                     "{} moves from {} to {} (beyond its 95 % interval) when {} is added",
-                    def.name,
+                    name,
                     crate::units::sig(a),
                     crate::units::sig(b),
                     cands[h.members[other]].label()

@@ -93,7 +93,7 @@ pub fn parse_spec(text: &str, file: &str) -> Result<ScenarioSpec, ScenarioError>
                     line: before.matches('\n').count() + 1,
                     column: before.len() - before.rfind('\n').map_or(0, |p| p + 1) + 1,
                     key,
-                    message: format!("{}\n{excerpt}", e.message().trim_end()),
+                    message: format!("{}\n{excerpt}", clip_line(e.message().trim_end())),
                 }
             }
             None => ScenarioError::Syntax {
@@ -102,6 +102,17 @@ pub fn parse_spec(text: &str, file: &str) -> Result<ScenarioSpec, ScenarioError>
             },
         }
     })
+}
+
+/// A message line cut to 4 × [`EXCERPT_HALF_WIDTH`] characters, "…" where it was cut
+/// (a type error quotes the value, which may be a whole long line).
+fn clip_line(line: &str) -> String {
+    let max = 4 * EXCERPT_HALF_WIDTH;
+    if line.chars().count() <= max {
+        line.to_string()
+    } else {
+        format!("{}…", line.chars().take(max).collect::<String>())
+    }
 }
 
 /// Characters of a source line shown either side of the error's column.
@@ -119,7 +130,11 @@ fn shorten_excerpt(excerpt: &str) -> String {
             .then(|| (i, rest.chars().take_while(|c| *c == ' ').count()))
     });
     let Some((at, col)) = caret else {
-        return excerpt.to_string();
+        return excerpt
+            .lines()
+            .map(clip_line)
+            .collect::<Vec<_>>()
+            .join("\n");
     };
     let from = col.saturating_sub(EXCERPT_HALF_WIDTH);
     let to = col + EXCERPT_HALF_WIDTH;
@@ -132,7 +147,8 @@ fn shorten_excerpt(excerpt: &str) -> String {
         // the source line (just above the caret's) and the caret's, when long
         let cut_here = (i == at || i + 1 == at) && long;
         let Some((gutter, rest)) = l.split_once("| ").filter(|_| cut_here) else {
-            out.push(l.to_string());
+            // the message's lines (a type error quotes the whole value)
+            out.push(clip_line(l));
             continue;
         };
         let n = rest.chars().count();

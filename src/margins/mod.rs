@@ -512,7 +512,11 @@ impl RunIdentity {
             samples: plan.samples,
             sampling: plan.sampling,
             horizon: match horizon {
-                Horizon::Orbits(o) => crate::units::count(o, "orbit"),
+                // exact (the shortest text that reads back to the number): two runs of
+                // 0.00054321 and 0.00054322 orbits are not one run, and `replay` reads
+                // the number back from here
+                Horizon::Orbits(1.0) => "1 orbit".to_string(),
+                Horizon::Orbits(o) => format!("{o} orbits"),
                 Horizon::Mission => MISSION_HORIZON.to_string(),
                 Horizon::SteadyState => STEADY_HORIZON.to_string(),
             },
