@@ -231,6 +231,9 @@ fn val_shared_cases_heater_in_a_recording_that_starts_late() {
         ("orbits 3–9".to_string(), "orbits 10–12".to_string())
     );
     assert_eq!(d.verdict, Verdict::Explained, "{:?}", d.findings);
+    // its figures start where it does: they drew three hours of model alone first
+    assert_eq!(d.series.figure_start_s(), 11_400.0);
+    assert_eq!(d.series.model_time_s.first(), Some(&11_400.0));
     assert_eq!(d.findings.len(), 1, "{:?}", d.findings);
     let f = &d.findings[0];
     assert_eq!(f.effect, "heater_thermostat");

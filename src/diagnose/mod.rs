@@ -534,6 +534,16 @@ pub struct Series {
 pub const MODEL_GRID_POINTS: usize = 2000;
 
 impl Series {
+    /// Where the figures' time axis and the models' grid start: the scenario's t = 0,
+    /// or the recording's first sample when that comes later than a twentieth of its
+    /// end (a recording that starts after the model has run up to it: its figures
+    /// showed hours of model alone before the first reading).
+    pub fn figure_start_s(&self) -> f64 {
+        let first = self.time_s.first().copied().unwrap_or(0.0).max(0.0);
+        let last = self.time_s.last().copied().unwrap_or(0.0);
+        if first > 0.05 * last { first } else { 0.0 }
+    }
+
     /// Fills the models' own grid: the baseline `model` and the `corrected` one (the
     /// baseline when there is none) simulated at even times over the recording, so a
     /// figure draws them through the recording's gaps as they are, not as straight
@@ -549,7 +559,10 @@ impl Series {
             return Ok(());
         }
         let n = MODEL_GRID_POINTS;
-        let grid: Arc<[f64]> = (0..n).map(|k| last * k as f64 / (n - 1) as f64).collect();
+        let first = self.figure_start_s();
+        let grid: Arc<[f64]> = (0..n)
+            .map(|k| first + (last - first) * k as f64 / (n - 1) as f64)
+            .collect();
         let per_channel = |p: Vec<Vec<f64>>| -> Vec<Vec<f64>> {
             obs.channels.iter().map(|c| p[c.sensor].clone()).collect()
         };

@@ -52,7 +52,8 @@ impl<'s> ChannelView<'s> {
     fn new(s: &'s Series, c: usize) -> ChannelView<'s> {
         let is_temp = s.units[c] != "um";
         let span = s.time_s.last().copied().unwrap_or(1.0).max(1.0);
-        let axis = TimeAxis::new(0.0, span);
+        let start = s.figure_start_s().min(span);
+        let axis = TimeAxis::new(start, (span - start).max(1.0));
         let readings = s
             .time_s
             .iter()
@@ -229,7 +230,7 @@ fn panel_chart<'a, 'b>(
         .axis_desc_style((FAMILY, 15));
     if !values {
         mesh.x_desc(format!(
-            "time since the recording's start ({})",
+            "time since the scenario's t = 0 ({})",
             view.axis.unit
         ));
     }

@@ -71,7 +71,8 @@ fn heldout_rms(s: &Series, c: usize, model: &[f64]) -> f64 {
 pub fn overview(s: &Series, title: &str) -> Result<Figure, PlotError> {
     let grid = Grid::of(s);
     let span = s.time_s.last().copied().unwrap_or(1.0).max(1.0);
-    let axis = TimeAxis::new(0.0, span);
+    let start = s.figure_start_s().min(span);
+    let axis = TimeAxis::new(start, (span - start).max(1.0));
     let mut svg = String::new();
     let mut notes = Annotations::default();
     {
@@ -274,7 +275,7 @@ fn draw_time_caption(
     axis: &TimeAxis,
     notes: &mut Annotations,
 ) -> Result<(), PlotError> {
-    let foot = format!("time since the recording's start ({})", axis.unit);
+    let foot = format!("time since the scenario's t = 0 ({})", axis.unit);
     let fw = text_width(&foot, 14.0);
     let pos = ((grid.w as f64 - fw) / 2.0, grid.h as f64 - 28.0);
     root.draw(&Text::new(
