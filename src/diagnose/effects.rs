@@ -553,7 +553,8 @@ impl Candidate {
         theta: &[f64],
         cov: Option<&[Vec<f64>]>,
     ) -> Vec<(String, f64, f64)> {
-        let cov_of = |a: &[f64], b: &[f64]| cov.map_or(f64::NAN, |c| bilinear(a, c, b));
+        let cov_of =
+            |a: &[f64], b: &[f64]| cov.map_or(f64::NAN, |c| bilinear(a, |i, j| c[i][j], b));
         self.report_rows()
             .into_iter()
             .map(|(name, row)| {
@@ -578,7 +579,7 @@ impl Candidate {
         cov: Option<&[Vec<f64>]>,
     ) -> (Vec<String>, Vec<Vec<Option<f64>>>) {
         let rows = self.report_rows();
-        let cv = |a: &[f64], b: &[f64]| cov.map_or(f64::NAN, |c| bilinear(a, c, b));
+        let cv = |a: &[f64], b: &[f64]| cov.map_or(f64::NAN, |c| bilinear(a, |i, j| c[i][j], b));
         let se: Vec<f64> = rows.iter().map(|(_, r)| cv(r, r).max(0.0).sqrt()).collect();
         let corr = rows
             .iter()
@@ -601,13 +602,13 @@ impl Candidate {
     }
 }
 
-/// aᵀ C b over the nonzero coefficients only (a covariance's other entries may be
-/// NaN where a parameter is not determined).
-fn bilinear(a: &[f64], c: &[Vec<f64>], b: &[f64]) -> f64 {
+/// aᵀ C b (C's entry (i, j) by `c`) over the nonzero coefficients only (a
+/// covariance's other entries may be NaN where a parameter is not determined).
+pub(crate) fn bilinear(a: &[f64], c: impl Fn(usize, usize) -> f64, b: &[f64]) -> f64 {
     let mut s = 0.0;
     for (i, &ai) in a.iter().enumerate().filter(|(_, x)| **x != 0.0) {
         for (j, &bj) in b.iter().enumerate().filter(|(_, x)| **x != 0.0) {
-            s += ai * c[i][j] * bj;
+            s += ai * c(i, j) * bj;
         }
     }
     s

@@ -1212,60 +1212,31 @@ fn owners(problem: &Problem<'_>, cands: &[Candidate], h: &Hypothesis) -> Vec<(St
         .collect()
 }
 
-/// `h`'s parameters as the report gives them ([`Candidate::report_rows`]: a heater's
-/// `off_c` for the `hysteresis_k` it is fitted as): the transform T over all of `h`'s
-/// parameters (the calibration's first, then each member's), block by block; the
-/// reported values are T θ and their covariance T C Tᵀ.
-fn report_transform(
-    problem: &Problem<'_>,
-    cands: &[Candidate],
-    h: &Hypothesis,
-) -> nalgebra::DMatrix<f64> {
-    let n = h.theta.len();
-    let mut t = nalgebra::DMatrix::zeros(n, n);
-    let mut off = 0;
-    let owners = (problem.calibration.iter()).chain(h.members.iter().map(|&m| &cands[m]));
-    for c in owners {
-        for (i, (_, row)) in c.report_rows().into_iter().enumerate() {
-            for (j, a) in row.into_iter().enumerate() {
-                t[(off + i, off + j)] = a;
-            }
-        }
-        off += c.params.len();
-    }
-    t
-}
-
-/// The covariance of `h`'s parameters as the report gives them (T C Tᵀ), if the fit
-/// has one.
+/// The covariance of `h`'s parameters as the report gives them
+/// ([`Candidate::report_rows`]: a heater's `off_c` for the `hysteresis_k` it is fitted
+/// as), if the fit has one: T C Tᵀ, T block by block (the calibration's parameters
+/// first, then each member's), each entry by [`effects::bilinear`].
 fn report_covariance(
     problem: &Problem<'_>,
     cands: &[Candidate],
     h: &Hypothesis,
 ) -> Option<nalgebra::DMatrix<f64>> {
-    let t = report_transform(problem, cands, h);
-    let n = t.nrows();
-    // over the nonzero coefficients only: an entry of C that is not finite stays in
-    // its own row and column, as it does without the transform
-    let nz: Vec<Vec<(usize, f64)>> = (0..n)
-        .map(|i| {
-            (0..n)
-                .filter(|&k| t[(i, k)] != 0.0)
-                .map(|k| (k, t[(i, k)]))
-                .collect()
-        })
-        .collect();
-    h.fit.covariance.as_ref().map(|c| {
-        nalgebra::DMatrix::from_fn(n, n, |i, j| {
-            let mut v = 0.0;
-            for &(k, a) in &nz[i] {
-                for &(l, b) in &nz[j] {
-                    v += a * c[(k, l)] * b;
-                }
-            }
-            v
-        })
-    })
+    // each reported parameter: its owner's first parameter and its row over the owner's
+    let mut rows: Vec<(usize, Vec<f64>)> = Vec::with_capacity(h.theta.len());
+    let mut off = 0;
+    for c in (problem.calibration.iter()).chain(h.members.iter().map(|&m| &cands[m])) {
+        rows.extend(c.report_rows().into_iter().map(|(_, row)| (off, row)));
+        off += c.params.len();
+    }
+    let c = h.fit.covariance.as_ref()?;
+    Some(nalgebra::DMatrix::from_fn(
+        rows.len(),
+        rows.len(),
+        |i, j| {
+            let ((oi, a), (oj, b)) = (&rows[i], &rows[j]);
+            effects::bilinear(a, |k, l| c[(oi + k, oj + l)], b)
+        },
+    ))
 }
 
 /// The parameters outside `off..off + k` (one finding's) that one of its parameters
@@ -2140,9 +2111,8 @@ fn heater_hints(
     }
     warming.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     // The first whose warming starts somewhere: a channel that is never at its noise
-    // (a sensor's offset) shows no start and gives way to the next.
-    // Starts where the residual is back at the noise first, from any channel; a
-    // floor's starts only when no channel has those.
+    // (a sensor's offset) shows no start and gives way to the next; the starts from a
+    // floor only when no channel has starts from the noise.
     let all: Vec<(Vec<usize>, Vec<usize>)> = warming
         .iter()
         .map(|&(c, _)| warming_starts(obs, &smooth[c], &obs.values[c], noise[c]))
@@ -2168,9 +2138,10 @@ fn heater_hints(
 /// a model's error in the warm phase took the start: a housing 8 % too heavy warms
 /// too slowly in sunlight, and a heater switched on at −10 °C was started at +24 °C.)
 ///
-/// Returns those, and second, for when no orbit of any channel gets back to the noise (the tail of each
-/// orbit's heating lasts into the next: a recording that starts while the heater
-/// already cycles): each orbit's start from its cold phase's peak back to within
+/// Returns those, and second, for when no orbit of any channel gets back to the noise
+/// (the tail of each orbit's heating lasts into the next: a recording that starts
+/// while the heater already cycles): each orbit's start from its cold phase's peak
+/// back to within
 /// σ/√5 of its floor (its lowest before the peak), where the peak stands 4σ/√5 clear
 /// of that floor. Before, such a recording gave no start, so no heater was tried: the
 /// shared heater case with its first two orbits cut off named an eclipse dissipation,
