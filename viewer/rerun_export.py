@@ -322,9 +322,12 @@ def orbit_starts(series):
     return t[first]
 
 
-def per_orbit(t_ns, values, starts_ns):
+def per_orbit(t_ns, values, starts_ns, keep_cut=False):
     """A series' range and time-weighted mean over each orbit: (mid time ns, min, max,
-    mean) arrays, one entry per orbit that has samples; NaN samples are skipped."""
+    mean) arrays, one entry per orbit that has samples; NaN samples are skipped. A last
+    orbit the run's end cuts short (its samples span less than 90 % of the median
+    orbit) is left out, unless `keep_cut`: its range is not an orbit's (a run of whole
+    orbits ends on the next orbit's first sample, whose min and max are that value)."""
     import numpy as np
 
     t = np.asarray(t_ns, dtype=np.int64)
@@ -341,7 +344,12 @@ def per_orbit(t_ns, values, starts_ns):
         mean = np.add.reduceat(np.where(ok, v, 0.0) * w, seg) / weight
     mean = np.where(weight > 0, mean, np.fmin.reduceat(v, seg))
     mid = (t[seg] + t[last]) // 2
-    return mid, np.fmin.reduceat(v, seg), np.fmax.reduceat(v, seg), mean
+    keep = slice(None)
+    if len(starts_ns) > 1 and not keep_cut:
+        period = float(np.median(np.diff(np.asarray(starts_ns, dtype=np.int64))))
+        if t[-1] - starts_ns[orbit[-1]] < 0.9 * period:
+            keep = slice(0, len(seg) - 1)
+    return mid[keep], np.fmin.reduceat(v, seg)[keep], np.fmax.reduceat(v, seg)[keep], mean[keep]
 
 
 def send_envelopes(out, series, channels, pairs, starts, eclipses=None):
@@ -415,7 +423,7 @@ def sunlit_share(t_ns, sunlit, starts_ns, eclipses, origin_ns):
         before = np.interp(bounds.astype(float), edges, cum, left=0.0, right=dark[-1])
         share = 1.0 - np.diff(before) / length
     else:
-        _, _, _, share = per_orbit(t_ns, sunlit, starts_ns)
+        _, _, _, share = per_orbit(t_ns, sunlit, starts_ns, keep_cut=True)
         share = share[: len(length)]
     return mid[whole], share[whole]
 
@@ -602,9 +610,12 @@ def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None
     if envelopes:  # a long run: the whole mission per orbit first, quick to load
         # the body's nodes first, then each gear's
         hot = sorted((k for k in envelopes if "°C" in k), key=lambda k: (not k.startswith("node"), k))
-        left = [view(k, envelopes[k]) for k in hot]
-        right = [view(k, v) for k, v in envelopes.items() if "°C" not in k]
-        tabs.append(rrb.Horizontal(*(rrb.Vertical(*x) for x in (left, right) if x),
+        cold = [k for k in envelopes if "°C" not in k]
+        # each view as tall as its legend needs: a body of four nodes has eight entries
+        # (min and max), which a third of the column cut off above two gears of six
+        columns = [([view(k, envelopes[k]) for k in keys], [max(4, len(envelopes[k])) for k in keys])
+                   for keys in (hot, cold) if keys]
+        tabs.append(rrb.Horizontal(*(rrb.Vertical(*x, row_shares=shares) for x, shares in columns),
                                    name=f"{name}: per orbit, min and max"))
     tabs += [rrb.Horizontal(*panes, name=name)] if panes else []
     # diagnose.mcap: recorded, baseline and corrected per channel; then the residuals

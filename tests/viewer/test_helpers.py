@@ -569,6 +569,16 @@ def test_per_orbit_closed_form():
     inner = slice(1, -1)  # whole orbits
     expect(np.all(lo[inner] < -0.99) and np.all(hi[inner] > 0.99), f"ranges {lo[inner].max()} … {hi[inner].min()}")
     expect(np.max(np.abs(mean[inner])) < 0.02, f"orbit means up to {np.max(np.abs(mean[inner]))}, not 0")
+    # a run of 40 whole orbits logs the 41st orbit's first sample at its end: that
+    # one-sample "orbit" (min = max) is not drawn; half an orbit more is not either
+    for extra_ns, name in ((0, "its first sample"), (period_ns // 2, "half of it")):
+        t2 = np.r_[t, np.arange(40 * period_ns, 40 * period_ns + extra_ns + 1, 60 * 10**9)]
+        n2 = 1 + t2 // period_ns
+        starts2 = module.orbit_starts({("/orbit/state", "orbit_number"): (list(t2), list(n2.astype(float)))})
+        mid2, lo2, hi2, _ = module.per_orbit(t2, np.sin(2 * np.pi * t2 / period_ns), starts2)
+        expect(len(starts2) == 41 and len(mid2) == 40,
+               f"the 41st orbit ({name}) drawn: {len(mid2)} of {len(starts2)} orbits")
+        expect(lo2[-1] < -0.99 and hi2[-1] > 0.99, f"the last drawn orbit's range {lo2[-1]} … {hi2[-1]}")
     few = {("/orbit/state", "orbit_number"): (list(t[t < 10 * period_ns]), list(n[t < 10 * period_ns]))}
     expect(module.orbit_starts(few) is None, "10 orbits got the per-orbit tab (it is for more than 30)")
 
@@ -659,7 +669,7 @@ def main():
         else:
             print("SKIP C: the binary's own log: it writes no pairs_json yet")
         check("C: a pair with no finite smallest: no point, verdict kept", test_smallest_not_finite)
-        check("D: per-orbit range and mean of a sine, orbit starts on k·P", test_per_orbit_closed_form)
+        check("D: per-orbit range and mean of a sine, orbit starts on k·P, no cut last orbit", test_per_orbit_closed_form)
         check("D: the sunlit share of each whole orbit from the eclipse windows", test_sunlit_share_from_eclipses)
         check("D: a view's legend goes to the corner its lines leave free", test_legend_corner_avoids_the_data)
     print(f"{results['passed']} passed, {results['failed']} failed")
