@@ -360,3 +360,45 @@ fn cli_recover_never_replaces_its_input() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An output path with an escape sequence or a line end in it is printed escaped on
+/// the success lines too, as errors print it (black-box helper-27: `csv:`, `figure:`
+/// and `wrote` printed it raw, so a name could recolour the terminal or split a line),
+/// and the file is written under the name given.
+#[test]
+fn cli_success_lines_escape_control_characters_in_paths() {
+    let dir = setup("escaped-paths");
+    let name = "we\nird\u{1b}[31m";
+    let csv = format!("{name}.csv");
+    let svg = format!("{name}.svg");
+    for (args, label) in [
+        (
+            vec![
+                "run",
+                "s.toml",
+                "--orbits",
+                "1",
+                "--no-log",
+                "--csv",
+                csv.as_str(),
+            ],
+            "csv: ",
+        ),
+        (vec!["plot", "l.mcap", "--out", svg.as_str()], "figure: "),
+    ] {
+        let out = run_in(&dir, &args);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{text}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(!text.contains('\u{1b}'), "a raw escape: {text:?}");
+        assert!(
+            text.contains(&format!("{label}we\\u{{a}}ird\\u{{1b}}[31m.")),
+            "{text:?}"
+        );
+    }
+    assert!(dir.join(&csv).is_file() && dir.join(&svg).is_file());
+}

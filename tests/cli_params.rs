@@ -466,3 +466,48 @@ fn cli_the_readme_key_table_is_the_registrys() {
         orbitlash::spec::registry::rows().len() + 2
     );
 }
+
+/// A range as `params`, the README's key table and the errors show it says which ends
+/// are excluded, as the rule checks them: an excluded finite end is written with
+/// "<" or ">" (black-box helper-27: an initial temperature of 5000 K and a Poisson
+/// ratio of 0.5 were refused by a range shown as "0 … 5000" and "−1 … 0.5", the error
+/// then saying "must be within −1 … 0.5 (got 0.5)").
+#[test]
+fn core_a_shown_range_marks_its_excluded_ends() {
+    let mut seen = 0;
+    for row in orbitlash::spec::registry::rows() {
+        let q = row.field.quantity;
+        let Some((lo, lo_in, hi, hi_in)) = q.interval() else {
+            continue;
+        };
+        let text = q.range();
+        let excluded = (!lo_in && lo.is_finite()) || (!hi_in && hi.is_finite());
+        if excluded {
+            seen += 1;
+            assert!(
+                text.contains('<') || text.contains('>'),
+                "{}: the range {text:?} hides an excluded end ({lo} {lo_in}, {hi} {hi_in})",
+                row.field.name
+            );
+        } else {
+            assert!(
+                !text.contains('<') && !text.contains('>'),
+                "{}: the range {text:?} excludes an end the rule accepts",
+                row.field.name
+            );
+        }
+    }
+    assert!(seen > 0, "no quantity with an excluded end was checked");
+    // and the error of an excluded end says the same range
+    let out = bin()
+        .args([
+            "backlash",
+            "--set",
+            "gear_pair.mesh.pinion.material.poisson=0.5",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("must be −1 < … < 0.5 (got 0.5)"), "{err}");
+}

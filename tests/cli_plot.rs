@@ -125,18 +125,19 @@ fn cli_plot_a_log_as_png_and_svg_with_eclipses_verdict_and_smallest_backlash() {
         (
             &cut,
             "INCOMPLETE: the log holds no verdict",
-            "has no end record",
+            ".mcap: it has no end record",
         ),
         (
             &recovered,
             "INCOMPLETE: the log holds no verdict",
-            // it has one, of its own (black-box helper-25: "has no end record")
-            "its end record (status `recovered`: a copy of a killed or cut-off run) holds no verdict",
+            // it has one, of its own (black-box helper-25: "has no end record"); the
+            // note is a sentence after the name (helper-27: "….mcap its end record")
+            ".mcap: its end record (status `recovered`: a copy of a killed or cut-off run) holds no verdict",
         ),
         (
             &failing,
             "FAIL: backlash below the smallest allowed (the log holds no verdict)",
-            "has no end record",
+            ".mcap: it has no end record",
         ),
     ] {
         let svg = input.with_extension("svg");
@@ -263,6 +264,32 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     let text = std::fs::read_to_string(&svg).unwrap();
     // `run --csv` has no eclipse flag and no margin: no shading, no verdict claimed
     assert!(text.contains("backlash (µm)") && !text.contains("PASS") && !text.contains("eclipse"));
+    // a table is told by its header whatever its name: a killed run's CSV
+    // (`<name>.csv.<pid>.partial`, cut mid-line) and one named like a log
+    let table = std::fs::read(&csv).unwrap();
+    for name in ["run.csv.4242.partial", "table.mcap"] {
+        let copy = dir.join(name);
+        std::fs::write(&copy, &table[..table.len() - 7]).unwrap();
+        let out = common::bin()
+            .arg("plot")
+            .arg(&copy)
+            .arg("--out")
+            .arg(dir.join(format!("{name}.svg")))
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // the cut line (its last cell short of digits) is left out, and said
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains("its last line has no end"),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
 
     // time going back names its line
     let lines: Vec<String> = std::fs::read_to_string(&csv)

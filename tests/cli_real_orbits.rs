@@ -207,7 +207,7 @@ fn cli_environment_reports_eclipses_and_writes_the_series() {
     let csv = std::fs::read_to_string(dir.join("c.csv")).unwrap();
     assert_eq!(
         csv.lines().next().unwrap(),
-        "time_s,orbit_angle_deg,sunlit,beta_deg,solar_flux_w_per_m2"
+        "time_s,orbit_angle_deg,sun_fraction,beta_deg,solar_flux_w_per_m2,solar_flux_unshadowed_w_per_m2"
     );
     assert_eq!(csv.lines().count(), 1 + 721);
     // TLE, conical shadow: a dated series with a penumbra ramp between full and none.
@@ -227,7 +227,7 @@ fn cli_environment_reports_eclipses_and_writes_the_series() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "time_s,utc,orbit_angle_deg,sunlit,beta_deg,solar_flux_w_per_m2"
+        "time_s,utc,orbit_angle_deg,sun_fraction,beta_deg,solar_flux_w_per_m2,solar_flux_unshadowed_w_per_m2"
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -238,6 +238,19 @@ fn cli_environment_reports_eclipses_and_writes_the_series() {
     // two penumbra crossings of about 12 s each at 1 s rows
     assert!((16..=40).contains(&partial), "{partial} penumbra rows");
     assert!(lit.iter().all(|f| (0.0..=1.0).contains(f)));
+    // the flux reaching the spacecraft is the log's (black-box helper-27: it was the
+    // unshadowed flux under that name): the unshadowed one dimmed by the Sun's
+    // fraction, 0 in the umbra, full in sunlight
+    for r in &rows {
+        let (f, reaching, unshadowed): (f64, f64, f64) = (
+            r[3].parse().unwrap(),
+            r[5].parse().unwrap(),
+            r[6].parse().unwrap(),
+        );
+        assert!(unshadowed > 1300.0, "{r:?}");
+        assert!((reaching - f * unshadowed).abs() < 0.01, "{r:?}");
+    }
+    assert!(rows.iter().any(|r| r[5] == "0.0000") && rows.iter().any(|r| r[3] == "1.000000"));
     // the output may not be the scenario it reads
     let copy = dir.join("s.toml");
     std::fs::copy(root.join("scenarios/hinge-tle-year.toml"), &copy).unwrap();
@@ -294,7 +307,7 @@ fn cli_environment_writes_each_faces_fluxes() {
     );
     let csv = std::fs::read_to_string(dir.join("f.csv")).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    assert_eq!(header.len(), 6 + 6 * 3);
+    assert_eq!(header.len(), 7 + 6 * 3);
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let (ir_pz, ir_mz, sol_my) = (
         col("panel_pz.pz.earth_ir_w_per_m2"),
@@ -309,7 +322,8 @@ fn cli_environment_writes_each_faces_fluxes() {
         assert_eq!(num(ir_mz), 0.0);
         // the −Y face (toward +orbit normal) sees S sin β in sunlight, none in eclipse
         let lit: f64 = num(3);
-        let flux: f64 = num(5);
+        let flux: f64 = num(6);
+        assert!((num(5) - lit * flux).abs() < 0.01, "{line}");
         let beta = num(4).to_radians();
         assert!(
             (num(sol_my) - lit * flux * beta.sin()).abs() < 0.5,
@@ -659,4 +673,42 @@ fn cli_an_earth_radius_above_the_orbit_is_refused() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// An eclipse's UTC is its seconds after the start, rounded to the millisecond both
+/// show (black-box helper-27: chrono's `%.3f` cut 3235.5699… s to `00:53:55.569`
+/// beside `3235.570`).
+#[test]
+fn cli_environment_utc_agrees_with_its_seconds() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = bin()
+        .arg("environment")
+        .arg(root.join("scenarios/hinge-tle-year.toml"))
+        .args(["--orbits", "3"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    let mut rows = 0;
+    for line in text.lines() {
+        let cells: Vec<&str> = line.split_whitespace().collect();
+        let (Some(s), Some(utc)) = (cells.first(), cells.last()) else {
+            continue;
+        };
+        let (Ok(s), Some(clock)) = (s.parse::<f64>(), utc.strip_prefix("2016-02-04T")) else {
+            continue;
+        };
+        // the start is 2016-02-04T00:00:00Z: the clock is the seconds, to the ms
+        let ms = (s * 1e3).round() as u64;
+        let want = format!(
+            "{:02}:{:02}:{:02}.{:03}Z",
+            ms / 3_600_000,
+            ms / 60_000 % 60,
+            ms / 1000 % 60,
+            ms % 1000
+        );
+        assert_eq!(clock, want, "{line}");
+        rows += 1;
+    }
+    assert_eq!(rows, 3, "{text}");
 }

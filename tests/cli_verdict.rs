@@ -156,7 +156,14 @@ fn cli_backlash_has_the_same_exit_statuses() {
     assert_eq!(fail.status.code(), Some(1));
     let json: serde_json::Value = serde_json::from_slice(&fail.stdout).unwrap();
     assert_eq!(json["pass"], false);
-    assert_eq!(json["pairs"][0]["verdict"], "fail");
+    // in `run --json`'s words (black-box helper-27: it said "fail" for all three)
+    assert_eq!(json["pairs"][0]["verdict"], "margin_violated");
+    for (c, verdict) in [("400", "interference"), ("9726.85", "no_valid_mesh")] {
+        let out = run_in(&dir, &["backlash", "s.toml", "--json", "--uniform-c", c]);
+        assert_eq!(out.status.code(), Some(1));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(json["pairs"][0]["verdict"], verdict, "{c} °C");
+    }
     // a state with no valid mesh fails the verdict, as in `run`
     let lost = run_in(
         &dir,

@@ -10,7 +10,7 @@ use orbitlash::constants::ZERO_CELSIUS_K;
 
 use orbitlash::gear::backlash::MeshError;
 use orbitlash::gear::{CenterDistance, DeformedGear, GearPair, MeshState};
-use orbitlash::run::summary::PassFail;
+use orbitlash::run::summary::PairVerdict;
 use orbitlash::units::{c_to_k, k_to_c};
 
 use super::table::{self, Align};
@@ -92,6 +92,26 @@ fn judge(states: &[Evaluated]) -> Judged<'_> {
         pass: states
             .iter()
             .all(|e| e.mesh.margin_m >= 0.0 && e.mesh.backlash_exact_m > 0.0),
+    }
+}
+
+/// A pair's verdict over its cases, in `run`'s words and order of precedence: a case
+/// with no valid mesh, then interference (no backlash left), then a margin violated.
+fn pair_verdict(states: &[Evaluated]) -> PairVerdict {
+    if states.iter().any(|e| e.no_mesh.is_some()) {
+        PairVerdict::NoValidMesh
+    } else if states
+        .iter()
+        .any(|e| e.mesh.backlash_exact_m.is_nan() || e.mesh.backlash_exact_m <= 0.0)
+    {
+        PairVerdict::Interference
+    } else if states
+        .iter()
+        .any(|e| e.mesh.margin_m.is_nan() || e.mesh.margin_m < 0.0)
+    {
+        PairVerdict::MarginViolated
+    } else {
+        PairVerdict::Pass
     }
 }
 
@@ -293,8 +313,9 @@ struct BacklashReport<'a> {
 #[derive(serde::Serialize)]
 struct PairReport<'a> {
     name: &'a str,
-    /// "pass" or "fail".
-    verdict: PassFail,
+    /// "pass", "margin_violated", "interference" or "no_valid_mesh": the words of
+    /// `run --json` (the worst case's).
+    verdict: PairVerdict,
     min_margin_um: f64,
     /// The minimum allowed, µm: the name `run --json` gives it.
     min_backlash_allowed_um: f64,
@@ -343,7 +364,7 @@ fn to_json<'a>(name: &'a str, cases: &'a [(&GearPair, Vec<Evaluated>)]) -> Backl
                 let j = judge(states);
                 PairReport {
                     name: &pair.name,
-                    verdict: PassFail::all([j.pass]),
+                    verdict: pair_verdict(states),
                     // of the cases that mesh: null when none does
                     min_margin_um: j.smallest.map_or(f64::NAN, |e| e.mesh.margin_m * 1e6),
                     min_backlash_allowed_um: pair.min_backlash_m * 1e6,

@@ -218,10 +218,10 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<Outcome> {
         .collect();
     outs.write_all(&refs)?;
     if let Some(p) = &a.json {
-        outln!(o, "json: {}", p.display());
+        outln!(o, "json: {}", super::shown_path(p));
     }
     for (p, _) in files.iter().filter(|(p, _)| Some(p) != a.json.as_ref()) {
-        outln!(o, "wrote: {}", p.display());
+        outln!(o, "wrote: {}", super::shown_path(p));
     }
     print_out(&o)?;
     Ok(Outcome::Pass)

@@ -42,8 +42,10 @@ pub struct EnvironmentArgs {
     #[arg(long, value_parser = step_arg)]
     step_s: Option<f64>,
     /// Write the time series here: time_s, utc (a dated scenario), orbit_angle_deg,
-    /// sunlit (0 … 1 in a penumbra), beta_deg, solar_flux_w_per_m2 (at the spacecraft,
-    /// before shadow), and per face `<node>.<face>.solar_w_per_m2`, `.albedo_w_per_m2`,
+    /// sun_fraction (0 … 1 in a penumbra), beta_deg, solar_flux_w_per_m2 (the flux
+    /// reaching the spacecraft, as in a run's log: 0 in the umbra, dimmed in a
+    /// penumbra), solar_flux_unshadowed_w_per_m2 (at its distance from the Sun, before
+    /// any shadow), and per face `<node>.<face>.solar_w_per_m2`, `.albedo_w_per_m2`,
     /// `.earth_ir_w_per_m2` (incident, before absorptivity).
     #[arg(long)]
     csv: Option<PathBuf>,
@@ -101,7 +103,9 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
     let start = env.start_utc();
     let utc = |t: f64| {
         start.map(|s| {
-            (s + sgp4::chrono::Duration::nanoseconds((t * 1e9).round() as i64))
+            // rounded to the millisecond it shows, as the seconds beside it are
+            // (chrono's %.3f cuts: 3235.5699… s showed .569 beside 3235.570)
+            (s + sgp4::chrono::Duration::milliseconds((t * 1e3).round() as i64))
                 .format("%Y-%m-%dT%H:%M:%S%.3fZ")
                 .to_string()
         })
@@ -178,7 +182,7 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         outln!(
             o,
             "\ncsv: {} ({} rows every {step:.3} s)",
-            path.display(),
+            super::shown_path(path),
             rows + 1
         );
     }
@@ -199,7 +203,7 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         };
         let inputs: Vec<&std::path::Path> = input_paths.iter().map(PathBuf::as_path).collect();
         super::plot::write_figure(&fig, p, &inputs)?;
-        outln!(o, "plot: {}", p.display());
+        outln!(o, "plot: {}", super::shown_path(p));
     }
     print_out(&o)
 }
@@ -246,7 +250,7 @@ fn orbit_figure(
     let (t, beta, flux) = (
         column("time_s")?,
         column("beta_deg")?,
-        column("solar_flux_w_per_m2")?,
+        column("solar_flux_unshadowed_w_per_m2")?,
     );
     let s = OrbitSeries {
         time_s: &t,
@@ -267,8 +271,8 @@ fn face_figure(text: &str, title: &str) -> Result<orbitlash::plot::Figure> {
             .map(|r| r.get(i).copied().unwrap_or(f64::NAN))
             .collect::<Vec<f64>>()
     };
-    let (Some(t), Some(lit)) = (col("time_s"), col("sunlit")) else {
-        bail!("the environment series lacks time_s or sunlit");
+    let (Some(t), Some(lit)) = (col("time_s"), col("sun_fraction")) else {
+        bail!("the environment series lacks time_s or sun_fraction");
     };
     let mut faces = Vec::new();
     for (i, h) in header.iter().enumerate() {
@@ -328,9 +332,10 @@ fn series(
     }
     header.extend([
         "orbit_angle_deg",
-        "sunlit",
+        "sun_fraction",
         "beta_deg",
         "solar_flux_w_per_m2",
+        "solar_flux_unshadowed_w_per_m2",
     ]);
     let mut header: Vec<String> = header.into_iter().map(String::from).collect();
     for ((face, _), node) in faces {
@@ -350,8 +355,15 @@ fn series(
         cells.push(format!("{:.6}", env.orbit_phase_deg(t)));
         cells.push(format!("{:.6}", env.sun_fraction(t)));
         cells.push(format!("{:.6}", s.beta_rad.to_degrees()));
-        // the flux at the spacecraft before any shadow
+        // the flux reaching the spacecraft, one definition with the log's
+        // `/orbit/state` (dimmed in a penumbra, 0 in the umbra), and before any shadow
+        let reaching = if env.sunlit(t) {
+            s.solar_flux_w_per_m2
+        } else {
+            0.0
+        };
         let unshadowed = env.state_with(t, false).solar_flux_w_per_m2;
+        cells.push(format!("{reaching:.4}"));
         cells.push(format!("{unshadowed:.4}"));
         if !faces.is_empty() {
             let fe = env.face_environment(&env.state_with(t, env.sunlit(t)));

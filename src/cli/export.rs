@@ -223,7 +223,7 @@ pub fn export(a: ExportArgs) -> Result<()> {
     if let Some(t) = &table.truncated {
         eprintln!(
             "note: {} was cut off: read {} messages up to t = {:.3} s ({} of {} bytes were whole)",
-            a.log.display(),
+            super::shown_path(&a.log),
             t.messages,
             t.t_end_s,
             t.recovered_bytes,

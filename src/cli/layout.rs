@@ -69,8 +69,8 @@ pub fn layout(a: LayoutArgs) -> Result<()> {
     outs.write_all(&[(&out, text.as_bytes())])?;
     print_out(&format!(
         "wrote {}: Foxglove layout for {} (open the log in Foxglove, then Layouts → Import from file…)\n",
-        out.display(),
-        a.log.display()
+        super::shown_path(&out),
+        super::shown_path(&a.log)
     ))
 }
 

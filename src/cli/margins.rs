@@ -220,7 +220,7 @@ pub fn margins(a: MarginsArgs) -> Result<Outcome> {
         };
         print_out(&format!(
             "shard {i}/{n}: {held} written to {}{} (merge the shards with `orbitlash merge`)\n",
-            p.display(),
+            super::shown_path(p),
             if invalid > 0 {
                 format!("; {invalid} of them could not be run")
             } else {
@@ -339,16 +339,16 @@ fn finish(
         .collect();
     outs.write_all(&refs)?;
     if let Some(p) = json {
-        outln!(o, "json: {}", p.display());
+        outln!(o, "json: {}", super::shown_path(p));
     }
     if let Some(p) = csv {
-        outln!(o, "csv: {}", p.display());
+        outln!(o, "csv: {}", super::shown_path(p));
     }
     for (p, _) in files
         .iter()
         .filter(|(p, _)| plots.is_some_and(|d| p.starts_with(d)))
     {
-        outln!(o, "plot: {}", p.display());
+        outln!(o, "plot: {}", super::shown_path(p));
     }
     print_out(&o)?;
     Ok(Outcome::from_pass(rep.verdict.passes()))

@@ -416,8 +416,33 @@ pub fn default_log_path(name: &str) -> Result<PathBuf> {
 }
 
 /// Writes a report to stdout; a closed pipe (`| head`) is not an error.
+/// A path as printed on a terminal: control characters escaped (`units::shown`), a
+/// line end in it too.
+pub fn shown_path(p: &std::path::Path) -> String {
+    orbitlash::units::shown(&p.display().to_string()).into_owned()
+}
+
 pub fn print_out(text: &str) -> Result<()> {
     use std::io::Write;
+    // no control character but line ends and tabs reaches the terminal (a path given
+    // with an escape sequence in it is printed escaped, as errors print it)
+    let text: std::borrow::Cow<'_, str> = if text
+        .chars()
+        .any(|c| c.is_control() && c != '\n' && c != '\t')
+    {
+        text.chars()
+            .map(|c| {
+                if c.is_control() && c != '\n' && c != '\t' {
+                    c.escape_unicode().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect::<String>()
+            .into()
+    } else {
+        text.into()
+    };
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),

@@ -68,13 +68,47 @@ pub fn write_figure(fig: &orbitlash::plot::Figure, out: &Path, inputs: &[&Path])
     Ok(())
 }
 
+/// The length of the file at `path` up to the end of its last whole line: all of it
+/// when it ends in a newline; else up to the last newline, with a note: a line without
+/// its end is one a run was writing when it was cut off (`<name>.csv.<pid>.partial`),
+/// and its last cell may be cut short of its digits.
+fn whole_lines_len(path: &Path) -> std::io::Result<u64> {
+    use std::io::{Read as _, Seek as _, SeekFrom};
+    let mut f = std::fs::File::open(path)?;
+    let len = f.metadata()?.len();
+    let mut at = len;
+    let mut block = vec![0u8; 64 * 1024];
+    while at > 0 {
+        let n = block.len().min(at as usize);
+        f.seek(SeekFrom::Start(at - n as u64))?;
+        f.read_exact(&mut block[..n])?;
+        if let Some(i) = block[..n].iter().rposition(|&b| b == b'\n') {
+            let end = at - n as u64 + i as u64 + 1;
+            if end < len {
+                eprintln!(
+                    "note: {}: its last line has no end (a run cut off while writing it); read up to the last whole line",
+                    super::shown_path(path)
+                );
+            }
+            return Ok(end);
+        }
+        if at < len && len - at > 1 << 20 {
+            break;
+        }
+        at -= n as u64;
+    }
+    // one line without an end: the header alone, read as it is
+    Ok(len)
+}
+
 /// A CSV table with `time_s` first, every cell a number (a row's error names its line).
 fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
     orbitlash::io::output::check_input(path)
         .with_context(|| format!("cannot read {}", path.display()))?;
-    let mut r = csv::ReaderBuilder::new()
-        .from_path(path)
-        .with_context(|| format!("cannot read {}", path.display()))?;
+    let whole = whole_lines_len(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let file =
+        std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut r = csv::ReaderBuilder::new().from_reader(std::io::Read::take(file, whole));
     let headers: Vec<String> = r
         .headers()
         .with_context(|| format!("{}: no header line", path.display()))?
@@ -145,7 +179,7 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
         if *count > 0 {
             eprintln!(
                 "note: {}: column {h} has no value (NaN) in {count} row(s), the first at line {first}: drawn as a gap (a run writes NaN only for the gears with no valid mesh, never for a temperature)",
-                path.display()
+                super::shown_path(path)
             );
         }
     }
@@ -228,7 +262,7 @@ pub fn plot(a: PlotArgs) -> Result<()> {
         }
     };
     draw(&a.input, &out, a.title.as_deref(), None, &a.nodes)?;
-    print_out(&format!("figure: {}\n", out.display()))
+    print_out(&format!("figure: {}\n", super::shown_path(&out)))
 }
 
 /// The figure of the run in `input` (a log or a CSV) written to `out`. The verdict,
@@ -245,12 +279,16 @@ pub fn draw(
     format_of(out, "--out")?;
     // The output's place is checked before the input is read.
     Outputs::new(OutputPolicy::reading(&[input])).file("--out", out)?;
-    // a log by its first bytes (the MCAP magic), whatever its name
-    let is_log = input
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-        || input.to_string_lossy().ends_with(".partial")
-        || starts_with_mcap_magic(input);
+    // a log by its first bytes (the MCAP magic), whatever its name; a table by its
+    // header (a killed run's `<name>.csv.<pid>.partial` too); a file that is neither
+    // is read as what its name says, so that its error speaks of the right format
+    let head = file_head(input, 8);
+    let is_log = head.starts_with(orbitlash::io::mcap_scan::MAGIC)
+        || !head.starts_with(b"time_s")
+            && (input
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+                || input.to_string_lossy().ends_with(".partial"));
     let mut end = end.cloned();
     let mut cut_off = false;
     let (name, headers, rows) = if is_log {
@@ -265,7 +303,11 @@ pub fn draw(
             && m.contains_key("original_status")
             && let Some(d) = m.get("detail")
         {
-            eprintln!("note: {}: {}", input.display(), orbitlash::units::shown(d));
+            eprintln!(
+                "note: {}: {}",
+                super::shown_path(input),
+                orbitlash::units::shown(d)
+            );
         }
         if let Some(e) = table
             .metadata
@@ -289,11 +331,11 @@ pub fn draw(
                     "its end record (status `{}`) holds no verdict (a log written before end records kept it)",
                     orbitlash::units::shown(status)
                 ),
-                None => "has no end record (a killed run or a cut-off copy)".to_string(),
+                None => "it has no end record (a killed run or a cut-off copy)".to_string(),
             };
             eprintln!(
-                "note: {} {which}: the figure shows the rows it holds, and no PASS",
-                input.display()
+                "note: {}: {which}: the figure shows the rows it holds, and no PASS",
+                super::shown_path(input)
             );
         }
         let name = table
@@ -329,15 +371,15 @@ pub fn draw(
     write_figure(&fig, out, &[input])
 }
 
-/// Whether the file at `path` starts with the MCAP magic (false when it cannot be read:
-/// reading it as CSV then names the error).
-fn starts_with_mcap_magic(path: &Path) -> bool {
+/// The first `n` bytes of the file at `path` (fewer when it is shorter, none when it
+/// cannot be read: reading it then names the error).
+fn file_head(path: &Path, n: u64) -> Vec<u8> {
     use std::io::Read as _;
-    let magic = orbitlash::io::mcap_scan::MAGIC;
-    let mut head = vec![0u8; magic.len()];
-    orbitlash::io::output::check_input(path).is_ok()
-        && std::fs::File::open(path)
-            .and_then(|mut f| f.read_exact(&mut head))
-            .is_ok()
-        && head == magic
+    let mut head = Vec::new();
+    if orbitlash::io::output::check_input(path).is_ok()
+        && let Ok(f) = std::fs::File::open(path)
+    {
+        let _ = f.take(n).read_to_end(&mut head);
+    }
+    head
 }

@@ -67,7 +67,7 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     if let Some(first) = damaged.first() {
         eprintln!(
             "{}: {} message(s) are damaged (their chunk fails its CRC, or they do not decode with their schema) and are left out (first: message {} on {} at t = {:.3} s)",
-            a.log.display(),
+            super::shown_path(&a.log),
             damaged.len(),
             first.number,
             orbitlash::units::shown(&first.topic),
@@ -80,14 +80,14 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     if damaged_chunks > 0 && damaged.is_empty() {
         eprintln!(
             "{}: {damaged_chunks} chunk(s) fail their CRC (first at byte {}); their records are kept where they still parse and every message decodes with its schema",
-            a.log.display(),
+            super::shown_path(&a.log),
             s.damaged_chunks[0]
         );
     }
     if s.complete && damaged_chunks == 0 {
         return print_out(&format!(
             "{} is a complete log (run_end: {}); nothing to recover\n",
-            a.log.display(),
+            super::shown_path(&a.log),
             s.metadata_value("orbitlash.run_end", "status")
                 .unwrap_or("none")
         ));
@@ -148,12 +148,12 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
         "recovered {} messages up to t = {:.3} s from {} ({how}{})\nwrote {}\n",
         r.messages,
         r.t_end_s,
-        a.log.display(),
+        super::shown_path(&a.log),
         match &r.original_status {
             Some(s) => format!("; the run had ended: {s}"),
             None => String::new(),
         },
-        out.display()
+        super::shown_path(&out)
     ))
 }
 

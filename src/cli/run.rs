@@ -316,10 +316,10 @@ fn report_run(
         let summary = RunSummary::new(sc, stats, window, mesh, daily, wall_s);
         let text = serde_json::to_string_pretty(&summary)? + "\n";
         outs.write_all(&[(p.as_path(), text.as_bytes())])?;
-        outln!(o, "json: {}", p.display());
+        outln!(o, "json: {}", super::shown_path(p));
     }
     if let Some(p) = &a.csv {
-        outln!(o, "csv: {}", p.display());
+        outln!(o, "csv: {}", super::shown_path(p));
     }
     // a replayed margins sample says which on its figure, a steady state that the
     // figure is one period of the periodic orbit
@@ -380,7 +380,7 @@ fn figure_and_log(
             .expect("checked in plan_outputs");
         super::plot::draw(source, f, title, Some(run_end), &[])
             .map_err(|e| anyhow!("--plot {}: {}", f.display(), error_chain(&e)))?;
-        outln!(o, "plot: {}", f.display());
+        outln!(o, "plot: {}", super::shown_path(f));
     }
     if let Some(p) = log_path {
         outln!(
@@ -388,9 +388,9 @@ fn figure_and_log(
             "log: {}  (Foxglove: `orbitlash layout {}` writes the layout of this log to import; \
              Rerun with its plots: `pip install -r viewer/requirements.txt` once, then \
              `python3 viewer/rerun_export.py {}` and `rerun` the .rrd)",
-            p.display(),
-            p.display(),
-            p.display()
+            super::shown_path(p),
+            super::shown_path(p),
+            super::shown_path(p)
         );
     }
     Ok(o)

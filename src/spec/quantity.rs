@@ -23,8 +23,9 @@ pub enum Rule {
         what: &'static str,
     },
     /// `lo ≤ v ≤ hi` (`lo < v < hi` when `open`), with the error "must be within
-    /// `shown` (got v`got_unit`)": for ranges said in other units than the value's
-    /// (an altitude in km), or with a symbol (degrees).
+    /// `shown` (got v`got_unit`)" ("must be `shown`" when `open`, whose `shown` writes
+    /// its ends as excluded: "−1 < … < 0.5"): for ranges said in other units than the
+    /// value's (an altitude in km), or with a symbol (degrees).
     Span {
         lo: f64,
         hi: f64,
@@ -110,7 +111,7 @@ impl Quantity {
             Rule::PositiveUpTo { hi } => format!("0 < … ≤ {}", n(hi)),
             Rule::PositiveAtLeast { lo, hi } => format!("{} … {}", n(lo), n(hi)),
             Rule::AtLeast { lo } => format!("≥ {}", n(lo)),
-            Rule::Temperature => format!("0 … {}", n(MAX_TEMPERATURE_K)),
+            Rule::Temperature => format!("0 < … < {}", n(MAX_TEMPERATURE_K)),
             Rule::InContext => String::new(),
         };
         match (rule.is_empty(), self.context.is_empty()) {
@@ -354,7 +355,7 @@ pub const POISSON: Quantity = q(
         lo: -1.0,
         hi: 0.5,
         open: true,
-        shown: "−1 … 0.5",
+        shown: "−1 < … < 0.5",
         got_unit: "",
     },
 );

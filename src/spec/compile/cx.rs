@@ -127,7 +127,9 @@ impl Cx {
                 if inside {
                     Ok(v)
                 } else {
-                    Err(self.err(path, format!("must be within {shown} (got {v}{got_unit})")))
+                    // an open span's text shows its excluded ends ("−1 < … < 0.5")
+                    let within = if open { "" } else { "within " };
+                    Err(self.err(path, format!("must be {within}{shown} (got {v}{got_unit})")))
                 }
             }
             Rule::Positive => self.positive(path, v),
