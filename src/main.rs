@@ -13,7 +13,13 @@ fn main() -> ExitCode {
         Ok(cli::Outcome::Pass) => ExitCode::SUCCESS,
         Ok(cli::Outcome::Fail) => ExitCode::from(1),
         Err(e) => {
-            eprintln!("error: {}", cli::error_chain(&e));
+            // a path or value quoted in the message is printed with its control
+            // characters escaped (an escape sequence would act on the terminal)
+            let chain = cli::error_chain(&e);
+            eprintln!(
+                "error: {}",
+                orbitlash::units::shown_keeping(&chain, &['\n'])
+            );
             ExitCode::from(2)
         }
     }

@@ -152,10 +152,17 @@ pub fn snap_whole(v: f64) -> f64 {
 /// Text from a file or the user as it may be shown on a terminal: control characters
 /// (escape sequences, bells, carriage returns) written as `\u{1b}`, never sent raw.
 pub fn shown(text: &str) -> std::borrow::Cow<'_, str> {
-    if text.chars().any(char::is_control) {
+    shown_keeping(text, &[])
+}
+
+/// [`shown`], but the characters of `keep` (line ends, tabs) pass as they are: for a
+/// whole report of many lines.
+pub fn shown_keeping<'a>(text: &'a str, keep: &[char]) -> std::borrow::Cow<'a, str> {
+    let escaped = |c: char| c.is_control() && !keep.contains(&c);
+    if text.chars().any(escaped) {
         text.chars()
             .map(|c| {
-                if c.is_control() {
+                if escaped(c) {
                     c.escape_unicode().to_string()
                 } else {
                     c.to_string()

@@ -401,4 +401,26 @@ fn cli_success_lines_escape_control_characters_in_paths() {
         );
     }
     assert!(dir.join(&csv).is_file() && dir.join(&svg).is_file());
+    // errors too (review helper-28: main printed the chain as it was), and a scenario
+    // read from such a name is named escaped in its report
+    let out = run_in(&dir, &["plot", &format!("{name}.missing.csv")]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    // (a line end stays one in an error: a message may have lines of its own)
+    assert!(
+        !err.contains('\u{1b}') && err.contains("ird\\u{1b}[31m.missing.csv"),
+        "{err:?}"
+    );
+    let toml = format!("{name}.toml");
+    std::fs::copy(dir.join("s.toml"), dir.join(&toml)).unwrap();
+    let out = run_in(&dir, &["check", &toml]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(
+        text.lines()
+            .next()
+            .unwrap()
+            .contains("we\\u{a}ird\\u{1b}[31m.toml"),
+        "{text:?}"
+    );
 }

@@ -480,22 +480,33 @@ fn core_a_shown_range_marks_its_excluded_ends() {
         let Some((lo, lo_in, hi, hi_in)) = q.interval() else {
             continue;
         };
+        // "a … b", "a < … < b", "0 < … ≤ b", "> 0", "≥ a" (and a context after a comma)
         let text = q.range();
-        let excluded = (!lo_in && lo.is_finite()) || (!hi_in && hi.is_finite());
-        if excluded {
-            seen += 1;
-            assert!(
-                text.contains('<') || text.contains('>'),
-                "{}: the range {text:?} hides an excluded end ({lo} {lo_in}, {hi} {hi_in})",
-                row.field.name
+        let rule = text.split(", ").next().unwrap();
+        let (left, right) = rule.split_once('…').unwrap_or((rule, ""));
+        let (left, right) = (left.trim(), right.trim());
+        let name = row.field.name;
+        if lo.is_finite() {
+            let shown_out = left.ends_with('<') || left.starts_with('>');
+            assert_eq!(
+                shown_out, !lo_in,
+                "{name}: {text:?} against the lower end {lo} ({lo_in})"
+            );
+            assert!(!left.starts_with('≥') || lo_in, "{name}: {text:?}");
+        }
+        if hi.is_finite() {
+            let shown_out = right.starts_with('<');
+            assert_eq!(
+                shown_out, !hi_in,
+                "{name}: {text:?} against the upper end {hi} ({hi_in})"
             );
         } else {
             assert!(
-                !text.contains('<') && !text.contains('>'),
-                "{}: the range {text:?} excludes an end the rule accepts",
-                row.field.name
+                right.is_empty(),
+                "{name}: {text:?} bounds an unbounded range"
             );
         }
+        seen += usize::from(!lo_in && lo.is_finite() || !hi_in && hi.is_finite());
     }
     assert!(seen > 0, "no quantity with an excluded end was checked");
     // and the error of an excluded end says the same range

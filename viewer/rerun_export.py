@@ -325,9 +325,10 @@ def orbit_starts(series):
 def per_orbit(t_ns, values, starts_ns, keep_cut=False):
     """A series' range and time-weighted mean over each orbit: (mid time ns, min, max,
     mean) arrays, one entry per orbit that has samples; NaN samples are skipped. A last
-    orbit the run's end cuts short (its samples span less than 90 % of the median
-    orbit) is left out, unless `keep_cut`: its range is not an orbit's (a run of whole
-    orbits ends on the next orbit's first sample, whose min and max are that value)."""
+    orbit the run's end cuts short (its samples span less than the others' by more
+    than a step and a half) is left out, unless `keep_cut`: its range is not an
+    orbit's (a run of whole orbits ends on the next orbit's first sample, whose min
+    and max are that value)."""
     import numpy as np
 
     t = np.asarray(t_ns, dtype=np.int64)
@@ -345,9 +346,12 @@ def per_orbit(t_ns, values, starts_ns, keep_cut=False):
     mean = np.where(weight > 0, mean, np.fmin.reduceat(v, seg))
     mid = (t[seg] + t[last]) // 2
     keep = slice(None)
-    if len(starts_ns) > 1 and not keep_cut:
-        period = float(np.median(np.diff(np.asarray(starts_ns, dtype=np.int64))))
-        if t[-1] - starts_ns[orbit[-1]] < 0.9 * period:
+    if len(seg) > 2 and not keep_cut:
+        # the span of each orbit's samples, against the others' less a step and a
+        # half (samples a fifth of an orbit apart span three or four fifths of a
+        # whole orbit, whichever the phase gives)
+        span = (t[last] - t[seg]).astype(float)
+        if span[-1] < float(np.median(span[:-1])) - 1.5 * float(np.median(np.diff(t))):
             keep = slice(0, len(seg) - 1)
     return mid[keep], np.fmin.reduceat(v, seg)[keep], np.fmax.reduceat(v, seg)[keep], mean[keep]
 
@@ -612,8 +616,10 @@ def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None
         hot = sorted((k for k in envelopes if "°C" in k), key=lambda k: (not k.startswith("node"), k))
         cold = [k for k in envelopes if "°C" not in k]
         # each view as tall as its legend needs: a body of four nodes has eight entries
-        # (min and max), which a third of the column cut off above two gears of six
-        columns = [([view(k, envelopes[k]) for k in keys], [max(4, len(envelopes[k])) for k in keys])
+        # (min and max), which a third of the column cut off above two gears of six;
+        # at most three times a small view's share (a body of fifty nodes would leave
+        # the gears' views a few pixels)
+        columns = [([view(k, envelopes[k]) for k in keys], [min(max(4, len(envelopes[k])), 12) for k in keys])
                    for keys in (hot, cold) if keys]
         tabs.append(rrb.Horizontal(*(rrb.Vertical(*x, row_shares=shares) for x, shares in columns),
                                    name=f"{name}: per orbit, min and max"))

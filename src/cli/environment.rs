@@ -100,15 +100,9 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         .face_loads()
         .map(|(l, f)| ((l.name.clone(), *f), net.nodes[l.node].name.clone()))
         .collect();
-    let start = env.start_utc();
     let utc = |t: f64| {
-        start.map(|s| {
-            // rounded to the millisecond it shows, as the seconds beside it are
-            // (chrono's %.3f cuts: 3235.5699… s showed .569 beside 3235.570)
-            (s + sgp4::chrono::Duration::milliseconds((t * 1e3).round() as i64))
-                .format("%Y-%m-%dT%H:%M:%S%.3fZ")
-                .to_string()
-        })
+        env.utc_at(t)
+            .map(|u| u.format("%Y-%m-%dT%H:%M:%S%.3fZ").to_string())
     };
 
     let mut o = String::new();
@@ -139,7 +133,7 @@ pub fn environment(a: EnvironmentArgs) -> Result<()> {
         dark / horizon
     );
     if !eclipses.is_empty() {
-        let head: Vec<&str> = if start.is_some() {
+        let head: Vec<&str> = if env.start_utc().is_some() {
             vec!["entry s", "exit s", "length s", "entry UTC"]
         } else {
             vec!["entry s", "exit s", "length s"]

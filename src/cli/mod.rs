@@ -272,7 +272,9 @@ pub fn load_with(path: Option<&Path>, sets: &[String]) -> Result<Loaded> {
     let (spec, toml, file) = match path {
         Some(p) => {
             let (spec, toml) = scenario_toml::read_spec_file(p)?;
-            (spec, toml, p.display().to_string())
+            // the name as every message and report shows it (control characters
+            // escaped: a line end would split a report's line or a TOML comment)
+            (spec, toml, shown_path(p))
         }
         None => (
             scenario_toml::parse_spec(REFERENCE_HINGE_TOML, "<embedded>")?,
@@ -415,34 +417,18 @@ pub fn default_log_path(name: &str) -> Result<PathBuf> {
     Ok(PathBuf::from("logs").join(format!("{name}.mcap")))
 }
 
-/// Writes a report to stdout; a closed pipe (`| head`) is not an error.
 /// A path as printed on a terminal: control characters escaped (`units::shown`), a
 /// line end in it too.
 pub fn shown_path(p: &std::path::Path) -> String {
     orbitlash::units::shown(&p.display().to_string()).into_owned()
 }
 
+/// Writes a report to stdout; a closed pipe (`| head`) is not an error. No control
+/// character but line ends and tabs reaches the terminal: a path given with an escape
+/// sequence in it is printed escaped, as `main` prints errors.
 pub fn print_out(text: &str) -> Result<()> {
     use std::io::Write;
-    // no control character but line ends and tabs reaches the terminal (a path given
-    // with an escape sequence in it is printed escaped, as errors print it)
-    let text: std::borrow::Cow<'_, str> = if text
-        .chars()
-        .any(|c| c.is_control() && c != '\n' && c != '\t')
-    {
-        text.chars()
-            .map(|c| {
-                if c.is_control() && c != '\n' && c != '\t' {
-                    c.escape_unicode().to_string()
-                } else {
-                    c.to_string()
-                }
-            })
-            .collect::<String>()
-            .into()
-    } else {
-        text.into()
-    };
+    let text = orbitlash::units::shown_keeping(text, &['\n', '\t']);
     let mut out = std::io::stdout().lock();
     match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),

@@ -68,47 +68,41 @@ pub fn write_figure(fig: &orbitlash::plot::Figure, out: &Path, inputs: &[&Path])
     Ok(())
 }
 
-/// The length of the file at `path` up to the end of its last whole line: all of it
-/// when it ends in a newline; else up to the last newline, with a note: a line without
-/// its end is one a run was writing when it was cut off (`<name>.csv.<pid>.partial`),
-/// and its last cell may be cut short of its digits.
-fn whole_lines_len(path: &Path) -> std::io::Result<u64> {
-    use std::io::{Read as _, Seek as _, SeekFrom};
-    let mut f = std::fs::File::open(path)?;
-    let len = f.metadata()?.len();
-    let mut at = len;
-    let mut block = vec![0u8; 64 * 1024];
-    while at > 0 {
-        let n = block.len().min(at as usize);
-        f.seek(SeekFrom::Start(at - n as u64))?;
-        f.read_exact(&mut block[..n])?;
-        if let Some(i) = block[..n].iter().rposition(|&b| b == b'\n') {
-            let end = at - n as u64 + i as u64 + 1;
-            if end < len {
+/// How much of the table `bytes` (read from `path`) to read: all of it, but for a
+/// killed run's (`<name>.csv.<pid>.partial`) whose last line has no end (`\n`, or the
+/// `\r` of a CRLF file): that line was being written when the run stopped, and its
+/// last cell may be short of digits, so it is left out, with a note. (A finished
+/// table of the tool always ends its last line; one from elsewhere without the end is
+/// read whole, and a short line is an error naming it.)
+fn whole_lines_len(path: &Path, bytes: &[u8]) -> usize {
+    let killed = path.to_string_lossy().ends_with(".partial");
+    match bytes.last() {
+        Some(b'\n' | b'\r') | None => bytes.len(),
+        Some(_) if !killed => bytes.len(),
+        Some(_) => {
+            let end = bytes
+                .iter()
+                .rposition(|&b| b == b'\n')
+                .map_or(bytes.len(), |i| i + 1);
+            if end < bytes.len() {
                 eprintln!(
-                    "note: {}: its last line has no end (a run cut off while writing it); read up to the last whole line",
+                    "note: {}: its last line has no end (a killed run's table): read up to the last whole line",
                     super::shown_path(path)
                 );
             }
-            return Ok(end);
+            end
         }
-        if at < len && len - at > 1 << 20 {
-            break;
-        }
-        at -= n as u64;
     }
-    // one line without an end: the header alone, read as it is
-    Ok(len)
 }
 
 /// A CSV table with `time_s` first, every cell a number (a row's error names its line).
 fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
     orbitlash::io::output::check_input(path)
         .with_context(|| format!("cannot read {}", path.display()))?;
-    let whole = whole_lines_len(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let file =
-        std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let mut r = csv::ReaderBuilder::new().from_reader(std::io::Read::take(file, whole));
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    // a byte-order mark (a table saved by a spreadsheet) is not part of `time_s`
+    let text = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&bytes);
+    let mut r = csv::ReaderBuilder::new().from_reader(&text[..whole_lines_len(path, text)]);
     let headers: Vec<String> = r
         .headers()
         .with_context(|| format!("{}: no header line", path.display()))?
@@ -282,13 +276,10 @@ pub fn draw(
     // a log by its first bytes (the MCAP magic), whatever its name; a table by its
     // header (a killed run's `<name>.csv.<pid>.partial` too); a file that is neither
     // is read as what its name says, so that its error speaks of the right format
-    let head = file_head(input, 8);
+    let head = file_head(input, 11);
+    let head = head.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&head);
     let is_log = head.starts_with(orbitlash::io::mcap_scan::MAGIC)
-        || !head.starts_with(b"time_s")
-            && (input
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-                || input.to_string_lossy().ends_with(".partial"));
+        || !head.starts_with(b"time_s") && named_like_a_log(input);
     let mut end = end.cloned();
     let mut cut_off = false;
     let (name, headers, rows) = if is_log {
@@ -369,6 +360,24 @@ pub fn draw(
     }
     let fig = figure(&series)?;
     write_figure(&fig, out, &[input])
+}
+
+/// Whether a file whose first bytes decide nothing (empty, cut short, neither a log
+/// nor a table) is named like a log: `.mcap`, or a killed run's `.<pid>.partial` of a
+/// name that is not a `.csv`'s.
+fn named_like_a_log(path: &Path) -> bool {
+    let name = path.to_string_lossy().to_ascii_lowercase();
+    let name = match name.strip_suffix(".partial") {
+        // `<name>.<ext>.<pid>[-<k>].partial`: the writer's process id
+        Some(stem) => match stem.rsplit_once('.') {
+            Some((head, pid)) if pid.chars().all(|c| c.is_ascii_digit() || c == '-') => {
+                return !head.ends_with(".csv");
+            }
+            _ => return true,
+        },
+        None => name,
+    };
+    name.ends_with(".mcap")
 }
 
 /// The first `n` bytes of the file at `path` (fewer when it is shorter, none when it

@@ -579,6 +579,13 @@ def test_per_orbit_closed_form():
         expect(len(starts2) == 41 and len(mid2) == 40,
                f"the 41st orbit ({name}) drawn: {len(mid2)} of {len(starts2)} orbits")
         expect(lo2[-1] < -0.99 and hi2[-1] > 0.99, f"the last drawn orbit's range {lo2[-1]} … {hi2[-1]}")
+    # samples a fifth of an orbit apart (4 or 5 per orbit): every whole orbit is drawn,
+    # the last one too (review helper-28: 39 of 40 with a rule of 90 % of the period)
+    t3 = np.arange(0, 40 * period_ns, period_ns * 2 // 9)
+    n3 = 1 + t3 // period_ns
+    starts3 = module.orbit_starts({("/orbit/state", "orbit_number"): (list(t3), list(n3.astype(float)))})
+    mid3, _, _, _ = module.per_orbit(t3, np.sin(2 * np.pi * t3 / period_ns), starts3)
+    expect(len(mid3) == 40, f"{len(mid3)} of 40 whole orbits sampled at 2/9 of an orbit drawn")
     few = {("/orbit/state", "orbit_number"): (list(t[t < 10 * period_ns]), list(n[t < 10 * period_ns]))}
     expect(module.orbit_starts(few) is None, "10 orbits got the per-orbit tab (it is for more than 30)")
 
