@@ -464,11 +464,35 @@ def send_series(out, series, channels, pairs):
                        points=field == "recorded", width=2.5 if field.endswith(("corrected", "after")) else None)
             key = "residuals" if field.startswith("residual") else "series"
             groups[f"{ch}: {key}"].append(entity)
+        elif topic == "/orbit/faces" and face_flux(field, channels):
+            # one view per flux (six faces of three fluxes on one axis were 18 lines
+            # whose legend covered the plot), each face by its name and colour
+            face, kind = face_flux(field, channels)
+            entity = f"orbit/faces/{field}"
+            faces = sorted({face_flux(f, channels)[0] for (tp, f) in series if tp == topic and face_flux(f, channels)})
+            out.series(entity, t, v, face, PALETTE[faces.index(face) % len(PALETTE)])
+            groups[f"faces: {kind}, incident (W/m²)"].append(entity)
         else:
             entity = f"{topic.strip('/')}/{field}"
             out.series(entity, t, v, field)
             groups[f"{topic.strip('/')}: {unit_group(field)}"].append(entity)
     return groups, body, gears
+
+
+FLUXES = (("solar", "direct Sun"), ("albedo", "albedo"), ("earth_ir", "Earth infrared"))
+
+
+def face_flux(field, channels):
+    """(face, flux) of a field of `/orbit/faces`: from the channel metadata's
+    `face:<field>` = `<node>.<face>.<flux>_w_per_m2` (`panel_px.px`, "direct Sun"), else
+    from the field's suffix; None for a field that is neither."""
+    name = channels.get("/orbit/faces", (None, {}))[1].get(f"face:{field}", field)
+    for key, said in FLUXES:
+        for sep in (".", "_"):
+            suffix = f"{sep}{key}_w_per_m2"
+            if name.endswith(suffix):
+                return name[: -len(suffix)], said
+    return None
 
 
 # A field's unit from its name's suffix, for one axis per unit.
@@ -630,7 +654,12 @@ def make_blueprint(name, groups, body, gears, has_events, span_s, envelopes=None
     if residuals:
         tabs.append(rrb.Grid(*residuals, name="residuals before and after"))
     if rest:
-        tabs.append(rrb.Grid(*rest, name="mesh, orbit, events" if body else "more"))
+        # named by what it holds (a model without gears has no mesh geometry), three
+        # views a row at most (four cut titles and time axes)
+        held = [w for w, there in (("mesh", any(k.startswith("mesh") for k in groups)),
+                                   ("orbit", any(k.startswith(("orbit", "faces")) for k in groups)),
+                                   ("events", has_events)) if there]
+        tabs.append(rrb.Grid(*rest, grid_columns=min(3, len(rest)), name=", ".join(held) or "more"))
     return rrb.Blueprint(
         rrb.Tabs(*tabs),
         rrb.TimePanel(timeline="sim_time", state="collapsed"),
