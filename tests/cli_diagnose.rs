@@ -224,7 +224,11 @@ fn cli_diagnose_heater_report_json_and_out_folder() {
     let overview = std::fs::read_to_string(out.join("overview.svg")).unwrap();
     for (ch, after) in r["heldout_rmse"].as_object().unwrap() {
         let before = r["baseline"]["heldout_rmse"][ch].as_f64().unwrap();
-        let title = format!("held-out RMSE {before:.2} → {:.2}", after.as_f64().unwrap());
+        let mut title = format!("held-out RMSE {before:.2} → {:.2}", after.as_f64().unwrap());
+        // a temperature channel's axis in °C, its RMSE (a difference) in K (helper-29)
+        if ch.ends_with("_c") {
+            title = format!("{ch} (°C): {title} K");
+        }
         assert!(
             overview.contains(&title),
             "{ch}: no {title:?} in the overview"

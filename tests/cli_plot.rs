@@ -644,6 +644,7 @@ fn cli_margins_figures_of_a_failing_run_with_long_key_paths_keep_labels_apart() 
         pass: false,
         below,
         interfering: 3,
+        reason: "3 of 400 samples interfere or lose the mesh".into(),
     })
     .unwrap();
     assert_drawn_right(&fig);
@@ -665,6 +666,11 @@ fn cli_margins_figures_of_a_failing_run_with_long_key_paths_keep_labels_apart() 
     assert!(texts.contains(
         &format!("FAIL: 400 samples, {below} below the minimum, 3 interfering").as_str()
     ));
+    // and why, under the counts
+    assert!(
+        texts.contains(&"3 of 400 samples interfere or lose the mesh"),
+        "{texts:?}"
+    );
     fig.png(1.0).unwrap();
 
     let long = "gear_pair.\"a-very-long-gear-pair-name-from-an-imported-network\".pinion.tooth_thinning_um";

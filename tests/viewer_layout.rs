@@ -426,6 +426,20 @@ fn cli_foxglove_layout_generated_for_every_shipped_scenario() {
             plotted, nodes,
             "{stem}: {plotted} of {nodes} node temperatures plotted"
         );
+        // the first tab is named by what it plots: backlash only with gear pairs
+        // (helper-29: FUNcube-1's said "temperatures, backlash, heat")
+        let gears = summary
+            .channels
+            .values()
+            .any(|c| c.topic.starts_with("/gears/"));
+        let tabs = layout["configById"]
+            .as_object()
+            .unwrap()
+            .values()
+            .find_map(|c| c["tabs"].as_array())
+            .unwrap_or_else(|| panic!("{stem}: no tabs"));
+        let title = tabs[0]["title"].as_str().unwrap();
+        assert_eq!(title.contains("backlash"), gears, "{stem}: {title}");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -427,6 +427,7 @@ fn plots_of(
                 pass: p.verdict == orbitlash::run::summary::PassFail::Pass,
                 below: p.violations.count,
                 interfering: p.interference.count,
+                reason: p.reason.clone(),
             })?;
         files.push((dir.join(dist_name), format.bytes(fig)?));
         let rows: Vec<(String, f64)> = p

@@ -362,7 +362,10 @@ pub fn layout(o: &Outline) -> Value {
         second.insert(0, "3D!gear-mesh".to_string());
     }
     let mut tabs = vec![
-        json!({"title": format!("{}: temperatures, backlash, heat", o.name), "layout": first}),
+        // named by what it plots: a model without gear pairs has no backlash panel
+        json!({"title": format!("{}: temperatures, {}heat", o.name,
+            if o.topics.keys().any(|k| k.starts_with("/gears/")) { "backlash, " } else { "" }),
+            "layout": first}),
     ];
     if !second.is_empty() {
         tabs.push(json!({"title": format!("{}: orbit{}", o.name, if scenes.is_empty() { "" } else { ", gear mesh 3-D" }), "layout": stack(&second, "row")}));

@@ -27,6 +27,10 @@ pub struct DistributionInput<'a> {
     /// Samples below the minimum allowed, and interfering.
     pub below: u64,
     pub interfering: u64,
+    /// Why the verdict is what it is (the report's `reason`), drawn under it: a FAIL
+    /// with no sample below the minimum is too few samples for 95/95, or samples the
+    /// model could not run, which the counts alone do not say.
+    pub reason: String,
 }
 
 const W: u32 = 900;
@@ -126,7 +130,7 @@ pub fn distribution(d: &DistributionInput<'_>) -> Result<Figure, PlotError> {
         // No valid sample: the headings alone.
         if !v.is_empty() {
             let hist = Histogram::of(&v, d);
-            let area = root.clone().shrink((0, 60), (W, H - 60));
+            let area = root.clone().shrink((0, 84), (W, H - 84));
             let mut chart = distribution_chart(&area, &hist)?;
             let plot_px = plot_rect(&chart);
             draw_bars(&mut chart, &hist, &mut notes.placer)?;
@@ -153,19 +157,20 @@ fn draw_headings(
         d.below,
         d.interfering
     );
+    let color = if d.pass {
+        RGBColor(0, 120, 60)
+    } else {
+        RGBColor(200, 0, 0)
+    };
+    let reason = clip_chars(&d.reason, 120);
     for (text, y, size, color) in [
         (d.title.as_str(), 10.0, 17.0, BLACK),
-        (
-            verdict.as_str(),
-            34.0,
-            15.0,
-            if d.pass {
-                RGBColor(0, 120, 60)
-            } else {
-                RGBColor(200, 0, 0)
-            },
-        ),
+        (verdict.as_str(), 34.0, 15.0, color),
+        (reason.as_str(), 52.0, 12.5, color),
     ] {
+        if text.is_empty() {
+            continue;
+        }
         let ((x, y), r) = notes.placer.place(
             text,
             size,
@@ -177,6 +182,15 @@ fn draw_headings(
         notes.keep(text, r);
     }
     Ok(())
+}
+
+/// `text` cut to `n` characters, with an ellipsis when cut.
+fn clip_chars(text: &str, n: usize) -> String {
+    if text.chars().count() <= n {
+        text.to_string()
+    } else {
+        text.chars().take(n - 1).chain(['…']).collect()
+    }
 }
 
 /// Draws the axes and grid of the histogram (left) and of the CDF (right).

@@ -185,9 +185,16 @@ fn draw_channel(
         return Ok(());
     }
     let (ylo, yhi) = nice_range(lo, hi);
+    // the channel's own unit on its axis; the RMSE, a difference, in kelvin for °C
+    let diff_unit = if unit == "°C" { "K" } else { unit };
     let head = format!(
-        "{}: held-out RMSE {:.2} → {:.2} {unit}",
+        "{}{}: held-out RMSE {:.2} → {:.2} {diff_unit}",
         s.channels[c],
+        if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" ({unit})")
+        },
         heldout_rms(s, c, &s.baseline[c]),
         heldout_rms(s, c, &s.corrected[c])
     );
