@@ -143,7 +143,7 @@ def read_log(path):
                 texts.append((t, int(proto.level), proto.message))
                 continue
             if schema.name.startswith("foxglove."):
-                continue  # the 3-D scene: Rerun's importer shows it as it is
+                continue  # the 3-D scene (`run --scene`): for Foxglove's 3D panel, not exported
             if channel.topic == "/thermal/temperature_c":
                 continue  # the °C copy of /thermal/temperature, converted here anyway
             # Every scalar field of the schema, not ListFields(): proto3 leaves a field at
