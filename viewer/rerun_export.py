@@ -458,10 +458,12 @@ def send_series(out, series, channels, pairs):
             if field == "train":
                 continue  # the fitted/held-out flag, not a series
             entity = f"diagnose/{ch}/{field}"
-            # the recording as points, the corrected model as the boldest line
-            # (the view's title names the channel)
+            # the recording and the residuals (each at a reading) as points, so that
+            # nothing is drawn across the recording's gaps; the corrected model as
+            # the boldest line (the view's title names the channel)
             out.series(entity, t, v, field.replace("_", " "), DIAGNOSE_COLORS.get(field),
-                       points=field == "recorded", width=2.5 if field.endswith(("corrected", "after")) else None)
+                       points=field == "recorded" or field.startswith("residual"),
+                       width=2.5 if field.endswith(("corrected", "after")) else None)
             key = "residuals" if field.startswith("residual") else "series"
             groups[f"{ch}: {key}"].append(entity)
         elif topic == "/orbit/faces" and face_flux(field, channels):
