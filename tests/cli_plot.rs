@@ -237,6 +237,20 @@ fn cli_plot_names_why_a_run_fails() {
     }
 }
 
+/// `orbitlash plot INPUT --out OUT`, run.
+fn plot_to(
+    input: impl AsRef<std::ffi::OsStr>,
+    out: impl AsRef<std::ffi::OsStr>,
+) -> std::process::Output {
+    common::bin()
+        .arg("plot")
+        .arg(input)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn cli_plot_a_csv_and_the_bad_inputs() {
     let dir = common::tmpdir("plot-csv");
@@ -248,13 +262,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
         .unwrap();
     assert_eq!(out.status.code(), Some(0));
     let svg = dir.join("run.svg");
-    let out = common::bin()
-        .arg("plot")
-        .arg(&csv)
-        .arg("--out")
-        .arg(&svg)
-        .output()
-        .unwrap();
+    let out = plot_to(&csv, &svg);
     assert_eq!(
         out.status.code(),
         Some(0),
@@ -278,13 +286,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     ] {
         let copy = dir.join(name);
         std::fs::write(&copy, bytes).unwrap();
-        let out = common::bin()
-            .arg("plot")
-            .arg(&copy)
-            .arg("--out")
-            .arg(dir.join(format!("{name}.svg")))
-            .output()
-            .unwrap();
+        let out = plot_to(&copy, dir.join(format!("{name}.svg")));
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{name}: {err}");
         assert_eq!(
@@ -295,13 +297,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     }
     let empty = dir.join("empty.csv.4242.partial");
     std::fs::write(&empty, b"").unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&empty)
-        .arg("--out")
-        .arg(dir.join("empty.svg"))
-        .output()
-        .unwrap();
+    let out = plot_to(&empty, dir.join("empty.svg"));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(
@@ -319,13 +315,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     bad.swap(3, 4);
     let back = dir.join("back.csv");
     std::fs::write(&back, bad.join("\n")).unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&back)
-        .arg("--out")
-        .arg(dir.join("b.png"))
-        .output()
-        .unwrap();
+    let out = plot_to(&back, dir.join("b.png"));
     common::assert_error(
         "back",
         &out,
@@ -337,13 +327,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     nan[2] = nan[2].replacen(',', ",x", 1);
     let bad_cell = dir.join("cell.csv");
     std::fs::write(&bad_cell, nan.join("\n")).unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&bad_cell)
-        .arg("--out")
-        .arg(dir.join("c.png"))
-        .output()
-        .unwrap();
+    let out = plot_to(&bad_cell, dir.join("c.png"));
     common::assert_error(
         "cell",
         &out,
@@ -354,13 +338,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     nan[4] = format!("{},inf,{}", cells[0], cells[2..].join(","));
     let nan_path = dir.join("nan.csv");
     std::fs::write(&nan_path, nan.join("\n")).unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&nan_path)
-        .arg("--out")
-        .arg(dir.join("n.png"))
-        .output()
-        .unwrap();
+    let out = plot_to(&nan_path, dir.join("n.png"));
     common::assert_error(
         "inf",
         &out,
@@ -381,13 +359,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
         .join(",");
     let gap_path = dir.join("gap.csv");
     std::fs::write(&gap_path, gap.join("\n")).unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&gap_path)
-        .arg("--out")
-        .arg(dir.join("g.svg"))
-        .output()
-        .unwrap();
+    let out = plot_to(&gap_path, dir.join("g.svg"));
     assert_eq!(
         out.status.code(),
         Some(0),
@@ -409,13 +381,7 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     }
     let hole_path = dir.join("hole.csv");
     std::fs::write(&hole_path, hole.join("\n")).unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&hole_path)
-        .arg("--out")
-        .arg(dir.join("h.svg"))
-        .output()
-        .unwrap();
+    let out = plot_to(&hole_path, dir.join("h.svg"));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(0), "{err}");
     for want in ["hole.csv", "housing_k", "2 row(s)", "line 6", "gap"] {
@@ -429,37 +395,19 @@ fn cli_plot_a_csv_and_the_bad_inputs() {
     );
     let nt = dir.join("nantime.csv");
     std::fs::write(&nt, nan_time.join("\n")).unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&nt)
-        .arg("--out")
-        .arg(dir.join("t.svg"))
-        .output()
-        .unwrap();
+    let out = plot_to(&nt, dir.join("t.svg"));
     common::assert_error(
         "nan time",
         &out,
         &["nantime.csv", "line 7", "column 1", "time_s"],
     );
     // the figure's format from its name; never over the input
-    let out = common::bin()
-        .arg("plot")
-        .arg(&csv)
-        .arg("--out")
-        .arg(dir.join("fig.jpg"))
-        .output()
-        .unwrap();
+    let out = plot_to(&csv, dir.join("fig.jpg"));
     common::assert_error("format", &out, &["fig.jpg", ".png or .svg"]);
     let before = std::fs::read(&csv).unwrap();
     let same = dir.join("same.svg");
     std::fs::copy(&csv, &same).unwrap();
-    let out = common::bin()
-        .arg("plot")
-        .arg(&same)
-        .arg("--out")
-        .arg(&same)
-        .output()
-        .unwrap();
+    let out = plot_to(&same, &same);
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(std::fs::read(&csv).unwrap(), before);
     assert_eq!(

@@ -74,12 +74,12 @@ struct Case {
 }
 
 /// A pair's cases judged: the case with the smallest margin among those whose gears
-/// mesh (none when no case meshes), the first case with no valid mesh, and whether
-/// every case keeps the minimum backlash with teeth that do not interfere.
+/// mesh (none when no case meshes), the first case with no valid mesh, and the
+/// verdict over every case ([`pair_verdict`]).
 struct Judged<'a> {
     smallest: Option<&'a Evaluated>,
     no_mesh: Option<&'a Evaluated>,
-    pass: bool,
+    verdict: PairVerdict,
 }
 
 fn judge(states: &[Evaluated]) -> Judged<'_> {
@@ -89,9 +89,7 @@ fn judge(states: &[Evaluated]) -> Judged<'_> {
             .filter(|e| e.mesh.margin_m.is_finite())
             .min_by(|x, y| x.mesh.margin_m.total_cmp(&y.mesh.margin_m)),
         no_mesh: states.iter().find(|e| e.no_mesh.is_some()),
-        pass: states
-            .iter()
-            .all(|e| e.mesh.margin_m >= 0.0 && e.mesh.backlash_exact_m > 0.0),
+        verdict: pair_verdict(states),
     }
 }
 
@@ -154,7 +152,7 @@ fn verdict_line(pair: &GearPair, states: &[Evaluated]) -> String {
     }
     format!(
         "{} {}: {}",
-        if j.pass { "PASS" } else { "FAIL" },
+        if j.verdict.passes() { "PASS" } else { "FAIL" },
         pair.name,
         parts.join("; ")
     )
@@ -215,7 +213,9 @@ pub fn backlash(a: BacklashArgs) -> Result<Outcome> {
             .collect();
         cases.push((pair, states));
     }
-    let pass = cases.iter().all(|(_, states)| judge(states).pass);
+    let pass = cases
+        .iter()
+        .all(|(_, states)| judge(states).verdict.passes());
     if a.json {
         print_out(&(serde_json::to_string_pretty(&to_json(&sc.name, &cases))? + "\n"))?;
         return Ok(Outcome::from_pass(pass));
@@ -357,14 +357,16 @@ struct Variants {
 fn to_json<'a>(name: &'a str, cases: &'a [(&GearPair, Vec<Evaluated>)]) -> BacklashReport<'a> {
     BacklashReport {
         scenario: name,
-        pass: cases.iter().all(|(_, states)| judge(states).pass),
+        pass: cases
+            .iter()
+            .all(|(_, states)| judge(states).verdict.passes()),
         pairs: cases
             .iter()
             .map(|(pair, states)| {
                 let j = judge(states);
                 PairReport {
                     name: &pair.name,
-                    verdict: pair_verdict(states),
+                    verdict: j.verdict,
                     // of the cases that mesh: null when none does
                     min_margin_um: j.smallest.map_or(f64::NAN, |e| e.mesh.margin_m * 1e6),
                     min_backlash_allowed_um: pair.min_backlash_m * 1e6,

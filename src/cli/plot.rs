@@ -68,6 +68,9 @@ pub fn write_figure(fig: &orbitlash::plot::Figure, out: &Path, inputs: &[&Path])
     Ok(())
 }
 
+/// The UTF-8 byte-order mark a spreadsheet may put before a table's header.
+const BOM: &[u8] = "\u{feff}".as_bytes();
+
 /// How much of the table `bytes` (read from `path`) to read: all of it, but for a
 /// killed run's (`<name>.csv.<pid>.partial`) whose last line has no end (`\n`, or the
 /// `\r` of a CRLF file): that line was being written when the run stopped, and its
@@ -101,7 +104,7 @@ fn read_csv(path: &Path) -> Result<(Vec<String>, Vec<Vec<f64>>)> {
         .with_context(|| format!("cannot read {}", path.display()))?;
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     // a byte-order mark (a table saved by a spreadsheet) is not part of `time_s`
-    let text = bytes.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&bytes);
+    let text = bytes.strip_prefix(BOM).unwrap_or(&bytes);
     let mut r = csv::ReaderBuilder::new().from_reader(&text[..whole_lines_len(path, text)]);
     let headers: Vec<String> = r
         .headers()
@@ -277,7 +280,7 @@ pub fn draw(
     // header (a killed run's `<name>.csv.<pid>.partial` too); a file that is neither
     // is read as what its name says, so that its error speaks of the right format
     let head = file_head(input, 11);
-    let head = head.strip_prefix("\u{feff}".as_bytes()).unwrap_or(&head);
+    let head = head.strip_prefix(BOM).unwrap_or(&head);
     let is_log = head.starts_with(orbitlash::io::mcap_scan::MAGIC)
         || !head.starts_with(b"time_s") && named_like_a_log(input);
     let mut end = end.cloned();

@@ -383,14 +383,15 @@ fn figure_and_log(
         outln!(o, "plot: {}", super::shown_path(f));
     }
     if let Some(p) = log_path {
+        let p = super::shown_path(p);
         outln!(
             o,
             "log: {}  (Foxglove: `orbitlash layout {}` writes the layout of this log to import; \
              Rerun with its plots: `pip install -r viewer/requirements.txt` once, then \
              `python3 viewer/rerun_export.py {}` and `rerun` the .rrd)",
-            super::shown_path(p),
-            super::shown_path(p),
-            super::shown_path(p)
+            p,
+            p,
+            p
         );
     }
     Ok(o)
